@@ -1,0 +1,133 @@
+#include "core/gl/context.h"
+
+#include <epoxy/egl.h>
+#include <epoxy/gl.h>
+#include <spdlog/spdlog.h>
+
+#include <cstdlib>
+#include <cstring>
+
+#include "core/errors.h"
+
+namespace volstyle::core::gl {
+
+struct Context::Egl {
+    EGLDisplay display = EGL_NO_DISPLAY;
+    EGLContext context = EGL_NO_CONTEXT;
+};
+
+namespace {
+
+std::string envOr(const char* name, const std::string& fallback) {
+    const char* v = std::getenv(name);
+    return v && *v ? std::string(v) : fallback;
+}
+
+/// The first EGL device that is not Mesa's software device, if any.
+EGLDeviceEXT findHardwareDevice() {
+    if (!epoxy_has_egl_extension(EGL_NO_DISPLAY, "EGL_EXT_device_enumeration")) return nullptr;
+    EGLDeviceEXT devices[16];
+    EGLint count = 0;
+    if (!eglQueryDevicesEXT(16, devices, &count)) return nullptr;
+    for (EGLint i = 0; i < count; ++i) {
+        const char* ext = eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS);
+        if (!ext || !std::strstr(ext, "EGL_MESA_device_software")) return devices[i];
+    }
+    return nullptr;
+}
+
+void GLAPIENTRY debugCallback(GLenum, GLenum type, GLuint id, GLenum severity, GLsizei,
+                              const GLchar* message, const void*) {
+    auto level = spdlog::level::debug;
+    if (severity == GL_DEBUG_SEVERITY_HIGH || type == GL_DEBUG_TYPE_ERROR) level = spdlog::level::err;
+    else if (severity == GL_DEBUG_SEVERITY_MEDIUM) level = spdlog::level::warn;
+    else if (severity == GL_DEBUG_SEVERITY_NOTIFICATION) level = spdlog::level::trace;
+    spdlog::log(level, "GL[{}]: {}", id, message);
+}
+
+}  // namespace
+
+const std::vector<std::string>& optionalExtensions() {
+    static const std::vector<std::string> ext = {"GL_NV_shader_atomic_float"};
+    return ext;
+}
+
+std::unique_ptr<Context> Context::create(const ContextOptions& options) {
+    std::unique_ptr<Context> ctx(new Context());
+    ctx->m_egl = std::make_unique<Egl>();
+    Egl& egl = *ctx->m_egl;
+    const std::string platform = options.platform.empty() ? envOr("VOLSTYLE_EGL", "auto") : options.platform;
+    if (platform != "auto" && platform != "device" && platform != "surfaceless")
+        throw GpuError("gl::Context: VOLSTYLE_EGL must be 'device' or 'surfaceless', got '" + platform + "'");
+
+    // Choose the EGL display: a GPU device if there is one (or if forced), else surfaceless Mesa.
+    if (platform != "surfaceless") {
+        if (EGLDeviceEXT device = findHardwareDevice()) {
+            egl.display = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, device, nullptr);
+            ctx->m_caps.platform = "device";
+        } else if (platform == "device") {
+            throw GpuError("gl::Context: VOLSTYLE_EGL=device but no EGL GPU device was found");
+        }
+    }
+    if (egl.display == EGL_NO_DISPLAY) {
+        if (!epoxy_has_egl_extension(EGL_NO_DISPLAY, "EGL_MESA_platform_surfaceless"))
+            throw GpuError("gl::Context: no EGL GPU device and no EGL_MESA_platform_surfaceless; install libegl-mesa0");
+        egl.display = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+        ctx->m_caps.platform = "surfaceless";
+    }
+    EGLint major = 0, minor = 0;
+    if (egl.display == EGL_NO_DISPLAY || !eglInitialize(egl.display, &major, &minor))
+        throw GpuError("gl::Context: eglInitialize failed on the " + ctx->m_caps.platform + " platform");
+    if (!eglBindAPI(EGL_OPENGL_API)) throw GpuError("gl::Context: this EGL has no desktop OpenGL");
+
+    // A configless, surfaceless GL 4.5 core context: compute work only, no default framebuffer.
+    const bool debug = options.debug || envOr("VOLSTYLE_GL_DEBUG", "0") == "1";
+    const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4,
+                                 EGL_CONTEXT_MINOR_VERSION, 5,
+                                 EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                                 EGL_CONTEXT_OPENGL_DEBUG, debug ? EGL_TRUE : EGL_FALSE,
+                                 EGL_NONE};
+    egl.context = eglCreateContext(egl.display, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attributes);
+    if (egl.context == EGL_NO_CONTEXT) {
+        throw GpuError("gl::Context: cannot create an OpenGL 4.5 core context (EGL error 0x" +
+                       fmt::format("{:x}", eglGetError()) + "); volstyle needs OpenGL 4.5");
+    }
+    ctx->makeCurrent();
+
+    Capabilities& caps = ctx->m_caps;
+    caps.glVersion = epoxy_gl_version();
+    caps.vendor = reinterpret_cast<const char*>(glGetString(GL_VENDOR));
+    caps.renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    caps.version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
+    caps.isSoftware = caps.renderer.find("llvmpipe") != std::string::npos ||
+                      caps.renderer.find("softpipe") != std::string::npos;
+    if (caps.glVersion < 45)
+        throw GpuError("gl::Context: '" + caps.renderer + "' offers OpenGL " + caps.version + "; volstyle needs 4.5");
+    caps.hasFloatAtomics = epoxy_has_gl_extension("GL_NV_shader_atomic_float");
+    glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &caps.max3DTextureSize);
+    glGetIntegerv(GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS, &caps.maxComputeInvocations);
+
+    glEnable(GL_DEBUG_OUTPUT);
+    if (debug) glEnable(GL_DEBUG_OUTPUT_SYNCHRONOUS);
+    glDebugMessageCallback(debugCallback, nullptr);
+    spdlog::debug("gl::Context: {} ({}) via EGL {} {}.{}, float atomics: {}", caps.renderer, caps.version,
+                  caps.platform, major, minor, caps.hasFloatAtomics ? "yes" : "no (CAS fallback)");
+    return ctx;
+}
+
+Context::~Context() {
+    if (!m_egl || m_egl->display == EGL_NO_DISPLAY) return;
+    eglMakeCurrent(m_egl->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    if (m_egl->context != EGL_NO_CONTEXT) eglDestroyContext(m_egl->display, m_egl->context);
+    eglTerminate(m_egl->display);
+}
+
+void Context::makeCurrent() {
+    if (!eglMakeCurrent(m_egl->display, EGL_NO_SURFACE, EGL_NO_SURFACE, m_egl->context))
+        throw GpuError("gl::Context: eglMakeCurrent failed");
+    m_owner = std::this_thread::get_id();
+}
+
+void Context::finish() { glFinish(); }
+
+}  // namespace volstyle::core::gl

@@ -1,0 +1,61 @@
+#pragma once
+/// \file context.h
+/// A headless OpenGL 4.5 core context through EGL: an EGL GPU device when one exists, otherwise
+/// Mesa's surfaceless platform (llvmpipe). `VOLSTYLE_EGL=device|surfaceless` forces one.
+/// The context is current on the thread that created it; every GL object must be created, used
+/// and destroyed on that thread.
+
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace volstyle::core::gl {
+
+/// What the context can do, read once at start-up.
+struct Capabilities {
+    std::string platform;   ///< "device" or "surfaceless"
+    std::string vendor, renderer, version;
+    int glVersion = 0;      ///< e.g. 45
+    bool isSoftware = false;        ///< llvmpipe / softpipe
+    bool hasFloatAtomics = false;   ///< GL_NV_shader_atomic_float (image/buffer float atomicAdd)
+    bool hasTimerQuery = true;      ///< core since 3.3
+    int max3DTextureSize = 0;
+    int maxComputeInvocations = 0;
+};
+
+struct ContextOptions {
+    /// "auto", "device" or "surfaceless"; empty = read VOLSTYLE_EGL, default "auto".
+    std::string platform;
+    /// Create a debug context (KHR_debug messages of every severity). Also VOLSTYLE_GL_DEBUG=1.
+    bool debug = false;
+};
+
+/// GL 4.5 core is required; these extensions are optional and switch code paths.
+const std::vector<std::string>& optionalExtensions();
+
+class Context {
+public:
+    /// Creates the context and makes it current. Throws GpuError with the reason (no EGL display,
+    /// GL older than 4.5, a required extension missing — named in the message).
+    static std::unique_ptr<Context> create(const ContextOptions& options = {});
+    ~Context();
+    Context(const Context&) = delete;
+    Context& operator=(const Context&) = delete;
+
+    const Capabilities& capabilities() const { return m_caps; }
+    /// Makes this context current on the calling thread (it is released from any other).
+    void makeCurrent();
+    bool isOwnedByThisThread() const { return std::this_thread::get_id() == m_owner; }
+    /// Blocks until the GPU has finished all submitted work.
+    void finish();
+
+private:
+    Context() = default;
+    struct Egl;
+    std::unique_ptr<Egl> m_egl;
+    Capabilities m_caps;
+    std::thread::id m_owner;
+};
+
+}  // namespace volstyle::core::gl

@@ -1,0 +1,190 @@
+// Image file I/O through OpenImageIO. The only translation unit that includes OIIO headers.
+
+#include "core/image/image_io.h"
+
+#include <OpenImageIO/imageio.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/errors.h"
+
+namespace volstyle::core {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string lowerExtension(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    return ext;
+}
+
+bool isFloatFormat(const OIIO::TypeDesc& t) {
+    return t.basetype == OIIO::TypeDesc::FLOAT || t.basetype == OIIO::TypeDesc::HALF ||
+           t.basetype == OIIO::TypeDesc::DOUBLE;
+}
+
+/// A file in the temp directory removed when this goes out of scope.
+struct TempFile {
+    std::string path;
+    explicit TempFile(const std::string& ext) {
+        std::string pattern = (fs::temp_directory_path() / "volstyle-XXXXXX").string() + ext;
+        std::vector<char> buf(pattern.begin(), pattern.end());
+        buf.push_back('\0');
+        int fd = mkstemps(buf.data(), int(ext.size()));
+        if (fd < 0) throw IoError("TempFile: cannot create a temporary file in " + fs::temp_directory_path().string());
+        close(fd);
+        path = buf.data();
+    }
+    ~TempFile() {
+        std::error_code ec;
+        fs::remove(path, ec);
+    }
+};
+
+/// Picks a file extension from the first bytes of an image, so uploads need no file name.
+std::string sniffExtension(const unsigned char* p, size_t n) {
+    auto starts = [&](std::initializer_list<unsigned char> magic) {
+        return n >= magic.size() && std::equal(magic.begin(), magic.end(), p);
+    };
+    if (starts({0x89, 'P', 'N', 'G'})) return ".png";
+    if (starts({0xFF, 0xD8, 0xFF})) return ".jpg";
+    if (starts({'I', 'I', 42, 0}) || starts({'M', 'M', 0, 42})) return ".tif";
+    if (starts({0x76, 0x2F, 0x31, 0x01})) return ".exr";
+    if (starts({'#', '?'})) return ".hdr";
+    return "";
+}
+
+}  // namespace
+
+LoadedImage loadImage(const std::string& path, int maxSide) {
+    if (!fs::exists(path)) throw IoError("loadImage(): no such file '" + path + "'");
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) {
+        throw IoError("loadImage(): cannot read '" + path + "' as an image: " + OIIO::geterror());
+    }
+    const OIIO::ImageSpec& spec = in->spec();
+    if (spec.width < 1 || spec.height < 1 || spec.width > maxSide || spec.height > maxSide) {
+        throw InvalidArgument("loadImage(): '" + path + "' is " + std::to_string(spec.width) + "x" +
+                              std::to_string(spec.height) + "; each side must be in [1, " +
+                              std::to_string(maxSide) + "]");
+    }
+    if (spec.depth > 1) throw InvalidArgument("loadImage(): '" + path + "' is a volume image");
+    const int nch = spec.nchannels;
+    std::vector<float> pixels(size_t(spec.width) * spec.height * nch);
+    if (!in->read_image(0, 0, 0, nch, OIIO::TypeDesc::FLOAT, pixels.data())) {
+        throw IoError("loadImage(): '" + path + "' is corrupt or truncated: " + in->geterror());
+    }
+    in->close();
+
+    LoadedImage out;
+    out.channels = nch;
+    out.hasAlpha = spec.alpha_channel >= 0 || nch == 4 || nch == 2;
+    out.wasSrgb = !isFloatFormat(spec.format);
+    out.image = Image(spec.width, spec.height);
+    const int alphaIndex = spec.alpha_channel >= 0 ? spec.alpha_channel : (nch == 4 ? 3 : (nch == 2 ? 1 : -1));
+    for (size_t i = 0; i < out.image.pixelCount(); ++i) {
+        const float* src = &pixels[i * nch];
+        float* dst = &out.image.rgba[i * 4];
+        // Grey (1-2 channels) broadcasts to RGB; the colour channels are the first non-alpha ones.
+        int colour[3];
+        int k = 0;
+        for (int c = 0; c < nch && k < 3; ++c)
+            if (c != alphaIndex) colour[k++] = c;
+        for (int c = 0; c < 3; ++c) {
+            float v = src[colour[k == 1 ? 0 : std::min(c, k - 1)]];
+            dst[c] = out.wasSrgb ? srgbToLinear(v) : v;
+        }
+        dst[3] = alphaIndex >= 0 ? src[alphaIndex] : 1.0f;
+    }
+    size_t bad = out.image.countNonFinite();
+    if (bad > 0) {
+        throw InvalidArgument("loadImage(): '" + path + "' contains " + std::to_string(bad) +
+                              " non-finite (NaN or Inf) values; fix or clamp them before uploading");
+    }
+    return out;
+}
+
+LoadedImage loadImageFromMemory(const void* data, size_t size, const std::string& nameHint,
+                                int maxSide) {
+    std::string ext = sniffExtension(static_cast<const unsigned char*>(data), size);
+    if (ext.empty()) {
+        throw InvalidArgument("loadImageFromMemory(): '" + nameHint +
+                              "' is not a supported image (PNG, JPEG, TIFF, EXR or HDR)");
+    }
+    TempFile tmp(ext);
+    {
+        std::ofstream f(tmp.path, std::ios::binary);
+        f.write(static_cast<const char*>(data), std::streamsize(size));
+        if (!f) throw IoError("loadImageFromMemory(): cannot write a temporary file");
+    }
+    try {
+        return loadImage(tmp.path, maxSide);
+    } catch (const Error& e) {
+        // Name the upload, not the temporary file, in the message.
+        std::string msg = e.what();
+        for (size_t pos; (pos = msg.find(tmp.path)) != std::string::npos;)
+            msg.replace(pos, tmp.path.size(), nameHint);
+        if (dynamic_cast<const InvalidArgument*>(&e)) throw InvalidArgument(msg);
+        throw IoError(msg);
+    }
+}
+
+void saveImage(const std::string& path, const Image& image, const SaveOptions& options) {
+    if (image.empty()) throw InvalidArgument("saveImage(): the image is empty");
+    const std::string ext = lowerExtension(path);
+    const bool isFloatFile = ext == ".exr" || ext == ".hdr";
+    const bool isKnown = isFloatFile || ext == ".png" || ext == ".jpg" || ext == ".jpeg" ||
+                         ext == ".tif" || ext == ".tiff";
+    if (!isKnown) {
+        throw InvalidArgument("saveImage(): unsupported extension '" + ext + "' in '" + path +
+                              "'; use .png, .jpg, .tif, .exr or .hdr");
+    }
+    const bool keepAlpha = ext == ".exr" || (options.writeAlpha && ext != ".jpg" && ext != ".jpeg" && ext != ".hdr");
+    const int nch = keepAlpha ? 4 : 3;
+    const float scale = float(std::exp2(options.exposure));
+
+    std::vector<float> pixels(image.pixelCount() * nch);
+    for (size_t i = 0; i < image.pixelCount(); ++i) {
+        for (int c = 0; c < 3; ++c) {
+            float v = image.rgba[i * 4 + c] * scale;
+            if (!isFloatFile) v = linearToSrgb(std::clamp(v, 0.0f, 1.0f));
+            pixels[i * nch + c] = v;
+        }
+        if (keepAlpha) pixels[i * nch + 3] = image.rgba[i * 4 + 3];
+    }
+
+    OIIO::TypeDesc format = OIIO::TypeDesc::UINT8;
+    if (ext == ".exr") format = options.halfFloat ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT;
+    else if (ext == ".hdr") format = OIIO::TypeDesc::FLOAT;
+    else if (options.bits == 16 && ext != ".jpg" && ext != ".jpeg") format = OIIO::TypeDesc::UINT16;
+
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) throw IoError("saveImage(): no writer for '" + path + "': " + OIIO::geterror());
+    OIIO::ImageSpec spec(image.width, image.height, nch, format);
+    if (keepAlpha) spec.alpha_channel = 3;
+    spec.attribute("oiio:ColorSpace", isFloatFile ? "linear" : "sRGB");
+    if (!out->open(path, spec) ||
+        !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close()) {
+        throw IoError("saveImage(): cannot write '" + path + "': " + out->geterror());
+    }
+}
+
+std::string encodeImage(const Image& image, const std::string& format, const SaveOptions& options) {
+    if (format != "png" && format != "exr")
+        throw InvalidArgument("encodeImage(): format must be 'png' or 'exr', got '" + format + "'");
+    TempFile tmp("." + format);
+    saveImage(tmp.path, image, options);
+    std::ifstream f(tmp.path, std::ios::binary);
+    std::ostringstream s;
+    s << f.rdbuf();
+    return s.str();
+}
+
+}  // namespace volstyle::core

@@ -1,0 +1,42 @@
+#pragma once
+/// \file image_io.h
+/// Image files through OpenImageIO (kept inside image_io.cpp). 8/16-bit formats (PNG, JPEG,
+/// TIFF) are sRGB: linearised on load, encoded on save. Float formats (EXR, HDR, float TIFF) are
+/// linear. Alpha, when present, is kept (as a weight for targets).
+
+#include <string>
+
+#include "core/image/image.h"
+
+namespace volstyle::core {
+
+struct LoadedImage {
+    Image image;
+    bool hasAlpha = false;
+    int channels = 0;
+    bool wasSrgb = false;  ///< the file was 8/16-bit and was linearised
+};
+
+/// Loads an image file. Throws IoError (missing, corrupt or truncated file) or InvalidArgument
+/// (non-finite values, more than `maxSide` pixels on a side).
+LoadedImage loadImage(const std::string& path, int maxSide = 8192);
+
+/// Loads an image from bytes in memory (an upload); `nameHint` is used in error messages.
+LoadedImage loadImageFromMemory(const void* data, size_t size, const std::string& nameHint,
+                                int maxSide = 8192);
+
+struct SaveOptions {
+    double exposure = 0;        ///< stops; applied as 2^exposure before encoding
+    bool writeAlpha = false;    ///< PNG/TIFF: keep alpha (EXR always has it)
+    bool halfFloat = true;      ///< EXR: half instead of float
+    int bits = 8;               ///< PNG/TIFF: 8 or 16
+};
+
+/// Saves by extension (.png .jpg .jpeg .tif .tiff .exr .hdr). Throws IoError / InvalidArgument.
+void saveImage(const std::string& path, const Image& image, const SaveOptions& options = {});
+
+/// Encodes to PNG or EXR bytes in memory (for HTTP answers): `format` is "png" or "exr".
+std::string encodeImage(const Image& image, const std::string& format,
+                        const SaveOptions& options = {});
+
+}  // namespace volstyle::core

@@ -1,0 +1,96 @@
+#include "core/render/params.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "core/errors.h"
+
+namespace volstyle::core {
+namespace {
+
+bool isFinite(const Vec3d& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+void throwIfAny(const char* what, const std::vector<FieldProblem>& problems) {
+    if (problems.empty()) return;
+    std::string msg;
+    for (const auto& p : problems) msg += (msg.empty() ? "" : "; ") + std::string(what) + "." + p.field + ": " + p.message;
+    throw InvalidArgument(msg);
+}
+
+}  // namespace
+
+std::vector<FieldProblem> Camera::check() const {
+    std::vector<FieldProblem> out;
+    if (!isFinite(eye)) out.push_back({"eye", "must be finite"});
+    if (!isFinite(target)) out.push_back({"target", "must be finite"});
+    if (!isFinite(up) || length(up) < 1e-12) out.push_back({"up", "must be a finite non-zero vector"});
+    if (out.empty()) {
+        Vec3d view = target - eye;
+        if (length(view) < 1e-9) {
+            out.push_back({"target", "must differ from eye"});
+        } else if (length(cross(normalize(view), normalize(up))) < 1e-6) {
+            out.push_back({"up", "must not be parallel to the view direction (target - eye)"});
+        }
+    }
+    if (!(fovYDeg > 0 && fovYDeg < 180)) out.push_back({"fov_y_deg", "must be in (0, 180)"});
+    if (width < 1 || width > 8192) out.push_back({"width", "must be in [1, 8192]"});
+    if (height < 1 || height > 8192) out.push_back({"height", "must be in [1, 8192]"});
+    if (!(nearDist >= 0) || !std::isfinite(nearDist)) out.push_back({"near", "must be finite and >= 0"});
+    if (!(farDist > nearDist)) out.push_back({"far", "must be greater than near"});
+    return out;
+}
+
+void Camera::validate() const { throwIfAny("camera", check()); }
+
+Camera::Frame Camera::frame() const {
+    Frame f;
+    f.forward = normalize(target - eye);
+    f.right = normalize(cross(f.forward, up));
+    f.up = cross(f.right, f.forward);
+    return f;
+}
+
+Vec3d Camera::rayDirection(double px, double py) const {
+    // Pixel centre (px+0.5, py+0.5) mapped to [-1,1]² with y up; the image plane sits at distance
+    // 1 with half-height tan(fov/2).
+    Frame f = frame();
+    double tanHalf = std::tan(fovYDeg * std::numbers::pi / 360.0);
+    double aspect = double(width) / double(height);
+    double sx = (2.0 * (px + 0.5) / width - 1.0) * tanHalf * aspect;
+    double sy = (1.0 - 2.0 * (py + 0.5) / height) * tanHalf;
+    return normalize(f.forward + f.right * sx + f.up * sy);
+}
+
+std::vector<FieldProblem> Lighting::check() const {
+    std::vector<FieldProblem> out;
+    if (lights.size() > size_t(kMaxLights))
+        out.push_back({"lights", "at most " + std::to_string(kMaxLights) + " lights are supported"});
+    for (size_t i = 0; i < lights.size(); ++i) {
+        const auto& l = lights[i];
+        std::string name = "lights/" + std::to_string(i);
+        if (!isFinite(l.direction) || length(l.direction) < 1e-12)
+            out.push_back({name + "/direction", "must be a finite non-zero vector"});
+        if (!isFinite(l.irradiance) || minComponent(l.irradiance) < 0)
+            out.push_back({name + "/irradiance", "must be finite and >= 0"});
+    }
+    if (!isFinite(background.color) || minComponent(background.color) < 0)
+        out.push_back({"background", "must be finite and >= 0"});
+    if (phase.type == PhaseType::HenyeyGreenstein && !(phase.g > -1 && phase.g < 1))
+        out.push_back({"phase/g", "must be in (-1, 1)"});
+    if (background.environment && background.environment->empty())
+        out.push_back({"background/environment", "the environment map is empty"});
+    return out;
+}
+
+void Lighting::validate() const { throwIfAny("lighting", check()); }
+
+void RenderSettings::validate() const {
+    std::vector<FieldProblem> out;
+    if (!(stepVoxels >= 0.01 && stepVoxels <= 16))
+        out.push_back({"step", "must be in [0.01, 16] voxels, got " + std::to_string(stepVoxels)});
+    if (!(terminationThreshold >= 0 && terminationThreshold < 1))
+        out.push_back({"termination_threshold", "must be in [0, 1)"});
+    throwIfAny("render", out);
+}
+
+}  // namespace volstyle::core

@@ -1,0 +1,96 @@
+#pragma once
+/// \file params.h
+/// GL-free value types that describe a rendering (SPEC §1): camera, lighting and settings.
+/// protocol/ may include this header; it never touches GL.
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/image/image.h"
+#include "core/math/vec.h"
+
+namespace volstyle::core {
+
+/// A field of a parameter struct and what is wrong with it (protocol/ maps it to a JSON Pointer).
+struct FieldProblem {
+    std::string field;    ///< e.g. "fov_y_deg", "lights/0/irradiance"
+    std::string message;
+};
+
+/// Pinhole camera (SPEC §1). Pixel (0,0) is the top-left pixel; rays pass through pixel centres.
+struct Camera {
+    Vec3d eye{0, 0, 3};
+    Vec3d target{0, 0, 0};
+    Vec3d up{0, 1, 0};
+    double fovYDeg = 40;
+    int width = 480;
+    int height = 480;
+    double nearDist = 0;                  ///< rays start this far from the eye (world units)
+    double farDist = 1e30;                ///< and end here (the "surface depth" when no mesh)
+
+    /// Every problem as (field, message), fields named as in the JSON API (`fov_y_deg`): eye =
+    /// target, up parallel to the view direction, fov outside (0,180), sizes outside [1, 8192],
+    /// near/far not 0 <= near < far, non-finite values.
+    std::vector<FieldProblem> check() const;
+    /// Throws InvalidArgument listing check()'s problems.
+    void validate() const;
+
+    /// Orthonormal camera frame: forward (eye->target), right, and true up.
+    struct Frame {
+        Vec3d forward, right, up;
+    };
+    Frame frame() const;
+
+    /// World-space direction (unit length) of the ray through the centre of pixel (px, py).
+    Vec3d rayDirection(double px, double py) const;
+};
+
+/// A directional light (the sun): `direction` points from the scene toward the light.
+struct DirectionalLight {
+    Vec3d direction{0.4, 0.8, 0.3};
+    Vec3d irradiance{1, 1, 1};  ///< E_l, RGB
+};
+
+enum class PhaseType { Isotropic, HenyeyGreenstein };
+
+/// Phase function p(cos) with cos = ω_l·(−ω) (SPEC §1). Henyey–Greenstein uses pbrt's sign
+/// convention, so g > 0 scatters forward: bright when looking toward the light.
+struct Phase {
+    PhaseType type = PhaseType::Isotropic;
+    double g = 0;  ///< HG asymmetry in (-1, 1)
+};
+
+/// Radiance arriving from behind the volume: a constant colour or a lat-long environment map.
+struct Background {
+    Vec3d color{0, 0, 0};
+    /// Latitude-longitude map, looked up by ray direction: u = 0.5 + atan2(ω.x, −ω.z)/2π
+    /// (so −z is the centre of the image), v = acos(ω.y)/π (+y is the top row). Linear RGB.
+    std::shared_ptr<const Image> environment;
+};
+
+constexpr int kMaxLights = 4;
+
+struct Lighting {
+    std::vector<DirectionalLight> lights{DirectionalLight{}};  ///< at most kMaxLights
+    Background background;
+    Phase phase;
+
+    std::vector<FieldProblem> check() const;
+    void validate() const;  ///< throws InvalidArgument listing check()'s problems
+};
+
+/// Quality/speed knobs of the ray marcher.
+struct RenderSettings {
+    double stepVoxels = 0.5;        ///< march step, in voxels of the extinction grid
+    bool skipEmptySpace = true;     ///< jump over occupancy bricks with zero extinction
+    /// Stop a ray once every channel's transmittance is below this. The radiance lost is at most
+    /// this fraction of the brightest medium radiance behind; 1e-5 keeps it under 1e-4 relative.
+    double terminationThreshold = 1e-5;
+    bool hardwareFilter = false;    ///< sample with the texture unit (fast, 8-bit weights on GPUs)
+
+    void validate() const;
+};
+
+}  // namespace volstyle::core

@@ -1,0 +1,63 @@
+// Sampling the property grids. Index space: voxel (i,j,k) has its centre at (i,j,k); values are
+// trilinear between centres, clamped to the edge within the voxels' box [-0.5, n-0.5]³, and zero
+// outside it (the march never samples outside).
+#include "common/params.glsl"
+
+#ifndef VOLSTYLE_HW_FILTER
+#define VOLSTYLE_HW_FILTER 0
+#endif
+
+layout(binding = kUnitExtinction) uniform sampler3D s_extinction;
+layout(binding = kUnitOccupancy) uniform sampler3D s_occupancy;
+
+// The 8-voxel trilinear stencil of index-space point p: corners i0..i1, weights from f.
+struct Stencil {
+    ivec3 i0;
+    ivec3 i1;
+    vec3 f;
+    vec3 p;
+};
+
+Stencil stencilAt(vec3 p) {
+    Stencil s;
+    vec3 q = clamp(p, vec3(0.0), vec3(u.dims.xyz - 1));
+    s.i0 = min(ivec3(floor(q)), u.dims.xyz - 1);
+    s.i1 = min(s.i0 + 1, u.dims.xyz - 1);
+    s.f = q - vec3(s.i0);
+    s.p = p;
+    return s;
+}
+
+vec3 fetchTrilinear(sampler3D tex, Stencil s) {
+#if VOLSTYLE_HW_FILTER
+    // The texture unit's filter (clamp-to-edge sampler): fast, but GPUs quantise its weights.
+    return texture(tex, (s.p + 0.5) / vec3(u.dims.xyz)).rgb;
+#else
+    vec3 c000 = texelFetch(tex, ivec3(s.i0.x, s.i0.y, s.i0.z), 0).rgb;
+    vec3 c100 = texelFetch(tex, ivec3(s.i1.x, s.i0.y, s.i0.z), 0).rgb;
+    vec3 c010 = texelFetch(tex, ivec3(s.i0.x, s.i1.y, s.i0.z), 0).rgb;
+    vec3 c110 = texelFetch(tex, ivec3(s.i1.x, s.i1.y, s.i0.z), 0).rgb;
+    vec3 c001 = texelFetch(tex, ivec3(s.i0.x, s.i0.y, s.i1.z), 0).rgb;
+    vec3 c101 = texelFetch(tex, ivec3(s.i1.x, s.i0.y, s.i1.z), 0).rgb;
+    vec3 c011 = texelFetch(tex, ivec3(s.i0.x, s.i1.y, s.i1.z), 0).rgb;
+    vec3 c111 = texelFetch(tex, ivec3(s.i1.x, s.i1.y, s.i1.z), 0).rgb;
+    vec3 c00 = mix(c000, c100, s.f.x), c10 = mix(c010, c110, s.f.x);
+    vec3 c01 = mix(c001, c101, s.f.x), c11 = mix(c011, c111, s.f.x);
+    return mix(mix(c00, c10, s.f.y), mix(c01, c11, s.f.y), s.f.z);
+#endif
+}
+
+// Ray (o + t d) against the voxels' box, in index space: [tEnter, tExit], empty if x > y.
+vec2 intersectVolumeBox(vec3 o, vec3 d) {
+    vec3 invD = 1.0 / mix(d, vec3(1e-30), equal(d, vec3(0.0)));
+    vec3 t0 = (vec3(-0.5) - o) * invD;
+    vec3 t1 = (vec3(u.dims.xyz) - 0.5 - o) * invD;
+    vec3 lo = min(t0, t1), hi = max(t0, t1);
+    return vec2(max(lo.x, max(lo.y, lo.z)), min(hi.x, min(hi.y, hi.z)));
+}
+
+// 1 - exp(-x) without cancellation for small optical depths (thin media, σt down to 1e-8).
+vec3 oneMinusExp(vec3 x) {
+    vec3 series = x * (1.0 - x * (0.5 - x * (1.0 / 6.0)));
+    return mix(1.0 - exp(-x), series, lessThan(x, vec3(1e-3)));
+}

@@ -1,0 +1,66 @@
+/* layout.h — shared by C++ and GLSL (STYLE §3.5, PNanoVDB style): the std140 uniform block of the
+ * ray-marching kernels, binding points and workgroup sizes. The GLSL loader defines VOLSTYLE_GLSL;
+ * the C++ side maps the vector types to 16-byte aligned structs. tests/unit/layout_test.cpp checks
+ * sizes and offsets. Only vec4/ivec4/mat4 members: std140 then equals the C++ layout. */
+#ifndef VOLSTYLE_LAYOUT_H
+#define VOLSTYLE_LAYOUT_H
+
+#ifdef VOLSTYLE_GLSL
+#define VS_VEC4 vec4
+#define VS_IVEC4 ivec4
+#define VS_MAT4 mat4
+#define VS_CONSTANT(type, name, value) const type name = value
+#else
+#include <cstdint>
+namespace volstyle::core::layout {
+struct alignas(16) Float4 { float x = 0, y = 0, z = 0, w = 0; };
+struct alignas(16) Int4 { int32_t x = 0, y = 0, z = 0, w = 0; };
+struct alignas(16) Float4x4 { float m[16] = {}; };  /* column-major, as GLSL mat4 */
+#define VS_VEC4 Float4
+#define VS_IVEC4 Int4
+#define VS_MAT4 Float4x4
+#define VS_CONSTANT(type, name, value) constexpr type name = value
+#endif
+
+VS_CONSTANT(int, kWorkgroup2D, 8);   /* render kernel: 8x8 pixels */
+VS_CONSTANT(int, kWorkgroup3D, 4);   /* volume kernels: 4x4x4 voxels */
+VS_CONSTANT(int, kBrickSize, 8);     /* occupancy brick edge, in voxels */
+VS_CONSTANT(int, kLightSlots, 4);    /* light-depth volumes bound at once */
+
+/* Binding points. */
+VS_CONSTANT(int, kBindingParams, 0);       /* UBO MarchParams */
+VS_CONSTANT(int, kBindingImageOut, 0);     /* SSBO vec4 pixels[] */
+VS_CONSTANT(int, kUnitExtinction, 0);
+VS_CONSTANT(int, kUnitAlbedo, 1);
+VS_CONSTANT(int, kUnitEmission, 2);
+VS_CONSTANT(int, kUnitEnvironment, 3);
+VS_CONSTANT(int, kUnitOccupancy, 4);
+VS_CONSTANT(int, kUnitLightDepth0, 5);     /* 5..8 */
+VS_CONSTANT(int, kImageUnitOut, 0);        /* image store target of volume kernels */
+
+/* Everything a march needs: camera, grid, lighting. World-space t parameterises rays. */
+struct MarchParams {
+    VS_MAT4 indexFromWorld;
+    VS_VEC4 eye;             /* xyz: camera position (world) */
+    VS_VEC4 camForward;      /* xyz: unit view direction; w: tan(fov_y / 2) */
+    VS_VEC4 camRight;        /* xyz: unit right; w: aspect (width / height) */
+    VS_VEC4 camUp;           /* xyz: unit up */
+    VS_VEC4 rayRange;        /* x: near, y: far (world distance from the eye) */
+    VS_IVEC4 dims;           /* xyz: voxels of the extinction grid */
+    VS_IVEC4 brickDims;      /* xyz: occupancy bricks */
+    VS_IVEC4 imageSize;      /* x: width, y: height; z: light index (light kernel) */
+    VS_VEC4 march;           /* x: step (voxels), y: termination threshold on transmittance */
+    VS_VEC4 background;      /* rgb: constant background radiance */
+    VS_VEC4 phase;           /* x: 0 isotropic, 1 Henyey-Greenstein; y: g */
+    VS_VEC4 lightDirection[kLightSlots];   /* xyz: unit world direction toward the light */
+    VS_VEC4 lightIrradiance[kLightSlots];  /* rgb: E_l */
+};
+
+#ifndef VOLSTYLE_GLSL
+}  /* namespace volstyle::core::layout */
+#endif
+#undef VS_VEC4
+#undef VS_IVEC4
+#undef VS_MAT4
+#undef VS_CONSTANT
+#endif

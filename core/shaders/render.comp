@@ -1,0 +1,80 @@
+// Single-scattering rendering (SPEC §1; TVCG Eq. 1-2): one invocation per pixel marches its ray
+// through the volume, accumulating emission and sun in-scattering attenuated by transmittance,
+// then adds the attenuated background.
+//
+// Variant defines: VOLSTYLE_HAS_EMISSION, VOLSTYLE_HAS_ALBEDO (else albedo 1),
+// VOLSTYLE_NUM_LIGHTS (0..kLightSlots; 0 skips in-scattering), VOLSTYLE_HAS_ENVIRONMENT,
+// VOLSTYLE_SKIP_EMPTY, VOLSTYLE_HW_FILTER.
+#include "common/march.glsl"
+#include "common/lighting.glsl"
+
+layout(local_size_x = kWorkgroup2D, local_size_y = kWorkgroup2D) in;
+
+layout(std430, binding = kBindingImageOut) writeonly buffer b_Image {
+    vec4 pixels[];
+};
+
+#if VOLSTYLE_HAS_EMISSION
+layout(binding = kUnitEmission) uniform sampler3D s_emission;
+#endif
+#if VOLSTYLE_HAS_ALBEDO
+layout(binding = kUnitAlbedo) uniform sampler3D s_albedo;
+#endif
+
+// Pinhole camera: the ray through the centre of pixel `pix` (row 0 at the top).
+vec3 cameraRay(ivec2 pix) {
+    vec2 ndc = (vec2(pix) + 0.5) / vec2(u.imageSize.xy) * 2.0 - 1.0;
+    float tanHalf = u.camForward.w, aspect = u.camRight.w;
+    return normalize(u.camForward.xyz + u.camRight.xyz * (ndc.x * tanHalf * aspect) -
+                     u.camUp.xyz * (ndc.y * tanHalf));
+}
+
+void main() {
+    ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
+    if (pix.x >= u.imageSize.x || pix.y >= u.imageSize.y) return;
+
+    // Set up the view ray in index space, parameterised by world distance t.
+    vec3 dir = cameraRay(pix);
+    vec3 o = (u.indexFromWorld * vec4(u.eye.xyz, 1.0)).xyz;
+    vec3 d = mat3(u.indexFromWorld) * dir;
+    vec2 range = intersectVolumeBox(o, d);
+    range = vec2(max(range.x, u.rayRange.x), min(range.y, u.rayRange.y));
+
+    vec3 radiance = vec3(0.0);
+    vec3 transmittance = vec3(1.0);
+    if (range.x < range.y) {
+        Segments seg = makeSegments(range, d);
+        for (int i = 0; i < seg.count;) {
+            int next = skipEmptyBricks(i, seg, o, d);
+            if (next != i) {
+                i = next;
+                continue;
+            }
+            Stencil st = stencilAt(o + segmentMidpoint(seg, i) * d);
+            vec3 sigma = fetchTrilinear(s_extinction, st);
+            ++i;
+            if (max3(sigma) <= 0.0) continue;
+
+            // Medium radiance L_m = L_e + ρ L_scat at the segment midpoint (Eq. 2).
+            vec3 Lm = vec3(0.0);
+#if VOLSTYLE_HAS_EMISSION
+            Lm += fetchTrilinear(s_emission, st);
+#endif
+#if VOLSTYLE_NUM_LIGHTS > 0
+#if VOLSTYLE_HAS_ALBEDO
+            vec3 albedo = fetchTrilinear(s_albedo, st);
+#else
+            vec3 albedo = vec3(1.0);
+#endif
+            Lm += albedo * inScattering(st, dir);
+#endif
+            // Segment of optical depth τ = σ dt: opacity 1 - e^{-τ}, then attenuate.
+            vec3 tau = sigma * seg.dt;
+            radiance += transmittance * oneMinusExp(tau) * Lm;
+            transmittance *= exp(-tau);
+            if (max3(transmittance) < u.march.y) break;  // early ray termination
+        }
+    }
+    radiance += transmittance * backgroundRadiance(dir);
+    pixels[pix.y * u.imageSize.x + pix.x] = vec4(radiance, 1.0 - (transmittance.r + transmittance.g + transmittance.b) / 3.0);
+}

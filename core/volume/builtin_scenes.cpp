@@ -1,0 +1,154 @@
+#include "core/volume/builtin_scenes.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+#include "core/errors.h"
+#include "core/volume/noise.h"
+
+namespace volstyle::core {
+namespace {
+
+double smoothstep(double a, double b, double x) {
+    double t = std::clamp((x - a) / (b - a), 0.0, 1.0);
+    return t * t * (3 - 2 * t);
+}
+
+/// Wyvill's soft-object kernel: 1 at the centre, 0 at radius, C1 smooth.
+double blobKernel(double distance, double radius) {
+    double q = distance / radius;
+    if (q >= 1) return 0;
+    double s = 1 - q * q;
+    return s * s * s;
+}
+
+struct VoxelProperties {
+    Vec3 extinction, albedo, emission;
+};
+using SceneFunction = std::function<VoxelProperties(const Vec3d& world)>;
+
+/// Evaluates `f` at every voxel centre, slices in parallel.
+Volume sample(int resolution, bool hasEmission, const SceneFunction& f) {
+    Int3 dims{resolution, resolution, resolution};
+    Volume v(dims, unitBoxWorldFromIndex(dims));
+    auto& ext = v.extinction();
+    auto& alb = v.ensureAlbedo();
+    std::vector<float>* emi = hasEmission ? &v.ensureEmission() : nullptr;
+    tbb::parallel_for(tbb::blocked_range<int>(0, resolution), [&](const tbb::blocked_range<int>& r) {
+        for (int k = r.begin(); k != r.end(); ++k)
+            for (int j = 0; j < resolution; ++j)
+                for (int i = 0; i < resolution; ++i) {
+                    VoxelProperties p = f(v.worldFromIndex().applyPoint({double(i), double(j), double(k)}));
+                    size_t n = 3 * v.index(i, j, k);
+                    for (int c = 0; c < 3; ++c) {
+                        ext[n + c] = p.extinction[c];
+                        alb[n + c] = p.albedo[c];
+                        if (emi) (*emi)[n + c] = p.emission[c];
+                    }
+                }
+    });
+    return v;
+}
+
+/// Cumulus: blended implicit blobs — a broad flat base, a middle layer and towers — whose lookup
+/// position is displaced by multi-octave noise, with billowy (cauliflower) noise on the surface
+/// and a flat bottom (Kniss et al. Sec. 3.4: implicit shapes perturbed by noise).
+Volume makeCloud(int res) {
+    struct Blob {
+        Vec3d c;
+        double r;
+    };
+    const std::vector<Blob> blobs = {
+        // base layer, wide and low
+        {{-0.62, -0.38, 0.05}, 0.34}, {{-0.25, -0.40, -0.10}, 0.40}, {{0.15, -0.40, 0.08}, 0.42},
+        {{0.55, -0.38, -0.05}, 0.36}, {{-0.05, -0.38, 0.38}, 0.32}, {{0.05, -0.40, -0.40}, 0.32},
+        // middle
+        {{-0.35, -0.08, 0.02}, 0.33}, {{0.05, -0.02, -0.05}, 0.38}, {{0.40, -0.10, 0.08}, 0.30},
+        // towers
+        {{-0.10, 0.28, 0.02}, 0.28}, {{0.18, 0.32, -0.05}, 0.25}, {{0.02, 0.55, 0.0}, 0.20},
+    };
+    PerlinNoise noise(7);
+    const double sigmaMax = 40.0;  // per world unit: optical depth ~40 across the core
+    return sample(res, false, [&](const Vec3d& p) {
+        Vec3d q = p + noise.fbm3(p * 2.2, 3) * 0.10;  // large-scale lumpiness
+        double field = 0;
+        for (const auto& b : blobs) field += blobKernel(length(q - b.c), b.r);
+        // Billows: 1 - |noise| has rounded crests and sharp creases, like cauliflower tops.
+        double billow = 1.0 - 2.0 * std::abs(noise.fbm(q * 5.5 + Vec3d(3.1, 0, 0), 3));
+        double wisps = noise.fbm(p * 14.0, 2);
+        double base = smoothstep(-0.66, -0.56, p.y);  // flat bottom
+        double density = smoothstep(0.22, 0.5, field + 0.16 * billow + 0.05 * wisps) * base;
+        return VoxelProperties{Vec3(float(sigmaMax * density)), Vec3(1.0f), Vec3(0.0f)};
+    });
+}
+
+/// A smoke column rising from the floor: its radius grows and its density falls with height, its
+/// axis wanders, and turbulent displacement grows as it rises.
+Volume makePlume(int res) {
+    PerlinNoise noise(11);
+    return sample(res, false, [&](const Vec3d& p) {
+        double h = std::clamp((p.y + 0.95) / 1.9, 0.0, 1.0);  // 0 at the source, 1 at the top
+        Vec3d q = p + noise.fbm3(p * 3.0 + Vec3d(0, -1.5 * h, 0), 4) * (0.03 + 0.22 * h);
+        double cx = 0.25 * noise.fbm({0.3, q.y * 1.2, 0.7}, 2);
+        double cz = 0.25 * noise.fbm({5.1, q.y * 1.2, 2.3}, 2);
+        double radius = 0.07 + 0.38 * std::pow(h, 0.8);
+        double r = std::hypot(q.x - cx, q.z - cz);
+        double column = 1 - smoothstep(0.55 * radius, radius, r);
+        double ends = smoothstep(-0.97, -0.9, p.y) * (1 - smoothstep(0.75, 0.95, p.y));
+        double wisps = std::clamp(0.75 + 0.6 * noise.fbm(q * 6.0, 3), 0.0, 1.0);
+        double density = column * ends * wisps * (1.0 - 0.6 * h);
+        return VoxelProperties{Vec3(float(25.0 * density)), Vec3(0.75f), Vec3(0.0f)};
+    });
+}
+
+Volume makeSphere(int res) {
+    return sample(res, false, [](const Vec3d& p) {
+        double density = 1 - smoothstep(0.3, 0.8, length(p));
+        return VoxelProperties{Vec3(float(8.0 * density)), Vec3(0.9f), Vec3(0.0f)};
+    });
+}
+
+Volume makeCube(int res) {
+    return sample(res, false, [](const Vec3d&) {
+        return VoxelProperties{Vec3(2.0f), Vec3(0.8f), Vec3(0.0f)};
+    });
+}
+
+}  // namespace
+
+const std::vector<BuiltinSceneInfo>& builtinScenes() {
+    static const std::vector<BuiltinSceneInfo> scenes = {
+        {"cloud", "a cumulus cloud: noise-perturbed blended blobs with a flat base"},
+        {"plume", "a rising, spreading smoke column with turbulent detail"},
+        {"sphere", "a sphere of smoke with a smooth falloff"},
+        {"cube", "a cube of constant extinction (closed-form tests)"},
+    };
+    return scenes;
+}
+
+Mat4 unitBoxWorldFromIndex(Int3 dims) {
+    double h = 2.0 / std::max({dims.x, dims.y, dims.z});
+    Vec3d origin{-0.5 * dims.x * h + 0.5 * h, -0.5 * dims.y * h + 0.5 * h, -0.5 * dims.z * h + 0.5 * h};
+    return Mat4::translate(origin) * Mat4::scale(Vec3d(h));
+}
+
+Volume makeBuiltinScene(const std::string& name, int resolution) {
+    if (resolution < kMinSceneResolution || resolution > kMaxSceneResolution) {
+        throw InvalidArgument("makeBuiltinScene(): resolution must be in [" +
+                              std::to_string(kMinSceneResolution) + ", " +
+                              std::to_string(kMaxSceneResolution) + "], got " + std::to_string(resolution));
+    }
+    if (name == "cloud") return makeCloud(resolution);
+    if (name == "plume") return makePlume(resolution);
+    if (name == "sphere") return makeSphere(resolution);
+    if (name == "cube") return makeCube(resolution);
+    std::string known;
+    for (const auto& s : builtinScenes()) known += (known.empty() ? "" : ", ") + s.name;
+    throw InvalidArgument("makeBuiltinScene(): unknown scene '" + name + "'; built-in scenes: " + known);
+}
+
+}  // namespace volstyle::core

@@ -1,0 +1,121 @@
+#include "protocol/render_json.h"
+
+namespace volstyle::protocol {
+namespace {
+
+nlohmann::json toJson(const Vec3d& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
+
+/// Adds the value-range problems core reports, as pointers below `path`.
+void addProblems(JsonReader& r, const std::string& path, const std::vector<core::FieldProblem>& problems) {
+    for (const auto& p : problems) r.fail(path + "/" + p.field, p.message);
+}
+
+}  // namespace
+
+core::Camera cameraFromJson(const nlohmann::json& j, const std::string& path) {
+    JsonReader r;
+    core::Camera cam;
+    if (r.object(j, path, {"eye", "target", "up", "fov_y_deg", "width", "height", "near", "far"})) {
+        for (const char* required : {"eye", "target"})
+            if (!j.contains(required)) r.fail(path + "/" + required, "is required");
+        if (j.contains("eye")) cam.eye = r.vec3(j["eye"], path + "/eye").value_or(cam.eye);
+        if (j.contains("target")) cam.target = r.vec3(j["target"], path + "/target").value_or(cam.target);
+        if (j.contains("up")) cam.up = r.vec3(j["up"], path + "/up").value_or(cam.up);
+        if (j.contains("fov_y_deg")) cam.fovYDeg = r.number(j["fov_y_deg"], path + "/fov_y_deg").value_or(cam.fovYDeg);
+        if (j.contains("width")) cam.width = r.integer(j["width"], path + "/width").value_or(cam.width);
+        if (j.contains("height")) cam.height = r.integer(j["height"], path + "/height").value_or(cam.height);
+        if (j.contains("near")) cam.nearDist = r.number(j["near"], path + "/near").value_or(cam.nearDist);
+        if (j.contains("far")) cam.farDist = r.number(j["far"], path + "/far").value_or(cam.farDist);
+        if (r.ok()) addProblems(r, path, cam.check());
+    }
+    r.throwIfErrors();
+    return cam;
+}
+
+nlohmann::json cameraToJson(const core::Camera& c) {
+    nlohmann::json j = {{"eye", toJson(c.eye)}, {"target", toJson(c.target)}, {"up", toJson(c.up)},
+                        {"fov_y_deg", c.fovYDeg}, {"width", c.width}, {"height", c.height}};
+    if (c.nearDist > 0) j["near"] = c.nearDist;
+    if (c.farDist < 1e30) j["far"] = c.farDist;
+    return j;
+}
+
+namespace {
+
+std::optional<core::DirectionalLight> lightFromJson(JsonReader& r, const nlohmann::json& j, const std::string& path) {
+    if (!r.object(j, path, {"direction", "irradiance"})) return std::nullopt;
+    core::DirectionalLight l;
+    for (const char* required : {"direction", "irradiance"})
+        if (!j.contains(required)) r.fail(path + "/" + required, "is required");
+    if (j.contains("direction")) l.direction = r.vec3(j["direction"], path + "/direction").value_or(l.direction);
+    if (j.contains("irradiance")) l.irradiance = r.vec3(j["irradiance"], path + "/irradiance").value_or(l.irradiance);
+    return l;
+}
+
+}  // namespace
+
+LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& path, bool allowFilePaths) {
+    JsonReader r;
+    LightingRequest out;
+    core::Lighting& L = out.lighting;
+    L.lights.clear();
+    if (r.object(j, path, {"sun", "lights", "background", "phase"})) {
+        if (j.contains("sun"))
+            if (auto l = lightFromJson(r, j["sun"], path + "/sun")) L.lights.push_back(*l);
+        if (j.contains("lights")) {
+            if (!j["lights"].is_array()) {
+                r.fail(path + "/lights", "must be an array of lights");
+            } else {
+                for (size_t i = 0; i < j["lights"].size(); ++i)
+                    if (auto l = lightFromJson(r, j["lights"][i], path + "/lights/" + std::to_string(i)))
+                        L.lights.push_back(*l);
+            }
+        }
+        if (j.contains("background")) {
+            const auto& b = j["background"];
+            const std::string bp = path + "/background";
+            if (b.is_array()) {
+                L.background.color = r.vec3(b, bp).value_or(L.background.color);
+            } else if (r.object(b, bp, {"color", "environment"})) {
+                if (b.contains("color")) L.background.color = r.vec3(b["color"], bp + "/color").value_or(L.background.color);
+                if (b.contains("environment")) {
+                    if (!allowFilePaths) r.fail(bp + "/environment", "file paths are not accepted here; upload the map instead");
+                    else out.environmentPath = r.string(b["environment"], bp + "/environment");
+                }
+            }
+        }
+        if (j.contains("phase") && r.object(j["phase"], path + "/phase", {"type", "g"})) {
+            const auto& ph = j["phase"];
+            std::string type = ph.contains("type") ? r.string(ph["type"], path + "/phase/type").value_or("") : "isotropic";
+            if (type == "isotropic") {
+                L.phase.type = core::PhaseType::Isotropic;
+            } else if (type == "henyey_greenstein") {
+                L.phase.type = core::PhaseType::HenyeyGreenstein;
+            } else if (!type.empty()) {
+                r.fail(path + "/phase/type", "must be 'isotropic' or 'henyey_greenstein', got '" + type + "'");
+            }
+            if (ph.contains("g")) L.phase.g = r.number(ph["g"], path + "/phase/g").value_or(0);
+        }
+        if (r.ok()) addProblems(r, path, L.check());
+    }
+    r.throwIfErrors();
+    return out;
+}
+
+nlohmann::json lightingToJson(const core::Lighting& L) {
+    nlohmann::json j;
+    if (L.lights.size() == 1) {
+        j["sun"] = {{"direction", toJson(L.lights[0].direction)}, {"irradiance", toJson(L.lights[0].irradiance)}};
+    } else if (!L.lights.empty()) {
+        j["lights"] = nlohmann::json::array();
+        for (const auto& l : L.lights)
+            j["lights"].push_back({{"direction", toJson(l.direction)}, {"irradiance", toJson(l.irradiance)}});
+    }
+    j["background"] = toJson(L.background.color);
+    j["phase"] = L.phase.type == core::PhaseType::Isotropic
+                     ? nlohmann::json{{"type", "isotropic"}}
+                     : nlohmann::json{{"type", "henyey_greenstein"}, {"g", L.phase.g}};
+    return j;
+}
+
+}  // namespace volstyle::protocol

@@ -1,0 +1,38 @@
+#pragma once
+/// \file render_json.h
+/// JSON forms of the camera and the lighting (SPEC §1, §3), shared by the HTTP API and the CLI's
+/// CAM.json / L.json files.
+///
+/// Camera: {"eye":[x,y,z], "target":[x,y,z], "up":[0,1,0], "fov_y_deg":40, "width":480,
+///          "height":480, "near":0, "far":1e30}   (eye and target required)
+/// Lighting: {"sun":{"direction":[x,y,z],"irradiance":[r,g,b]}, "lights":[{…}, …],
+///            "background":[r,g,b] | {"color":[r,g,b]} | {"environment":"sky.exr"},
+///            "phase":{"type":"isotropic"} | {"type":"henyey_greenstein","g":0.3}}
+/// `sun` and `lights` together give at most 4 lights; no `sun` and no `lights` means no light.
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+
+#include "core/render/params.h"
+#include "protocol/validation.h"
+
+namespace volstyle::protocol {
+
+/// Throws ValidationError listing every invalid field (paths below `path`).
+core::Camera cameraFromJson(const nlohmann::json& j, const std::string& path = "");
+nlohmann::json cameraToJson(const core::Camera& camera);
+
+struct LightingRequest {
+    core::Lighting lighting;
+    /// `background.environment`: an image path. Only the CLI accepts it (relative to the JSON
+    /// file); the API never takes server-side paths.
+    std::optional<std::string> environmentPath;
+};
+
+LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& path = "",
+                                 bool allowFilePaths = false);
+nlohmann::json lightingToJson(const core::Lighting& lighting);
+
+}  // namespace volstyle::protocol

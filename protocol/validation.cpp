@@ -1,0 +1,105 @@
+#include "protocol/validation.h"
+
+#include <cmath>
+
+namespace volstyle::protocol {
+namespace {
+
+std::string summarize(const std::vector<FieldError>& details) {
+    std::string s;
+    for (size_t i = 0; i < details.size() && i < 3; ++i)
+        s += (i ? "; " : "") + (details[i].path.empty() ? std::string("(document)") : details[i].path) + ": " +
+             details[i].message;
+    if (details.size() > 3) s += "; and " + std::to_string(details.size() - 3) + " more";
+    return s;
+}
+
+const char* typeName(const nlohmann::json& j) { return j.type_name(); }
+
+}  // namespace
+
+ValidationError::ValidationError(std::vector<FieldError> details)
+    : InvalidArgument(summarize(details)), m_details(std::move(details)) {
+    m_onlyUnknownFields = !m_details.empty();
+    for (const auto& d : m_details) m_onlyUnknownFields &= d.message.rfind("unknown field", 0) == 0;
+}
+
+const char* ValidationError::code() const noexcept {
+    return m_onlyUnknownFields ? "unknown_field" : "invalid_argument";
+}
+
+bool JsonReader::object(const nlohmann::json& j, const std::string& path,
+                        std::initializer_list<const char*> allowed) {
+    if (!j.is_object()) {
+        fail(path, std::string("must be an object, got ") + typeName(j));
+        return false;
+    }
+    for (const auto& [key, value] : j.items()) {
+        bool known = false;
+        for (const char* a : allowed) known |= key == a;
+        if (!known) {
+            std::string list;
+            for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+            fail(path + "/" + key, "unknown field; allowed: " + list);
+        }
+    }
+    return true;
+}
+
+std::optional<double> JsonReader::number(const nlohmann::json& j, const std::string& path) {
+    if (!j.is_number()) {
+        fail(path, std::string("must be a number, got ") + typeName(j));
+        return std::nullopt;
+    }
+    double v = j.get<double>();
+    if (!std::isfinite(v)) {
+        fail(path, "must be finite");
+        return std::nullopt;
+    }
+    return v;
+}
+
+std::optional<int> JsonReader::integer(const nlohmann::json& j, const std::string& path) {
+    if (!j.is_number_integer()) {
+        fail(path, std::string("must be an integer, got ") + typeName(j));
+        return std::nullopt;
+    }
+    return j.get<int>();
+}
+
+std::optional<std::string> JsonReader::string(const nlohmann::json& j, const std::string& path) {
+    if (!j.is_string()) {
+        fail(path, std::string("must be a string, got ") + typeName(j));
+        return std::nullopt;
+    }
+    return j.get<std::string>();
+}
+
+std::optional<Vec3d> JsonReader::vec3(const nlohmann::json& j, const std::string& path) {
+    if (!j.is_array() || j.size() != 3) {
+        fail(path, std::string("must be an array of 3 numbers, got ") + typeName(j));
+        return std::nullopt;
+    }
+    Vec3d v;
+    bool good = true;
+    for (int i = 0; i < 3; ++i) {
+        auto c = number(j[size_t(i)], path + "/" + std::to_string(i));
+        good &= c.has_value();
+        if (c) v[i] = *c;
+    }
+    return good ? std::optional<Vec3d>(v) : std::nullopt;
+}
+
+void JsonReader::throwIfErrors() const {
+    if (!m_errors.empty()) throw ValidationError(m_errors);
+}
+
+nlohmann::json parseJson(const std::string& text, const std::string& what) {
+    try {
+        return nlohmann::json::parse(text);
+    } catch (const nlohmann::json::parse_error& e) {
+        throw ValidationError({{"", what + " is not valid JSON: " + e.what()}});
+    }
+}
+
+}  // namespace volstyle::protocol

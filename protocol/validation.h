@@ -1,0 +1,61 @@
+#pragma once
+/// \file validation.h
+/// Field-level validation of JSON requests: every problem is collected with its JSON Pointer
+/// (`/camera/fov_y_deg`) so one answer lists them all (SPEC §3).
+
+#include <nlohmann/json.hpp>
+
+#include <initializer_list>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/errors.h"
+#include "core/math/vec.h"
+
+namespace volstyle::protocol {
+
+constexpr const char* kApiVersion = "v1";
+
+struct FieldError {
+    std::string path;     ///< JSON Pointer of the offending field
+    std::string message;  ///< what is wrong and what is allowed
+};
+
+/// Thrown when a request has invalid fields; `details()` lists each. `code()` is
+/// "unknown_field" when every problem is an unknown field, "invalid_argument" otherwise.
+class ValidationError : public InvalidArgument {
+public:
+    explicit ValidationError(std::vector<FieldError> details);
+    const std::vector<FieldError>& details() const { return m_details; }
+    const char* code() const noexcept override;
+
+private:
+    std::vector<FieldError> m_details;
+    bool m_onlyUnknownFields = false;
+};
+
+/// Reads typed values out of JSON, recording a FieldError instead of throwing.
+class JsonReader {
+public:
+    /// Checks `j` is an object whose keys are all in `allowed`; records each unknown key.
+    bool object(const nlohmann::json& j, const std::string& path, std::initializer_list<const char*> allowed);
+    std::optional<double> number(const nlohmann::json& j, const std::string& path);
+    std::optional<int> integer(const nlohmann::json& j, const std::string& path);
+    std::optional<std::string> string(const nlohmann::json& j, const std::string& path);
+    std::optional<Vec3d> vec3(const nlohmann::json& j, const std::string& path);
+    void fail(const std::string& path, const std::string& message) { m_errors.push_back({path, message}); }
+
+    bool ok() const { return m_errors.empty(); }
+    /// Throws ValidationError if anything was recorded.
+    void throwIfErrors() const;
+    const std::vector<FieldError>& errors() const { return m_errors; }
+
+private:
+    std::vector<FieldError> m_errors;
+};
+
+/// Parses JSON text, throwing ValidationError (path "") with the parser's message.
+nlohmann::json parseJson(const std::string& text, const std::string& what);
+
+}  // namespace volstyle::protocol

@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# Configures (once) and builds volstyle in Release into build/. Used by run.sh and test.sh.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+launcher=()
+if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
+if [ ! -f build/CMakeCache.txt ]; then
+  cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "${launcher[@]}"
+fi
+cmake --build build -j"$(nproc)"

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Installs the Debian packages volstyle builds and runs with, only those that are missing.
+# Idempotent: a second run installs nothing. Needs root (or sudo) when something is missing.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config ccache
+  libegl-dev libepoxy-dev libegl-mesa0 libgl1-mesa-dri   # headless GL: EGL + Mesa llvmpipe
+  libopenvdb-dev libboost-iostreams-dev libtbb-dev         # OpenVDB (FindOpenVDB needs boost-iostreams)
+  libopenimageio-dev                                       # images (found with pkg-config)
+  libspdlog-dev libfmt-dev nlohmann-json3-dev libcpp-httplib-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+echo "install_deps: installing ${missing[*]}" >&2
+sudo_cmd=()
+if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -qq
+"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,69 @@
+#include "server/cli.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/errors.h"
+
+namespace volstyle::server {
+
+std::string Arguments::get(const std::string& name, const std::string& fallback) const {
+    auto it = options.find(name);
+    return it == options.end() ? fallback : it->second;
+}
+
+double Arguments::number(const std::string& name, double fallback) const {
+    if (!has(name)) return fallback;
+    const std::string& s = get(name);
+    size_t used = 0;
+    double v = 0;
+    try {
+        v = std::stod(s, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used == 0 || used != s.size() || !std::isfinite(v))
+        throw InvalidArgument("--" + name + " must be a number, got '" + s + "'");
+    return v;
+}
+
+Arguments parseArguments(const std::vector<std::string>& args, const std::vector<std::string>& known,
+                         const std::vector<std::string>& flags) {
+    auto isIn = [](const std::vector<std::string>& v, const std::string& s) {
+        return std::find(v.begin(), v.end(), s) != v.end();
+    };
+    Arguments out;
+    for (size_t i = 0; i < args.size(); ++i) {
+        std::string a = args[i];
+        if (a.size() < 2 || a[0] != '-') {
+            out.positional.push_back(a);
+            continue;
+        }
+        std::string name = a == "-o" ? "output" : a.substr(a.rfind("--", 0) == 0 ? 2 : 1);
+        std::string value;
+        bool hasValue = false;
+        if (auto eq = name.find('='); eq != std::string::npos) {
+            value = name.substr(eq + 1);
+            name = name.substr(0, eq);
+            hasValue = true;
+        }
+        if (!isIn(known, name) && !isIn(flags, name)) {
+            std::string list;
+            for (const auto& k : known) list += " --" + k;
+            for (const auto& f : flags) list += " --" + f;
+            throw InvalidArgument("unknown option '" + a + "'; options:" + list);
+        }
+        if (isIn(flags, name)) {
+            out.options[name] = "1";
+            continue;
+        }
+        if (!hasValue) {
+            if (i + 1 >= args.size()) throw InvalidArgument("option '" + a + "' needs a value");
+            value = args[++i];
+        }
+        out.options[name] = value;
+    }
+    return out;
+}
+
+}  // namespace volstyle::server

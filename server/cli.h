@@ -1,0 +1,30 @@
+#pragma once
+/// \file cli.h
+/// The `volstyle` subcommands (SPEC §4). Each returns the process exit status: 0 success,
+/// 2 bad input (one line on stderr), 1 anything else.
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace volstyle::server {
+
+/// `--name value`, `--name=value`, `-o value` and bare flags; positional arguments in order.
+struct Arguments {
+    std::map<std::string, std::string> options;
+    std::vector<std::string> positional;
+
+    bool has(const std::string& name) const { return options.count(name) > 0; }
+    std::string get(const std::string& name, const std::string& fallback = "") const;
+    double number(const std::string& name, double fallback) const;
+};
+
+/// Parses argv (after the subcommand); `flags` are options that take no value. Unknown options
+/// throw InvalidArgument naming them and listing `known`.
+Arguments parseArguments(const std::vector<std::string>& args, const std::vector<std::string>& known,
+                         const std::vector<std::string>& flags);
+
+int runRender(const std::vector<std::string>& args);
+int runInfo(const std::vector<std::string>& args);
+
+}  // namespace volstyle::server

@@ -1,0 +1,57 @@
+// `volstyle info FILE.vdb`: the grids of a VDB file — names, types, dimensions, transform and
+// value ranges — and whether volstyle can load it.
+
+#include <fmt/format.h>
+
+#include <iostream>
+
+#include "core/errors.h"
+#include "core/volume/vdb_io.h"
+#include "server/cli.h"
+
+namespace volstyle::server {
+
+int runInfo(const std::vector<std::string>& argv) {
+    Arguments args = parseArguments(argv, {}, {"help"});
+    if (args.has("help") || args.positional.size() != 1) {
+        if (!args.has("help")) throw InvalidArgument("usage: volstyle info FILE.vdb");
+        std::cout << "usage: volstyle info FILE.vdb\n";
+        return 0;
+    }
+    const std::string path = args.positional[0];
+    auto grids = core::inspectVdb(path);
+    std::cout << path << ": " << grids.size() << " grid(s)\n";
+    for (const auto& g : grids) {
+        Int3 dims{g.activeMax.x - g.activeMin.x + 1, g.activeMax.y - g.activeMin.y + 1, g.activeMax.z - g.activeMin.z + 1};
+        if (g.activeVoxels == 0) dims = {0, 0, 0};
+        std::cout << fmt::format("  {:<18} {:<6} {:<10} active voxels {:>10}  bbox [{} {} {}]..[{} {} {}]  dims {}x{}x{}\n",
+                                 g.name, g.type, g.gridClass, g.activeVoxels, g.activeMin.x, g.activeMin.y,
+                                 g.activeMin.z, g.activeMax.x, g.activeMax.y, g.activeMax.z, dims.x, dims.y, dims.z);
+        std::cout << fmt::format("    voxel size [{:g} {:g} {:g}]", g.voxelSize.x, g.voxelSize.y, g.voxelSize.z);
+        if (g.isLinearTransform) {
+            const Mat4& m = g.worldFromIndex;
+            std::cout << fmt::format("  world from index [[{:g} {:g} {:g} {:g}] [{:g} {:g} {:g} {:g}] [{:g} {:g} {:g} {:g}]]",
+                                     m(0, 0), m(0, 1), m(0, 2), m(0, 3), m(1, 0), m(1, 1), m(1, 2), m(1, 3),
+                                     m(2, 0), m(2, 1), m(2, 2), m(2, 3));
+        } else {
+            std::cout << "  non-linear (frustum) transform";
+        }
+        std::cout << "\n";
+        if (g.type == "float")
+            std::cout << fmt::format("    values [{:g}, {:g}]\n", g.minValue.x, g.maxValue.x);
+        else
+            std::cout << fmt::format("    values [{:g} {:g} {:g}] .. [{:g} {:g} {:g}]\n", g.minValue.x, g.minValue.y,
+                                     g.minValue.z, g.maxValue.x, g.maxValue.y, g.maxValue.z);
+    }
+    try {
+        core::Volume v = core::loadVdb(path);
+        std::cout << fmt::format("loads as a {}x{}x{} volume with {}{}\n", v.dims().x, v.dims().y, v.dims().z,
+                                 v.hasAlbedo() ? "albedo" : "default albedo 1",
+                                 v.hasEmission() ? ", emission" : ", no emission");
+    } catch (const InvalidArgument& e) {
+        std::cout << "does not load: " << e.what() << "\n";
+    }
+    return 0;
+}
+
+}  // namespace volstyle::server
