@@ -86,22 +86,23 @@ Volume makeCloud(int res) {
     });
 }
 
-/// A smoke column rising from the floor: its radius grows and its density falls with height, its
-/// axis wanders, and turbulent displacement grows as it rises.
+/// A smoke column rising from a source near the floor: its radius grows and its density falls
+/// with height, its axis wanders, and turbulent displacement and wispy breakup grow as it rises.
 Volume makePlume(int res) {
     PerlinNoise noise(11);
     return sample(res, false, [&](const Vec3d& p) {
-        double h = std::clamp((p.y + 0.95) / 1.9, 0.0, 1.0);  // 0 at the source, 1 at the top
-        Vec3d q = p + noise.fbm3(p * 3.0 + Vec3d(0, -1.5 * h, 0), 4) * (0.03 + 0.22 * h);
-        double cx = 0.25 * noise.fbm({0.3, q.y * 1.2, 0.7}, 2);
-        double cz = 0.25 * noise.fbm({5.1, q.y * 1.2, 2.3}, 2);
-        double radius = 0.07 + 0.38 * std::pow(h, 0.8);
+        double h = std::clamp((p.y + 0.9) / 1.8, 0.0, 1.0);  // 0 at the source, 1 at the top
+        Vec3d q = p + noise.fbm3(p * 2.5 + Vec3d(0, -2.0 * h, 0), 4) * (0.02 + 0.30 * h * h);
+        double cx = 0.30 * h * noise.fbm({0.3, q.y * 1.1, 0.7}, 2);
+        double cz = 0.30 * h * noise.fbm({5.1, q.y * 1.1, 2.3}, 2);
+        double radius = 0.06 + 0.42 * std::pow(h, 0.9);
         double r = std::hypot(q.x - cx, q.z - cz);
-        double column = 1 - smoothstep(0.55 * radius, radius, r);
-        double ends = smoothstep(-0.97, -0.9, p.y) * (1 - smoothstep(0.75, 0.95, p.y));
-        double wisps = std::clamp(0.75 + 0.6 * noise.fbm(q * 6.0, 3), 0.0, 1.0);
-        double density = column * ends * wisps * (1.0 - 0.6 * h);
-        return VoxelProperties{Vec3(float(25.0 * density)), Vec3(0.75f), Vec3(0.0f)};
+        double column = 1 - smoothstep(0.35 * radius, radius, r);
+        double top = 1 - smoothstep(0.45, 0.92, q.y + 0.15 * noise.fbm(q * 3.0, 2));
+        double bottom = smoothstep(-0.95, -0.85, p.y);
+        double wisps = std::clamp(0.55 + 1.2 * noise.fbm(q * 7.0 + Vec3d(0, -3.0 * h, 0), 4), 0.0, 1.0);
+        double density = column * top * bottom * wisps * (1.0 - 0.7 * h);
+        return VoxelProperties{Vec3(float(14.0 * density)), Vec3(0.7f), Vec3(0.0f)};
     });
 }
 
