@@ -110,12 +110,12 @@ Program ShaderBuilder::buildCompute() const {
     glCompileShader(shader);
     GLint ok = 0;
     glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    auto logOf = [](GLuint obj, bool isShader) {
+    auto logOf = [](GLuint obj, bool isShader) -> std::string {
         GLint len = 0;
         isShader ? glGetShaderiv(obj, GL_INFO_LOG_LENGTH, &len) : glGetProgramiv(obj, GL_INFO_LOG_LENGTH, &len);
         std::string log(size_t(std::max(len, 1)), '\0');
         isShader ? glGetShaderInfoLog(obj, len, nullptr, log.data()) : glGetProgramInfoLog(obj, len, nullptr, log.data());
-        return log.c_str();
+        return std::string(log.c_str());  // drop the terminating NULs
     };
     if (!ok) {
         std::string log = rewriteCompileLog(logOf(shader, true), src.files);

@@ -65,7 +65,10 @@ std::string sniffExtension(const unsigned char* p, size_t n) {
 
 LoadedImage loadImage(const std::string& path, int maxSide) {
     if (!fs::exists(path)) throw IoError("loadImage(): no such file '" + path + "'");
-    auto in = OIIO::ImageInput::open(path);
+    // Alpha is a weight, not coverage: keep colours unassociated (OIIO would premultiply).
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = OIIO::ImageInput::open(path, &config);
     if (!in) {
         throw IoError("loadImage(): cannot read '" + path + "' as an image: " + OIIO::geterror());
     }
@@ -170,6 +173,7 @@ void saveImage(const std::string& path, const Image& image, const SaveOptions& o
     OIIO::ImageSpec spec(image.width, image.height, nch, format);
     if (keepAlpha) spec.alpha_channel = 3;
     spec.attribute("oiio:ColorSpace", isFloatFile ? "linear" : "sRGB");
+    if (!isFloatFile) spec.attribute("oiio:UnassociatedAlpha", 1);  // PNG/TIFF alpha is a weight
     if (!out->open(path, spec) ||
         !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close()) {
         throw IoError("saveImage(): cannot write '" + path + "': " + out->geterror());

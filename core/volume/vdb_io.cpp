@@ -2,11 +2,13 @@
 
 #include "core/volume/vdb_io.h"
 
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/Prune.h>
 
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <mutex>
 #include <sstream>
@@ -102,12 +104,16 @@ void densify(const openvdb::GridBase::Ptr& grid, const openvdb::GridBase& refere
 openvdb::GridPtrVecPtr readAllGrids(const std::string& path) {
     initOpenVdb();
     if (!fs::exists(path)) throw IoError("loadVdb(): no such file '" + path + "'");
+    // OpenVDB keeps reading a truncated file with garbage sizes and may allocate gigabytes. A
+    // stream that throws on any short read stops it at the first missing byte instead.
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError("loadVdb(): cannot open '" + path + "'");
+    in.exceptions(std::ios::failbit | std::ios::badbit);
     try {
-        openvdb::io::File file(path);
-        file.open();
-        auto grids = file.getGrids();
-        file.close();
-        return grids;
+        openvdb::io::Stream stream(in, /*delayLoad=*/false);
+        return stream.getGrids();
+    } catch (const std::ios_base::failure&) {
+        throw IoError("loadVdb(): '" + path + "' is truncated (it ends before its grids do)");
     } catch (const openvdb::Exception& e) {
         throw IoError("loadVdb(): '" + path + "' is not a readable OpenVDB file (corrupt or truncated): " + e.what());
     } catch (const std::exception& e) {

@@ -1,5 +1,6 @@
 // Sun in-scattering, phase functions and the background (SPEC §1).
 #include "common/volume.glsl"
+#include "common/precise_math.glsl"
 
 #ifndef VOLSTYLE_NUM_LIGHTS
 #define VOLSTYLE_NUM_LIGHTS 0
@@ -42,8 +43,19 @@ layout(binding = kUnitEnvironment) uniform sampler2D s_environment;
 // or the constant colour.
 vec3 backgroundRadiance(vec3 dir) {
 #if VOLSTYLE_HAS_ENVIRONMENT
-    vec2 uv = vec2(0.5 + atan(dir.x, -dir.z) * 0.15915494309189535, acos(clamp(dir.y, -1.0, 1.0)) * 0.3183098861837907);
-    return texture(s_environment, uv).rgb;
+    vec2 uv = vec2(0.5 + preciseAtan2(dir.x, -dir.z) / (2.0 * kPi),
+                   preciseAtan2(length(dir.xz), dir.y) / kPi);
+    // Bilinear by hand (texel centres at (i + 0.5) / size, longitude wraps, latitude clamps):
+    // texture units quantise filter weights on GPUs, and this is once per pixel.
+    ivec2 size = textureSize(s_environment, 0);
+    vec2 xy = uv * vec2(size) - 0.5;
+    ivec2 i0 = ivec2(floor(xy));
+    vec2 f = xy - vec2(i0);
+    int x0 = ((i0.x % size.x) + size.x) % size.x, x1 = (x0 + 1) % size.x;
+    int y0 = clamp(i0.y, 0, size.y - 1), y1 = clamp(i0.y + 1, 0, size.y - 1);
+    vec3 top = mix(texelFetch(s_environment, ivec2(x0, y0), 0).rgb, texelFetch(s_environment, ivec2(x1, y0), 0).rgb, f.x);
+    vec3 bottom = mix(texelFetch(s_environment, ivec2(x0, y1), 0).rgb, texelFetch(s_environment, ivec2(x1, y1), 0).rgb, f.x);
+    return mix(top, bottom, f.y);
 #else
     return u.background.rgb;
 #endif

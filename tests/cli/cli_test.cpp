@@ -1,0 +1,106 @@
+// The real `volstyle` binary: exit 0 on success, 2 with one clear line on bad input.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "../unit/test_files.h"
+#include "core/image/image_io.h"
+#include "core/volume/builtin_scenes.h"
+#include "core/volume/vdb_io.h"
+
+namespace fs = std::filesystem;
+using namespace volstyle;
+
+namespace {
+
+struct Result {
+    int status = -1;
+    std::string out;  // stdout + stderr
+};
+
+Result run(const std::string& args) {
+    std::string cmd = std::string(VOLSTYLE_BINARY) + " " + args + " 2>&1";
+    Result r;
+    FILE* pipe = popen(cmd.c_str(), "r");
+    std::array<char, 4096> buf;
+    while (size_t n = fread(buf.data(), 1, buf.size(), pipe)) r.out.append(buf.data(), n);
+    int st = pclose(pipe);
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    return r;
+}
+
+size_t lines(const std::string& s) { return size_t(std::count(s.begin(), s.end(), '\n')); }
+
+void writeText(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
+
+}  // namespace
+
+TEST(Cli, RendersABuiltinSceneToPngAndExr) {
+    auto dir = test::scratchDir();
+    std::string examples = std::string(VOLSTYLE_SOURCE_DIR) + "/docs/examples/";
+    writeText(dir / "cam.json", R"({"eye":[0,0,3],"target":[0,0,0],"width":32,"height":24})");
+    Result r = run("render --scene builtin:sphere:32 --camera " + (dir / "cam.json").string() + " --lighting " +
+                   examples + "lighting.json -o " + (dir / "s.png").string());
+    ASSERT_EQ(r.status, 0) << r.out;
+    core::LoadedImage png = core::loadImage((dir / "s.png").string());
+    EXPECT_EQ(png.image.width, 32);
+    EXPECT_EQ(png.image.height, 24);
+    r = run("render --scene builtin:sphere:32 --camera " + (dir / "cam.json").string() + " -o " + (dir / "s.exr").string());
+    ASSERT_EQ(r.status, 0) << r.out;
+    core::LoadedImage exr = core::loadImage((dir / "s.exr").string());
+    EXPECT_TRUE(exr.hasAlpha);
+    EXPECT_GT(exr.image.pixel(16, 12)[3], 0.5f) << "the sphere covers the centre";
+}
+
+TEST(Cli, DegenerateCameraIsExit2WithOneLine) {
+    auto dir = test::scratchDir();
+    writeText(dir / "cam.json", R"({"eye":[0,0,3],"target":[0,0,3],"fov_y_deg":0})");
+    Result r = run("render --scene builtin:cube:16 --camera " + (dir / "cam.json").string() + " -o " + (dir / "x.png").string());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(lines(r.out), 1u) << r.out;
+    EXPECT_NE(r.out.find("/target: must differ from eye"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("/fov_y_deg"), std::string::npos) << r.out;
+    EXPECT_FALSE(fs::exists(dir / "x.png"));
+}
+
+TEST(Cli, BadInputsAreExit2) {
+    auto dir = test::scratchDir();
+    test::writeBytes(dir / "junk.vdb", std::string(1000, 'j'));
+    writeText(dir / "bad.json", "{ not json");
+    const std::string out = " -o " + (dir / "x.png").string();
+    struct Case {
+        std::string args, expect;
+    } cases[] = {
+        {"render --scene " + (dir / "junk.vdb").string() + out, "not a readable OpenVDB"},
+        {"render --scene builtin:smoke" + out, "unknown scene 'smoke'"},
+        {"render --scene builtin:cube:16 --camera " + (dir / "missing.json").string() + out, "cannot read"},
+        {"render --scene builtin:cube:16 --camera " + (dir / "bad.json").string() + out, "not valid JSON"},
+        {"render --scene builtin:cube:16 --step 0" + out, "step"},
+        {"render --scene builtin:cube:16 --zoom 2" + out, "unknown option '--zoom'"},
+        {"render --scene builtin:cube:16 -o " + (dir / "x.bmp").string(), ".png or .exr"},
+        {"info " + (dir / "junk.vdb").string(), "not a readable OpenVDB"},
+        {"frobnicate", "unknown command"},
+    };
+    for (const auto& c : cases) {
+        Result r = run(c.args);
+        EXPECT_EQ(r.status, 2) << c.args << "\n" << r.out;
+        EXPECT_NE(r.out.find(c.expect), std::string::npos) << c.args << "\n" << r.out;
+    }
+}
+
+TEST(Cli, InfoDescribesAVdb) {
+    auto dir = test::scratchDir();
+    core::saveVdb((dir / "cube.vdb").string(), core::makeBuiltinScene("cube", 16));
+    Result r = run("info " + (dir / "cube.vdb").string());
+    ASSERT_EQ(r.status, 0) << r.out;
+    EXPECT_NE(r.out.find("density"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("dims 16x16x16"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("values [2, 2]"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("loads as a 16x16x16 volume"), std::string::npos) << r.out;
+    // And the file renders.
+    EXPECT_EQ(run("render --scene " + (dir / "cube.vdb").string() + " -o " + (dir / "c.png").string()).status, 0);
+}

@@ -1,0 +1,28 @@
+#pragma once
+// One GL context for the whole test binary, created on first use on the main thread. Without an
+// EGL context (no Mesa, no GPU) GL tests skip with the reason instead of failing.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "core/gl/context.h"
+#include "core/render/renderer.h"
+
+namespace volstyle::test {
+
+/// The shared context, or nullptr with `reason` set.
+core::gl::Context* glContext(std::string* reason = nullptr);
+/// A renderer on the shared context (kept for the whole run so programs compile once).
+core::Renderer& sharedRenderer();
+
+/// Largest |a − b| / (|b| + floor) over RGB of all pixels.
+double maxRelativeError(const core::Image& a, const core::Image& b, double floor);
+
+}  // namespace volstyle::test
+
+#define VOLSTYLE_REQUIRE_GL()                                                        \
+    do {                                                                             \
+        std::string volstyle_reason_;                                                \
+        if (!::volstyle::test::glContext(&volstyle_reason_))                         \
+            GTEST_SKIP() << "no EGL/OpenGL 4.5 context: " << volstyle_reason_;       \
+    } while (0)

@@ -1,0 +1,139 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "core/errors.h"
+#include "core/image/image_io.h"
+#include "test_files.h"
+
+using namespace volstyle;
+using namespace volstyle::core;
+
+namespace {
+
+Image gradient(int w, int h) {
+    Image img(w, h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            float* p = img.pixel(x, y);
+            p[0] = float(x) / (w - 1), p[1] = float(y) / (h - 1), p[2] = 0.25f, p[3] = float(x + y) / (w + h - 2);
+        }
+    return img;
+}
+
+}  // namespace
+
+TEST(Srgb, TransferFunctionsInvertEachOther) {
+    // Exact inverses up to float rounding (1e-6 absolute over [0,1]).
+    for (int i = 0; i <= 1000; ++i) {
+        float v = float(i) / 1000;
+        EXPECT_NEAR(srgbToLinear(linearToSrgb(v)), v, 1e-6f) << v;
+    }
+    EXPECT_NEAR(srgbToLinear(0.5f), 0.2140411f, 1e-6f);  // IEC 61966-2-1 value
+}
+
+TEST(ImageIo, Png16RoundTripLinearises) {
+    auto dir = test::scratchDir();
+    Image img = gradient(17, 9);
+    SaveOptions opt;
+    opt.bits = 16;
+    opt.writeAlpha = true;
+    saveImage((dir / "a.png").string(), img, opt);
+    LoadedImage back = loadImage((dir / "a.png").string());
+    EXPECT_TRUE(back.wasSrgb);
+    EXPECT_TRUE(back.hasAlpha);
+    ASSERT_EQ(back.image.width, 17);
+    // 16-bit sRGB quantisation: step 1/65535 in encoded space, slope of the decode ≤ 2.4 → 5e-5.
+    for (size_t i = 0; i < img.rgba.size(); ++i) EXPECT_NEAR(back.image.rgba[i], img.rgba[i], 5e-5f) << i;
+}
+
+TEST(ImageIo, Png8RoundTripWithinQuantisation) {
+    auto dir = test::scratchDir();
+    Image img = gradient(8, 8);
+    saveImage((dir / "a.png").string(), img);
+    LoadedImage back = loadImage((dir / "a.png").string());
+    EXPECT_FALSE(back.hasAlpha);  // written as RGB: alpha defaults to weight 1
+    for (size_t i = 0; i < img.pixelCount(); ++i) {
+        for (int c = 0; c < 3; ++c) {
+            // Half an 8-bit step in encoded space, times the decode slope (≤ 1 above 0.04).
+            float v = img.rgba[i * 4 + c];
+            EXPECT_NEAR(back.image.rgba[i * 4 + c], v, 0.5f / 255 * std::max(1.0f, 3.0f * v) + 1e-3f);
+        }
+        EXPECT_EQ(back.image.rgba[i * 4 + 3], 1.0f);
+    }
+}
+
+TEST(ImageIo, ExrIsLinearAndExact) {
+    auto dir = test::scratchDir();
+    Image img = gradient(5, 4);
+    img.pixel(1, 1)[0] = 37.5f;  // HDR value survives
+    SaveOptions opt;
+    opt.halfFloat = false;
+    saveImage((dir / "a.exr").string(), img, opt);
+    LoadedImage back = loadImage((dir / "a.exr").string());
+    EXPECT_FALSE(back.wasSrgb);
+    EXPECT_EQ(back.image.rgba, img.rgba);
+}
+
+TEST(ImageIo, ExposureScalesPngOnly) {
+    auto dir = test::scratchDir();
+    Image img(1, 1);
+    img.pixel(0, 0)[0] = 0.1f;
+    SaveOptions opt;
+    opt.exposure = 1;  // ×2
+    opt.bits = 16;
+    saveImage((dir / "a.png").string(), img, opt);
+    EXPECT_NEAR(loadImage((dir / "a.png").string()).image.rgba[0], 0.2f, 1e-4f);
+}
+
+TEST(ImageIo, CorruptPngIsIoError) {
+    auto dir = test::scratchDir();
+    test::writeBytes(dir / "bad.png", "\x89PNG\r\n\x1a\nthis is not a png at all");
+    EXPECT_THROW(loadImage((dir / "bad.png").string()), IoError);
+}
+
+TEST(ImageIo, TruncatedPngIsIoError) {
+    auto dir = test::scratchDir();
+    saveImage((dir / "a.png").string(), gradient(64, 64));
+    std::string bytes = test::readBytes(dir / "a.png");
+    test::writeBytes(dir / "cut.png", bytes.substr(0, bytes.size() / 2));
+    try {
+        loadImage((dir / "cut.png").string());
+        FAIL() << "a truncated PNG loaded";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("cut.png"), std::string::npos) << e.what();
+    }
+}
+
+TEST(ImageIo, NonFiniteValuesAreRejected) {
+    auto dir = test::scratchDir();
+    Image img = gradient(4, 4);
+    img.pixel(2, 3)[1] = std::numeric_limits<float>::quiet_NaN();
+    img.pixel(0, 0)[0] = std::numeric_limits<float>::infinity();
+    SaveOptions opt;
+    opt.halfFloat = false;
+    saveImage((dir / "nan.exr").string(), img, opt);
+    try {
+        loadImage((dir / "nan.exr").string());
+        FAIL() << "NaN image loaded";
+    } catch (const InvalidArgument& e) {
+        EXPECT_NE(std::string(e.what()).find("2 non-finite"), std::string::npos) << e.what();
+    }
+}
+
+TEST(ImageIo, MissingFileAndUnknownFormat) {
+    EXPECT_THROW(loadImage("/nonexistent/x.png"), IoError);
+    const std::string junk = "GIF89a not supported";
+    EXPECT_THROW(loadImageFromMemory(junk.data(), junk.size(), "upload"), InvalidArgument);
+    EXPECT_THROW(saveImage("/tmp/x.bmp", gradient(2, 2)), InvalidArgument);
+}
+
+TEST(ImageIo, FromMemoryMatchesFile) {
+    auto dir = test::scratchDir();
+    saveImage((dir / "a.png").string(), gradient(6, 6));
+    std::string bytes = test::readBytes(dir / "a.png");
+    LoadedImage m = loadImageFromMemory(bytes.data(), bytes.size(), "upload");
+    EXPECT_EQ(m.image.rgba, loadImage((dir / "a.png").string()).image.rgba);
+    EXPECT_EQ(encodeImage(gradient(6, 6), "png"), bytes);
+}

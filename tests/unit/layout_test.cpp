@@ -1,0 +1,27 @@
+// layout.h is compiled as C++ here and as GLSL in the kernels: the std140 block must have the
+// same offsets on both sides (NanoVDB TestOffsets). std140 puts vec4/ivec4 at 16-byte strides and
+// a mat4 at 64 bytes, so every member's offset is fixed by the order below.
+#include <gtest/gtest.h>
+
+#include <cstddef>
+
+#include "core/shaders/layout.h"
+
+using volstyle::core::layout::MarchParams;
+
+static_assert(sizeof(volstyle::core::layout::Float4) == 16);
+static_assert(sizeof(volstyle::core::layout::Int4) == 16);
+static_assert(sizeof(volstyle::core::layout::Float4x4) == 64);
+static_assert(offsetof(MarchParams, indexFromWorld) == 0);
+static_assert(offsetof(MarchParams, eye) == 64);
+static_assert(offsetof(MarchParams, camForward) == 80);
+static_assert(offsetof(MarchParams, dims) == 144);
+static_assert(offsetof(MarchParams, march) == 192);
+static_assert(offsetof(MarchParams, lightDirection) == 240);
+static_assert(offsetof(MarchParams, lightIrradiance) == 240 + 16 * volstyle::core::layout::kLightSlots);
+static_assert(sizeof(MarchParams) == 240 + 32 * volstyle::core::layout::kLightSlots);
+
+TEST(Layout, MarchParamsMatchesStd140) {
+    // The static_asserts above are the test; this records the size in the test log.
+    EXPECT_EQ(sizeof(MarchParams), 368u);
+}

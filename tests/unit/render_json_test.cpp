@@ -1,0 +1,77 @@
+#include <gtest/gtest.h>
+
+#include "protocol/render_json.h"
+
+using namespace volstyle;
+using json = nlohmann::json;
+
+namespace {
+
+std::vector<protocol::FieldError> errorsOf(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const protocol::ValidationError& e) {
+        return e.details();
+    }
+    return {};
+}
+
+}  // namespace
+
+TEST(CameraJson, ParsesAndRoundTrips) {
+    json j = {{"eye", {1, 2, 3}}, {"target", {0, 0, 0}}, {"fov_y_deg", 30}, {"width", 64}, {"height", 32}};
+    core::Camera c = protocol::cameraFromJson(j);
+    EXPECT_EQ(c.eye, Vec3d(1, 2, 3));
+    EXPECT_EQ(c.width, 64);
+    EXPECT_EQ(protocol::cameraFromJson(protocol::cameraToJson(c)).fovYDeg, 30);
+}
+
+TEST(CameraJson, ReportsEveryBadFieldWithItsPointer) {
+    json j = {{"eye", {1, 2}}, {"target", {0, 0, 0}}, {"fov_y_deg", "wide"}, {"width", 1.5}, {"zoom", 2}};
+    auto errors = errorsOf([&] { protocol::cameraFromJson(j, "/camera"); });
+    std::set<std::string> paths;
+    for (const auto& e : errors) paths.insert(e.path);
+    EXPECT_EQ(paths, (std::set<std::string>{"/camera/eye", "/camera/fov_y_deg", "/camera/width", "/camera/zoom"}));
+}
+
+TEST(CameraJson, RangeProblemsUseJsonPointers) {
+    json j = {{"eye", {0, 0, 0}}, {"target", {0, 0, 0}}, {"fov_y_deg", 200}};
+    auto errors = errorsOf([&] { protocol::cameraFromJson(j, "/camera"); });
+    ASSERT_EQ(errors.size(), 2u);
+    EXPECT_EQ(errors[0].path, "/camera/target");
+    EXPECT_EQ(errors[1].path, "/camera/fov_y_deg");
+    EXPECT_EQ(errors[1].message, "must be in (0, 180)");
+}
+
+TEST(CameraJson, UnknownFieldHasItsOwnCode) {
+    try {
+        protocol::cameraFromJson({{"eye", {0, 0, 1}}, {"target", {0, 0, 0}}, {"lens", 35}});
+        FAIL();
+    } catch (const protocol::ValidationError& e) {
+        EXPECT_STREQ(e.code(), "unknown_field");
+    }
+}
+
+TEST(LightingJson, SunPhaseAndBackground) {
+    json j = {{"sun", {{"direction", {0, 1, 0}}, {"irradiance", {2, 2, 2}}}},
+              {"background", {0.1, 0.2, 0.3}},
+              {"phase", {{"type", "henyey_greenstein"}, {"g", 0.4}}}};
+    auto r = protocol::lightingFromJson(j);
+    ASSERT_EQ(r.lighting.lights.size(), 1u);
+    EXPECT_EQ(r.lighting.phase.type, core::PhaseType::HenyeyGreenstein);
+    EXPECT_EQ(r.lighting.background.color, Vec3d(0.1, 0.2, 0.3));
+    EXPECT_EQ(protocol::lightingFromJson(protocol::lightingToJson(r.lighting)).lighting.phase.g, 0.4);
+}
+
+TEST(LightingJson, RejectsBadValuesAndServerPaths) {
+    auto errors = errorsOf([] {
+        protocol::lightingFromJson({{"phase", {{"type", "rayleigh"}}}, {"sun", {{"direction", {0, 1, 0}}}}});
+    });
+    ASSERT_EQ(errors.size(), 2u);
+    EXPECT_EQ(errors[0].path, "/sun/irradiance");
+    EXPECT_EQ(errors[1].path, "/phase/type");
+    errors = errorsOf([] { protocol::lightingFromJson({{"background", {{"environment", "/etc/passwd"}}}}); });
+    ASSERT_EQ(errors.size(), 1u);
+    EXPECT_EQ(errors[0].path, "/background/environment");
+    EXPECT_EQ(protocol::lightingFromJson({{"background", {{"environment", "sky.exr"}}}}, "", true).environmentPath, "sky.exr");
+}
