@@ -47,13 +47,14 @@ auto fromFile(const std::string& path, F&& parse) {
 const char* kUsage =
     "usage: volstyle render --scene builtin:NAME[:RES]|FILE.vdb [--camera CAM.json]\n"
     "                       [--lighting L.json] [--exposure STOPS] [--step VOXELS] [--no-skip]\n"
+    "                       [--hw-filter]\n"
     "                       -o OUT.png|OUT.exr\n";
 
 }  // namespace
 
 int runRender(const std::vector<std::string>& argv) {
     Arguments args = parseArguments(argv, {"scene", "camera", "lighting", "exposure", "step", "output"},
-                                    {"no-skip", "help"});
+                                    {"no-skip", "hw-filter", "help"});
     if (args.has("help")) {
         std::cout << kUsage;
         return 0;
@@ -65,10 +66,9 @@ int runRender(const std::vector<std::string>& argv) {
     if (ext != ".png" && ext != ".exr")
         throw InvalidArgument("-o must end in .png or .exr, got '" + output + "'");
 
-    core::Camera camera;
-    camera.eye = {0, 0.2, 3.2};
+    core::Camera camera = core::defaultCamera();
     if (args.has("camera")) camera = fromFile(args.get("camera"), [](const nlohmann::json& j) { return protocol::cameraFromJson(j); });
-    core::Lighting lighting;
+    core::Lighting lighting = core::defaultLighting();
     if (args.has("lighting")) {
         const std::string path = args.get("lighting");
         auto request = fromFile(path, [](const nlohmann::json& j) { return protocol::lightingFromJson(j, "", true); });
@@ -81,6 +81,7 @@ int runRender(const std::vector<std::string>& argv) {
     core::RenderSettings settings;
     settings.stepVoxels = args.number("step", settings.stepVoxels);
     settings.skipEmptySpace = !args.has("no-skip");
+    settings.hardwareFilter = args.has("hw-filter");
     settings.validate();
     const double exposure = args.number("exposure", 0);
 

@@ -47,9 +47,25 @@ void GLAPIENTRY debugCallback(GLenum, GLenum type, GLuint id, GLenum severity, G
 
 }  // namespace
 
-const std::vector<std::string>& optionalExtensions() {
-    static const std::vector<std::string> ext = {"GL_NV_shader_atomic_float"};
-    return ext;
+const std::vector<RequiredFeature>& requiredFeatures() {
+    static const std::vector<RequiredFeature> features = {
+        {"GL_ARB_compute_shader", 43, "every kernel"},
+        {"GL_ARB_shader_storage_buffer_object", 43, "image and residual buffers"},
+        {"GL_ARB_shader_image_load_store", 42, "light-depth and occupancy volumes"},
+        {"GL_ARB_direct_state_access", 45, "all GL object set-up"},
+        {"GL_ARB_enhanced_layouts", 44, "binding points from constants in layout.h"},
+        {"GL_KHR_debug", 43, "object labels and driver messages"},
+        {"GL_ARB_timer_query", 33, "GPU timings in benchmarks"},
+    };
+    return features;
+}
+
+std::vector<std::string> missingFeatures(int glVersion, const std::function<bool(const char*)>& hasExtension) {
+    std::vector<std::string> missing;
+    for (const auto& f : requiredFeatures())
+        if (glVersion < f.coreVersion && !hasExtension(f.extension))
+            missing.push_back(std::string(f.extension) + " (used for " + f.usedFor + ")");
+    return missing;
 }
 
 std::unique_ptr<Context> Context::create(const ContextOptions& options) {
@@ -101,8 +117,13 @@ std::unique_ptr<Context> Context::create(const ContextOptions& options) {
     caps.version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
     caps.isSoftware = caps.renderer.find("llvmpipe") != std::string::npos ||
                       caps.renderer.find("softpipe") != std::string::npos;
-    if (caps.glVersion < 45)
-        throw GpuError("gl::Context: '" + caps.renderer + "' offers OpenGL " + caps.version + "; volstyle needs 4.5");
+    auto missing = missingFeatures(caps.glVersion, [](const char* e) { return epoxy_has_gl_extension(e); });
+    if (!missing.empty()) {
+        std::string list;
+        for (const auto& m : missing) list += (list.empty() ? "" : ", ") + m;
+        throw GpuError("gl::Context: '" + caps.renderer + "' (OpenGL " + caps.version + ") lacks " + list +
+                       "; volstyle needs OpenGL 4.5 core");
+    }
     caps.hasFloatAtomics = epoxy_has_gl_extension("GL_NV_shader_atomic_float");
     glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &caps.max3DTextureSize);
     glGetIntegerv(GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS, &caps.maxComputeInvocations);

@@ -5,6 +5,7 @@
 /// The context is current on the thread that created it; every GL object must be created, used
 /// and destroyed on that thread.
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
@@ -31,8 +32,17 @@ struct ContextOptions {
     bool debug = false;
 };
 
-/// GL 4.5 core is required; these extensions are optional and switch code paths.
-const std::vector<std::string>& optionalExtensions();
+/// A GL feature volstyle needs: present when the context's version is at least `coreVersion`
+/// (e.g. 45) or the driver lists `extension`.
+struct RequiredFeature {
+    const char* extension;
+    int coreVersion;
+    const char* usedFor;
+};
+const std::vector<RequiredFeature>& requiredFeatures();
+
+/// The required features a context lacks, as "GL_ARB_x (used for …)". Pure: testable without GL.
+std::vector<std::string> missingFeatures(int glVersion, const std::function<bool(const char*)>& hasExtension);
 
 class Context {
 public:

@@ -55,6 +55,7 @@ void GpuVolume::upload(const Volume& volume) {
     }
     m_albedo = volume.hasAlbedo() ? uploadRgb(volume.albedo(), d, "albedo") : gl::Texture();
     m_emission = volume.hasEmission() ? uploadRgb(volume.emission(), d, "emission") : gl::Texture();
+    m_maxEmission = volume.hasEmission() ? maxComponent(Volume::range(volume.emission()).second) : 0.0f;
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("GpuVolume: out of GPU memory uploading the volume");
 }
 

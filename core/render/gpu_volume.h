@@ -25,6 +25,8 @@ public:
     const Mat4& worldFromIndex() const { return m_worldFromIndex; }
     bool hasAlbedo() const { return bool(m_albedo); }
     bool hasEmission() const { return bool(m_emission); }
+    /// Largest emission value (any channel), for bounding what a ray can still gather.
+    float maxEmission() const { return m_maxEmission; }
     GLuint extinctionTexture() const { return m_extinction.id(); }
     GLuint albedoTexture() const { return m_albedo.id(); }
     GLuint emissionTexture() const { return m_emission.id(); }
@@ -40,7 +42,8 @@ private:
     Int3 m_dims, m_brickDims;
     Mat4 m_worldFromIndex;
     gl::Texture m_extinction, m_albedo, m_emission, m_occupancy;
-    size_t m_extinctionHash = 0;  // to detect unchanged extinction on re-upload
+    size_t m_extinctionHash = 0;
+    float m_maxEmission = 0;  // to detect unchanged extinction on re-upload
     uint64_t m_extinctionVersion = 0;
     uint64_t m_occupancyVersion = 0;
 };

@@ -84,6 +84,25 @@ std::vector<FieldProblem> Lighting::check() const {
 
 void Lighting::validate() const { throwIfAny("lighting", check()); }
 
+Lighting defaultLighting() {
+    Lighting l;
+    l.lights = {{{-0.55, 0.65, 0.55}, {26.0, 24.5, 22.0}},
+                {{0.0, 1.0, 0.0}, {3.0, 4.0, 6.0}},
+                {{0.2, -1.0, 0.1}, {1.6, 1.5, 1.3}}};
+    l.background.color = {0.32, 0.50, 0.82};
+    l.phase = {PhaseType::HenyeyGreenstein, 0.25};
+    return l;
+}
+
+Camera defaultCamera() {
+    Camera c;
+    c.eye = {0.0, 0.15, 3.4};
+    c.target = {0.0, -0.05, 0.0};
+    c.fovYDeg = 38;
+    c.width = c.height = 480;
+    return c;
+}
+
 void RenderSettings::validate() const {
     std::vector<FieldProblem> out;
     if (!(stepVoxels >= 0.01 && stepVoxels <= 16))

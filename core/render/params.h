@@ -82,11 +82,21 @@ struct Lighting {
 };
 
 /// Quality/speed knobs of the ray marcher.
+/// The default outdoor look (docs/examples/lighting.json): a warm sun from the upper left front,
+/// a blue sky light from above, a faint ground bounce from below, a sky-blue background and mildly
+/// forward Henyey–Greenstein scattering. Tuned so a white cloud's lit side is about 0.9.
+Lighting defaultLighting();
+
+/// The default view: 480×480 from +z, slightly above the horizon, framing [-1, 1]³.
+Camera defaultCamera();
+
 struct RenderSettings {
     double stepVoxels = 0.5;        ///< march step, in voxels of the extinction grid
     bool skipEmptySpace = true;     ///< jump over occupancy bricks with zero extinction
-    /// Stop a ray once every channel's transmittance is below this. The radiance lost is at most
-    /// this fraction of the brightest medium radiance behind; 1e-5 keeps it under 1e-4 relative.
+    /// Early ray termination budget ε. A ray stops once its transmittance T is below ε and the
+    /// most it could still gather, T·L_max (L_max bounds emission + in-scattering + background),
+    /// is below ε of what it has gathered — or once T < 1e-3·ε. So the radiance lost is below ε
+    /// relative (alpha below ε absolute). 0 marches every ray to its end.
     double terminationThreshold = 1e-5;
     bool hardwareFilter = false;    ///< sample with the texture unit (fast, 8-bit weights on GPUs)
 

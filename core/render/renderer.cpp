@@ -51,7 +51,38 @@ double msSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+/// The largest phase-function value: 1/4π, or HG at cos = −1 (pbrt's sign puts its peak there).
+double maxPhase(const Phase& phase) {
+    const double inv4pi = 1.0 / (4.0 * std::numbers::pi);
+    if (phase.type == PhaseType::Isotropic) return inv4pi;
+    double g = std::abs(phase.g);
+    return inv4pi * (1 + g) / ((1 - g) * (1 - g));
+}
+
+double maxValue(const Image& image) {
+    double m = 0;
+    for (size_t i = 0; i < image.pixelCount(); ++i)
+        for (int c = 0; c < 3; ++c) m = std::max(m, double(image.rgba[4 * i + c]));
+    return m;
+}
+
 }  // namespace
+
+double Renderer::radianceBound(const GpuVolume& volume, const Lighting& lighting) {
+    // L_m ≤ max L_e + max ρ · Σ p_max E_l (ρ ≤ 1, T_l ≤ 1); the background is bounded by its max.
+    double bound = volume.maxEmission();
+    for (const auto& l : lighting.lights) bound += maxPhase(lighting.phase) * maxComponent(l.irradiance);
+    if (lighting.background.environment) {
+        if (lighting.background.environment != m_boundSource) {
+            m_boundSource = lighting.background.environment;
+            m_environmentMax = maxValue(*lighting.background.environment);
+        }
+        bound += m_environmentMax;
+    } else {
+        bound += maxComponent(lighting.background.color);
+    }
+    return bound;
+}
 
 Renderer::Renderer(gl::Context& context)
     : m_context(context),
@@ -84,6 +115,7 @@ void Renderer::updateOccupancy(GpuVolume& volume, RenderStats& stats) {
     dispatch3D(volume.brickDims());
     gl::barrierAfterComputeWrites();
     volume.markOccupancyCurrent();
+    m_context.finish();  // rare: wait so the timing is this pass's own
     stats.occupancyMs += msSince(t0);
 }
 
@@ -126,6 +158,7 @@ GLuint Renderer::lightDepthTexture(GpuVolume& volume, const DirectionalLight& li
     glBindImageTexture(layout::kImageUnitOut, lv->texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     dispatch3D(d);
     gl::barrierAfterComputeWrites();
+    m_context.finish();  // rare: wait so the timing is this pass's own
     stats.lightMs += msSince(t0);
     stats.lightVolumesRecomputed++;
     GLuint id = lv->texture.id();
@@ -180,6 +213,7 @@ Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& 
         p.lightDirection[i] = f4(normalize(lights[i]->direction));
         p.lightIrradiance[i] = f4(lights[i]->irradiance);
     }
+    p.march.z = float(radianceBound(volume, lighting));
     uploadParams(&p, sizeof(p));
 
     // Pick the variant: passes for absent features are compiled out.

@@ -48,6 +48,8 @@ private:
                              RenderStats& stats);
     void uploadParams(const void* data, size_t bytes);
     GLuint environmentTexture(const std::shared_ptr<const Image>& env);
+    /// An upper bound on the radiance a ray can gather per unit opacity (early termination).
+    double radianceBound(const GpuVolume& volume, const Lighting& lighting);
 
     gl::Context& m_context;
     std::map<std::string, gl::Program> m_programs;
@@ -59,6 +61,8 @@ private:
     std::shared_ptr<const Image> m_environmentSource;  // held so its address is never reused
     gl::GpuTimer m_timer;
     uint64_t m_frame = 0;
+    std::shared_ptr<const Image> m_boundSource;  // environment whose maximum is cached
+    double m_environmentMax = 0;
 };
 
 }  // namespace volstyle::core

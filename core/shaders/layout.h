@@ -49,7 +49,7 @@ struct MarchParams {
     VS_IVEC4 dims;           /* xyz: voxels of the extinction grid */
     VS_IVEC4 brickDims;      /* xyz: occupancy bricks */
     VS_IVEC4 imageSize;      /* x: width, y: height; z: light index (light kernel) */
-    VS_VEC4 march;           /* x: step (voxels), y: termination threshold on transmittance */
+    VS_VEC4 march;           /* x: step (voxels), y: termination budget ε, z: bound on radiance */
     VS_VEC4 background;      /* rgb: constant background radiance */
     VS_VEC4 phase;           /* x: 0 isotropic, 1 Henyey-Greenstein; y: g */
     VS_VEC4 lightDirection[kLightSlots];   /* xyz: unit world direction toward the light */

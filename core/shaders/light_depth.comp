@@ -12,11 +12,23 @@ void main() {
     ivec3 voxel = ivec3(gl_GlobalInvocationID);
     if (any(greaterThanEqual(voxel, u.dims.xyz))) return;
 
-    // Voxels in empty bricks are only ever read where σ = 0 (see skipEmptyBricks), so skip them.
-    ivec3 brick = voxel / kBrickSize;
+    // A voxel's depth is read only by samples whose trilinear stencil holds it; the rest of such a
+    // stencil lies within one voxel of it, so if that 3³ neighbourhood has no extinction every
+    // reader has σ = 0 and multiplies the depth by nothing. Skip those voxels (exactly), first by
+    // brick (the brick's apron covers the neighbourhood), then voxel by voxel.
     vec3 depth = vec3(0.0);
-    if (texelFetch(s_occupancy, brick, 0).r > 0.0) {
-        vec3 o = vec3(voxel);
+    bool isRead = texelFetch(s_occupancy, voxel / kBrickSize, 0).r > 0.0;
+    if (isRead) {
+        float neighbourhood = 0.0;
+        ivec3 lo = max(voxel - 1, ivec3(0)), hi = min(voxel + 1, u.dims.xyz - 1);
+        for (int z = lo.z; z <= hi.z; ++z)
+            for (int y = lo.y; y <= hi.y; ++y)
+                for (int x = lo.x; x <= hi.x; ++x)
+                    neighbourhood = max(neighbourhood, max3(texelFetch(s_extinction, ivec3(x, y, z), 0).rgb));
+        isRead = neighbourhood > 0.0;
+    }
+    if (isRead) {
+        vec3 o = vec3(voxel);  // march from the voxel centre toward the light
         vec3 d = mat3(u.indexFromWorld) * u.lightDirection[u.imageSize.z].xyz;
         vec2 range = vec2(0.0, intersectVolumeBox(o, d).y);
         if (range.y > 0.0) {

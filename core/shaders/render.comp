@@ -72,7 +72,9 @@ void main() {
             vec3 tau = sigma * seg.dt;
             radiance += transmittance * oneMinusExp(tau) * Lm;
             transmittance *= exp(-tau);
-            if (max3(transmittance) < u.march.y) break;  // early ray termination
+            // Early ray termination: what is left to gather is at most T·L_max (march.z).
+            float T = max3(transmittance);
+            if ((T < u.march.y && T * u.march.z <= u.march.y * max3(radiance)) || T < 1e-3 * u.march.y) break;
         }
     }
     radiance += transmittance * backgroundRadiance(dir);

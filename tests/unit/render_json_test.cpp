@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <set>
+
 #include "protocol/render_json.h"
 
 using namespace volstyle;
@@ -74,4 +77,21 @@ TEST(LightingJson, RejectsBadValuesAndServerPaths) {
     ASSERT_EQ(errors.size(), 1u);
     EXPECT_EQ(errors[0].path, "/background/environment");
     EXPECT_EQ(protocol::lightingFromJson({{"background", {{"environment", "sky.exr"}}}}, "", true).environmentPath, "sky.exr");
+}
+
+TEST(LightingJson, DefaultLightingMatchesTheExampleFile) {
+    std::ifstream f(std::string(VOLSTYLE_SOURCE_DIR) + "/docs/examples/lighting.json");
+    core::Lighting fromFile = protocol::lightingFromJson(nlohmann::json::parse(f)).lighting;
+    core::Lighting builtIn = core::defaultLighting();
+    ASSERT_EQ(fromFile.lights.size(), builtIn.lights.size());
+    for (size_t i = 0; i < builtIn.lights.size(); ++i) {
+        EXPECT_EQ(fromFile.lights[i].direction, builtIn.lights[i].direction);
+        EXPECT_EQ(fromFile.lights[i].irradiance, builtIn.lights[i].irradiance);
+    }
+    EXPECT_EQ(fromFile.background.color, builtIn.background.color);
+    EXPECT_EQ(fromFile.phase.g, builtIn.phase.g);
+    std::ifstream c(std::string(VOLSTYLE_SOURCE_DIR) + "/docs/examples/camera.json");
+    core::Camera cam = protocol::cameraFromJson(nlohmann::json::parse(c));
+    EXPECT_EQ(cam.eye, core::defaultCamera().eye);
+    EXPECT_EQ(cam.fovYDeg, core::defaultCamera().fovYDeg);
 }

@@ -2,9 +2,13 @@
 // #line markers and compile-log rewriting.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <map>
 
 #include "core/errors.h"
+#include "core/gl/context.h"
 #include "core/gl/shader_builder.h"
 
 using volstyle::core::gl::PreprocessedShader;
@@ -71,4 +75,27 @@ TEST(ShaderBuilder, EmbeddedShadersArePresent) {
     // Every kernel preprocesses with the real embedded includes.
     for (const char* k : {"render.comp", "light_depth.comp", "occupancy.comp"})
         EXPECT_NO_THROW(ShaderBuilder(k).preprocess()) << k;
+}
+
+TEST(ShaderBuilder, ShaderDirOverrideLoadsFromDisk) {
+    auto dir = std::filesystem::temp_directory_path() / "volstyle-shader-override";
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir / "render.comp") << "// edited on disk\n";
+    setenv("VOLSTYLE_SHADER_DIR", dir.c_str(), 1);
+    std::string text = volstyle::core::gl::loadShaderSource("render.comp");
+    EXPECT_THROW(volstyle::core::gl::loadShaderSource("occupancy.comp"), volstyle::NotFound);
+    unsetenv("VOLSTYLE_SHADER_DIR");
+    EXPECT_EQ(text, "// edited on disk\n");
+    std::filesystem::remove_all(dir);
+}
+
+TEST(GlFeatures, MissingFeaturesAreNamed) {
+    using volstyle::core::gl::missingFeatures;
+    auto none = [](const char*) { return false; };
+    EXPECT_TRUE(missingFeatures(45, none).empty());
+    auto at43 = missingFeatures(43, none);
+    ASSERT_EQ(at43.size(), 2u);  // DSA (4.5) and enhanced layouts (4.4)
+    EXPECT_EQ(at43[0], "GL_ARB_direct_state_access (used for all GL object set-up)");
+    // An extension stands in for the core version.
+    EXPECT_EQ(missingFeatures(43, [](const char* e) { return std::string(e) == "GL_ARB_direct_state_access"; }).size(), 1u);
 }
