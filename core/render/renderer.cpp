@@ -179,27 +179,22 @@ GLuint Renderer::environmentTexture(const std::shared_ptr<const Image>& env) {
     return m_environment.id();
 }
 
-Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& lighting,
-                       const RenderSettings& settings, RenderStats* statsOut) {
-    VOLSTYLE_CHECK(m_context.isOwnedByThisThread(), ==, true);
-    camera.validate();
-    lighting.validate();
-    settings.validate();
-    auto t0 = std::chrono::steady_clock::now();
+Renderer::MarchSetup Renderer::prepareMarch(GpuVolume& volume, const Camera& camera, const Lighting& lighting,
+                                            const RenderSettings& settings, RenderStats& stats) {
     ++m_frame;
-    RenderStats stats;
     updateOccupancy(volume, stats);
 
     // Lights with zero irradiance add nothing: leave them out of the variant.
     std::vector<const DirectionalLight*> lights;
     for (const auto& l : lighting.lights)
         if (maxComponent(l.irradiance) > 0) lights.push_back(&l);
-    std::vector<GLuint> lightTextures;
+    MarchSetup setup;
     for (size_t i = 0; i < lights.size(); ++i)
-        lightTextures.push_back(lightDepthTexture(volume, *lights[i], settings.stepVoxels, stats));
+        setup.lightTextures.push_back(lightDepthTexture(volume, *lights[i], settings.stepVoxels, stats));
 
     // Camera and lighting parameters.
-    layout::MarchParams p = volumeParams(volume, settings);
+    layout::MarchParams& p = setup.params;
+    p = volumeParams(volume, settings);
     const Camera::Frame f = camera.frame();
     p.eye = f4(camera.eye);
     p.camForward = f4(f.forward, std::tan(camera.fovYDeg * std::numbers::pi / 360.0));
@@ -214,25 +209,42 @@ Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& 
         p.lightIrradiance[i] = f4(lights[i]->irradiance);
     }
     p.march.z = float(radianceBound(volume, lighting));
-    uploadParams(&p, sizeof(p));
+    return setup;
+}
+
+void Renderer::bindMarch(const GpuVolume& volume, const Lighting& lighting, const MarchSetup& setup) {
+    uploadParams(&setup.params, sizeof(setup.params));
+    glBindTextureUnit(layout::kUnitExtinction, volume.extinctionTexture());
+    glBindTextureUnit(layout::kUnitOccupancy, volume.occupancyTexture());
+    if (lighting.background.environment)
+        glBindTextureUnit(layout::kUnitEnvironment, environmentTexture(lighting.background.environment));
+    for (size_t i = 0; i < setup.lightTextures.size(); ++i)
+        glBindTextureUnit(GLuint(layout::kUnitLightDepth0 + i), setup.lightTextures[i]);
+}
+
+Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& lighting,
+                       const RenderSettings& settings, RenderStats* statsOut) {
+    VOLSTYLE_CHECK(m_context.isOwnedByThisThread(), ==, true);
+    camera.validate();
+    lighting.validate();
+    settings.validate();
+    auto t0 = std::chrono::steady_clock::now();
+    RenderStats stats;
+    MarchSetup setup = prepareMarch(volume, camera, lighting, settings, stats);
 
     // Pick the variant: passes for absent features are compiled out.
     const bool hasEnvironment = bool(lighting.background.environment);
     gl::ShaderBuilder builder("render.comp");
     builder.define("VOLSTYLE_HAS_EMISSION", volume.hasEmission() ? 1 : 0)
         .define("VOLSTYLE_HAS_ALBEDO", volume.hasAlbedo() ? 1 : 0)
-        .define("VOLSTYLE_NUM_LIGHTS", (long long)lights.size())
+        .define("VOLSTYLE_NUM_LIGHTS", (long long)setup.lightTextures.size())
         .define("VOLSTYLE_HAS_ENVIRONMENT", hasEnvironment ? 1 : 0)
         .define("VOLSTYLE_SKIP_EMPTY", settings.skipEmptySpace ? 1 : 0)
         .define("VOLSTYLE_HW_FILTER", settings.hardwareFilter ? 1 : 0);
     glUseProgram(program(builder).id());
-    glBindTextureUnit(layout::kUnitExtinction, volume.extinctionTexture());
-    glBindTextureUnit(layout::kUnitOccupancy, volume.occupancyTexture());
+    bindMarch(volume, lighting, setup);
     if (volume.hasAlbedo()) glBindTextureUnit(layout::kUnitAlbedo, volume.albedoTexture());
     if (volume.hasEmission()) glBindTextureUnit(layout::kUnitEmission, volume.emissionTexture());
-    if (hasEnvironment) glBindTextureUnit(layout::kUnitEnvironment, environmentTexture(lighting.background.environment));
-    for (size_t i = 0; i < lightTextures.size(); ++i)
-        glBindTextureUnit(GLuint(layout::kUnitLightDepth0 + i), lightTextures[i]);
 
     const size_t bytes = size_t(camera.width) * camera.height * 4 * sizeof(float);
     if (bytes > m_pixelBytes) {

@@ -15,6 +15,7 @@
 #include "core/image/image.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/params.h"
+#include "core/shaders/layout.h"
 
 namespace volstyle::core {
 
@@ -40,9 +41,23 @@ public:
     /// Drops cached light volumes and occupancy-derived data (e.g. before freeing a volume).
     void clearCaches();
 
+    /// What every march kernel (this renderer's, the solver's projector) shares: the uniform
+    /// block for `camera`, and the light-depth volumes of the lights with non-zero irradiance.
+    struct MarchSetup {
+        layout::MarchParams params;
+        std::vector<GLuint> lightTextures;
+    };
+    /// Updates occupancy and light volumes if stale and fills the uniform block.
+    MarchSetup prepareMarch(GpuVolume& volume, const Camera& camera, const Lighting& lighting,
+                            const RenderSettings& settings, RenderStats& stats);
+    /// Uploads the block and binds extinction, occupancy, environment and light-depth textures.
+    void bindMarch(const GpuVolume& volume, const Lighting& lighting, const MarchSetup& setup);
+    /// The compiled program of a variant (compiled once, then cached).
+    const gl::Program& program(const gl::ShaderBuilder& builder);
+    gl::Context& context() { return m_context; }
+
 private:
     struct LightVolume;
-    const gl::Program& program(const gl::ShaderBuilder& builder);
     void updateOccupancy(GpuVolume& volume, RenderStats& stats);
     GLuint lightDepthTexture(GpuVolume& volume, const DirectionalLight& light, double stepVoxels,
                              RenderStats& stats);

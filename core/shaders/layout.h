@@ -37,6 +37,13 @@ VS_CONSTANT(int, kUnitEnvironment, 3);
 VS_CONSTANT(int, kUnitOccupancy, 4);
 VS_CONSTANT(int, kUnitLightDepth0, 5);     /* 5..8 */
 VS_CONSTANT(int, kImageUnitOut, 0);        /* image store target of volume kernels */
+VS_CONSTANT(int, kBindingUnknown, 1);      /* SSBO: the solver's unknown coefficients (3 per voxel) */
+VS_CONSTANT(int, kBindingResidual, 2);     /* SSBO vec4 per pixel: residual read by the adjoint */
+VS_CONSTANT(int, kBindingVectorX, 3);      /* SSBOs of the vector kernels */
+VS_CONSTANT(int, kBindingVectorY, 4);
+VS_CONSTANT(int, kBindingVectorZ, 5);
+VS_CONSTANT(int, kBindingPartials, 6);     /* per-workgroup partial sums (dvec4) */
+VS_CONSTANT(int, kWorkgroup1D, 256);
 
 /* Everything a march needs: camera, grid, lighting. World-space t parameterises rays. */
 struct MarchParams {
@@ -54,6 +61,17 @@ struct MarchParams {
     VS_VEC4 phase;           /* x: 0 isotropic, 1 Henyey-Greenstein; y: g */
     VS_VEC4 lightDirection[kLightSlots];   /* xyz: unit world direction toward the light */
     VS_VEC4 lightIrradiance[kLightSlots];  /* rgb: E_l */
+    VS_IVEC4 unknownDims;    /* xyz: voxels of the solver's unknown grid; w: pixel offset of the view */
+    VS_VEC4 unknownScale;    /* xyz: unknown voxels per extinction voxel; w: termination T */
+    VS_IVEC4 unknownLayout;  /* x: elements per unknown block (the albedo block's offset in joint solves) */
+};
+
+/* Parameters of the vector kernels (vector_ops.comp). Vectors are arrays of vec4 (rgb used). */
+struct VectorParams {
+    VS_VEC4 alpha;           /* per-channel scalars */
+    VS_VEC4 bounds;          /* x, y: lower, upper bound of block 0; z, w: of block 1 */
+    VS_IVEC4 count;          /* x: elements; y: first element; z: elements per block */
+    VS_IVEC4 dims;           /* xyz: grid of one block (Laplacian) */
 };
 
 #ifndef VOLSTYLE_GLSL

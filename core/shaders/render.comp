@@ -7,6 +7,7 @@
 // VOLSTYLE_SKIP_EMPTY, VOLSTYLE_HW_FILTER.
 #include "common/march.glsl"
 #include "common/lighting.glsl"
+#include "common/camera.glsl"
 
 layout(local_size_x = kWorkgroup2D, local_size_y = kWorkgroup2D) in;
 
@@ -21,24 +22,15 @@ layout(binding = kUnitEmission) uniform sampler3D s_emission;
 layout(binding = kUnitAlbedo) uniform sampler3D s_albedo;
 #endif
 
-// Pinhole camera: the ray through the centre of pixel `pix` (row 0 at the top).
-vec3 cameraRay(ivec2 pix) {
-    vec2 ndc = (vec2(pix) + 0.5) / vec2(u.imageSize.xy) * 2.0 - 1.0;
-    float tanHalf = u.camForward.w, aspect = u.camRight.w;
-    return normalize(u.camForward.xyz + u.camRight.xyz * (ndc.x * tanHalf * aspect) -
-                     u.camUp.xyz * (ndc.y * tanHalf));
-}
-
 void main() {
     ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
     if (pix.x >= u.imageSize.x || pix.y >= u.imageSize.y) return;
 
     // Set up the view ray in index space, parameterised by world distance t.
     vec3 dir = cameraRay(pix);
-    vec3 o = (u.indexFromWorld * vec4(u.eye.xyz, 1.0)).xyz;
-    vec3 d = mat3(u.indexFromWorld) * dir;
-    vec2 range = intersectVolumeBox(o, d);
-    range = vec2(max(range.x, u.rayRange.x), min(range.y, u.rayRange.y));
+    vec3 o, d;
+    vec2 range;
+    viewRay(dir, o, d, range);
 
     vec3 radiance = vec3(0.0);
     vec3 transmittance = vec3(1.0);

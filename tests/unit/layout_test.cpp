@@ -19,9 +19,11 @@ static_assert(offsetof(MarchParams, dims) == 144);
 static_assert(offsetof(MarchParams, march) == 192);
 static_assert(offsetof(MarchParams, lightDirection) == 240);
 static_assert(offsetof(MarchParams, lightIrradiance) == 240 + 16 * volstyle::core::layout::kLightSlots);
-static_assert(sizeof(MarchParams) == 240 + 32 * volstyle::core::layout::kLightSlots);
+static_assert(offsetof(MarchParams, unknownDims) == 240 + 32 * volstyle::core::layout::kLightSlots);
+static_assert(sizeof(MarchParams) == 240 + 32 * volstyle::core::layout::kLightSlots + 48);
+static_assert(sizeof(volstyle::core::layout::VectorParams) == 64);
 
 TEST(Layout, MarchParamsMatchesStd140) {
     // The static_asserts above are the test; this records the size in the test log.
-    EXPECT_EQ(sizeof(MarchParams), 368u);
+    EXPECT_EQ(sizeof(MarchParams), 416u);
 }

@@ -1,0 +1,177 @@
+// The solver's linear operator W and its adjoint Wᵀ, from one source (TVCG Sec. 5.1, Listing 1):
+// VOLSTYLE_ADJOINT = 0 renders the unknown field (W a, one value per pixel); = 1 scatters each
+// pixel's residual back along the same ray with the same weights (Wᵀ r), so the two agree to
+// float precision. Rays start, step, skip and end exactly as the renderer's do.
+//
+// VOLSTYLE_UNKNOWN: 1 emission (Eq. 6: weight T·(1 − e^{−σΔt})), 2 albedo (the same times L_scat,
+// Sec. 4.2.2), 3 emission and albedo (two blocks of unknowns, Sec. 4.2.3), 4 extinction (log
+// space, Sec. 4.2.4: weight Δt, the line integral of the basis).
+// VOLSTYLE_BASIS: 0 box (nearest unknown voxel), 1 trilinear (hat functions at voxel centres).
+// The unknown grid may be coarser than the extinction grid: both span the same box. Unknowns are
+// vec4 per voxel (rgb used) so every solver vector shares one layout.
+#include "common/march.glsl"
+#include "common/lighting.glsl"
+#include "common/camera.glsl"
+
+#define UNKNOWN_EMISSION 1
+#define UNKNOWN_ALBEDO 2
+#define UNKNOWN_EMISSION_ALBEDO 3
+#define UNKNOWN_EXTINCTION 4
+
+#ifndef VOLSTYLE_ADJOINT
+#define VOLSTYLE_ADJOINT 0
+#endif
+#ifndef VOLSTYLE_BASIS
+#define VOLSTYLE_BASIS 1
+#endif
+#ifndef VOLSTYLE_HAS_FLOAT_ATOMICS
+#define VOLSTYLE_HAS_FLOAT_ATOMICS 0
+#endif
+
+layout(local_size_x = kWorkgroup2D, local_size_y = kWorkgroup2D) in;
+
+#if VOLSTYLE_ADJOINT
+#if VOLSTYLE_HAS_FLOAT_ATOMICS
+layout(std430, binding = kBindingUnknown) buffer b_Unknown {
+    float unknown[];
+};
+void scatterAdd(uint i, float v) { atomicAdd(unknown[i], v); }
+#else
+// No float atomics (core GL 4.5 has none): a compare-and-swap loop on the bits. Exact: every
+// addition lands once.
+layout(std430, binding = kBindingUnknown) buffer b_Unknown {
+    uint unknownBits[];
+};
+void scatterAdd(uint i, float v) {
+    uint seen = unknownBits[i];
+    for (;;) {
+        uint expected = seen;
+        seen = atomicCompSwap(unknownBits[i], expected, floatBitsToUint(uintBitsToFloat(expected) + v));
+        if (seen == expected) break;
+    }
+}
+#endif
+layout(std430, binding = kBindingResidual) readonly buffer b_Residual {
+    vec4 residual[];
+};
+#else
+layout(std430, binding = kBindingUnknown) readonly buffer b_Unknown {
+    float unknown[];
+};
+layout(std430, binding = kBindingImageOut) writeonly buffer b_Image {
+    vec4 pixels[];
+};
+#endif
+
+// The basis functions that are non-zero at extinction-index point p, over the unknown grid.
+struct Basis {
+    uint index[8];
+    float weight[8];
+};
+#if VOLSTYLE_BASIS == 0
+const int kBasisCount = 1;
+#else
+const int kBasisCount = 8;
+#endif
+
+uint unknownIndex(ivec3 c) { return uint((c.z * u.unknownDims.y + c.y) * u.unknownDims.x + c.x); }
+
+Basis basisAt(vec3 p) {
+    Basis b;
+    ivec3 n = u.unknownDims.xyz;
+    vec3 q = (p + 0.5) * u.unknownScale.xyz - 0.5;  // unknown-grid index space, same box
+#if VOLSTYLE_BASIS == 0
+    b.index[0] = unknownIndex(clamp(ivec3(floor(q + 0.5)), ivec3(0), n - 1));
+    b.weight[0] = 1.0;
+#else
+    q = clamp(q, vec3(0.0), vec3(n - 1));
+    ivec3 i0 = min(ivec3(floor(q)), n - 1), i1 = min(i0 + 1, n - 1);
+    vec3 f = q - vec3(i0);
+    for (int c = 0; c < 8; ++c) {
+        ivec3 corner = ivec3((c & 1) != 0 ? i1.x : i0.x, (c & 2) != 0 ? i1.y : i0.y, (c & 4) != 0 ? i1.z : i0.z);
+        b.index[c] = unknownIndex(corner);
+        b.weight[c] = ((c & 1) != 0 ? f.x : 1.0 - f.x) * ((c & 2) != 0 ? f.y : 1.0 - f.y) *
+                      ((c & 4) != 0 ? f.z : 1.0 - f.z);
+    }
+#endif
+    return b;
+}
+
+// W: add weight · (Σ basis · a) of block `block`; Wᵀ: scatter weight · r · basis into it.
+#if VOLSTYLE_ADJOINT
+void apply(Basis b, uint block, vec3 weight, vec3 r, inout vec3 unused) {
+    vec3 v = weight * r;
+    for (int c = 0; c < kBasisCount; ++c) {
+        uint i = 4u * (block + b.index[c]);
+        if (b.weight[c] == 0.0) continue;
+        scatterAdd(i, v.r * b.weight[c]);
+        scatterAdd(i + 1u, v.g * b.weight[c]);
+        scatterAdd(i + 2u, v.b * b.weight[c]);
+    }
+}
+#else
+void apply(Basis b, uint block, vec3 weight, vec3 unusedResidual, inout vec3 sum) {
+    vec3 a = vec3(0.0);
+    for (int c = 0; c < kBasisCount; ++c) {
+        uint i = 4u * (block + b.index[c]);
+        a += b.weight[c] * vec3(unknown[i], unknown[i + 1u], unknown[i + 2u]);
+    }
+    sum += weight * a;
+}
+#endif
+
+void main() {
+    ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
+    if (pix.x >= u.imageSize.x || pix.y >= u.imageSize.y) return;
+    uint pixelIndex = uint(u.unknownDims.w + pix.y * u.imageSize.x + pix.x);
+#if VOLSTYLE_ADJOINT
+    vec3 r = residual[pixelIndex].rgb;
+    if (r == vec3(0.0)) return;  // weight-0 pixels scatter nothing
+#else
+    vec3 r = vec3(0.0);
+#endif
+    vec3 sum = vec3(0.0);
+
+    vec3 dir = cameraRay(pix);
+    vec3 o, d;
+    vec2 range;
+    viewRay(dir, o, d, range);
+    if (range.x < range.y) {
+        Segments seg = makeSegments(range, d);
+#if VOLSTYLE_UNKNOWN == UNKNOWN_EXTINCTION
+        // Log-space tomography: o_k = Σ σ_i ∫ v_i dt. The current extinction is not involved,
+        // so no skipping: every segment of the box counts.
+        for (int i = 0; i < seg.count; ++i)
+            apply(basisAt(o + segmentMidpoint(seg, i) * d), 0u, vec3(seg.dt), r, sum);
+#else
+        vec3 transmittance = vec3(1.0);
+        for (int i = 0; i < seg.count;) {
+            int next = skipEmptyBricks(i, seg, o, d);
+            if (next != i) {
+                i = next;
+                continue;
+            }
+            vec3 p = o + segmentMidpoint(seg, i) * d;
+            vec3 sigma = fetchTrilinear(s_extinction, stencilAt(p));
+            ++i;
+            if (max3(sigma) <= 0.0) continue;
+            vec3 tau = sigma * seg.dt;
+            vec3 opacity = transmittance * oneMinusExp(tau);  // T · (1 − e^{−σΔt})
+            Basis b = basisAt(p);
+#if VOLSTYLE_UNKNOWN == UNKNOWN_EMISSION || VOLSTYLE_UNKNOWN == UNKNOWN_EMISSION_ALBEDO
+            apply(b, 0u, opacity, r, sum);
+#endif
+#if VOLSTYLE_UNKNOWN == UNKNOWN_ALBEDO || VOLSTYLE_UNKNOWN == UNKNOWN_EMISSION_ALBEDO
+            uint albedoBlock = VOLSTYLE_UNKNOWN == UNKNOWN_EMISSION_ALBEDO ? uint(u.unknownLayout.x) : 0u;
+            apply(b, albedoBlock, opacity * inScattering(stencilAt(p), dir), r, sum);
+#endif
+            transmittance *= exp(-tau);
+            // Only a transmittance cut-off: forward and adjoint must stop at the same segment.
+            if (max3(transmittance) < u.unknownScale.w) break;
+        }
+#endif
+    }
+#if !VOLSTYLE_ADJOINT
+    pixels[pixelIndex] = vec4(sum, 0.0);
+#endif
+}

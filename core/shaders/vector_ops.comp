@@ -1,0 +1,122 @@
+// The solver's vector operations, all on the GPU (TVCG Sec. 5.1: "all necessary steps of the
+// conjugate gradient method are carried out on the GPU"). Vectors are arrays of vec4 whose rgb
+// are three independent channels; scalars are per channel (vec4 alpha). VOLSTYLE_OP picks one:
+//   OP_AXPY      y[i] += alpha * x[i]
+//   OP_XPBY      y[i]  = x[i] + alpha * y[i]
+//   OP_MUL       y[i] *= x[i]
+//   OP_DOT       partial[workgroup] = Σ x[i]·y[i] per channel, accumulated in double: float sums
+//                drift on large grids and would fake divergence
+//   OP_LAPLACIAN y = alpha · L x, the 7-point Laplacian over the cells where z (the hull) is set:
+//                (L x)_i = Σ_{j ∈ N6(i), j in hull} (x_j − x_i) (symmetric, so Lᵀ = L)
+//   OP_FREE      y[i] = 0 where x (the unknowns) sits at a bound and y would push past it
+//   OP_STEP      partial[workgroup] = min over i of the step t ≥ 0 at which x + t·y meets a bound
+//   OP_CLAMP     y = clamp(y, lower, upper)
+// Elements [first, first + count) are processed; element i belongs to block i / blockSize, whose
+// bounds are bounds.xy (block 0) or bounds.zw (block 1).
+#include "layout.h"
+
+layout(local_size_x = kWorkgroup1D) in;
+
+layout(std140, binding = kBindingParams) uniform b_VectorParams {
+    VectorParams v;
+};
+layout(std430, binding = kBindingVectorX) readonly buffer b_X {
+    vec4 x[];
+};
+layout(std430, binding = kBindingVectorY) buffer b_Y {
+    vec4 y[];
+};
+layout(std430, binding = kBindingVectorZ) readonly buffer b_Z {
+    vec4 z[];
+};
+layout(std430, binding = kBindingPartials) writeonly buffer b_Partials {
+    dvec4 partial[];
+};
+
+#define OP_AXPY 1
+#define OP_XPBY 2
+#define OP_MUL 3
+#define OP_DOT 4
+#define OP_LAPLACIAN 5
+#define OP_FREE 6
+#define OP_STEP 7
+#define OP_CLAMP 8
+
+#if VOLSTYLE_OP == OP_DOT || VOLSTYLE_OP == OP_STEP
+shared dvec4 s_reduce[kWorkgroup1D];
+#endif
+
+vec2 boundsOf(uint i) { return (int(i) / v.count.z) == 0 ? v.bounds.xy : v.bounds.zw; }
+
+void main() {
+    uint local = gl_LocalInvocationID.x;
+    uint k = gl_GlobalInvocationID.x;
+    bool inside = k < uint(v.count.x);
+    uint i = uint(v.count.y) + k;
+
+#if VOLSTYLE_OP == OP_AXPY
+    if (inside) y[i].rgb += v.alpha.rgb * x[i].rgb;
+#elif VOLSTYLE_OP == OP_XPBY
+    if (inside) y[i].rgb = x[i].rgb + v.alpha.rgb * y[i].rgb;
+#elif VOLSTYLE_OP == OP_MUL
+    if (inside) y[i].rgb *= x[i].rgb;
+#elif VOLSTYLE_OP == OP_DOT
+    s_reduce[local] = inside ? dvec4(dvec3(x[i].rgb) * dvec3(y[i].rgb), 0.0) : dvec4(0.0);
+    barrier();
+    for (uint stride = kWorkgroup1D / 2; stride > 0; stride >>= 1) {
+        if (local < stride) s_reduce[local] += s_reduce[local + stride];
+        barrier();
+    }
+    if (local == 0) partial[gl_WorkGroupID.x] = s_reduce[0];
+#elif VOLSTYLE_OP == OP_LAPLACIAN
+    if (inside) {
+        ivec3 n = v.dims.xyz;
+        int block = int(i) / v.count.z, cell = int(i) % v.count.z;
+        ivec3 c = ivec3(cell % n.x, (cell / n.x) % n.y, cell / (n.x * n.y));
+        vec3 sum = vec3(0.0);
+        if (z[i].r > 0.0) {
+            const ivec3 offsets[6] = ivec3[6](ivec3(1, 0, 0), ivec3(-1, 0, 0), ivec3(0, 1, 0),
+                                              ivec3(0, -1, 0), ivec3(0, 0, 1), ivec3(0, 0, -1));
+            for (int o = 0; o < 6; ++o) {
+                ivec3 q = c + offsets[o];
+                if (any(lessThan(q, ivec3(0))) || any(greaterThanEqual(q, n))) continue;
+                uint j = uint(block * v.count.z + (q.z * n.y + q.y) * n.x + q.x);
+                if (z[j].r > 0.0) sum += x[j].rgb - x[i].rgb;
+            }
+        }
+        y[i] = vec4(v.alpha.rgb * sum, 0.0);
+    }
+#elif VOLSTYLE_OP == OP_FREE
+    if (inside) {
+        vec2 b = boundsOf(i);
+        bvec3 atLower = lessThanEqual(x[i].rgb, vec3(b.x)), atUpper = greaterThanEqual(x[i].rgb, vec3(b.y));
+        bvec3 fixedLower = bvec3(atLower.x && y[i].r < 0.0, atLower.y && y[i].g < 0.0, atLower.z && y[i].b < 0.0);
+        bvec3 fixedUpper = bvec3(atUpper.x && y[i].r > 0.0, atUpper.y && y[i].g > 0.0, atUpper.z && y[i].b > 0.0);
+        y[i].rgb = mix(y[i].rgb, vec3(0.0), bvec3(fixedLower.x || fixedUpper.x, fixedLower.y || fixedUpper.y,
+                                                  fixedLower.z || fixedUpper.z));
+    }
+#elif VOLSTYLE_OP == OP_STEP
+    const double kNone = 1e300;
+    dvec4 t = dvec4(kNone);
+    if (inside) {
+        vec2 b = boundsOf(i);
+        for (int c = 0; c < 3; ++c) {
+            float p = y[i][c], a = x[i][c];
+            if (p > 0.0 && b.y < 1e30) t[c] = max(0.0lf, double(b.y - a) / double(p));
+            else if (p < 0.0) t[c] = max(0.0lf, double(b.x - a) / double(p));
+        }
+    }
+    s_reduce[local] = t;
+    barrier();
+    for (uint stride = kWorkgroup1D / 2; stride > 0; stride >>= 1) {
+        if (local < stride) s_reduce[local] = min(s_reduce[local], s_reduce[local + stride]);
+        barrier();
+    }
+    if (local == 0) partial[gl_WorkGroupID.x] = s_reduce[0];
+#elif VOLSTYLE_OP == OP_CLAMP
+    if (inside) {
+        vec2 b = boundsOf(i);
+        y[i].rgb = clamp(y[i].rgb, vec3(b.x), vec3(b.y));
+    }
+#endif
+}

@@ -1,0 +1,141 @@
+#include "core/solve/gpu_vector.h"
+
+#include <algorithm>
+
+#include "core/errors.h"
+#include "core/render/renderer.h"
+#include "core/shaders/layout.h"
+
+namespace volstyle::core {
+
+GpuVector::GpuVector(size_t elements, const std::string& label)
+    : m_buffer(gl::createBuffer(std::max<size_t>(elements, 1) * 16, nullptr, GL_DYNAMIC_STORAGE_BIT, label)),
+      m_elements(elements) {
+    fill(0.0f);
+}
+
+void GpuVector::upload(const std::vector<float>& rgba) {
+    VOLSTYLE_CHECK(rgba.size(), ==, m_elements * 4);
+    glNamedBufferSubData(m_buffer.id(), 0, GLsizeiptr(rgba.size() * sizeof(float)), rgba.data());
+}
+
+std::vector<float> GpuVector::download() const {
+    std::vector<float> out(m_elements * 4);
+    gl::barrierAfterComputeWrites();
+    glGetNamedBufferSubData(m_buffer.id(), 0, GLsizeiptr(out.size() * sizeof(float)), out.data());
+    return out;
+}
+
+void GpuVector::fill(float value) {
+    glClearNamedBufferData(m_buffer.id(), GL_R32F, GL_RED, GL_FLOAT, &value);
+}
+
+struct VectorOps::Dispatch {
+    const GpuVector* x = nullptr;
+    const GpuVector* y = nullptr;
+    const GpuVector* z = nullptr;
+    Vec3d alpha;
+    Bounds bounds;
+    Range range;
+    Int3 dims;
+};
+
+VectorOps::VectorOps(Renderer& renderer)
+    : m_renderer(renderer),
+      m_params(gl::createBuffer(sizeof(layout::VectorParams), nullptr, GL_DYNAMIC_STORAGE_BIT, "vector-params")) {}
+
+std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
+    const size_t size = d.y ? d.y->size() : d.x->size();
+    const size_t first = std::min(d.range.first, size);
+    const size_t count = std::min(d.range.count, size - first);
+    layout::VectorParams p;
+    p.alpha = {float(d.alpha.x), float(d.alpha.y), float(d.alpha.z), 0};
+    p.bounds = {d.bounds.lower[0], d.bounds.upper[0], d.bounds.lower[1], d.bounds.upper[1]};
+    p.count = {int(count), int(first), int(std::max<size_t>(d.bounds.blockSize, 1)), 0};
+    if (op == kLaplacian) p.count.z = int(d.dims.volume());
+    p.dims = {d.dims.x, d.dims.y, d.dims.z, 0};
+    glNamedBufferSubData(m_params.id(), 0, sizeof(p), &p);
+    glBindBufferBase(GL_UNIFORM_BUFFER, layout::kBindingParams, m_params.id());
+
+    const size_t groups = std::max<size_t>(1, (count + layout::kWorkgroup1D - 1) / layout::kWorkgroup1D);
+    const bool reduces = op == kDot || op == kStep;
+    if (reduces && groups > m_partialCapacity) {
+        m_partials = gl::createBuffer(groups * 32, nullptr, GL_DYNAMIC_STORAGE_BIT, "vector-partials");
+        m_partialCapacity = groups;
+    }
+    // Unused bindings still need a buffer behind them; point them at y or x.
+    const GpuVector* any = d.y ? d.y : d.x;
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingVectorX, (d.x ? d.x : any)->id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingVectorY, (d.y ? d.y : any)->id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingVectorZ, (d.z ? d.z : any)->id());
+    if (m_partials) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingPartials, m_partials.id());
+    glUseProgram(m_renderer.program(gl::ShaderBuilder("vector_ops.comp").define("VOLSTYLE_OP", op)).id());
+    if (count > 0) glDispatchCompute(GLuint(groups), 1, 1);
+    gl::barrierAfterComputeWrites();
+    if (!reduces) return {};
+    std::vector<double> partials(groups * 4);
+    if (count > 0) glGetNamedBufferSubData(m_partials.id(), 0, GLsizeiptr(groups * 32), partials.data());
+    return partials;
+}
+
+void VectorOps::axpy(const Vec3d& alpha, const GpuVector& x, GpuVector& y, Range range) {
+    Dispatch d;
+    d.x = &x, d.y = &y, d.alpha = alpha, d.range = range;
+    run(kAxpy, d);
+}
+
+void VectorOps::xpby(const GpuVector& x, const Vec3d& beta, GpuVector& y) {
+    Dispatch d;
+    d.x = &x, d.y = &y, d.alpha = beta;
+    run(kXpby, d);
+}
+
+void VectorOps::multiply(const GpuVector& x, GpuVector& y) {
+    Dispatch d;
+    d.x = &x, d.y = &y;
+    run(kMul, d);
+}
+
+Vec3d VectorOps::dot(const GpuVector& x, const GpuVector& y, Range range) {
+    Dispatch d;
+    d.x = &x, d.y = &y, d.range = range;
+    auto partials = run(kDot, d);
+    Vec3d sum(0.0);
+    for (size_t g = 0; g < partials.size(); g += 4) sum += Vec3d(partials[g], partials[g + 1], partials[g + 2]);
+    return sum;
+}
+
+void VectorOps::laplacian(double scale, const GpuVector& x, const GpuVector& hull, Int3 dims, GpuVector& out) {
+    Dispatch d;
+    d.x = &x, d.y = &out, d.z = &hull, d.alpha = Vec3d(scale), d.dims = dims;
+    run(kLaplacian, d);
+}
+
+void VectorOps::freeSet(const GpuVector& a, GpuVector& s, const Bounds& bounds) {
+    Dispatch d;
+    d.x = &a, d.y = &s, d.bounds = bounds;
+    run(kFree, d);
+}
+
+Vec3d VectorOps::maxStep(const GpuVector& a, const GpuVector& p, const Bounds& bounds) {
+    Dispatch d;
+    d.x = &a, d.y = &p, d.bounds = bounds;
+    auto partials = run(kStep, d);
+    Vec3d m(1e300);
+    for (size_t g = 0; g < partials.size(); g += 4)
+        for (int c = 0; c < 3; ++c) m[c] = std::min(m[c], partials[g + size_t(c)]);
+    return m;
+}
+
+void VectorOps::clamp(GpuVector& a, const Bounds& bounds) {
+    Dispatch d;
+    d.y = &a, d.bounds = bounds;
+    run(kClamp, d);
+}
+
+void VectorOps::copy(const GpuVector& from, GpuVector& to) {
+    VOLSTYLE_CHECK(from.size(), ==, to.size());
+    glCopyNamedBufferSubData(from.id(), to.id(), 0, 0, GLsizeiptr(from.size() * 16));
+}
+
+}  // namespace volstyle::core

@@ -1,0 +1,72 @@
+#pragma once
+/// \file gpu_vector.h
+/// GPU-resident solver vectors (arrays of vec4, rgb = three independent channels) and the
+/// operations CGLS needs on them, each one dispatch of vector_ops.comp. Reductions accumulate in
+/// float64 on the GPU and finish on the host. GL thread only.
+
+#include <string>
+#include <vector>
+
+#include "core/gl/object.h"
+#include "core/math/vec.h"
+
+namespace volstyle::core {
+
+class Renderer;
+
+class GpuVector {
+public:
+    GpuVector() = default;
+    GpuVector(size_t elements, const std::string& label);
+    size_t size() const { return m_elements; }
+    GLuint id() const { return m_buffer.id(); }
+    void upload(const std::vector<float>& rgba);  ///< 4 floats per element
+    std::vector<float> download() const;
+    void fill(float value);
+
+private:
+    gl::Buffer m_buffer;
+    size_t m_elements = 0;
+};
+
+/// Box constraints per block of unknowns (block = element / blockSize; at most two blocks).
+struct Bounds {
+    float lower[2] = {-3e38f, -3e38f};
+    float upper[2] = {3e38f, 3e38f};
+    size_t blockSize = 0;
+};
+
+/// A sub-range of elements.
+struct Range {
+    size_t first = 0;
+    size_t count = size_t(-1);  ///< -1: to the end
+};
+
+class VectorOps {
+public:
+    explicit VectorOps(Renderer& renderer);
+    void axpy(const Vec3d& alpha, const GpuVector& x, GpuVector& y, Range range = {});  ///< y += αx
+    void xpby(const GpuVector& x, const Vec3d& beta, GpuVector& y);                     ///< y = x + βy
+    void multiply(const GpuVector& x, GpuVector& y);                                   ///< y ⊙= x
+    Vec3d dot(const GpuVector& x, const GpuVector& y, Range range = {});
+    /// out = scale · L x over the cells of `hull` (rgb > 0), per block of `dims` cells.
+    void laplacian(double scale, const GpuVector& x, const GpuVector& hull, Int3 dims, GpuVector& out);
+    /// Zeroes s where a is at a bound and s points past it.
+    void freeSet(const GpuVector& a, GpuVector& s, const Bounds& bounds);
+    /// Per channel, the largest t ≥ 0 with a + t·p inside the bounds (1e300 if unbounded).
+    Vec3d maxStep(const GpuVector& a, const GpuVector& p, const Bounds& bounds);
+    void clamp(GpuVector& a, const Bounds& bounds);
+    void copy(const GpuVector& from, GpuVector& to);
+
+private:
+    enum Op { kAxpy = 1, kXpby, kMul, kDot, kLaplacian, kFree, kStep, kClamp };
+    struct Dispatch;
+    std::vector<double> run(Op op, const Dispatch& d);
+
+    Renderer& m_renderer;
+    gl::Buffer m_params;
+    gl::Buffer m_partials;
+    size_t m_partialCapacity = 0;
+};
+
+}  // namespace volstyle::core

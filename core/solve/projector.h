@@ -1,0 +1,69 @@
+#pragma once
+/// \file projector.h
+/// The matrix-free operator W of the painting solver and its adjoint (TVCG Sec. 4.2, 5.1), both
+/// from project.comp: `forward` renders an unknown field into every view's pixels (W a);
+/// `adjoint` scatters per-pixel residuals back into the unknown grid along the same rays with the
+/// same weights (Wᵀ r). GL thread only.
+
+#include <vector>
+
+#include "core/render/gpu_volume.h"
+#include "core/render/renderer.h"
+#include "core/solve/gpu_vector.h"
+#include "core/solve/solve_types.h"
+
+namespace volstyle::core {
+
+
+struct ProjectorStats {
+    double forwardMs = 0;
+    double adjointMs = 0;
+    int forwardCalls = 0;
+    int adjointCalls = 0;
+};
+
+class Projector {
+public:
+    /// `unknownDims`: the unknown grid (the extinction grid's dims or coarser, same box).
+    Projector(Renderer& renderer, GpuVolume& volume, const Lighting& lighting, Unknown unknown,
+              BasisType basis, Int3 unknownDims, double stepVoxels);
+
+    /// Adds a view; its pixels follow those of the views added before (row-major, top row first).
+    void addView(const Camera& camera);
+    size_t viewCount() const { return m_views.size(); }
+    size_t pixelCount() const { return m_pixelCount; }
+    Range viewRange(size_t view) const { return {m_views[view].offset, size_t(m_views[view].camera.width) * m_views[view].camera.height}; }
+    /// Unknown elements: voxels of the unknown grid, times 2 for emission + albedo.
+    size_t elementCount() const { return size_t(m_unknownDims.volume()) * (m_unknown == Unknown::EmissionAlbedo ? 2 : 1); }
+    Int3 unknownDims() const { return m_unknownDims; }
+    Unknown unknown() const { return m_unknown; }
+
+    void forward(const GpuVector& a, GpuVector& pixels);   ///< pixels = W a
+    void adjoint(const GpuVector& pixels, GpuVector& a);   ///< a = Wᵀ pixels
+    const ProjectorStats& stats() const { return m_stats; }
+    /// Scatter with GL_NV_shader_atomic_float (default where the context has it) or with the
+    /// compare-and-swap fallback; tests cover both.
+    void setUseFloatAtomics(bool use);
+
+private:
+    struct View {
+        Camera camera;
+        Renderer::MarchSetup setup;
+        size_t offset;
+    };
+    void dispatch(bool adjoint, const GpuVector& unknowns, const GpuVector& pixels);
+
+    Renderer& m_renderer;
+    GpuVolume& m_volume;
+    Lighting m_lighting;
+    Unknown m_unknown;
+    BasisType m_basis;
+    Int3 m_unknownDims;
+    double m_step;
+    std::vector<View> m_views;
+    size_t m_pixelCount = 0;
+    ProjectorStats m_stats;
+    bool m_useFloatAtomics = false;
+};
+
+}  // namespace volstyle::core
