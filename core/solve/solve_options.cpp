@@ -1,0 +1,54 @@
+#include "core/solve/solve_options.h"
+
+#include <cmath>
+
+#include "core/errors.h"
+
+namespace volstyle::core {
+
+const char* unknownName(Unknown u) {
+    switch (u) {
+        case Unknown::Emission: return "emission";
+        case Unknown::Albedo: return "albedo";
+        case Unknown::EmissionAlbedo: return "emission+albedo";
+        case Unknown::Extinction: return "extinction";
+    }
+    return "?";
+}
+
+std::vector<FieldProblem> SolveOptions::check() const {
+    std::vector<FieldProblem> out;
+    auto weight = [&](double w, const char* name) {
+        if (!(w >= 0 && w <= 1e9)) out.push_back({std::string("regularization/") + name, "must be in [0, 1e9]"});
+    };
+    weight(regularization.laplacian, "laplacian");
+    weight(regularization.l2, "l2");
+    weight(regularization.towardOne, "toward_one");
+    if (maxIterations < 1 || maxIterations > 10000) out.push_back({"max_iterations", "must be in [1, 10000]"});
+    if (!(tolerance >= 0 && tolerance < 1)) out.push_back({"tolerance", "must be in [0, 1)"});
+    if (!(stepVoxels >= 0.05 && stepVoxels <= 8)) out.push_back({"step", "must be in [0.05, 8] voxels"});
+    if (resolution && (resolution->x < 1 || resolution->y < 1 || resolution->z < 1 || resolution->x > 1024 ||
+                       resolution->y > 1024 || resolution->z > 1024))
+        out.push_back({"resolution", "each size must be in [1, 1024]"});
+    if (unknown == Unknown::Extinction) {
+        if (!mediumRadiance) {
+            out.push_back({"medium_radiance", "is required for an extinction solve (TVCG Sec. 4.2.4)"});
+        } else if (!(std::isfinite(mediumRadiance->x) && std::isfinite(mediumRadiance->y) &&
+                     std::isfinite(mediumRadiance->z) && minComponent(*mediumRadiance) >= 0)) {
+            out.push_back({"medium_radiance", "must be finite and >= 0"});
+        }
+    } else if (mediumRadiance) {
+        out.push_back({"medium_radiance", "applies to extinction solves only"});
+    }
+    return out;
+}
+
+void SolveOptions::validate() const {
+    auto problems = check();
+    if (problems.empty()) return;
+    std::string msg;
+    for (const auto& p : problems) msg += (msg.empty() ? "" : "; ") + p.field + ": " + p.message;
+    throw InvalidArgument("solve options: " + msg);
+}
+
+}  // namespace volstyle::core

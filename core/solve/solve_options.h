@@ -1,0 +1,74 @@
+#pragma once
+/// \file solve_options.h
+/// What a solve is asked to do (SPEC §2), GL-free: protocol/ parses it from JSON, the CLI from
+/// flags. `check()` lists every problem with the JSON field it belongs to.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/image/image.h"
+#include "core/math/vec.h"
+#include "core/render/params.h"
+#include "core/solve/solve_types.h"
+
+namespace volstyle::core {
+
+/// Regularizer weights (TVCG Sec. 5.2; "weak weights, i.e. 2^-9"), each averaged over the
+/// unknown voxels so they do not depend on resolution.
+struct Regularization {
+    double laplacian = 0.002;  ///< ‖L a‖²: smoothness within the hull
+    double l2 = 0;             ///< ‖a‖²: small values
+    double towardOne = 0;      ///< ‖a − 1‖²: values near one
+};
+
+struct SolveOptions {
+    Unknown unknown = Unknown::Emission;
+    BasisType basis = BasisType::Trilinear;
+    Regularization regularization;
+    int maxIterations = 30;
+    double tolerance = 1e-4;    ///< stop when an iteration lowers the objective by less than this, relatively
+    double stepVoxels = 0.5;
+    bool useHull = true;        ///< "hull": "extinction" (true) or "none"
+    std::optional<Int3> resolution;       ///< unknown grid; default: the extinction grid's
+    std::optional<Vec3d> mediumRadiance;  ///< L_m, required for extinction solves (Sec. 4.2.4)
+    std::vector<std::string> views;       ///< which views; empty: all with a target
+    bool enforceBounds = true;  ///< albedo in [0,1], emission and extinction ≥ 0 (tests may lift it)
+
+    std::vector<FieldProblem> check() const;
+    void validate() const;  ///< throws InvalidArgument listing check()'s problems
+};
+
+/// One painted view: the camera, the target (linear RGB; alpha = weight) and optional weights.
+struct SolveView {
+    std::string name;
+    Camera camera;
+    Image target;
+    std::optional<Image> weights;  ///< single-channel (R used), multiplies the target's alpha
+};
+
+/// Reported after every iteration.
+struct SolveProgress {
+    int iteration = 0;
+    double objective = 0;
+    std::vector<double> rmsPerView;  ///< weighted RMS error of each view (mean over RGB)
+    double elapsedMs = 0;
+    double forwardMs = 0, adjointMs = 0, vectorMs = 0;  ///< this iteration's split
+};
+
+struct SolveReport {
+    int iterations = 0;
+    std::string stopReason;  ///< converged, stagnated, max_iterations, zero_gradient, no_constraints
+    double initialObjective = 0, finalObjective = 0;
+    std::vector<double> initialRms, finalRms;
+    std::vector<double> objectiveHistory;  ///< [0] before the first iteration
+    size_t unknownCount = 0, hullCount = 0;
+    size_t constraintPixels = 0;
+    size_t ignoredPixels = 0;   ///< extinction: ratio not positive, or L_bg = L_m (weight 0)
+    size_t clampedPixels = 0;   ///< extinction: ratio above 1, clamped to 1
+    double totalMs = 0, forwardMs = 0, adjointMs = 0, vectorMs = 0;
+};
+
+const char* unknownName(Unknown u);
+
+}  // namespace volstyle::core

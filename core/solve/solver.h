@@ -1,0 +1,50 @@
+#pragma once
+/// \file solver.h
+/// The painting solver (TVCG Sec. 4–5, SPEC §2): finds the emission, albedo, both, or the
+/// extinction whose single-scattering renderings match painted targets in the weighted
+/// least-squares sense, with regularizers and bounds.
+///
+/// Method: CGLS on the stacked system [√(w/Σw)·W; √(λ_lap/M)·L; √((λ0+λ1)/M)·I] a ≈
+/// [√(w/Σw)·o; 0; √((λ0+λ1)/M)·t] (t = λ1/(λ0+λ1)), three channels in lockstep, with an active
+/// set for the bounds: variables at a bound whose gradient points outward are frozen; a step is
+/// cut where the first free variable meets its bound, and that channel restarts from the
+/// gradient. Every step is along a descent direction with at most the exact line-search length,
+/// so the objective never rises. All vectors live on the GPU; reductions are float64.
+///
+/// A Solver works on its own copy of the volume: a cancelled or failed solve changes nothing.
+/// GL thread only.
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "core/render/renderer.h"
+#include "core/solve/solve_options.h"
+#include "core/volume/volume.h"
+
+namespace volstyle::core {
+
+struct SolveResult {
+    Volume volume;  ///< the input volume with the solved property replaced
+    SolveReport report;
+};
+
+class Solver {
+public:
+    /// Validates everything up front (throws InvalidArgument): options, views (a target per view,
+    /// sizes matching the camera, no NaN/Inf), the unknown's requirements.
+    Solver(Renderer& renderer, const Volume& volume, const Lighting& lighting, std::vector<SolveView> views,
+           SolveOptions options);
+    ~Solver();
+
+    using ProgressCallback = std::function<void(const SolveProgress&)>;
+    /// Runs to a stopping rule. `cancel` is checked between iterations (throws Cancelled).
+    SolveResult run(const ProgressCallback& progress = {}, const std::atomic<bool>* cancel = nullptr);
+
+private:
+    struct State;
+    std::unique_ptr<State> m_state;
+};
+
+}  // namespace volstyle::core
