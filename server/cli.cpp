@@ -3,7 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
 #include "core/errors.h"
+#include "core/image/image_io.h"
+#include "protocol/render_json.h"
 
 namespace volstyle::server {
 
@@ -64,6 +70,27 @@ Arguments parseArguments(const std::vector<std::string>& args, const std::vector
         out.options[name] = value;
     }
     return out;
+}
+
+nlohmann::json readJsonFile(const std::string& path) {
+    std::ifstream f(path);
+    if (!f) throw IoError("cannot read '" + path + "'");
+    std::stringstream s;
+    s << f.rdbuf();
+    try {
+        return protocol::parseJson(s.str(), "'" + path + "'");
+    } catch (const protocol::ValidationError& e) {
+        throw InvalidArgument(e.what());
+    }
+}
+
+core::Lighting lightingFromJsonFile(const nlohmann::json& j, const std::string& jsonPath, const std::string& pointer) {
+    auto request = protocol::lightingFromJson(j, pointer, /*allowFilePaths=*/true);
+    if (request.environmentPath) {
+        auto env = std::filesystem::path(jsonPath).parent_path() / *request.environmentPath;
+        request.lighting.background.environment = std::make_shared<core::Image>(core::loadImage(env.string()).image);
+    }
+    return request.lighting;
 }
 
 }  // namespace volstyle::server

@@ -3,9 +3,15 @@
 /// The `volstyle` subcommands (SPEC §4). Each returns the process exit status: 0 success,
 /// 2 bad input (one line on stderr), 1 anything else.
 
+#include <nlohmann/json.hpp>
+
 #include <map>
 #include <string>
 #include <vector>
+
+#include "core/errors.h"
+#include "core/render/params.h"
+#include "protocol/validation.h"
 
 namespace volstyle::server {
 
@@ -24,7 +30,24 @@ struct Arguments {
 Arguments parseArguments(const std::vector<std::string>& args, const std::vector<std::string>& known,
                          const std::vector<std::string>& flags);
 
+/// Reads and parses a JSON file; InvalidArgument names the file.
+nlohmann::json readJsonFile(const std::string& path);
+
+/// Parses a file with `parse`, turning validation errors into one line that names the file.
+template <typename F>
+auto fromFile(const std::string& path, F&& parse) {
+    try {
+        return parse(readJsonFile(path));
+    } catch (const protocol::ValidationError& e) {
+        throw InvalidArgument("'" + path + "': " + e.what());
+    }
+}
+
+/// A lighting object from a file (`jsonPath`): environment map paths are relative to it.
+core::Lighting lightingFromJsonFile(const nlohmann::json& j, const std::string& jsonPath, const std::string& pointer = "");
+
 int runRender(const std::vector<std::string>& args);
+int runSolve(const std::vector<std::string>& args);
 int runInfo(const std::vector<std::string>& args);
 
 }  // namespace volstyle::server

@@ -22,28 +22,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-nlohmann::json readJsonFile(const std::string& path) {
-    std::ifstream f(path);
-    if (!f) throw IoError("cannot read '" + path + "'");
-    std::stringstream s;
-    s << f.rdbuf();
-    try {
-        return protocol::parseJson(s.str(), "'" + path + "'");
-    } catch (const protocol::ValidationError& e) {
-        throw InvalidArgument(e.what());
-    }
-}
-
-/// Rethrows a validation error with the file it came from.
-template <typename F>
-auto fromFile(const std::string& path, F&& parse) {
-    try {
-        return parse(readJsonFile(path));
-    } catch (const protocol::ValidationError& e) {
-        throw InvalidArgument("'" + path + "': " + e.what());
-    }
-}
-
 const char* kUsage =
     "usage: volstyle render --scene builtin:NAME[:RES]|FILE.vdb [--camera CAM.json]\n"
     "                       [--lighting L.json] [--exposure STOPS] [--step VOXELS] [--no-skip]\n"
@@ -71,12 +49,7 @@ int runRender(const std::vector<std::string>& argv) {
     core::Lighting lighting = core::defaultLighting();
     if (args.has("lighting")) {
         const std::string path = args.get("lighting");
-        auto request = fromFile(path, [](const nlohmann::json& j) { return protocol::lightingFromJson(j, "", true); });
-        lighting = request.lighting;
-        if (request.environmentPath) {
-            fs::path env = fs::path(path).parent_path() / *request.environmentPath;
-            lighting.background.environment = std::make_shared<core::Image>(core::loadImage(env.string()).image);
-        }
+        lighting = fromFile(path, [&](const nlohmann::json& j) { return lightingFromJsonFile(j, path); });
     }
     core::RenderSettings settings;
     settings.stepVoxels = args.number("step", settings.stepVoxels);

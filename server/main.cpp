@@ -17,6 +17,7 @@ const char* kUsage =
     "volstyle — restyle volumes by painting them\n"
     "usage: volstyle <command> [options]\n"
     "  render   render a scene to PNG/EXR      (volstyle render --help)\n"
+    "  solve    restyle a volume from painted views (volstyle solve --help)\n"
     "  info     describe an OpenVDB file       (volstyle info FILE.vdb)\n"
     "Environment: VOLSTYLE_EGL=device|surfaceless, VOLSTYLE_LOG_LEVEL=debug|info|warn,\n"
     "             VOLSTYLE_SHADER_DIR=core/shaders (load shaders from disk).\n";
@@ -41,6 +42,7 @@ int main(int argc, char** argv) {
     try {
         if (command == "render") return volstyle::server::runRender(args);
         if (command == "info") return volstyle::server::runInfo(args);
+        if (command == "solve") return volstyle::server::runSolve(args);
         std::cerr << "volstyle: unknown command '" << command << "'\n" << kUsage;
         return 2;
     } catch (const volstyle::InvalidArgument& e) {
@@ -52,6 +54,9 @@ int main(int argc, char** argv) {
     } catch (const volstyle::NotFound& e) {
         std::cerr << "volstyle " << command << ": " << e.what() << "\n";
         return 2;
+    } catch (const volstyle::Cancelled& e) {
+        std::cerr << "volstyle " << command << ": cancelled: " << e.what() << "\n";
+        return 130;
     } catch (const volstyle::Error& e) {
         std::cerr << "volstyle " << command << ": " << e.code() << ": " << e.what() << "\n";
         return 1;

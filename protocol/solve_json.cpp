@@ -1,0 +1,114 @@
+#include "protocol/solve_json.h"
+
+#include <algorithm>
+#include <set>
+
+namespace volstyle::protocol {
+
+std::optional<core::Unknown> parseUnknowns(const std::vector<std::string>& names) {
+    std::set<std::string> s(names.begin(), names.end());
+    if (s == std::set<std::string>{"emission"}) return core::Unknown::Emission;
+    if (s == std::set<std::string>{"albedo"}) return core::Unknown::Albedo;
+    if (s == std::set<std::string>{"emission", "albedo"}) return core::Unknown::EmissionAlbedo;
+    if (s == std::set<std::string>{"extinction"}) return core::Unknown::Extinction;
+    return std::nullopt;
+}
+
+core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::string& path, core::SolveOptions o) {
+    JsonReader r;
+    if (r.object(j, path, {"unknowns", "basis", "regularization", "max_iterations", "tolerance", "step", "hull",
+                           "resolution", "medium_radiance", "views"})) {
+        if (j.contains("unknowns")) {
+            std::vector<std::string> names;
+            if (!j["unknowns"].is_array()) {
+                r.fail(path + "/unknowns", "must be an array such as [\"emission\", \"albedo\"]");
+            } else {
+                for (size_t i = 0; i < j["unknowns"].size(); ++i)
+                    if (auto s = r.string(j["unknowns"][i], path + "/unknowns/" + std::to_string(i))) names.push_back(*s);
+                if (auto u = parseUnknowns(names)) o.unknown = *u;
+                else if (r.ok())
+                    r.fail(path + "/unknowns", "must be [\"emission\"], [\"albedo\"], [\"emission\", \"albedo\"] or [\"extinction\"]");
+            }
+        }
+        if (j.contains("basis")) {
+            auto b = r.string(j["basis"], path + "/basis");
+            if (b == "trilinear") o.basis = core::BasisType::Trilinear;
+            else if (b == "box") o.basis = core::BasisType::Box;
+            else if (b) r.fail(path + "/basis", "must be 'trilinear' or 'box'");
+        }
+        if (j.contains("regularization") && r.object(j["regularization"], path + "/regularization", {"laplacian", "l2", "toward_one"})) {
+            const auto& g = j["regularization"];
+            const std::string p = path + "/regularization";
+            if (g.contains("laplacian")) o.regularization.laplacian = r.number(g["laplacian"], p + "/laplacian").value_or(o.regularization.laplacian);
+            if (g.contains("l2")) o.regularization.l2 = r.number(g["l2"], p + "/l2").value_or(o.regularization.l2);
+            if (g.contains("toward_one")) o.regularization.towardOne = r.number(g["toward_one"], p + "/toward_one").value_or(o.regularization.towardOne);
+        }
+        if (j.contains("max_iterations")) o.maxIterations = r.integer(j["max_iterations"], path + "/max_iterations").value_or(o.maxIterations);
+        if (j.contains("tolerance")) o.tolerance = r.number(j["tolerance"], path + "/tolerance").value_or(o.tolerance);
+        if (j.contains("step")) o.stepVoxels = r.number(j["step"], path + "/step").value_or(o.stepVoxels);
+        if (j.contains("hull")) {
+            auto h = r.string(j["hull"], path + "/hull");
+            if (h == "extinction") o.useHull = true;
+            else if (h == "none") o.useHull = false;
+            else if (h) r.fail(path + "/hull", "must be 'extinction' or 'none'");
+        }
+        if (j.contains("resolution") && r.object(j["resolution"], path + "/resolution", {"emission", "albedo", "extinction"})) {
+            std::optional<Int3> res;
+            for (const auto& [key, value] : j["resolution"].items()) {
+                const std::string p = path + "/resolution/" + key;
+                if (!value.is_array() || value.size() != 3 || !value[0].is_number_integer() || !value[1].is_number_integer() ||
+                    !value[2].is_number_integer()) {
+                    r.fail(p, "must be [nx, ny, nz] integers");
+                    continue;
+                }
+                Int3 v{value[0].get<int>(), value[1].get<int>(), value[2].get<int>()};
+                if (res && !(*res == v)) r.fail(p, "emission and albedo are solved on one grid: give them the same resolution");
+                res = v;
+            }
+            if (res) o.resolution = res;
+        }
+        if (j.contains("medium_radiance")) o.mediumRadiance = r.vec3(j["medium_radiance"], path + "/medium_radiance");
+        if (j.contains("views")) {
+            o.views.clear();
+            if (!j["views"].is_array()) r.fail(path + "/views", "must be an array of view ids");
+            else
+                for (size_t i = 0; i < j["views"].size(); ++i)
+                    if (auto s = r.string(j["views"][i], path + "/views/" + std::to_string(i))) o.views.push_back(*s);
+        }
+        if (r.ok())
+            for (const auto& p : o.check()) r.fail(path + "/" + p.field, p.message);
+    }
+    r.throwIfErrors();
+    return o;
+}
+
+nlohmann::json solveOptionsToJson(const core::SolveOptions& o) {
+    nlohmann::json unknowns = o.unknown == core::Unknown::EmissionAlbedo ? nlohmann::json{"emission", "albedo"}
+                                                                         : nlohmann::json{core::unknownName(o.unknown)};
+    nlohmann::json j = {{"unknowns", unknowns},
+                        {"basis", o.basis == core::BasisType::Box ? "box" : "trilinear"},
+                        {"regularization", {{"laplacian", o.regularization.laplacian}, {"l2", o.regularization.l2},
+                                            {"toward_one", o.regularization.towardOne}}},
+                        {"max_iterations", o.maxIterations}, {"tolerance", o.tolerance}, {"step", o.stepVoxels},
+                        {"hull", o.useHull ? "extinction" : "none"}, {"views", o.views}};
+    if (o.resolution) j["resolution"] = {{o.unknown == core::Unknown::Extinction ? "extinction" : "emission",
+                                         {o.resolution->x, o.resolution->y, o.resolution->z}}};
+    if (o.mediumRadiance) j["medium_radiance"] = {o.mediumRadiance->x, o.mediumRadiance->y, o.mediumRadiance->z};
+    return j;
+}
+
+nlohmann::json solveReportToJson(const core::SolveReport& r) {
+    return {{"iterations", r.iterations}, {"stop_reason", r.stopReason}, {"initial_objective", r.initialObjective},
+            {"final_objective", r.finalObjective}, {"initial_rms", r.initialRms}, {"final_rms", r.finalRms},
+            {"unknowns", r.unknownCount}, {"hull_unknowns", r.hullCount}, {"constraint_pixels", r.constraintPixels},
+            {"ignored_pixels", r.ignoredPixels}, {"clamped_pixels", r.clampedPixels}, {"total_ms", r.totalMs},
+            {"forward_ms", r.forwardMs}, {"adjoint_ms", r.adjointMs}, {"vector_ms", r.vectorMs}};
+}
+
+nlohmann::json solveProgressToJson(const core::SolveProgress& p) {
+    return {{"iteration", p.iteration}, {"objective", p.objective}, {"rms_per_view", p.rmsPerView},
+            {"elapsed_ms", p.elapsedMs}, {"forward_ms", p.forwardMs}, {"adjoint_ms", p.adjointMs},
+            {"vector_ms", p.vectorMs}};
+}
+
+}  // namespace volstyle::protocol

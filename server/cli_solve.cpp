@@ -1,0 +1,216 @@
+// `volstyle solve`: restyle a volume from painted target views (SPEC §4). Reads VIEWS.json
+// (cameras, target and weight image paths relative to it, optional lighting), solves, writes the
+// VDB, with a progress bar on stderr.
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include "core/errors.h"
+#include "core/gl/context.h"
+#include "core/image/image_io.h"
+#include "core/render/renderer.h"
+#include "core/solve/solver.h"
+#include "core/volume/vdb_io.h"
+#include "protocol/render_json.h"
+#include "protocol/solve_json.h"
+#include "server/cli.h"
+#include "server/scene_source.h"
+
+namespace volstyle::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* kUsage =
+    "usage: volstyle solve --scene builtin:NAME[:RES]|IN.vdb --views VIEWS.json -o OUT.vdb\n"
+    "                      [--unknowns emission|albedo|emission,albedo|extinction] [--iterations N]\n"
+    "                      [--regularization laplacian=0.002,l2=0,toward_one=0] [--basis trilinear|box]\n"
+    "                      [--step VOXELS] [--tolerance T] [--hull extinction|none] [--resolution X,Y,Z]\n"
+    "                      [--medium-radiance R,G,B] [--options OPTS.json] [--quiet]\n";
+
+std::vector<std::string> split(const std::string& s, char sep) {
+    std::vector<std::string> out;
+    std::stringstream in(s);
+    for (std::string item; std::getline(in, item, sep);)
+        if (!item.empty()) out.push_back(item);
+    return out;
+}
+
+std::vector<double> numbers(const std::string& flag, const std::string& value, size_t count) {
+    std::vector<double> out;
+    for (const auto& part : split(value, ',')) {
+        size_t used = 0;
+        double v = 0;
+        try {
+            v = std::stod(part, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used != part.size() || used == 0) throw InvalidArgument("--" + flag + ": '" + part + "' is not a number");
+        out.push_back(v);
+    }
+    if (out.size() != count)
+        throw InvalidArgument("--" + flag + " takes " + std::to_string(count) + " comma-separated numbers, got '" + value + "'");
+    return out;
+}
+
+/// The views of VIEWS.json: {"views": [{"name"?, "camera", "target", "weights"?}], "lighting"?}.
+std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& lighting) {
+    nlohmann::json j = readJsonFile(path);
+    protocol::JsonReader r;
+    std::vector<core::SolveView> views;
+    const fs::path base = fs::path(path).parent_path();
+    if (r.object(j, "", {"views", "lighting"})) {
+        if (!j.contains("views") || !j["views"].is_array() || j["views"].empty()) {
+            r.fail("/views", "must be a non-empty array of {\"camera\", \"target\", \"weights\"}");
+        } else {
+            for (size_t i = 0; i < j["views"].size(); ++i) {
+                const auto& v = j["views"][i];
+                const std::string p = "/views/" + std::to_string(i);
+                if (!r.object(v, p, {"name", "camera", "target", "weights"})) continue;
+                core::SolveView view;
+                view.name = v.contains("name") ? r.string(v["name"], p + "/name").value_or("") : "v" + std::to_string(i + 1);
+                if (!v.contains("camera") || !v.contains("target")) {
+                    r.fail(p, "needs \"camera\" and \"target\"");
+                    continue;
+                }
+                try {
+                    view.camera = protocol::cameraFromJson(v["camera"], p + "/camera");
+                } catch (const protocol::ValidationError& e) {
+                    for (const auto& d : e.details()) r.fail(d.path, d.message);
+                }
+                auto target = r.string(v["target"], p + "/target");
+                auto weights = v.contains("weights") ? r.string(v["weights"], p + "/weights") : std::nullopt;
+                if (!r.ok()) continue;
+                view.target = core::loadImage((base / *target).string()).image;
+                if (weights) view.weights = core::loadImage((base / *weights).string()).image;
+                views.push_back(std::move(view));
+            }
+        }
+        if (j.contains("lighting")) {
+            try {
+                lighting = lightingFromJsonFile(j["lighting"], path, "/lighting");
+            } catch (const protocol::ValidationError& e) {
+                for (const auto& d : e.details()) r.fail(d.path, d.message);
+            }
+        }
+    }
+    try {
+        r.throwIfErrors();
+    } catch (const protocol::ValidationError& e) {
+        throw InvalidArgument("'" + path + "': " + e.what());
+    }
+    return views;
+}
+
+/// One line, redrawn in place on a terminal, appended otherwise (logs).
+class ProgressBar {
+public:
+    ProgressBar(int total, bool quiet) : m_total(total), m_quiet(quiet), m_isTty(isatty(fileno(stderr))) {}
+    void update(const core::SolveProgress& p) {
+        if (m_quiet) return;
+        const int width = 24, filled = std::min(width, width * p.iteration / std::max(1, m_total));
+        double rms = 0;
+        for (double x : p.rmsPerView) rms += x / double(p.rmsPerView.size());
+        std::fprintf(stderr, "%s[%s%s] %3d/%d  objective %.4g  RMS %.4g  %.1f s", m_isTty ? "\r" : "",
+                     std::string(size_t(filled), '#').c_str(), std::string(size_t(width - filled), '.').c_str(),
+                     p.iteration, m_total, p.objective, rms, p.elapsedMs / 1000);
+        std::fputs(m_isTty ? "" : "\n", stderr);
+        std::fflush(stderr);
+    }
+    void finish() {
+        if (!m_quiet && m_isTty) std::fputs("\n", stderr);
+    }
+
+private:
+    int m_total;
+    bool m_quiet, m_isTty;
+};
+
+}  // namespace
+
+int runSolve(const std::vector<std::string>& argv) {
+    Arguments args = parseArguments(argv,
+                                    {"scene", "views", "output", "unknowns", "iterations", "regularization", "basis",
+                                     "step", "tolerance", "hull", "resolution", "medium-radiance", "options"},
+                                    {"quiet", "help"});
+    if (args.has("help")) {
+        std::cout << kUsage;
+        return 0;
+    }
+    for (const char* required : {"scene", "views", "output"})
+        if (!args.has(required)) throw InvalidArgument(std::string("--") + (std::string(required) == "output" ? "o OUT.vdb" : required) + " is required\n" + kUsage);
+    const std::string output = args.get("output");
+    if (fs::path(output).extension() != ".vdb") throw InvalidArgument("-o must end in .vdb, got '" + output + "'");
+
+    // Options: defaults, then OPTS.json, then flags.
+    core::SolveOptions opt;
+    if (args.has("options"))
+        opt = fromFile(args.get("options"), [&](const nlohmann::json& j) { return protocol::solveOptionsFromJson(j, "", opt); });
+    if (args.has("unknowns")) {
+        auto u = protocol::parseUnknowns(split(args.get("unknowns"), ','));
+        if (!u) throw InvalidArgument("--unknowns must be emission, albedo, emission,albedo or extinction");
+        opt.unknown = *u;
+    }
+    if (args.has("iterations")) opt.maxIterations = int(args.number("iterations", opt.maxIterations));
+    if (args.has("tolerance")) opt.tolerance = args.number("tolerance", opt.tolerance);
+    if (args.has("step")) opt.stepVoxels = args.number("step", opt.stepVoxels);
+    if (args.has("basis")) {
+        const std::string b = args.get("basis");
+        if (b != "trilinear" && b != "box") throw InvalidArgument("--basis must be trilinear or box");
+        opt.basis = b == "box" ? core::BasisType::Box : core::BasisType::Trilinear;
+    }
+    if (args.has("hull")) {
+        const std::string h = args.get("hull");
+        if (h != "extinction" && h != "none") throw InvalidArgument("--hull must be extinction or none");
+        opt.useHull = h == "extinction";
+    }
+    if (args.has("regularization")) {
+        for (const auto& kv : split(args.get("regularization"), ',')) {
+            auto eq = kv.find('=');
+            if (eq == std::string::npos) throw InvalidArgument("--regularization takes name=value pairs, got '" + kv + "'");
+            const std::string name = kv.substr(0, eq);
+            double value = numbers("regularization", kv.substr(eq + 1), 1)[0];
+            if (name == "laplacian") opt.regularization.laplacian = value;
+            else if (name == "l2") opt.regularization.l2 = value;
+            else if (name == "toward_one") opt.regularization.towardOne = value;
+            else throw InvalidArgument("--regularization: unknown term '" + name + "'; terms: laplacian, l2, toward_one");
+        }
+    }
+    if (args.has("resolution")) {
+        auto r = numbers("resolution", args.get("resolution"), 3);
+        opt.resolution = Int3{int(r[0]), int(r[1]), int(r[2])};
+    }
+    if (args.has("medium-radiance")) {
+        auto m = numbers("medium-radiance", args.get("medium-radiance"), 3);
+        opt.mediumRadiance = Vec3d(m[0], m[1], m[2]);
+    }
+    opt.validate();
+
+    core::Lighting lighting = core::defaultLighting();
+    std::vector<core::SolveView> views = readViews(args.get("views"), lighting);
+    core::Volume volume = loadScene(args.get("scene"));
+
+    auto context = core::gl::Context::create();
+    core::Renderer renderer(*context);
+    core::Solver solver(renderer, volume, lighting, std::move(views), opt);
+    ProgressBar bar(opt.maxIterations, args.has("quiet"));
+    core::SolveResult result = solver.run([&](const core::SolveProgress& p) { bar.update(p); });
+    bar.finish();
+
+    if (fs::path(output).has_parent_path()) fs::create_directories(fs::path(output).parent_path());
+    core::saveVdb(output, result.volume);
+    const auto& rep = result.report;
+    double rms0 = 0, rms1 = 0;
+    for (double x : rep.initialRms) rms0 += x / double(rep.initialRms.size());
+    for (double x : rep.finalRms) rms1 += x / double(rep.finalRms.size());
+    std::fprintf(stderr, "%s: %d iterations (%s), RMS %.4g -> %.4g, %.2f s; wrote %s\n", core::unknownName(opt.unknown),
+                 rep.iterations, rep.stopReason.c_str(), rms0, rms1, rep.totalMs / 1000, output.c_str());
+    return 0;
+}
+
+}  // namespace volstyle::server
