@@ -208,8 +208,9 @@ int runSolve(const std::vector<std::string>& argv) {
     double rms0 = 0, rms1 = 0;
     for (double x : rep.initialRms) rms0 += x / double(rep.initialRms.size());
     for (double x : rep.finalRms) rms1 += x / double(rep.finalRms.size());
-    std::fprintf(stderr, "%s: %d iterations (%s), RMS %.4g -> %.4g, %.2f s; wrote %s\n", core::unknownName(opt.unknown),
-                 rep.iterations, rep.stopReason.c_str(), rms0, rms1, rep.totalMs / 1000, output.c_str());
+    std::fprintf(stderr, "%s: %d iterations (%s), RMS %.4g -> %.4g, %.2f s (forward %.2f, back-projection %.2f, vectors %.2f); wrote %s\n",
+                 core::unknownName(opt.unknown), rep.iterations, rep.stopReason.c_str(), rms0, rms1, rep.totalMs / 1000,
+                 rep.forwardMs / 1000, rep.adjointMs / 1000, rep.vectorMs / 1000, output.c_str());
     return 0;
 }
 

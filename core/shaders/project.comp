@@ -55,8 +55,9 @@ layout(std430, binding = kBindingResidual) readonly buffer b_Residual {
     vec4 residual[];
 };
 #else
+// Forward reads whole elements: one vec4 load per basis function instead of three floats.
 layout(std430, binding = kBindingUnknown) readonly buffer b_Unknown {
-    float unknown[];
+    vec4 unknown[];
 };
 layout(std430, binding = kBindingImageOut) writeonly buffer b_Image {
     vec4 pixels[];
@@ -112,10 +113,7 @@ void apply(Basis b, uint block, vec3 weight, vec3 r, inout vec3 unused) {
 #else
 void apply(Basis b, uint block, vec3 weight, vec3 unusedResidual, inout vec3 sum) {
     vec3 a = vec3(0.0);
-    for (int c = 0; c < kBasisCount; ++c) {
-        uint i = 4u * (block + b.index[c]);
-        a += b.weight[c] * vec3(unknown[i], unknown[i + 1u], unknown[i + 2u]);
-    }
+    for (int c = 0; c < kBasisCount; ++c) a += b.weight[c] * unknown[block + b.index[c]].rgb;
     sum += weight * a;
 }
 #endif

@@ -5,7 +5,8 @@
 //   OP_XPBY      y[i]  = x[i] + alpha * y[i]
 //   OP_MUL       y[i] *= x[i]
 //   OP_DOT       partial[workgroup] = Σ x[i]·y[i] per channel, accumulated in double: float sums
-//                drift on large grids and would fake divergence
+//                drift on large grids and would fake divergence (reductions run grid-stride loops
+//                over at most kReduceGroups workgroups)
 //   OP_LAPLACIAN y = alpha · L x, the 7-point Laplacian over the cells where z (the hull) is set:
 //                (L x)_i = Σ_{j ∈ N6(i), j in hull} (x_j − x_i) (symmetric, so Lᵀ = L)
 //   OP_FREE      y[i] = 0 where x (the unknowns) sits at a bound and y would push past it
@@ -61,7 +62,13 @@ void main() {
 #elif VOLSTYLE_OP == OP_MUL
     if (inside) y[i].rgb *= x[i].rgb;
 #elif VOLSTYLE_OP == OP_DOT
-    s_reduce[local] = inside ? dvec4(dvec3(x[i].rgb) * dvec3(y[i].rgb), 0.0) : dvec4(0.0);
+    // Grid-stride: few workgroups, so few barriers (costly on llvmpipe) and few partials to read.
+    dvec4 acc = dvec4(0.0);
+    for (uint e = k; e < uint(v.count.x); e += gl_NumWorkGroups.x * kWorkgroup1D) {
+        uint j = uint(v.count.y) + e;
+        acc.rgb += dvec3(x[j].rgb) * dvec3(y[j].rgb);
+    }
+    s_reduce[local] = acc;
     barrier();
     for (uint stride = kWorkgroup1D / 2; stride > 0; stride >>= 1) {
         if (local < stride) s_reduce[local] += s_reduce[local + stride];
@@ -98,12 +105,13 @@ void main() {
 #elif VOLSTYLE_OP == OP_STEP
     const double kNone = 1e300;
     dvec4 t = dvec4(kNone);
-    if (inside) {
-        vec2 b = boundsOf(i);
+    for (uint e = k; e < uint(v.count.x); e += gl_NumWorkGroups.x * kWorkgroup1D) {
+        uint j = uint(v.count.y) + e;
+        vec2 b = boundsOf(j);
         for (int c = 0; c < 3; ++c) {
-            float p = y[i][c], a = x[i][c];
-            if (p > 0.0 && b.y < 1e30) t[c] = max(0.0lf, double(b.y - a) / double(p));
-            else if (p < 0.0) t[c] = max(0.0lf, double(b.x - a) / double(p));
+            float p = y[j][c], a = x[j][c];
+            if (p > 0.0 && b.y < 1e30) t[c] = min(t[c], max(0.0lf, double(b.y - a) / double(p)));
+            else if (p < 0.0) t[c] = min(t[c], max(0.0lf, double(b.x - a) / double(p)));
         }
     }
     s_reduce[local] = t;

@@ -57,8 +57,11 @@ std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
     glNamedBufferSubData(m_params.id(), 0, sizeof(p), &p);
     glBindBufferBase(GL_UNIFORM_BUFFER, layout::kBindingParams, m_params.id());
 
-    const size_t groups = std::max<size_t>(1, (count + layout::kWorkgroup1D - 1) / layout::kWorkgroup1D);
     const bool reduces = op == kDot || op == kStep;
+    // Reductions loop over elements within fewer workgroups: fewer barriers and partials.
+    constexpr size_t kReduceGroups = 64;
+    size_t groups = std::max<size_t>(1, (count + layout::kWorkgroup1D - 1) / layout::kWorkgroup1D);
+    if (reduces) groups = std::min(groups, kReduceGroups);
     if (reduces && groups > m_partialCapacity) {
         m_partials = gl::createBuffer(groups * 32, nullptr, GL_DYNAMIC_STORAGE_BIT, "vector-partials");
         m_partialCapacity = groups;

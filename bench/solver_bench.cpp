@@ -1,0 +1,242 @@
+// bench/solver: the painting solver on the configurations of the TVCG paper's Fig. 4, and run time
+// against error.
+//
+// Problem: the built-in cloud thinned to optical depth ~3, with "VS" stamped into its emission;
+// targets are renderings of that ground truth; the solve starts from the plain cloud (emission).
+//   Part 1 (Fig. 4): 32³/64³/128³ × 64–512 steps per volume diagonal × 2 views of 480×480, and
+//           128³ / 256 steps with 2–10 views of 640×360. Per iteration: forward, back-projection
+//           and vector ms; iterations to converge (tolerance 1e-4, at most 30); total s; final
+//           RMS relative to the start.
+//   Part 2 (sweep, 64³, 2 views of 240×240): step 0.25–4 voxels, box vs trilinear basis, and the
+//           iteration count, each against the error of a novel-view rendering of the solution
+//           relative to a converged reference (step 0.25, trilinear, 150 iterations). Written as
+//           CSV and a log–log PNG plot (x: seconds, y: error; grid lines at decades).
+// Usage: solver_bench [--quick] [--out DIR]
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+
+#include "bench_util.h"
+#include "core/image/image_io.h"
+#include "core/render/gpu_volume.h"
+#include "core/render/renderer.h"
+#include "core/solve/solver.h"
+#include "core/volume/builtin_scenes.h"
+
+using namespace volstyle;
+using namespace volstyle::core;
+
+namespace {
+
+bool inLetters(const Vec3d& w) {
+    static const char* glyphs[5] = {"X.X.XXX", "X.X.X..", "X.X.XXX", "X.X...X", ".X..XXX"};
+    int col = int(std::floor((w.x + 0.7) / 1.4 * 7)), row = int(std::floor((0.55 - w.y) / 1.1 * 5));
+    return col >= 0 && col < 7 && row >= 0 && row < 5 && glyphs[row][col] == 'X';
+}
+
+struct Scene {
+    Volume plain, truth;
+};
+
+Scene makeScene(int res) {
+    Scene s{makeBuiltinScene("cloud", res), {}};
+    for (float& x : s.plain.extinction()) x *= 0.08f;
+    s.truth = s.plain;
+    auto& e = s.truth.ensureEmission();
+    for (int k = 0; k < res; ++k)
+        for (int j = 0; j < res; ++j)
+            for (int i = 0; i < res; ++i)
+                if (inLetters(s.truth.worldFromIndex().applyPoint({double(i), double(j), double(k)}))) {
+                    size_t n = 3 * s.truth.index(i, j, k);
+                    e[n] = 2.0f, e[n + 1] = 1.0f, e[n + 2] = 0.2f;
+                }
+    return s;
+}
+
+std::vector<Camera> cameras(int count, int w, int h) {
+    std::vector<Camera> cams;
+    for (int i = 0; i < count; ++i) {
+        double a = 0.3 + 2 * std::numbers::pi * i / count;
+        Camera c;
+        c.eye = {3.0 * std::sin(a), 0.4 * std::cos(3 * a) + 0.013, 3.0 * std::cos(a)};
+        c.target = {0.011, -0.07, 0.013};
+        c.fovYDeg = 42;
+        c.width = w, c.height = h;
+        cams.push_back(c);
+    }
+    return cams;
+}
+
+std::vector<SolveView> targets(Renderer& r, const Volume& truth, const std::vector<Camera>& cams, double step) {
+    GpuVolume gpu(truth);
+    RenderSettings s;
+    s.stepVoxels = step;
+    std::vector<SolveView> v;
+    for (size_t i = 0; i < cams.size(); ++i) v.push_back({"v" + std::to_string(i), cams[i], r.render(gpu, cams[i], defaultLighting(), s), std::nullopt});
+    return v;
+}
+
+double mean(const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x / double(v.size());
+    return s;
+}
+
+/// A minimal log–log plot: series as coloured polylines with square markers.
+struct Plot {
+    Image img{640, 420};
+    double x0, x1, y0, y1;  // log10 ranges
+    Plot(double xmin, double xmax, double ymin, double ymax)
+        : x0(std::floor(std::log10(xmin))), x1(std::ceil(std::log10(xmax))), y0(std::floor(std::log10(ymin))), y1(std::ceil(std::log10(ymax))) {
+        for (size_t i = 0; i < img.pixelCount(); ++i) img.rgba[4 * i] = img.rgba[4 * i + 1] = img.rgba[4 * i + 2] = img.rgba[4 * i + 3] = 1;
+        for (double d = x0; d <= x1; d += 1) line(std::pow(10, d), std::pow(10, y0), std::pow(10, d), std::pow(10, y1), {0.8f, 0.8f, 0.8f});
+        for (double d = y0; d <= y1; d += 1) line(std::pow(10, x0), std::pow(10, d), std::pow(10, x1), std::pow(10, d), {0.8f, 0.8f, 0.8f});
+    }
+    std::pair<double, double> px(double x, double y) const {
+        return {40 + (std::log10(x) - x0) / (x1 - x0) * 580, 400 - (std::log10(y) - y0) / (y1 - y0) * 380};
+    }
+    void dot(int x, int y, Vec3 c) {
+        if (x >= 0 && y >= 0 && x < img.width && y < img.height) {
+            float* p = img.pixel(x, y);
+            p[0] = c.x, p[1] = c.y, p[2] = c.z;
+        }
+    }
+    void line(double ax, double ay, double bx, double by, Vec3 c) {
+        auto [x0p, y0p] = px(ax, ay);
+        auto [x1p, y1p] = px(bx, by);
+        int n = int(std::max(std::abs(x1p - x0p), std::abs(y1p - y0p))) + 1;
+        for (int i = 0; i <= n; ++i) dot(int(x0p + (x1p - x0p) * i / n), int(y0p + (y1p - y0p) * i / n), c);
+    }
+    void series(const std::vector<std::pair<double, double>>& pts, Vec3 c) {
+        for (size_t i = 0; i < pts.size(); ++i) {
+            if (!(pts[i].first > 0 && pts[i].second > 0)) continue;
+            auto [x, y] = px(pts[i].first, pts[i].second);
+            for (int dy = -3; dy <= 3; ++dy)
+                for (int dx = -3; dx <= 3; ++dx) dot(int(x) + dx, int(y) + dy, c);
+            if (i > 0 && pts[i - 1].first > 0 && pts[i - 1].second > 0) line(pts[i - 1].first, pts[i - 1].second, pts[i].first, pts[i].second, c);
+        }
+    }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    bool quick = false;
+    std::string outDir = "bench-results";
+    for (int i = 1; i < argc; ++i) {
+        if (!std::strcmp(argv[i], "--quick")) quick = true;
+        if (!std::strcmp(argv[i], "--out") && i + 1 < argc) outDir = argv[++i];
+    }
+    std::filesystem::create_directories(outDir);
+    spdlog::set_level(spdlog::level::warn);
+    auto context = gl::Context::create();
+    Renderer renderer(*context);
+    const auto& caps = context->capabilities();
+    std::printf("renderer: %s | %s | EGL %s | float atomics %s\n\n", caps.renderer.c_str(), caps.version.c_str(),
+                caps.platform.c_str(), caps.hasFloatAtomics ? "yes" : "no");
+
+    // Part 1: the paper's Fig. 4 configurations.
+    struct Config {
+        int res, stepsPerDiagonal, views, w, h;
+    };
+    std::vector<Config> configs;
+    const std::vector<int> resolutions = quick ? std::vector<int>{32, 64} : std::vector<int>{32, 64, 128};
+    const std::vector<int> stepCounts = quick ? std::vector<int>{128, 256} : std::vector<int>{64, 128, 256, 512};
+    for (int res : resolutions)
+        for (int steps : stepCounts) configs.push_back({res, steps, 2, quick ? 240 : 480, quick ? 240 : 480});
+    if (!quick)
+        for (int views : {2, 4, 6, 8, 10}) configs.push_back({128, 256, views, 640, 360});
+    std::printf("| volume | steps/diagonal | views | pixels | ms/iter forward | ms/iter back-proj | ms/iter vector | ms/iter | iterations | stop | total s | final RMS / start |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::vector<std::string> json;
+    for (const Config& c : configs) {
+        Scene scene = makeScene(c.res);
+        const double step = std::sqrt(3.0) * c.res / c.stepsPerDiagonal;
+        auto views = targets(renderer, scene.truth, cameras(c.views, c.w, c.h), step);
+        SolveOptions opt;
+        opt.stepVoxels = step;
+        opt.maxIterations = 30;
+        auto t0 = std::chrono::steady_clock::now();
+        SolveResult r = Solver(renderer, scene.plain, defaultLighting(), views, opt).run();
+        double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const auto& rep = r.report;
+        int n = std::max(1, rep.iterations);
+        double rel = mean(rep.finalRms) / mean(rep.initialRms);
+        std::printf("| %d³ | %d | %d | %dx%d | %.0f | %.0f | %.0f | %.0f | %d | %s | %.1f | %.3f |\n", c.res, c.stepsPerDiagonal,
+                    c.views, c.w, c.h, rep.forwardMs / n, rep.adjointMs / n, rep.vectorMs / n,
+                    (rep.forwardMs + rep.adjointMs + rep.vectorMs) / n, rep.iterations, rep.stopReason.c_str(), total, rel);
+        std::fflush(stdout);
+        char line[512];
+        std::snprintf(line, sizeof line,
+                      "{\"bench\":\"solver\",\"renderer\":\"%s\",\"resolution\":%d,\"steps_per_diagonal\":%d,\"views\":%d,"
+                      "\"width\":%d,\"height\":%d,\"forward_ms_per_iteration\":%.1f,\"adjoint_ms_per_iteration\":%.1f,"
+                      "\"vector_ms_per_iteration\":%.1f,\"iterations\":%d,\"stop\":\"%s\",\"total_s\":%.2f,\"final_rms_relative\":%.4f}",
+                      caps.renderer.c_str(), c.res, c.stepsPerDiagonal, c.views, c.w, c.h, rep.forwardMs / n, rep.adjointMs / n,
+                      rep.vectorMs / n, rep.iterations, rep.stopReason.c_str(), total, rel);
+        json.push_back(line);
+    }
+    std::printf("\n");
+    for (const auto& j : json) std::printf("%s\n", j.c_str());
+
+    // Part 2: run time against error.
+    const int res = quick ? 32 : 64, size = quick ? 120 : 240;
+    Scene scene = makeScene(res);
+    auto views = targets(renderer, scene.truth, cameras(2, size, size), 0.25);
+    Camera novel = cameras(1, 200, 200)[0];
+    novel.eye = {-2.2, 1.2, 2.0};
+    auto solveAndRender = [&](double step, BasisType basis, int iterations, double& seconds) {
+        SolveOptions opt;
+        opt.stepVoxels = step;
+        opt.basis = basis;
+        opt.maxIterations = iterations;
+        opt.tolerance = 0;
+        auto t0 = std::chrono::steady_clock::now();
+        SolveResult r = Solver(renderer, scene.plain, defaultLighting(), views, opt).run();
+        seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        GpuVolume gpu(r.volume);
+        RenderSettings fine;
+        fine.stepVoxels = 0.25;
+        return renderer.render(gpu, novel, defaultLighting(), fine);
+    };
+    double refSeconds = 0;
+    Image reference = solveAndRender(0.25, BasisType::Trilinear, quick ? 40 : 150, refSeconds);
+    std::ofstream csv(outDir + "/solver_sweep.csv");
+    csv << "sweep,parameter,seconds,error\n";
+    std::vector<std::pair<double, double>> stepPts, boxPts, iterPts;
+    for (double step : {0.25, 0.5, 1.0, 2.0, 4.0}) {
+        for (BasisType basis : {BasisType::Trilinear, BasisType::Box}) {
+            double s = 0;
+            Image img = solveAndRender(step, basis, 30, s);
+            double err = bench::relativeRms(img, reference);
+            const char* name = basis == BasisType::Box ? "box" : "trilinear";
+            csv << "step_" << name << "," << step << "," << s << "," << err << "\n";
+            (basis == BasisType::Box ? boxPts : stepPts).push_back({s, err});
+            std::printf("{\"bench\":\"solver_sweep\",\"sweep\":\"step\",\"basis\":\"%s\",\"step_voxels\":%g,\"seconds\":%.2f,\"error\":%.4g}\n", name, step, s, err);
+        }
+    }
+    for (int iterations : {1, 2, 5, 10, 20, 40, 80}) {
+        double s = 0;
+        Image img = solveAndRender(0.5, BasisType::Trilinear, iterations, s);
+        double err = bench::relativeRms(img, reference);
+        csv << "iterations,trilinear," << iterations << "," << s << "," << err << "\n";
+        iterPts.push_back({s, err});
+        std::printf("{\"bench\":\"solver_sweep\",\"sweep\":\"iterations\",\"iterations\":%d,\"seconds\":%.2f,\"error\":%.4g}\n", iterations, s, err);
+    }
+    double xmin = 1e9, xmax = 0, ymin = 1e9, ymax = 0;
+    for (auto* pts : {&stepPts, &boxPts, &iterPts})
+        for (auto [x, y] : *pts)
+            if (x > 0 && y > 0) xmin = std::min(xmin, x), xmax = std::max(xmax, x), ymin = std::min(ymin, y), ymax = std::max(ymax, y);
+    Plot plot(xmin, xmax, ymin, ymax);
+    plot.series(stepPts, {0.85f, 0.2f, 0.1f});   // red: step sweep, trilinear
+    plot.series(boxPts, {0.1f, 0.35f, 0.85f});   // blue: step sweep, box
+    plot.series(iterPts, {0.1f, 0.6f, 0.2f});    // green: iteration sweep
+    saveImage(outDir + "/solver_sweep.png", plot.img);
+    std::printf("\nreference: %.1f s; wrote %s/solver_sweep.csv and solver_sweep.png "
+                "(red: step 0.25..4 trilinear, blue: box, green: 1..80 iterations)\n", refSeconds, outDir.c_str());
+    return 0;
+}
