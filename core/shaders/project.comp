@@ -64,10 +64,13 @@ layout(std430, binding = kBindingImageOut) writeonly buffer b_Image {
 };
 #endif
 
-// The basis functions that are non-zero at extinction-index point p, over the unknown grid.
+// The basis functions that are non-zero at extinction-index point p, over the unknown grid:
+// the corners i0..i1 and fractions f of a trilinear stencil (box: one corner, weight 1). No arrays:
+// llvmpipe keeps arrays in memory, which made the projector three times slower.
 struct Basis {
-    uint index[8];
-    float weight[8];
+    ivec3 i0;
+    ivec3 i1;
+    vec3 f;
 };
 #if VOLSTYLE_BASIS == 0
 const int kBasisCount = 1;
@@ -75,27 +78,29 @@ const int kBasisCount = 1;
 const int kBasisCount = 8;
 #endif
 
-uint unknownIndex(ivec3 c) { return uint((c.z * u.unknownDims.y + c.y) * u.unknownDims.x + c.x); }
-
 Basis basisAt(vec3 p) {
     Basis b;
     ivec3 n = u.unknownDims.xyz;
     vec3 q = (p + 0.5) * u.unknownScale.xyz - 0.5;  // unknown-grid index space, same box
 #if VOLSTYLE_BASIS == 0
-    b.index[0] = unknownIndex(clamp(ivec3(floor(q + 0.5)), ivec3(0), n - 1));
-    b.weight[0] = 1.0;
+    b.i0 = b.i1 = clamp(ivec3(floor(q + 0.5)), ivec3(0), n - 1);
+    b.f = vec3(0.0);
 #else
     q = clamp(q, vec3(0.0), vec3(n - 1));
-    ivec3 i0 = min(ivec3(floor(q)), n - 1), i1 = min(i0 + 1, n - 1);
-    vec3 f = q - vec3(i0);
-    for (int c = 0; c < 8; ++c) {
-        ivec3 corner = ivec3((c & 1) != 0 ? i1.x : i0.x, (c & 2) != 0 ? i1.y : i0.y, (c & 4) != 0 ? i1.z : i0.z);
-        b.index[c] = unknownIndex(corner);
-        b.weight[c] = ((c & 1) != 0 ? f.x : 1.0 - f.x) * ((c & 2) != 0 ? f.y : 1.0 - f.y) *
-                      ((c & 4) != 0 ? f.z : 1.0 - f.z);
-    }
+    b.i0 = min(ivec3(floor(q)), n - 1);
+    b.i1 = min(b.i0 + 1, n - 1);
+    b.f = q - vec3(b.i0);
 #endif
     return b;
+}
+
+// Corner c of the stencil: its unknown index (within a block) and weight.
+uint cornerIndex(Basis b, int c, out float weight) {
+    bvec3 upper = bvec3((c & 1) != 0, (c & 2) != 0, (c & 4) != 0);
+    ivec3 corner = mix(b.i0, b.i1, upper);
+    vec3 w = mix(1.0 - b.f, b.f, upper);
+    weight = w.x * w.y * w.z;
+    return uint((corner.z * u.unknownDims.y + corner.y) * u.unknownDims.x + corner.x);
 }
 
 // W: add weight · (Σ basis · a) of block `block`; Wᵀ: scatter weight · r · basis into it.
@@ -103,17 +108,22 @@ Basis basisAt(vec3 p) {
 void apply(Basis b, uint block, vec3 weight, vec3 r, inout vec3 unused) {
     vec3 v = weight * r;
     for (int c = 0; c < kBasisCount; ++c) {
-        uint i = 4u * (block + b.index[c]);
-        if (b.weight[c] == 0.0) continue;
-        scatterAdd(i, v.r * b.weight[c]);
-        scatterAdd(i + 1u, v.g * b.weight[c]);
-        scatterAdd(i + 2u, v.b * b.weight[c]);
+        float w;
+        uint i = 4u * (block + cornerIndex(b, c, w));
+        if (w == 0.0) continue;
+        scatterAdd(i, v.r * w);
+        scatterAdd(i + 1u, v.g * w);
+        scatterAdd(i + 2u, v.b * w);
     }
 }
 #else
 void apply(Basis b, uint block, vec3 weight, vec3 unusedResidual, inout vec3 sum) {
     vec3 a = vec3(0.0);
-    for (int c = 0; c < kBasisCount; ++c) a += b.weight[c] * unknown[block + b.index[c]].rgb;
+    for (int c = 0; c < kBasisCount; ++c) {
+        float w;
+        uint i = block + cornerIndex(b, c, w);
+        a += w * unknown[i].rgb;
+    }
     sum += weight * a;
 }
 #endif
