@@ -16,17 +16,18 @@ std::optional<core::Unknown> parseUnknowns(const std::vector<std::string>& names
 
 core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::string& path, core::SolveOptions o) {
     JsonReader r;
-    if (r.object(j, path, {"unknowns", "basis", "regularization", "max_iterations", "tolerance", "step", "hull",
+    if (r.object(j, path, {"unknowns", "basis", "regularization", "max_iterations", "tolerance", "step", "traversal", "hull",
                            "resolution", "medium_radiance", "views"})) {
         if (j.contains("unknowns")) {
             std::vector<std::string> names;
             if (!j["unknowns"].is_array()) {
                 r.fail(path + "/unknowns", "must be an array such as [\"emission\", \"albedo\"]");
             } else {
+                const size_t before = r.errors().size();
                 for (size_t i = 0; i < j["unknowns"].size(); ++i)
                     if (auto s = r.string(j["unknowns"][i], path + "/unknowns/" + std::to_string(i))) names.push_back(*s);
                 if (auto u = parseUnknowns(names)) o.unknown = *u;
-                else if (r.ok())
+                else if (r.errors().size() == before)
                     r.fail(path + "/unknowns", "must be [\"emission\"], [\"albedo\"], [\"emission\", \"albedo\"] or [\"extinction\"]");
             }
         }
@@ -36,16 +37,33 @@ core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::stri
             else if (b == "box") o.basis = core::BasisType::Box;
             else if (b) r.fail(path + "/basis", "must be 'trilinear' or 'box'");
         }
-        if (j.contains("regularization") && r.object(j["regularization"], path + "/regularization", {"laplacian", "l2", "toward_one"})) {
+        if (j.contains("regularization") &&
+            r.object(j["regularization"], path + "/regularization", {"laplacian", "l2", "toward_one", "emission", "albedo"})) {
             const auto& g = j["regularization"];
             const std::string p = path + "/regularization";
-            if (g.contains("laplacian")) o.regularization.laplacian = r.number(g["laplacian"], p + "/laplacian").value_or(o.regularization.laplacian);
-            if (g.contains("l2")) o.regularization.l2 = r.number(g["l2"], p + "/l2").value_or(o.regularization.l2);
-            if (g.contains("toward_one")) o.regularization.towardOne = r.number(g["toward_one"], p + "/toward_one").value_or(o.regularization.towardOne);
+            auto weights = [&](const nlohmann::json& w, const std::string& wp, core::Regularization& reg) {
+                if (w.contains("laplacian")) reg.laplacian = r.number(w["laplacian"], wp + "/laplacian").value_or(reg.laplacian);
+                if (w.contains("l2")) reg.l2 = r.number(w["l2"], wp + "/l2").value_or(reg.l2);
+                if (w.contains("toward_one")) reg.towardOne = r.number(w["toward_one"], wp + "/toward_one").value_or(reg.towardOne);
+            };
+            weights(g, p, o.regularization);
+            // Per-unknown objects start from the shared weights and override some of them.
+            for (const char* name : {"emission", "albedo"}) {
+                if (!g.contains(name) || !r.object(g[name], p + "/" + name, {"laplacian", "l2", "toward_one"})) continue;
+                core::Regularization reg = o.regularization;
+                weights(g[name], p + "/" + name, reg);
+                (std::string(name) == "emission" ? o.emissionRegularization : o.albedoRegularization) = reg;
+            }
         }
         if (j.contains("max_iterations")) o.maxIterations = r.integer(j["max_iterations"], path + "/max_iterations").value_or(o.maxIterations);
         if (j.contains("tolerance")) o.tolerance = r.number(j["tolerance"], path + "/tolerance").value_or(o.tolerance);
         if (j.contains("step")) o.stepVoxels = r.number(j["step"], path + "/step").value_or(o.stepVoxels);
+        if (j.contains("traversal")) {
+            auto t = r.string(j["traversal"], path + "/traversal");
+            if (t == "march") o.exactTraversal = false;
+            else if (t == "exact") o.exactTraversal = true;
+            else if (t) r.fail(path + "/traversal", "must be 'march' or 'exact'");
+        }
         if (j.contains("hull")) {
             auto h = r.string(j["hull"], path + "/hull");
             if (h == "extinction") o.useHull = true;
@@ -90,7 +108,10 @@ nlohmann::json solveOptionsToJson(const core::SolveOptions& o) {
                         {"regularization", {{"laplacian", o.regularization.laplacian}, {"l2", o.regularization.l2},
                                             {"toward_one", o.regularization.towardOne}}},
                         {"max_iterations", o.maxIterations}, {"tolerance", o.tolerance}, {"step", o.stepVoxels},
+                        {"traversal", o.exactTraversal ? "exact" : "march"},
                         {"hull", o.useHull ? "extinction" : "none"}, {"views", o.views}};
+    for (auto [name, reg] : {std::pair{"emission", &o.emissionRegularization}, std::pair{"albedo", &o.albedoRegularization}})
+        if (*reg) j["regularization"][name] = {{"laplacian", (*reg)->laplacian}, {"l2", (*reg)->l2}, {"toward_one", (*reg)->towardOne}};
     if (o.resolution) j["resolution"] = {{o.unknown == core::Unknown::Extinction ? "extinction" : "emission",
                                          {o.resolution->x, o.resolution->y, o.resolution->z}}};
     if (o.mediumRadiance) j["medium_radiance"] = {o.mediumRadiance->x, o.mediumRadiance->y, o.mediumRadiance->z};

@@ -4,7 +4,8 @@
 ///
 ///   {"unknowns": ["emission","albedo"], "basis": "trilinear"|"box",
 ///    "regularization": {"laplacian": 0.002, "l2": 0, "toward_one": 0},
-///    "max_iterations": 30, "tolerance": 1e-4, "step": 0.5, "hull": "extinction"|"none",
+///    "max_iterations": 30, "tolerance": 1e-4, "step": 0.5, "traversal": "march"|"exact",
+///    "hull": "extinction"|"none",
 ///    "resolution": {"emission": [64,64,64]}, "medium_radiance": [r,g,b], "views": ["v1","v3"]}
 ///
 /// Every field is optional. `unknowns` is one of ["emission"], ["albedo"], ["emission","albedo"],

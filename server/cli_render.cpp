@@ -25,14 +25,14 @@ namespace fs = std::filesystem;
 const char* kUsage =
     "usage: volstyle render --scene builtin:NAME[:RES]|FILE.vdb [--camera CAM.json]\n"
     "                       [--lighting L.json] [--exposure STOPS] [--step VOXELS] [--no-skip]\n"
-    "                       [--hw-filter]\n"
+    "                       [--hw-filter] [--exact-traversal]\n"
     "                       -o OUT.png|OUT.exr\n";
 
 }  // namespace
 
 int runRender(const std::vector<std::string>& argv) {
     Arguments args = parseArguments(argv, {"scene", "camera", "lighting", "exposure", "step", "output"},
-                                    {"no-skip", "hw-filter", "help"});
+                                    {"no-skip", "hw-filter", "exact-traversal", "help"});
     if (args.has("help")) {
         std::cout << kUsage;
         return 0;
@@ -55,6 +55,7 @@ int runRender(const std::vector<std::string>& argv) {
     settings.stepVoxels = args.number("step", settings.stepVoxels);
     settings.skipEmptySpace = !args.has("no-skip");
     settings.hardwareFilter = args.has("hw-filter");
+    settings.exactTraversal = args.has("exact-traversal");
     settings.validate();
     const double exposure = args.number("exposure", 0);
 

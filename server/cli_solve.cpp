@@ -28,8 +28,10 @@ namespace fs = std::filesystem;
 const char* kUsage =
     "usage: volstyle solve --scene builtin:NAME[:RES]|IN.vdb --views VIEWS.json -o OUT.vdb\n"
     "                      [--unknowns emission|albedo|emission,albedo|extinction] [--iterations N]\n"
-    "                      [--regularization laplacian=0.002,l2=0,toward_one=0] [--basis trilinear|box]\n"
-    "                      [--step VOXELS] [--tolerance T] [--hull extinction|none] [--resolution X,Y,Z]\n"
+    "                      [--regularization laplacian=0.002,l2=0,toward_one=0,albedo.toward_one=0.01]\n"
+    "                      [--basis trilinear|box]\n"
+    "                      [--step VOXELS] [--traversal march|exact] [--tolerance T] [--hull extinction|none]\n"
+    "                      [--resolution X,Y,Z]\n"
     "                      [--medium-radiance R,G,B] [--options OPTS.json] [--quiet]\n";
 
 std::vector<std::string> split(const std::string& s, char sep) {
@@ -136,7 +138,7 @@ private:
 int runSolve(const std::vector<std::string>& argv) {
     Arguments args = parseArguments(argv,
                                     {"scene", "views", "output", "unknowns", "iterations", "regularization", "basis",
-                                     "step", "tolerance", "hull", "resolution", "medium-radiance", "options"},
+                                     "step", "traversal", "tolerance", "hull", "resolution", "medium-radiance", "options"},
                                     {"quiet", "help"});
     if (args.has("help")) {
         std::cout << kUsage;
@@ -164,6 +166,11 @@ int runSolve(const std::vector<std::string>& argv) {
         if (b != "trilinear" && b != "box") throw InvalidArgument("--basis must be trilinear or box");
         opt.basis = b == "box" ? core::BasisType::Box : core::BasisType::Trilinear;
     }
+    if (args.has("traversal")) {
+        const std::string t = args.get("traversal");
+        if (t != "march" && t != "exact") throw InvalidArgument("--traversal must be march or exact");
+        opt.exactTraversal = t == "exact";
+    }
     if (args.has("hull")) {
         const std::string h = args.get("hull");
         if (h != "extinction" && h != "none") throw InvalidArgument("--hull must be extinction or none");
@@ -173,12 +180,23 @@ int runSolve(const std::vector<std::string>& argv) {
         for (const auto& kv : split(args.get("regularization"), ',')) {
             auto eq = kv.find('=');
             if (eq == std::string::npos) throw InvalidArgument("--regularization takes name=value pairs, got '" + kv + "'");
-            const std::string name = kv.substr(0, eq);
+            std::string name = kv.substr(0, eq);
             double value = numbers("regularization", kv.substr(eq + 1), 1)[0];
-            if (name == "laplacian") opt.regularization.laplacian = value;
-            else if (name == "l2") opt.regularization.l2 = value;
-            else if (name == "toward_one") opt.regularization.towardOne = value;
-            else throw InvalidArgument("--regularization: unknown term '" + name + "'; terms: laplacian, l2, toward_one");
+            // "albedo.toward_one=…" sets one unknown's weight (starting from the shared ones).
+            core::Regularization* reg = &opt.regularization;
+            if (auto dot = name.find('.'); dot != std::string::npos) {
+                const std::string unknown = name.substr(0, dot);
+                auto& slot = unknown == "emission" ? opt.emissionRegularization : opt.albedoRegularization;
+                if (unknown != "emission" && unknown != "albedo")
+                    throw InvalidArgument("--regularization: '" + unknown + "' is not emission or albedo");
+                if (!slot) slot = opt.regularization;
+                reg = &*slot;
+                name = name.substr(dot + 1);
+            }
+            if (name == "laplacian") reg->laplacian = value;
+            else if (name == "l2") reg->l2 = value;
+            else if (name == "toward_one") reg->towardOne = value;
+            else throw InvalidArgument("--regularization: unknown term '" + name + "'; terms: laplacian, l2, toward_one (optionally emission. or albedo.)");
         }
     }
     if (args.has("resolution")) {

@@ -99,6 +99,8 @@ struct RenderSettings {
     /// relative (alpha below ε absolute). 0 marches every ray to its end.
     double terminationThreshold = 1e-5;
     bool hardwareFilter = false;    ///< sample with the texture unit (fast, 8-bit weights on GPUs)
+    /// One segment per voxel cell crossed (Amanatides–Woo) instead of equal steps of stepVoxels.
+    bool exactTraversal = false;
 
     void validate() const;
 };

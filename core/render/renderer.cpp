@@ -15,6 +15,7 @@ struct Renderer::LightVolume {
     uint64_t extinctionVersion = 0;
     Vec3d direction;
     double stepVoxels = 0;
+    bool exactTraversal = false;
     Int3 dims;
     gl::Texture texture;
     uint64_t lastUsedFrame = 0;
@@ -119,12 +120,13 @@ void Renderer::updateOccupancy(GpuVolume& volume, RenderStats& stats) {
     stats.occupancyMs += msSince(t0);
 }
 
-GLuint Renderer::lightDepthTexture(GpuVolume& volume, const DirectionalLight& light, double stepVoxels,
+GLuint Renderer::lightDepthTexture(GpuVolume& volume, const DirectionalLight& light, const RenderSettings& march,
                                    RenderStats& stats) {
+    const double stepVoxels = march.stepVoxels;
     const Vec3d dir = normalize(light.direction);
     for (auto& lv : m_lightVolumes) {
         if (lv->extinctionVersion == volume.extinctionVersion() && lv->direction == dir &&
-            lv->stepVoxels == stepVoxels && lv->dims == volume.dims()) {
+            lv->stepVoxels == stepVoxels && lv->exactTraversal == march.exactTraversal && lv->dims == volume.dims()) {
             lv->lastUsedFrame = m_frame;
             return lv->texture.id();
         }
@@ -140,6 +142,7 @@ GLuint Renderer::lightDepthTexture(GpuVolume& volume, const DirectionalLight& li
     lv->extinctionVersion = volume.extinctionVersion();
     lv->direction = dir;
     lv->stepVoxels = stepVoxels;
+    lv->exactTraversal = march.exactTraversal;
     lv->dims = volume.dims();
     lv->lastUsedFrame = m_frame;
     lv->texture = gl::createTexture(GL_TEXTURE_3D, "light-depth");
@@ -152,7 +155,7 @@ GLuint Renderer::lightDepthTexture(GpuVolume& volume, const DirectionalLight& li
     p.imageSize = {0, 0, 0, 0};  // z: the light index into lightDirection[]
     p.lightDirection[0] = f4(dir);
     uploadParams(&p, sizeof(p));
-    glUseProgram(program(gl::ShaderBuilder("light_depth.comp")).id());
+    glUseProgram(program(gl::ShaderBuilder("light_depth.comp").define("VOLSTYLE_EXACT_TRAVERSAL", march.exactTraversal ? 1 : 0)).id());
     glBindTextureUnit(layout::kUnitExtinction, volume.extinctionTexture());
     glBindTextureUnit(layout::kUnitOccupancy, volume.occupancyTexture());
     glBindImageTexture(layout::kImageUnitOut, lv->texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
@@ -190,7 +193,7 @@ Renderer::MarchSetup Renderer::prepareMarch(GpuVolume& volume, const Camera& cam
         if (maxComponent(l.irradiance) > 0) lights.push_back(&l);
     MarchSetup setup;
     for (size_t i = 0; i < lights.size(); ++i)
-        setup.lightTextures.push_back(lightDepthTexture(volume, *lights[i], settings.stepVoxels, stats));
+        setup.lightTextures.push_back(lightDepthTexture(volume, *lights[i], settings, stats));
 
     // Camera and lighting parameters.
     layout::MarchParams& p = setup.params;
@@ -240,7 +243,8 @@ Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& 
         .define("VOLSTYLE_NUM_LIGHTS", (long long)setup.lightTextures.size())
         .define("VOLSTYLE_HAS_ENVIRONMENT", hasEnvironment ? 1 : 0)
         .define("VOLSTYLE_SKIP_EMPTY", settings.skipEmptySpace ? 1 : 0)
-        .define("VOLSTYLE_HW_FILTER", settings.hardwareFilter ? 1 : 0);
+        .define("VOLSTYLE_HW_FILTER", settings.hardwareFilter ? 1 : 0)
+        .define("VOLSTYLE_EXACT_TRAVERSAL", settings.exactTraversal ? 1 : 0);
     glUseProgram(program(builder).id());
     bindMarch(volume, lighting, setup);
     if (volume.hasAlbedo()) glBindTextureUnit(layout::kUnitAlbedo, volume.albedoTexture());

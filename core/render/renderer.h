@@ -59,7 +59,7 @@ public:
 private:
     struct LightVolume;
     void updateOccupancy(GpuVolume& volume, RenderStats& stats);
-    GLuint lightDepthTexture(GpuVolume& volume, const DirectionalLight& light, double stepVoxels,
+    GLuint lightDepthTexture(GpuVolume& volume, const DirectionalLight& light, const RenderSettings& march,
                              RenderStats& stats);
     void uploadParams(const void* data, size_t bytes);
     GLuint environmentTexture(const std::shared_ptr<const Image>& env);

@@ -32,15 +32,10 @@ void main() {
         vec3 d = mat3(u.indexFromWorld) * u.lightDirection[u.imageSize.z].xyz;
         vec2 range = vec2(0.0, intersectVolumeBox(o, d).y);
         if (range.y > 0.0) {
-            Segments seg = makeSegments(range, d);
-            for (int i = 0; i < seg.count;) {
-                int next = skipEmptyBricks(i, seg, o, d);
-                if (next != i) {
-                    i = next;
-                    continue;
-                }
-                depth += fetchTrilinear(s_extinction, stencilAt(o + segmentMidpoint(seg, i) * d)) * seg.dt;
-                ++i;
+            RayMarch m = beginMarch(range, o, d);
+            float tMid, dt;
+            while (nextSegment(m, true, tMid, dt)) {
+                depth += fetchTrilinear(s_extinction, stencilAt(o + tMid * d)) * dt;
                 if (min(depth.r, min(depth.g, depth.b)) > kOpaqueDepth) break;
             }
         }

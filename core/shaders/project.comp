@@ -145,25 +145,19 @@ void main() {
     vec2 range;
     viewRay(dir, o, d, range);
     if (range.x < range.y) {
-        Segments seg = makeSegments(range, d);
+        RayMarch m = beginMarch(range, o, d);
+        float tMid, dt;
 #if VOLSTYLE_UNKNOWN == UNKNOWN_EXTINCTION
         // Log-space tomography: o_k = Σ σ_i ∫ v_i dt. The current extinction is not involved,
         // so no skipping: every segment of the box counts.
-        for (int i = 0; i < seg.count; ++i)
-            apply(basisAt(o + segmentMidpoint(seg, i) * d), 0u, vec3(seg.dt), r, sum);
+        while (nextSegment(m, false, tMid, dt)) apply(basisAt(o + tMid * d), 0u, vec3(dt), r, sum);
 #else
         vec3 transmittance = vec3(1.0);
-        for (int i = 0; i < seg.count;) {
-            int next = skipEmptyBricks(i, seg, o, d);
-            if (next != i) {
-                i = next;
-                continue;
-            }
-            vec3 p = o + segmentMidpoint(seg, i) * d;
+        while (nextSegment(m, true, tMid, dt)) {
+            vec3 p = o + tMid * d;
             vec3 sigma = fetchTrilinear(s_extinction, stencilAt(p));
-            ++i;
             if (max3(sigma) <= 0.0) continue;
-            vec3 tau = sigma * seg.dt;
+            vec3 tau = sigma * dt;
             vec3 opacity = transmittance * oneMinusExp(tau);  // T · (1 − e^{−σΔt})
             Basis b = basisAt(p);
 #if VOLSTYLE_UNKNOWN == UNKNOWN_EMISSION || VOLSTYLE_UNKNOWN == UNKNOWN_EMISSION_ALBEDO

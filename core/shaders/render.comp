@@ -4,7 +4,7 @@
 //
 // Variant defines: VOLSTYLE_HAS_EMISSION, VOLSTYLE_HAS_ALBEDO (else albedo 1),
 // VOLSTYLE_NUM_LIGHTS (0..kLightSlots; 0 skips in-scattering), VOLSTYLE_HAS_ENVIRONMENT,
-// VOLSTYLE_SKIP_EMPTY, VOLSTYLE_HW_FILTER.
+// VOLSTYLE_SKIP_EMPTY, VOLSTYLE_HW_FILTER, VOLSTYLE_EXACT_TRAVERSAL.
 #include "common/march.glsl"
 #include "common/lighting.glsl"
 #include "common/camera.glsl"
@@ -35,16 +35,11 @@ void main() {
     vec3 radiance = vec3(0.0);
     vec3 transmittance = vec3(1.0);
     if (range.x < range.y) {
-        Segments seg = makeSegments(range, d);
-        for (int i = 0; i < seg.count;) {
-            int next = skipEmptyBricks(i, seg, o, d);
-            if (next != i) {
-                i = next;
-                continue;
-            }
-            Stencil st = stencilAt(o + segmentMidpoint(seg, i) * d);
+        RayMarch m = beginMarch(range, o, d);
+        float tMid, dt;
+        while (nextSegment(m, true, tMid, dt)) {
+            Stencil st = stencilAt(o + tMid * d);
             vec3 sigma = fetchTrilinear(s_extinction, st);
-            ++i;
             if (max3(sigma) <= 0.0) continue;
 
             // Medium radiance L_m = L_e + ρ L_scat at the segment midpoint (Eq. 2).
@@ -61,7 +56,7 @@ void main() {
             Lm += albedo * inScattering(st, dir);
 #endif
             // Segment of optical depth τ = σ dt: opacity 1 - e^{-τ}, then attenuate.
-            vec3 tau = sigma * seg.dt;
+            vec3 tau = sigma * dt;
             radiance += transmittance * oneMinusExp(tau) * Lm;
             transmittance *= exp(-tau);
             // Early ray termination: what is left to gather is at most T·L_max (march.z).

@@ -108,9 +108,9 @@ Vec3d VectorOps::dot(const GpuVector& x, const GpuVector& y, Range range) {
     return sum;
 }
 
-void VectorOps::laplacian(double scale, const GpuVector& x, const GpuVector& hull, Int3 dims, GpuVector& out) {
+void VectorOps::laplacian(double scale, const GpuVector& x, const GpuVector& hull, Int3 dims, GpuVector& out, Range range) {
     Dispatch d;
-    d.x = &x, d.y = &out, d.z = &hull, d.alpha = Vec3d(scale), d.dims = dims;
+    d.x = &x, d.y = &out, d.z = &hull, d.alpha = Vec3d(scale), d.dims = dims, d.range = range;
     run(kLaplacian, d);
 }
 

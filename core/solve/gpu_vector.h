@@ -50,7 +50,7 @@ public:
     void multiply(const GpuVector& x, GpuVector& y);                                   ///< y ⊙= x
     Vec3d dot(const GpuVector& x, const GpuVector& y, Range range = {});
     /// out = scale · L x over the cells of `hull` (rgb > 0), per block of `dims` cells.
-    void laplacian(double scale, const GpuVector& x, const GpuVector& hull, Int3 dims, GpuVector& out);
+    void laplacian(double scale, const GpuVector& x, const GpuVector& hull, Int3 dims, GpuVector& out, Range range = {});
     /// Zeroes s where a is at a bound and s points past it.
     void freeSet(const GpuVector& a, GpuVector& s, const Bounds& bounds);
     /// Per channel, the largest t ≥ 0 with a + t·p inside the bounds (1e300 if unbounded).

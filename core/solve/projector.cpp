@@ -12,9 +12,9 @@ namespace volstyle::core {
 constexpr float kProjectorTermination = 1e-8f;
 
 Projector::Projector(Renderer& renderer, GpuVolume& volume, const Lighting& lighting, Unknown unknown,
-                     BasisType basis, Int3 unknownDims, double stepVoxels)
+                     BasisType basis, Int3 unknownDims, double stepVoxels, bool exactTraversal)
     : m_renderer(renderer), m_volume(volume), m_lighting(lighting), m_unknown(unknown), m_basis(basis),
-      m_unknownDims(unknownDims), m_step(stepVoxels) {
+      m_unknownDims(unknownDims), m_step(stepVoxels), m_exactTraversal(exactTraversal) {
     if (unknownDims.x < 1 || unknownDims.y < 1 || unknownDims.z < 1)
         throw InvalidArgument("Projector: the unknown grid must have at least one voxel");
     if (unknown == Unknown::Extinction) m_lighting.lights.clear();  // log-space tomography: no light
@@ -31,6 +31,7 @@ void Projector::addView(const Camera& camera) {
     camera.validate();
     RenderSettings settings;
     settings.stepVoxels = m_step;
+    settings.exactTraversal = m_exactTraversal;
     RenderStats stats;
     View view{camera, m_renderer.prepareMarch(m_volume, camera, m_lighting, settings, stats), m_pixelCount};
     const Int3 n = m_volume.dims();
@@ -52,7 +53,8 @@ void Projector::dispatch(bool adjoint, const GpuVector& unknowns, const GpuVecto
             .define("VOLSTYLE_UNKNOWN", int(m_unknown))
             .define("VOLSTYLE_BASIS", int(m_basis))
             .define("VOLSTYLE_NUM_LIGHTS", needsLight ? (long long)v.setup.lightTextures.size() : 0)
-            .define("VOLSTYLE_SKIP_EMPTY", 1);
+            .define("VOLSTYLE_SKIP_EMPTY", 1)
+            .define("VOLSTYLE_EXACT_TRAVERSAL", m_exactTraversal ? 1 : 0);
         if (adjoint && m_useFloatAtomics) {
             builder.define("VOLSTYLE_HAS_FLOAT_ATOMICS", 1).extension("GL_NV_shader_atomic_float");
         }

@@ -26,7 +26,7 @@ class Projector {
 public:
     /// `unknownDims`: the unknown grid (the extinction grid's dims or coarser, same box).
     Projector(Renderer& renderer, GpuVolume& volume, const Lighting& lighting, Unknown unknown,
-              BasisType basis, Int3 unknownDims, double stepVoxels);
+              BasisType basis, Int3 unknownDims, double stepVoxels, bool exactTraversal = false);
 
     /// Adds a view; its pixels follow those of the views added before (row-major, top row first).
     void addView(const Camera& camera);
@@ -60,6 +60,7 @@ private:
     BasisType m_basis;
     Int3 m_unknownDims;
     double m_step;
+    bool m_exactTraversal;
     std::vector<View> m_views;
     size_t m_pixelCount = 0;
     ProjectorStats m_stats;

@@ -21,9 +21,14 @@ std::vector<FieldProblem> SolveOptions::check() const {
     auto weight = [&](double w, const char* name) {
         if (!(w >= 0 && w <= 1e9)) out.push_back({std::string("regularization/") + name, "must be in [0, 1e9]"});
     };
-    weight(regularization.laplacian, "laplacian");
-    weight(regularization.l2, "l2");
-    weight(regularization.towardOne, "toward_one");
+    auto weights = [&](const Regularization& r, const std::string& prefix) {
+        weight(r.laplacian, (prefix + "laplacian").c_str());
+        weight(r.l2, (prefix + "l2").c_str());
+        weight(r.towardOne, (prefix + "toward_one").c_str());
+    };
+    weights(regularization, "");
+    if (emissionRegularization) weights(*emissionRegularization, "emission/");
+    if (albedoRegularization) weights(*albedoRegularization, "albedo/");
     if (maxIterations < 1 || maxIterations > 10000) out.push_back({"max_iterations", "must be in [1, 10000]"});
     if (!(tolerance >= 0 && tolerance < 1)) out.push_back({"tolerance", "must be in [0, 1)"});
     if (!(stepVoxels >= 0.05 && stepVoxels <= 8)) out.push_back({"step", "must be in [0.05, 8] voxels"});
@@ -41,6 +46,12 @@ std::vector<FieldProblem> SolveOptions::check() const {
         out.push_back({"medium_radiance", "applies to extinction solves only"});
     }
     return out;
+}
+
+const Regularization& SolveOptions::regularizationFor(Unknown block) const {
+    if (block == Unknown::Emission && emissionRegularization) return *emissionRegularization;
+    if (block == Unknown::Albedo && albedoRegularization) return *albedoRegularization;
+    return regularization;
 }
 
 void SolveOptions::validate() const {

@@ -22,13 +22,24 @@ struct Regularization {
     double towardOne = 0;      ///< ‖a − 1‖²: values near one
 };
 
+/// How the bounds are kept (the benchmark compares them; the default is the faster).
+enum class BoundsMethod {
+    Projected,   ///< try clamp(a + αp); keep it where it lowers the objective, else cut
+    CutAtBound,  ///< always cut the step where the first free variable meets its bound
+};
+
 struct SolveOptions {
     Unknown unknown = Unknown::Emission;
     BasisType basis = BasisType::Trilinear;
-    Regularization regularization;
+    Regularization regularization;  ///< for every unknown, unless overridden below
+    /// Per-unknown weights of a joint solve (TVCG Sec. 5.2: "we can specify which element to
+    /// favor and, e.g., minimize emission"); absent: `regularization`.
+    std::optional<Regularization> emissionRegularization, albedoRegularization;
+    BoundsMethod boundsMethod = BoundsMethod::Projected;
     int maxIterations = 30;
     double tolerance = 1e-4;    ///< stop when an iteration lowers the objective by less than this, relatively
     double stepVoxels = 0.5;
+    bool exactTraversal = false;  ///< "traversal": "march" (equal steps) or "exact" (voxel cells)
     bool useHull = true;        ///< "hull": "extinction" (true) or "none"
     std::optional<Int3> resolution;       ///< unknown grid; default: the extinction grid's
     std::optional<Vec3d> mediumRadiance;  ///< L_m, required for extinction solves (Sec. 4.2.4)
@@ -37,6 +48,8 @@ struct SolveOptions {
 
     std::vector<FieldProblem> check() const;
     void validate() const;  ///< throws InvalidArgument listing check()'s problems
+    /// The weights for the emission or albedo block (extinction: `regularization`).
+    const Regularization& regularizationFor(Unknown block) const;
 };
 
 /// One painted view: the camera, the target (linear RGB; alpha = weight) and optional weights.

@@ -80,8 +80,14 @@ struct Solver::State {
     VectorOps ops;
     GpuVector a, aPrev, s, p, hull, obs, sqrtW, rImg, qImg, tmpImg, dImg, rLap, qLap, dLap, tmpU, rId;
     Bounds bounds;
-    double cLap = 0, cId = 0, target = 0;
-    Vec3d constant{0, 0, 0};
+    /// Regularizer rows of one block of unknowns (emission, albedo or extinction): √(λ_lap/M) L,
+    /// √((λ0+λ1)/M) (a − t) with t = λ1/(λ0+λ1), M the block's hull unknowns.
+    struct BlockRegularizer {
+        Range range;
+        double cLap = 0, cId = 0, target = 0;
+    };
+    std::vector<BlockRegularizer> blocks;
+    Vec3d constant{0, 0, 0};  // λ0‖a‖² + λ1‖a−1‖² = λ‖a−t‖² + λ0λ1/λ per element
     Vec3d weightSum{0, 0, 0};
     std::vector<Vec3d> viewWeightSum;
     std::vector<float> hullHost;
@@ -114,7 +120,7 @@ Solver::Solver(Renderer& renderer, const Volume& volume, const Lighting& lightin
     st.elements = st.cells * (st.opt.unknown == Unknown::EmissionAlbedo ? 2 : 1);
     st.gpu = std::make_unique<GpuVolume>(st.volume);
     st.W = std::make_unique<Projector>(renderer, *st.gpu, st.lighting, st.opt.unknown, st.opt.basis, st.udims,
-                                       st.opt.stepVoxels);
+                                       st.opt.stepVoxels, st.opt.exactTraversal);
     for (const auto& v : st.views) st.W->addView(v.camera);
     const size_t P = st.W->pixelCount(), E = st.elements;
     st.obs = GpuVector(P, "obs"), st.sqrtW = GpuVector(P, "sqrt-weights"), st.rImg = GpuVector(P, "r-img");
@@ -186,6 +192,7 @@ void Solver::State::buildObservations() {
     GpuVolume fixedGpu(fixed);
     RenderSettings settings;
     settings.stepVoxels = opt.stepVoxels;
+    settings.exactTraversal = opt.exactTraversal;
 
     const size_t P = W->pixelCount();
     std::vector<float> o(P * 4, 0.0f), w(P * 4, 0.0f);
@@ -340,38 +347,51 @@ void Solver::State::initialUnknowns() {
     }
     a.upload(init);
 
-    // Regularizer scales, averaged over the hull's unknowns.
-    const double Mh = std::max<double>(1.0, double(report.hullCount));
-    const Regularization& reg = opt.regularization;
-    cLap = std::sqrt(reg.laplacian / Mh);
-    const double lambda = reg.l2 + reg.towardOne;
-    cId = std::sqrt(lambda / Mh);
-    target = lambda > 0 ? reg.towardOne / lambda : 0;
-    constant = Vec3d(lambda > 0 ? reg.l2 * reg.towardOne / lambda : 0);  // λ0‖a‖² + λ1‖a−1‖² = λ‖a−t‖² + this
+    // Regularizer scales per block, averaged over the block's hull unknowns.
+    std::vector<Unknown> kinds = {opt.unknown};
+    if (opt.unknown == Unknown::EmissionAlbedo) kinds = {Unknown::Emission, Unknown::Albedo};
+    for (size_t b = 0; b < kinds.size(); ++b) {
+        size_t inHull = 0;
+        for (size_t e = b * cells; e < (b + 1) * cells; ++e) inHull += hullHost[4 * e] > 0 ? 1 : 0;
+        const double Mh = std::max<double>(1.0, double(inHull));
+        const Regularization& reg = opt.regularizationFor(kinds[b]);
+        const double lambda = reg.l2 + reg.towardOne;
+        BlockRegularizer br;
+        br.range = {b * cells, cells};
+        br.cLap = std::sqrt(reg.laplacian / Mh);
+        br.cId = std::sqrt(lambda / Mh);
+        br.target = lambda > 0 ? reg.towardOne / lambda : 0;
+        blocks.push_back(br);
+        constant += Vec3d(lambda > 0 ? reg.l2 * reg.towardOne / lambda : 0);
+    }
 }
 
 void Solver::State::applyA(const GpuVector& x, GpuVector& img, GpuVector& lap) {
     W->forward(x, img);
     ops.multiply(sqrtW, img);
-    if (cLap > 0) ops.laplacian(cLap, x, hull, udims, lap);
+    for (const auto& b : blocks)
+        if (b.cLap > 0) ops.laplacian(b.cLap, x, hull, udims, lap, b.range);  // blocks without stay 0
 }
 
 void Solver::State::move(const Vec3d& step, const GpuVector& x, const GpuVector& img, const GpuVector& lap) {
     ops.axpy(step, x, a);
     ops.axpy(-step, img, rImg);
-    if (cLap > 0) ops.axpy(-step, lap, rLap);
-    if (cId > 0) ops.axpy(-step * cId, x, rId);
+    ops.axpy(-step, lap, rLap);
+    for (const auto& b : blocks)
+        if (b.cId > 0) ops.axpy(-step * b.cId, x, rId, b.range);
 }
 
 void Solver::State::applyAt() {
     ops.copy(rImg, tmpImg);
     ops.multiply(sqrtW, tmpImg);
     W->adjoint(tmpImg, s);
-    if (cLap > 0) {
-        ops.laplacian(cLap, rLap, hull, udims, tmpU);  // L is symmetric
-        ops.axpy(Vec3d(1.0), tmpU, s);
+    for (const auto& b : blocks) {
+        if (b.cLap > 0) {
+            ops.laplacian(b.cLap, rLap, hull, udims, tmpU, b.range);  // L is symmetric
+            ops.axpy(Vec3d(1.0), tmpU, s, b.range);
+        }
+        if (b.cId > 0) ops.axpy(Vec3d(b.cId), rId, s, b.range);
     }
-    if (cId > 0) ops.axpy(Vec3d(cId), rId, s);
     ops.multiply(hull, s);
     if (opt.enforceBounds) ops.freeSet(a, s, bounds);
 }
@@ -383,14 +403,16 @@ void Solver::State::restart(Vec3d& gamma) {
     ops.axpy(Vec3d(-1.0), qImg, rImg);
     ops.multiply(sqrtW, rImg);
     rLap.fill(0.0f);
-    if (cLap > 0) ops.laplacian(-cLap, a, hull, udims, rLap);
     rId.fill(0.0f);
-    if (cId > 0) {
-        std::vector<float> av = a.download(), r(av.size(), 0.0f);
-        for (size_t i = 0; i < av.size(); ++i)
-            if (i % 4 != 3 && hullHost[i - i % 4] > 0) r[i] = float(cId * (target - av[i]));
-        rId.upload(r);
+    std::vector<float> av, r;
+    for (const auto& b : blocks) {
+        if (b.cLap > 0) ops.laplacian(-b.cLap, a, hull, udims, rLap, b.range);
+        if (b.cId <= 0) continue;
+        if (av.empty()) av = a.download(), r.assign(av.size(), 0.0f);
+        for (size_t i = 4 * b.range.first; i < 4 * (b.range.first + b.range.count); ++i)
+            if (i % 4 != 3 && hullHost[i - i % 4] > 0) r[i] = float(b.cId * (b.target - av[i]));
     }
+    if (!r.empty()) rId.upload(r);
     applyAt();
     ops.copy(s, p);
     gamma = ops.dot(s, s);
@@ -398,8 +420,10 @@ void Solver::State::restart(Vec3d& gamma) {
 
 Vec3d Solver::State::objective() {
     Vec3d f = ops.dot(rImg, rImg) + constant;
-    if (cLap > 0) f += ops.dot(rLap, rLap);
-    if (cId > 0) f += ops.dot(rId, rId);
+    bool lap = false, id = false;
+    for (const auto& b : blocks) lap |= b.cLap > 0, id |= b.cId > 0;
+    if (lap) f += ops.dot(rLap, rLap);
+    if (id) f += ops.dot(rId, rId);
     return f;
 }
 
@@ -473,8 +497,10 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
         // Step along p: α = γ / ‖A p‖² (the exact line minimum).
         st.applyA(st.p, st.qImg, st.qLap);
         Vec3d delta = st.ops.dot(st.qImg, st.qImg);
-        if (st.cLap > 0) delta += st.ops.dot(st.qLap, st.qLap);
-        if (st.cId > 0) delta += st.ops.dot(st.p, st.p) * (st.cId * st.cId);
+        for (const auto& b : st.blocks) {
+            if (b.cLap > 0) delta += st.ops.dot(st.qLap, st.qLap, b.range);
+            if (b.cId > 0) delta += st.ops.dot(st.p, st.p, b.range) * (b.cId * b.cId);
+        }
         Vec3d alpha, maxStep(1e300);
         bool hit[3] = {false, false, false};
         if (st.opt.enforceBounds) maxStep = st.ops.maxStep(st.a, st.p, st.bounds);
@@ -485,6 +511,11 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
         st.ops.copy(st.a, st.aPrev);
         if (!(hit[0] || hit[1] || hit[2])) {
             st.move(alpha, st.p, st.qImg, st.qLap);
+        } else if (st.opt.boundsMethod == BoundsMethod::CutAtBound) {
+            Vec3d cut;
+            for (int c = 0; c < 3; ++c) cut[c] = hit[c] ? maxStep[c] : alpha[c];
+            st.move(cut, st.p, st.qImg, st.qLap);
+            st.ops.clamp(st.a, st.bounds);  // rounding only
         } else {
             // The step leaves the box in some channel. Try the projected step a' = clamp(a + αp):
             // it moves many variables at once (in channels that stay inside it is the plain CG

@@ -180,3 +180,24 @@ TEST(Projector, EmissionForwardIsTheRenderersEmission) {
     for (size_t i = 0; i < img.pixelCount(); ++i)
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(Wa[4 * i + size_t(c)], img.rgba[4 * i + size_t(c)], 1e-5f) << i;
 }
+
+TEST(Projector, ExactTraversalKeepsTheAdjointIdentity) {
+    VOLSTYLE_REQUIRE_GL();
+    Problem prob = makeProblem(11);
+    GpuVolume gpu(prob.volume);
+    for (Unknown u : {Unknown::Emission, Unknown::Albedo, Unknown::Extinction})
+        for (BasisType basis : {BasisType::Box, BasisType::Trilinear}) {
+            Projector W(test::sharedRenderer(), gpu, prob.lighting, u, basis, prob.volume.dims(), 0.5, /*exact=*/true);
+            for (const auto& c : prob.cameras) W.addView(c);
+            auto a = randomVector(W.elementCount(), 3), r = randomVector(W.pixelCount(), 4);
+            GpuVector ga(W.elementCount(), "a"), gr(W.pixelCount(), "r"), gWa(W.pixelCount(), "Wa"), gWtr(W.elementCount(), "Wtr");
+            ga.upload(toFloat(a));
+            gr.upload(toFloat(r));
+            W.forward(ga, gWa);
+            W.adjoint(gr, gWtr);
+            Vec3d lhs = dot(r, gWa.download()), rhs = dot(a, gWtr.download());
+            for (int c = 0; c < 3; ++c)
+                EXPECT_LE(std::abs(lhs[c] - rhs[c]) / std::max(std::abs(lhs[c]), 1e-3), 1e-4)
+                    << "unknown " << int(u) << " basis " << int(basis) << " channel " << c;
+        }
+}

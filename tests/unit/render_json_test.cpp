@@ -4,6 +4,7 @@
 #include <set>
 
 #include "protocol/render_json.h"
+#include "protocol/solve_json.h"
 
 using namespace volstyle;
 using json = nlohmann::json;
@@ -94,4 +95,35 @@ TEST(LightingJson, DefaultLightingMatchesTheExampleFile) {
     core::Camera cam = protocol::cameraFromJson(nlohmann::json::parse(c));
     EXPECT_EQ(cam.eye, core::defaultCamera().eye);
     EXPECT_EQ(cam.fovYDeg, core::defaultCamera().fovYDeg);
+}
+
+TEST(SolveJson, ParsesEveryFieldAndPerUnknownWeights) {
+    auto o = protocol::solveOptionsFromJson(nlohmann::json::parse(R"({
+        "unknowns": ["albedo", "emission"], "basis": "box", "max_iterations": 12, "tolerance": 1e-5,
+        "step": 1.0, "hull": "none", "resolution": {"emission": [8, 8, 8], "albedo": [8, 8, 8]},
+        "regularization": {"laplacian": 0.01, "albedo": {"toward_one": 0.5}}, "views": ["v2"]})"));
+    EXPECT_EQ(o.unknown, core::Unknown::EmissionAlbedo);
+    EXPECT_EQ(o.basis, core::BasisType::Box);
+    EXPECT_EQ(o.maxIterations, 12);
+    EXPECT_FALSE(o.useHull);
+    EXPECT_EQ(o.resolution->x, 8);
+    EXPECT_EQ(o.regularizationFor(core::Unknown::Emission).towardOne, 0.0);
+    EXPECT_EQ(o.regularizationFor(core::Unknown::Albedo).towardOne, 0.5);
+    EXPECT_EQ(o.regularizationFor(core::Unknown::Albedo).laplacian, 0.01);  // inherited
+    EXPECT_EQ(o.views, std::vector<std::string>{"v2"});
+    auto back = protocol::solveOptionsFromJson(protocol::solveOptionsToJson(o));
+    EXPECT_EQ(back.regularizationFor(core::Unknown::Albedo).towardOne, 0.5);
+}
+
+TEST(SolveJson, ReportsBadFields) {
+    try {
+        protocol::solveOptionsFromJson(nlohmann::json::parse(R"({"unknowns": ["colour"], "hull": "maybe", "tolerance": "low",
+            "resolution": {"emission": [8, 8]}, "regularization": {"albedo": {"smooth": 1}}, "extra": 1})"));
+        FAIL();
+    } catch (const protocol::ValidationError& e) {
+        std::set<std::string> paths;
+        for (const auto& d : e.details()) paths.insert(d.path);
+        EXPECT_EQ(paths, (std::set<std::string>{"/unknowns", "/hull", "/tolerance", "/resolution/emission",
+                                                "/regularization/albedo/smooth", "/extra"}));
+    }
 }
