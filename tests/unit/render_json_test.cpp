@@ -100,12 +100,13 @@ TEST(LightingJson, DefaultLightingMatchesTheExampleFile) {
 TEST(SolveJson, ParsesEveryFieldAndPerUnknownWeights) {
     auto o = protocol::solveOptionsFromJson(nlohmann::json::parse(R"({
         "unknowns": ["albedo", "emission"], "basis": "box", "max_iterations": 12, "tolerance": 1e-5,
-        "step": 1.0, "hull": "none", "resolution": {"emission": [8, 8, 8], "albedo": [8, 8, 8]},
+        "step": 1.0, "traversal": "exact", "hull": "none", "resolution": {"emission": [8, 8, 8], "albedo": [8, 8, 8]},
         "regularization": {"laplacian": 0.01, "albedo": {"toward_one": 0.5}}, "views": ["v2"]})"));
     EXPECT_EQ(o.unknown, core::Unknown::EmissionAlbedo);
     EXPECT_EQ(o.basis, core::BasisType::Box);
     EXPECT_EQ(o.maxIterations, 12);
     EXPECT_FALSE(o.useHull);
+    EXPECT_TRUE(o.exactTraversal);
     EXPECT_EQ(o.resolution->x, 8);
     EXPECT_EQ(o.regularizationFor(core::Unknown::Emission).towardOne, 0.0);
     EXPECT_EQ(o.regularizationFor(core::Unknown::Albedo).towardOne, 0.5);
