@@ -21,6 +21,7 @@
 #include <fstream>
 #include <numbers>
 
+#include "../tests/common/stamped_cloud.h"
 #include "bench_util.h"
 #include "core/image/image_io.h"
 #include "core/render/gpu_volume.h"
@@ -33,19 +34,14 @@ using namespace volstyle::core;
 
 namespace {
 
-bool inLetters(const Vec3d& w) {
-    static const char* glyphs[5] = {"X.X.XXX", "X.X.X..", "X.X.XXX", "X.X...X", ".X..XXX"};
-    int col = int(std::floor((w.x + 0.7) / 1.4 * 7)), row = int(std::floor((0.55 - w.y) / 1.1 * 5));
-    return col >= 0 && col < 7 && row >= 0 && row < 5 && glyphs[row][col] == 'X';
-}
+using test::inLetters;
 
 struct Scene {
     Volume plain, truth;
 };
 
 Scene makeScene(int res) {
-    Scene s{makeBuiltinScene("cloud", res), {}};
-    for (float& x : s.plain.extinction()) x *= 0.08f;
+    Scene s{test::thinCloud(res), {}};
     s.truth = s.plain;
     auto& e = s.truth.ensureEmission();
     for (int k = 0; k < res; ++k)

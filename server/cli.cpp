@@ -18,19 +18,21 @@ std::string Arguments::get(const std::string& name, const std::string& fallback)
     return it == options.end() ? fallback : it->second;
 }
 
-double Arguments::number(const std::string& name, double fallback) const {
-    if (!has(name)) return fallback;
-    const std::string& s = get(name);
+double parseNumber(const std::string& flag, const std::string& text) {
     size_t used = 0;
     double v = 0;
     try {
-        v = std::stod(s, &used);
+        v = std::stod(text, &used);
     } catch (const std::exception&) {
         used = 0;
     }
-    if (used == 0 || used != s.size() || !std::isfinite(v))
-        throw InvalidArgument("--" + name + " must be a number, got '" + s + "'");
+    if (used == 0 || used != text.size() || !std::isfinite(v))
+        throw InvalidArgument("--" + flag + " must be a number, got '" + text + "'");
     return v;
+}
+
+double Arguments::number(const std::string& name, double fallback) const {
+    return has(name) ? parseNumber(name, get(name)) : fallback;
 }
 
 Arguments parseArguments(const std::vector<std::string>& args, const std::vector<std::string>& known,

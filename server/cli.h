@@ -25,6 +25,9 @@ struct Arguments {
     double number(const std::string& name, double fallback) const;
 };
 
+/// A finite number, or InvalidArgument naming `--flag`.
+double parseNumber(const std::string& flag, const std::string& text);
+
 /// Parses argv (after the subcommand); `flags` are options that take no value. Unknown options
 /// throw InvalidArgument naming them and listing `known`.
 Arguments parseArguments(const std::vector<std::string>& args, const std::vector<std::string>& known,

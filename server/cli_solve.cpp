@@ -44,17 +44,7 @@ std::vector<std::string> split(const std::string& s, char sep) {
 
 std::vector<double> numbers(const std::string& flag, const std::string& value, size_t count) {
     std::vector<double> out;
-    for (const auto& part : split(value, ',')) {
-        size_t used = 0;
-        double v = 0;
-        try {
-            v = std::stod(part, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used != part.size() || used == 0) throw InvalidArgument("--" + flag + ": '" + part + "' is not a number");
-        out.push_back(v);
-    }
+    for (const auto& part : split(value, ',')) out.push_back(parseNumber(flag, part));
     if (out.size() != count)
         throw InvalidArgument("--" + flag + " takes " + std::to_string(count) + " comma-separated numbers, got '" + value + "'");
     return out;

@@ -12,6 +12,7 @@
 #include "core/render/gpu_volume.h"
 #include "core/solve/solver.h"
 #include "core/volume/builtin_scenes.h"
+#include "../common/stamped_cloud.h"
 #include "gl_test_env.h"
 
 using namespace volstyle;
@@ -19,18 +20,8 @@ using namespace volstyle::core;
 
 namespace {
 
-/// "VS" in a 5x3-pixel font over the x–y plane, extruded along z: 1 inside the letters.
-bool inLetters(const Vec3d& w) {
-    static const char* glyphs[5] = {"X.X.XXX", "X.X.X..", "X.X.XXX", "X.X...X", ".X..XXX"};
-    int col = int(std::floor((w.x + 0.7) / 1.4 * 7)), row = int(std::floor((0.55 - w.y) / 1.1 * 5));
-    return col >= 0 && col < 7 && row >= 0 && row < 5 && glyphs[row][col] == 'X';
-}
-
-Volume thinCloud(int res) {
-    Volume v = makeBuiltinScene("cloud", res);
-    for (float& s : v.extinction()) s *= 0.08f;  // optical depth a few units: the inside shows
-    return v;
-}
+using test::inLetters;
+using test::thinCloud;
 
 std::vector<Camera> ringCameras(int count, int size, double phase = 0.3) {
     std::vector<Camera> cams;
