@@ -51,6 +51,7 @@ core::Lighting lightingFromJsonFile(const nlohmann::json& j, const std::string& 
 
 int runRender(const std::vector<std::string>& args);
 int runSolve(const std::vector<std::string>& args);
+int runServe(const std::vector<std::string>& args);
 int runInfo(const std::vector<std::string>& args);
 
 }  // namespace volstyle::server

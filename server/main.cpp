@@ -16,6 +16,7 @@ namespace {
 const char* kUsage =
     "volstyle — restyle volumes by painting them\n"
     "usage: volstyle <command> [options]\n"
+    "  serve    the HTTP/JSON server           (volstyle serve --help)\n"
     "  render   render a scene to PNG/EXR      (volstyle render --help)\n"
     "  solve    restyle a volume from painted views (volstyle solve --help)\n"
     "  info     describe an OpenVDB file       (volstyle info FILE.vdb)\n"
@@ -43,6 +44,7 @@ int main(int argc, char** argv) {
         if (command == "render") return volstyle::server::runRender(args);
         if (command == "info") return volstyle::server::runInfo(args);
         if (command == "solve") return volstyle::server::runSolve(args);
+        if (command == "serve") return volstyle::server::runServe(args);
         std::cerr << "volstyle: unknown command '" << command << "'\n" << kUsage;
         return 2;
     } catch (const volstyle::InvalidArgument& e) {

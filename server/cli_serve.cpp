@@ -1,0 +1,58 @@
+// `volstyle serve`: the HTTP/JSON server (SPEC §3–4). SIGINT/SIGTERM stop it cleanly: a thread
+// waits for the signals (blocked everywhere else) and stops the listener.
+
+#include <pthread.h>
+#include <signal.h>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <thread>
+
+#include "core/errors.h"
+#include "server/cli.h"
+#include "server/http_server.h"
+
+namespace volstyle::server {
+
+int runServe(const std::vector<std::string>& argv) {
+    Arguments args = parseArguments(argv, {"host", "port", "token", "web-dir"}, {"help"});
+    if (args.has("help")) {
+        std::cout << "usage: volstyle serve [--host 127.0.0.1] [--port 8080] [--token T] [--web-dir web]\n";
+        return 0;
+    }
+    ServerOptions opt;
+    opt.host = args.get("host", opt.host);
+    const double port = args.number("port", opt.port);
+    if (port < 0 || port > 65535 || port != std::floor(port)) throw InvalidArgument("--port must be in [0, 65535]");
+    opt.port = int(port);
+    const char* envToken = std::getenv("VOLSTYLE_TOKEN");
+    opt.token = args.get("token", envToken ? envToken : "");
+    opt.webDir = args.get("web-dir", opt.webDir);
+
+    // Block the stop signals before any thread starts, so only the waiter below receives them.
+    sigset_t stopSignals;
+    sigemptyset(&stopSignals);
+    sigaddset(&stopSignals, SIGINT);
+    sigaddset(&stopSignals, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &stopSignals, nullptr);
+
+    spdlog::set_level(std::getenv("VOLSTYLE_LOG_LEVEL") ? spdlog::get_level() : spdlog::level::info);
+    HttpServer server(opt);
+    const int bound = server.bind();
+    std::thread waiter([&] {
+        int sig = 0;
+        sigwait(&stopSignals, &sig);
+        spdlog::info("signal {}: stopping", sig);
+        server.stop();
+    });
+    std::cout << "volstyle: serving http://" << opt.host << ":" << bound << "/" << std::endl;
+    server.listen();
+    // listen() also returns if the listener fails; wake the waiter in that case.
+    pthread_kill(waiter.native_handle(), SIGTERM);
+    waiter.join();
+    return 0;
+}
+
+}  // namespace volstyle::server

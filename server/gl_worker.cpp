@@ -1,0 +1,60 @@
+#include "server/gl_worker.h"
+
+namespace volstyle::server {
+
+GlWorker::GlWorker() {
+    std::promise<void> started;
+    auto ready = started.get_future();
+    m_thread = std::thread([this, &started] { loop(started); });
+    try {
+        ready.get();
+    } catch (...) {
+        m_thread.join();
+        throw;
+    }
+}
+
+GlWorker::~GlWorker() {
+    {
+        std::lock_guard lock(m_mutex);
+        m_stopping = true;
+    }
+    m_wake.notify_all();
+    if (m_thread.joinable()) m_thread.join();
+}
+
+void GlWorker::post(std::function<void(core::Renderer&)> task) {
+    {
+        std::lock_guard lock(m_mutex);
+        m_queue.push_back(std::move(task));
+    }
+    m_wake.notify_one();
+}
+
+void GlWorker::loop(std::promise<void>& started) {
+    std::unique_ptr<core::gl::Context> context;
+    std::unique_ptr<core::Renderer> renderer;
+    try {
+        context = core::gl::Context::create();
+        renderer = std::make_unique<core::Renderer>(*context);
+        m_caps = context->capabilities();
+        started.set_value();
+    } catch (...) {
+        started.set_exception(std::current_exception());
+        return;
+    }
+    for (;;) {
+        std::function<void(core::Renderer&)> task;
+        {
+            std::unique_lock lock(m_mutex);
+            m_wake.wait(lock, [&] { return m_stopping || !m_queue.empty(); });
+            if (m_queue.empty()) break;  // stopping and drained
+            task = std::move(m_queue.front());
+            m_queue.pop_front();
+        }
+        task(*renderer);  // packaged tasks capture their own exceptions
+    }
+    renderer.reset();  // GL objects die on this thread, before the context
+}
+
+}  // namespace volstyle::server

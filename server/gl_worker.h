@@ -1,0 +1,49 @@
+#pragma once
+/// \file gl_worker.h
+/// The server's GL thread (SPEC §3 Concurrency): it owns the GL context and the renderer; HTTP
+/// threads post closures to it and wait for their results. Exceptions travel back to the caller.
+
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <future>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "core/gl/context.h"
+#include "core/render/renderer.h"
+
+namespace volstyle::server {
+
+class GlWorker {
+public:
+    /// Starts the thread and creates the context on it; throws GpuError if that fails.
+    GlWorker();
+    ~GlWorker();  ///< finishes queued work, then stops
+
+    /// Runs `task(renderer)` on the GL thread and returns its result (or rethrows its exception).
+    template <typename F>
+    auto run(F&& task) -> decltype(task(std::declval<core::Renderer&>())) {
+        using R = decltype(task(std::declval<core::Renderer&>()));
+        auto job = std::make_shared<std::packaged_task<R(core::Renderer&)>>(std::forward<F>(task));
+        auto result = job->get_future();
+        post([job](core::Renderer& r) { (*job)(r); });
+        return result.get();
+    }
+
+    const core::gl::Capabilities& capabilities() const { return m_caps; }
+
+private:
+    void post(std::function<void(core::Renderer&)> task);
+    void loop(std::promise<void>& started);
+
+    std::thread m_thread;
+    std::mutex m_mutex;
+    std::condition_variable m_wake;
+    std::deque<std::function<void(core::Renderer&)>> m_queue;
+    bool m_stopping = false;
+    core::gl::Capabilities m_caps;
+};
+
+}  // namespace volstyle::server

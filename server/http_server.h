@@ -1,0 +1,41 @@
+#pragma once
+/// \file http_server.h
+/// `volstyle serve`: the HTTP/JSON API of SPEC §3 over cpp-httplib. This first part serves
+/// health, the built-in scenes, sessions, lighting and renders; views, targets, solve jobs, events,
+/// durability and the painting page follow (issue #4).
+
+#include <memory>
+#include <string>
+
+#include "core/volume/volume.h"
+
+namespace volstyle::server {
+
+struct ServerOptions {
+    std::string host = "127.0.0.1";
+    int port = 8080;                 ///< 0: any free port (tests)
+    std::string token;               ///< required when host is not loopback
+    std::string webDir = "web";
+    size_t maxSessions = 64;
+    size_t maxJsonBytes = 1 << 20;   ///< 1 MiB
+    int maxImageSide = 4096;
+    core::VolumeLimits volumeLimits;
+};
+
+class HttpServer {
+public:
+    /// Checks the options (a non-loopback host needs a token: InvalidArgument otherwise) and
+    /// starts the GL thread (GpuError if no context).
+    explicit HttpServer(ServerOptions options);
+    ~HttpServer();
+
+    int bind();     ///< binds host:port (port 0: any free one) and returns the port
+    void listen();  ///< serves until stop(); call after bind()
+    void stop();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> m;
+};
+
+}  // namespace volstyle::server

@@ -1,0 +1,60 @@
+#include "server/session_store.h"
+
+#include <random>
+
+#include "core/errors.h"
+
+namespace volstyle::server {
+
+std::string SessionStore::newId() {
+    // 128 bits from the OS's entropy source (std::random_device reads /dev/urandom on Linux).
+    static std::mutex m;
+    static std::random_device device;
+    std::lock_guard lock(m);
+    std::string id;
+    const char* hex = "0123456789abcdef";
+    for (int i = 0; i < 4; ++i) {
+        uint32_t r = device();
+        for (int k = 0; k < 8; ++k, r >>= 4) id += hex[r & 15];
+    }
+    return id;
+}
+
+std::shared_ptr<Session> SessionStore::add(std::shared_ptr<Session> s) {
+    std::lock_guard lock(m_mutex);
+    if (m_sessions.size() >= m_max)
+        throw InvalidArgument("too_many_sessions: the server holds its limit of " + std::to_string(m_max) +
+                              " sessions; delete one first");
+    s->id = newId();
+    m_sessions[s->id] = s;
+    return s;
+}
+
+std::shared_ptr<Session> SessionStore::find(const std::string& id) const {
+    std::lock_guard lock(m_mutex);
+    auto it = m_sessions.find(id);
+    return it == m_sessions.end() ? nullptr : it->second;
+}
+
+std::shared_ptr<Session> SessionStore::remove(const std::string& id) {
+    std::lock_guard lock(m_mutex);
+    auto it = m_sessions.find(id);
+    if (it == m_sessions.end()) return nullptr;
+    auto s = it->second;
+    m_sessions.erase(it);
+    return s;
+}
+
+std::vector<std::shared_ptr<Session>> SessionStore::all() const {
+    std::lock_guard lock(m_mutex);
+    std::vector<std::shared_ptr<Session>> out;
+    for (const auto& [id, s] : m_sessions) out.push_back(s);
+    return out;
+}
+
+size_t SessionStore::size() const {
+    std::lock_guard lock(m_mutex);
+    return m_sessions.size();
+}
+
+}  // namespace volstyle::server

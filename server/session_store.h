@@ -1,0 +1,47 @@
+#pragma once
+/// \file session_store.h
+/// Editing sessions held by the server: the volume (and its GPU copy, owned by the GL thread),
+/// the lighting, and bookkeeping. Ids are 128 random bits in hex (unguessable, SPEC §3).
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "core/render/gpu_volume.h"
+#include "core/render/params.h"
+#include "core/volume/volume.h"
+
+namespace volstyle::server {
+
+struct Session {
+    std::string id;
+    std::string created;  ///< ISO 8601, UTC
+    std::string scene;    ///< where the volume came from
+    core::Volume volume;
+    int version = 1;
+    core::Lighting lighting;
+    std::shared_ptr<core::GpuVolume> gpu;  ///< created and destroyed on the GL thread
+    std::mutex mutex;                      ///< guards the fields above
+};
+
+class SessionStore {
+public:
+    explicit SessionStore(size_t maxSessions) : m_max(maxSessions) {}
+    /// Adds a session with a fresh id; throws TooMany when full.
+    std::shared_ptr<Session> add(std::shared_ptr<Session> s);
+    std::shared_ptr<Session> find(const std::string& id) const;  ///< nullptr if unknown
+    std::shared_ptr<Session> remove(const std::string& id);      ///< nullptr if unknown
+    std::vector<std::shared_ptr<Session>> all() const;
+    size_t size() const;
+
+    static std::string newId();
+
+private:
+    size_t m_max;
+    mutable std::mutex m_mutex;
+    std::map<std::string, std::shared_ptr<Session>> m_sessions;
+};
+
+}  // namespace volstyle::server
