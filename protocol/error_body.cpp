@@ -15,7 +15,8 @@ int httpStatusFor(const std::string& code) {
     if (code == "not_found") return 404;
     if (code == "busy" || code == "cancelled") return 409;
     if (code == "too_large") return 413;
-    if (code == "unsupported_media" || code == "io_error") return 422;
+    if (code == "unsupported_media" || code == "io_error" || code == "too_many_jobs" || code == "too_many_sessions")
+        return 422;
     if (code == "out_of_memory") return 507;
     return 500;
 }

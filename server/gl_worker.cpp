@@ -23,12 +23,25 @@ GlWorker::~GlWorker() {
     if (m_thread.joinable()) m_thread.join();
 }
 
-void GlWorker::post(std::function<void(core::Renderer&)> task) {
+void GlWorker::post(std::function<void(core::Renderer&)> task, bool isLong) {
     {
         std::lock_guard lock(m_mutex);
-        m_queue.push_back(std::move(task));
+        (isLong ? m_long : m_short).push_back(std::move(task));
     }
     m_wake.notify_one();
+}
+
+void GlWorker::runShortTasks(core::Renderer& renderer) {
+    for (;;) {
+        std::function<void(core::Renderer&)> task;
+        {
+            std::lock_guard lock(m_mutex);
+            if (m_short.empty()) return;
+            task = std::move(m_short.front());
+            m_short.pop_front();
+        }
+        task(renderer);
+    }
 }
 
 void GlWorker::loop(std::promise<void>& started) {
@@ -47,10 +60,11 @@ void GlWorker::loop(std::promise<void>& started) {
         std::function<void(core::Renderer&)> task;
         {
             std::unique_lock lock(m_mutex);
-            m_wake.wait(lock, [&] { return m_stopping || !m_queue.empty(); });
-            if (m_queue.empty()) break;  // stopping and drained
-            task = std::move(m_queue.front());
-            m_queue.pop_front();
+            m_wake.wait(lock, [&] { return m_stopping || !m_short.empty() || !m_long.empty(); });
+            auto& queue = !m_short.empty() ? m_short : m_long;  // short tasks first
+            if (queue.empty()) break;                            // stopping and drained
+            task = std::move(queue.front());
+            queue.pop_front();
         }
         task(*renderer);  // packaged tasks capture their own exceptions
     }

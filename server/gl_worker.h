@@ -22,26 +22,33 @@ public:
     GlWorker();
     ~GlWorker();  ///< finishes queued work, then stops
 
-    /// Runs `task(renderer)` on the GL thread and returns its result (or rethrows its exception).
+    /// Runs a short `task(renderer)` (a render, a release) on the GL thread and returns its
+    /// result (or rethrows its exception). Short tasks also run between a long task's iterations.
     template <typename F>
     auto run(F&& task) -> decltype(task(std::declval<core::Renderer&>())) {
         using R = decltype(task(std::declval<core::Renderer&>()));
         auto job = std::make_shared<std::packaged_task<R(core::Renderer&)>>(std::forward<F>(task));
         auto result = job->get_future();
-        post([job](core::Renderer& r) { (*job)(r); });
+        post([job](core::Renderer& r) { (*job)(r); }, /*isLong=*/false);
         return result.get();
     }
+
+    /// Queues a long task (a solve) and returns at once; long tasks run one after another.
+    void submit(std::function<void(core::Renderer&)> task) { post(std::move(task), /*isLong=*/true); }
+
+    /// From inside a long task (on the GL thread): runs the short tasks waiting now.
+    void runShortTasks(core::Renderer& renderer);
 
     const core::gl::Capabilities& capabilities() const { return m_caps; }
 
 private:
-    void post(std::function<void(core::Renderer&)> task);
+    void post(std::function<void(core::Renderer&)> task, bool isLong);
     void loop(std::promise<void>& started);
 
     std::thread m_thread;
     std::mutex m_mutex;
     std::condition_variable m_wake;
-    std::deque<std::function<void(core::Renderer&)>> m_queue;
+    std::deque<std::function<void(core::Renderer&)>> m_short, m_long;
     bool m_stopping = false;
     core::gl::Capabilities m_caps;
 };

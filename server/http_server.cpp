@@ -6,6 +6,10 @@
 #include <atomic>
 #include <chrono>
 #include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
 
 #include "core/errors.h"
 #include "core/image/image_io.h"
@@ -13,7 +17,11 @@
 #include "core/volume/builtin_scenes.h"
 #include "protocol/error_body.h"
 #include "protocol/render_json.h"
+#include "core/solve/solver.h"
+#include "core/volume/vdb_io.h"
+#include "protocol/solve_json.h"
 #include "server/gl_worker.h"
+#include "server/job_store.h"
 #include "server/session_store.h"
 
 namespace volstyle::server {
@@ -58,6 +66,8 @@ struct HttpServer::Impl {
     httplib::Server http;
     std::unique_ptr<GlWorker> gl;
     SessionStore sessions;
+    JobStore jobs;
+    static constexpr size_t kMaxQueuedJobs = 4;
     std::atomic<uint64_t> requestCounter{0};
 
     explicit Impl(ServerOptions o) : opt(std::move(o)), sessions(opt.maxSessions) {}
@@ -94,9 +104,56 @@ struct HttpServer::Impl {
                 {"volume", {{"dims", {v.dims().x, v.dims().y, v.dims().z}}, {"bbox", {vec(lo), vec(hi)}},
                             {"voxel_size", vec(vs)}, {"grids", grids}, {"version", s.version}}},
                 {"lighting", protocol::lightingToJson(s.lighting)},
-                {"views", json::array()},
-                {"jobs", json::array()}};
+                {"views", viewsJson(s)},
+                {"jobs", s.jobs}};
     }
+
+    static json viewJson(const SessionView& v) {
+        return {{"id", v.id}, {"camera", protocol::cameraToJson(v.camera)}, {"has_target", v.target.has_value()},
+                {"has_weights", v.weights.has_value()}};
+    }
+    static json viewsJson(const Session& s) {
+        json list = json::array();
+        for (const auto& v : s.views) list.push_back(viewJson(v));
+        return list;
+    }
+    static SessionView& view(Session& s, const std::string& id) {
+        for (auto& v : s.views)
+            if (v.id == id) return v;
+        throw ApiError("not_found", "no view '" + id + "' in session '" + s.id + "'");
+    }
+
+    /// Decodes an uploaded image; anything undecodable is 422.
+    core::Image decodeImage(const std::string& bytes, const std::string& what) {
+        try {
+            return core::loadImageFromMemory(bytes.data(), bytes.size(), what, opt.maxImageSide).image;
+        } catch (const Error& e) {
+            throw ApiError("unsupported_media", e.what());
+        }
+    }
+
+    /// Renders `volume` (uploaded for this call) or the session's own GPU copy, on the GL thread.
+    std::string renderImage(Session& s, const core::Volume* volume, const core::Camera& camera, const std::string& format,
+                            double exposure) {
+        core::Lighting lighting;
+        std::shared_ptr<core::GpuVolume> gpu;
+        {
+            std::lock_guard lock(s.mutex);
+            lighting = s.lighting;
+        }
+        core::Image image = gl->run([&](core::Renderer& renderer) {
+            if (volume) return renderer.render(*std::make_unique<core::GpuVolume>(*volume), camera, lighting);
+            std::lock_guard lock(s.mutex);
+            if (!s.gpu) s.gpu = std::make_shared<core::GpuVolume>(s.volume);
+            return renderer.render(*s.gpu, camera, lighting);
+        });
+        core::SaveOptions save;
+        save.exposure = format == "png" ? exposure : 0;
+        return core::encodeImage(image, format, save);
+    }
+
+    void runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr<Session>& s, core::SolveOptions options,
+                  core::Renderer& renderer);
 
     void reply(httplib::Response& res, int status, const json& body) {
         res.status = status;
@@ -202,11 +259,15 @@ void HttpServer::Impl::routes() {
                 r.fail("/resolution", "must be in [8, " + std::to_string(core::kMaxSceneResolution) + "]");
         }
         r.throwIfErrors();
+        if (sessions.size() >= opt.maxSessions)
+            throw ApiError("too_many_sessions", "the server holds its limit of " + std::to_string(opt.maxSessions) +
+                                                    " sessions; delete one first");
         auto s = std::make_shared<Session>();
         s->created = isoNow();
         s->scene = scene;
         s->volume = core::makeBuiltinScene(scene.substr(8), resolution);  // InvalidArgument lists the scenes
         s->lighting = core::defaultLighting();
+        s->versions[1] = s->volume;
         sessions.add(s);
         reply(res, 201, sessionJson(*s));
     });
@@ -269,7 +330,300 @@ void HttpServer::Impl::routes() {
         save.exposure = format == "png" ? exposure : 0;
         res.set_content(core::encodeImage(image, format, save), format == "png" ? "image/png" : "image/x-exr");
     });
+    const std::string sid = R"(/sessions/([0-9a-f]+))", vid = R"(/views/(v[0-9]+))", jid = R"(/jobs/([0-9a-f]+))";
+    http.Post(api + sid + "/views", [this](const httplib::Request& req, httplib::Response& res) {
+        auto s = session(req.matches[1]);
+        json body = parseBody(req);
+        protocol::JsonReader r;
+        core::Camera camera;
+        if (r.object(body, "", {"camera"})) {
+            if (!body.contains("camera")) r.fail("/camera", "is required");
+            else try {
+                camera = protocol::cameraFromJson(body["camera"], "/camera");
+            } catch (const protocol::ValidationError& e) {
+                for (const auto& d : e.details()) r.fail(d.path, d.message);
+            }
+            if (camera.width > opt.maxImageSide || camera.height > opt.maxImageSide)
+                r.fail("/camera", "images are limited to " + std::to_string(opt.maxImageSide) + " pixels a side");
+        }
+        r.throwIfErrors();
+        std::lock_guard lock(s->mutex);
+        s->views.push_back({"v" + std::to_string(s->nextView++), camera, std::nullopt, std::nullopt});
+        reply(res, 201, viewJson(s->views.back()));
+    });
+    http.Get(api + sid + "/views", [this](const httplib::Request& req, httplib::Response& res) {
+        auto s = session(req.matches[1]);
+        std::lock_guard lock(s->mutex);
+        reply(res, 200, viewsJson(*s));
+    });
+    http.Get(api + sid + vid, [this](const httplib::Request& req, httplib::Response& res) {
+        auto s = session(req.matches[1]);
+        std::lock_guard lock(s->mutex);
+        reply(res, 200, viewJson(view(*s, req.matches[2])));
+    });
+    http.Delete(api + sid + vid, [this](const httplib::Request& req, httplib::Response& res) {
+        auto s = session(req.matches[1]);
+        std::lock_guard lock(s->mutex);
+        view(*s, req.matches[2]);  // 404 if absent
+        std::erase_if(s->views, [&](const SessionView& v) { return v.id == req.matches[2]; });
+        res.status = 204;
+    });
+    for (const char* part : {"target", "weights"}) {
+        const bool isTarget = std::string(part) == "target";
+        http.Put(api + sid + vid + "/" + part, [this, isTarget](const httplib::Request& req, httplib::Response& res) {
+            auto s = session(req.matches[1]);
+            core::Image image = decodeImage(req.body, isTarget ? "the target" : "the weight image");
+            std::lock_guard lock(s->mutex);
+            SessionView& v = view(*s, req.matches[2]);
+            if (image.width != v.camera.width || image.height != v.camera.height)
+                throw ApiError("invalid_argument", "the image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                                                       " but view " + v.id + " renders " + std::to_string(v.camera.width) + "x" +
+                                                       std::to_string(v.camera.height));
+            (isTarget ? v.target : v.weights) = std::move(image);
+            reply(res, 200, viewJson(v));
+        });
+    }
+    http.Get(api + sid + vid + "/target.png", [this](const httplib::Request& req, httplib::Response& res) {
+        auto s = session(req.matches[1]);
+        std::lock_guard lock(s->mutex);
+        SessionView& v = view(*s, req.matches[2]);
+        if (!v.target) throw ApiError("not_found", "view " + v.id + " has no target yet");
+        core::SaveOptions save;
+        save.writeAlpha = true;
+        res.set_content(core::encodeImage(*v.target, "png", save), "image/png");
+    });
+    http.Get(api + sid + vid + R"(/render\.(png|exr))", [this](const httplib::Request& req, httplib::Response& res) {
+        auto s = session(req.matches[1]);
+        core::Camera camera;
+        {
+            std::lock_guard lock(s->mutex);
+            camera = view(*s, req.matches[2]).camera;
+        }
+        const std::string format = req.matches[3];
+        double exposure = req.has_param("exposure") ? std::atof(req.get_param_value("exposure").c_str()) : 0;
+        res.set_content(renderImage(*s, nullptr, camera, format, exposure), format == "png" ? "image/png" : "image/x-exr");
+    });
+    http.Post(api + sid + "/solve", [this](const httplib::Request& req, httplib::Response& res) {
+        auto s = session(req.matches[1]);
+        core::SolveOptions options = protocol::solveOptionsFromJson(parseBody(req));
+        if (jobs.pending(s->id) >= kMaxQueuedJobs)
+            throw ApiError("too_many_jobs", "session '" + s->id + "' already has " + std::to_string(kMaxQueuedJobs) +
+                                                " queued jobs (the limit); wait or cancel one");
+        {
+            std::lock_guard lock(s->mutex);
+            bool anyTarget = false;
+            for (const auto& v : s->views) anyTarget |= v.target.has_value();
+            if (!anyTarget) throw ApiError("invalid_argument", "no view has a target; PUT …/views/{vid}/target first");
+        }
+        auto job = jobs.add(s->id);
+        {
+            std::lock_guard lock(s->mutex);
+            s->jobs.push_back(job->id);
+        }
+        spdlog::info("job {} queued (session {})", job->id, s->id);
+        gl->submit([this, job, s, options](core::Renderer& renderer) { runSolve(job, s, options, renderer); });
+        reply(res, 202, {{"job", job->id}});
+    });
+    http.Get(api + jid, [this](const httplib::Request& req, httplib::Response& res) {
+        auto job = jobs.find(req.matches[1]);
+        if (!job) throw ApiError("not_found", "no job '" + std::string(req.matches[1]) + "'");
+        reply(res, 200, job->toJson());
+    });
+    http.Delete(api + jid, [this](const httplib::Request& req, httplib::Response& res) {
+        auto job = jobs.find(req.matches[1]);
+        if (!job) throw ApiError("not_found", "no job '" + std::string(req.matches[1]) + "'");
+        job->cancel = true;
+        reply(res, 202, job->toJson());
+    });
+    http.Get(api + jid + "/events", [this](const httplib::Request& req, httplib::Response& res) {
+        auto job = jobs.find(req.matches[1]);
+        if (!job) throw ApiError("not_found", "no job '" + std::string(req.matches[1]) + "'");
+        res.set_header("Cache-Control", "no-cache");
+        res.set_chunked_content_provider("text/event-stream", [job, sent = size_t(0)](size_t, httplib::DataSink& sink) mutable {
+            std::unique_lock lock(job->mutex);
+            job->changed.wait_for(lock, std::chrono::milliseconds(500), [&] { return job->events.size() > sent || job->isFinished(); });
+            while (sent < job->events.size()) {
+                const auto& [event, data] = job->events[sent++];
+                std::string message = "event: " + event + "\ndata: " + data.dump() + "\n\n";
+                lock.unlock();
+                if (!sink.write(message.data(), message.size())) return false;  // the client left
+                lock.lock();
+            }
+            if (job->isFinished()) {
+                lock.unlock();
+                sink.done();
+            }
+            return true;
+        });
+    });
+    http.Get(api + jid + "/preview/" + R"((v[0-9]+)\.png)", [this](const httplib::Request& req, httplib::Response& res) {
+        auto job = jobs.find(req.matches[1]);
+        if (!job) throw ApiError("not_found", "no job '" + std::string(req.matches[1]) + "'");
+        auto s = session(job->session);
+        std::optional<core::Volume> preview;
+        {
+            std::lock_guard lock(job->mutex);
+            preview = job->preview;
+        }
+        core::Camera camera;
+        {
+            std::lock_guard lock(s->mutex);
+            camera = view(*s, req.matches[2]).camera;
+        }
+        res.set_content(renderImage(*s, preview ? &*preview : nullptr, camera, "png", 0), "image/png");
+    });
+    http.Get(api + sid + R"(/volume\.vdb)", [this](const httplib::Request& req, httplib::Response& res) {
+        auto s = session(req.matches[1]);
+        core::Volume v;
+        {
+            std::lock_guard lock(s->mutex);
+            int version = req.has_param("version") ? std::atoi(req.get_param_value("version").c_str()) : s->version;
+            auto it = s->versions.find(version);
+            if (it == s->versions.end()) throw ApiError("not_found", "session '" + s->id + "' has no version " + std::to_string(version));
+            v = it->second;
+        }
+        const std::string tmp = (std::filesystem::temp_directory_path() / ("volstyle-" + SessionStore::newId() + ".vdb")).string();
+        core::saveVdb(tmp, v);
+        std::ifstream f(tmp, std::ios::binary);
+        std::stringstream bytes;
+        bytes << f.rdbuf();
+        std::filesystem::remove(tmp);
+        res.set_content(bytes.str(), "application/octet-stream");
+    });
+    http.Put(api + sid + "/volume", [this](const httplib::Request& req, httplib::Response& res) {
+        auto s = session(req.matches[1]);
+        const std::string tmp = (std::filesystem::temp_directory_path() / ("volstyle-" + SessionStore::newId() + ".vdb")).string();
+        std::ofstream(tmp, std::ios::binary).write(req.body.data(), std::streamsize(req.body.size()));
+        core::Volume v;
+        try {
+            v = core::loadVdb(tmp, opt.volumeLimits);
+        } catch (const Error& e) {
+            std::filesystem::remove(tmp);
+            std::string msg = e.what();
+            for (size_t pos; (pos = msg.find(tmp)) != std::string::npos;) msg.replace(pos, tmp.size(), "the upload");
+            throw ApiError(msg.find("over the limit") != std::string::npos ? "too_large" : "unsupported_media", msg);
+        }
+        std::filesystem::remove(tmp);
+        {
+            std::lock_guard lock(s->mutex);
+            s->volume = std::move(v);
+            s->version = s->versions.rbegin()->first + 1;
+            s->versions[s->version] = s->volume;
+            if (s->gpu) gl->run([gpu = std::move(s->gpu)](core::Renderer&) mutable { gpu.reset(); });
+        }
+        reply(res, 200, sessionJson(*s));
+    });
+    http.Post(api + sid + "/revert", [this](const httplib::Request& req, httplib::Response& res) {
+        auto s = session(req.matches[1]);
+        json body = parseBody(req);
+        protocol::JsonReader r;
+        int version = 0;
+        if (r.object(body, "", {"version"})) {
+            if (!body.contains("version")) r.fail("/version", "is required");
+            else version = r.integer(body["version"], "/version").value_or(0);
+        }
+        r.throwIfErrors();
+        {
+            std::lock_guard lock(s->mutex);
+            auto it = s->versions.find(version);
+            if (it == s->versions.end()) throw ApiError("not_found", "session '" + s->id + "' has no version " + std::to_string(version));
+            // Undo is a new version with the old content: nothing is lost.
+            s->volume = it->second;
+            s->version = s->versions.rbegin()->first + 1;
+            s->versions[s->version] = s->volume;
+            if (s->gpu) gl->run([gpu = std::move(s->gpu)](core::Renderer&) mutable { gpu.reset(); });
+        }
+        reply(res, 200, sessionJson(*s));
+    });
     if (!opt.webDir.empty()) http.set_mount_point("/", opt.webDir);  // httplib refuses '..' paths
+}
+
+void HttpServer::Impl::runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr<Session>& s,
+                                core::SolveOptions options, core::Renderer& renderer) {
+    if (job->cancel) {
+        std::lock_guard lock(job->mutex);
+        job->state = "cancelled";
+        job->error = protocol::errorBody("cancelled", "cancelled before it started", {}, "")["error"];
+    } else {
+        {
+            std::lock_guard lock(job->mutex);
+            job->state = "running";
+        }
+        spdlog::info("job {} running", job->id);
+        try {
+            // Snapshot the session: the solve works on copies; the session changes only on success.
+            core::Volume volume;
+            core::Lighting lighting;
+            std::vector<core::SolveView> views;
+            std::vector<std::string> viewIds;
+            {
+                std::lock_guard lock(s->mutex);
+                volume = s->volume;
+                lighting = s->lighting;
+                for (const auto& v : s->views) {
+                    viewIds.push_back(v.id);
+                    views.push_back({v.id, v.camera, v.target.value_or(core::Image()), v.weights});
+                }
+            }
+            core::Solver solver(renderer, volume, lighting, std::move(views), options);
+            auto lastPreview = Clock::now() - std::chrono::hours(1);
+            core::SolveResult result = solver.run([&](const core::SolveProgress& p) {
+                json progress = protocol::solveProgressToJson(p);
+                {
+                    std::lock_guard lock(job->mutex);
+                    job->progress = progress;
+                }
+                job->emit("progress", progress);
+                // Previews at most once a second: the latest iterate, rendered on request.
+                if (Clock::now() - lastPreview >= std::chrono::seconds(1)) {
+                    lastPreview = Clock::now();
+                    core::Volume current = solver.currentVolume();
+                    json urls = json::object();
+                    for (const auto& id : viewIds) urls[id] = "/api/v1/jobs/" + job->id + "/preview/" + id + ".png";
+                    {
+                        std::lock_guard lock(job->mutex);
+                        job->preview = std::move(current);
+                    }
+                    job->emit("preview", {{"iteration", p.iteration}, {"urls", urls}});
+                }
+                gl->runShortTasks(renderer);  // renders waiting for the GL thread run between iterations
+            }, &job->cancel);
+            int version = 0;
+            {
+                std::lock_guard lock(s->mutex);
+                s->volume = std::move(result.volume);
+                version = s->version = s->versions.rbegin()->first + 1;
+                s->versions[s->version] = s->volume;
+                s->gpu = std::make_shared<core::GpuVolume>(s->volume);  // on the GL thread
+            }
+            std::lock_guard lock(job->mutex);
+            job->state = "done";
+            job->result = {{"version", version}, {"report", protocol::solveReportToJson(result.report)}};
+        } catch (const Cancelled& e) {
+            std::lock_guard lock(job->mutex);
+            job->state = "cancelled";
+            job->error = protocol::errorBody("cancelled", e.what(), {}, "")["error"];
+        } catch (const protocol::ValidationError& e) {
+            std::lock_guard lock(job->mutex);
+            job->state = "failed";
+            job->error = protocol::errorBody(e.code(), e.what(), e.details(), "")["error"];
+        } catch (const Error& e) {
+            std::lock_guard lock(job->mutex);
+            job->state = "failed";
+            job->error = protocol::errorBody(e.code(), e.what(), {}, "")["error"];
+        } catch (const std::exception& e) {
+            std::lock_guard lock(job->mutex);
+            job->state = "failed";
+            job->error = protocol::errorBody("internal_error", e.what(), {}, "")["error"];
+        }
+    }
+    std::string state;
+    {
+        std::lock_guard lock(job->mutex);
+        state = job->state;
+    }
+    spdlog::info("job {} {}", job->id, state);
+    job->emit(state, job->toJson());
 }
 
 }  // namespace volstyle::server

@@ -4,6 +4,7 @@
 /// the lighting, and bookkeeping. Ids are 128 random bits in hex (unguessable, SPEC §3).
 
 #include <map>
+#include <optional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -15,12 +16,24 @@
 
 namespace volstyle::server {
 
+/// A view of a session: a camera, and the painted target (alpha = weight) and weights once uploaded.
+struct SessionView {
+    std::string id;  ///< "v1", "v2", …
+    core::Camera camera;
+    std::optional<core::Image> target;
+    std::optional<core::Image> weights;
+};
+
 struct Session {
     std::string id;
     std::string created;  ///< ISO 8601, UTC
     std::string scene;    ///< where the volume came from
     core::Volume volume;
     int version = 1;
+    std::map<int, core::Volume> versions;  ///< every committed version, for revert and download
+    std::vector<SessionView> views;
+    int nextView = 1;
+    std::vector<std::string> jobs;
     core::Lighting lighting;
     std::shared_ptr<core::GpuVolume> gpu;  ///< created and destroyed on the GL thread
     std::mutex mutex;                      ///< guards the fields above

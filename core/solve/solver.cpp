@@ -466,6 +466,8 @@ Volume Solver::State::result() {
     return out;
 }
 
+Volume Solver::currentVolume() { return m_state->result(); }
+
 SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool>* cancel) {
     State& st = *m_state;
     SolveReport& rep = st.report;

@@ -42,6 +42,9 @@ public:
     /// Runs to a stopping rule. `cancel` is checked between iterations (throws Cancelled).
     SolveResult run(const ProgressCallback& progress = {}, const std::atomic<bool>* cancel = nullptr);
 
+    /// The volume with the current iterate (for previews; call from the progress callback).
+    Volume currentVolume();
+
 private:
     struct State;
     std::unique_ptr<State> m_state;

@@ -4,6 +4,8 @@
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <thread>
 
 #include "core/errors.h"
@@ -165,4 +167,125 @@ TEST_F(ApiWithToken, MissingOrWrongTokenIs401) {
     expectError(client().Get("/api/v1/scenes", wrong), 401, "unauthorized");
     httplib::Headers right = {{"Authorization", "Bearer s3cret-token"}};
     EXPECT_EQ(client().Get("/api/v1/scenes", right)->status, 200);
+}
+
+namespace {
+
+std::string pngOf(const core::Image& img) { return core::encodeImage(img, "png"); }
+
+/// Reads an SSE stream to its end; returns the event names in order.
+std::vector<std::string> readEvents(httplib::Client& c, const std::string& path) {
+    std::string buffer;
+    std::vector<std::string> names;
+    c.set_read_timeout(120, 0);
+    c.Get(path.c_str(), [&](const char* data, size_t n) {
+        buffer.append(data, n);
+        for (size_t pos; (pos = buffer.find("\n\n")) != std::string::npos;) {
+            std::string block = buffer.substr(0, pos);
+            buffer.erase(0, pos + 2);
+            if (block.rfind("event: ", 0) == 0) names.push_back(block.substr(7, block.find('\n') - 7));
+        }
+        return true;
+    });
+    return names;
+}
+
+}  // namespace
+
+TEST_F(Api, PaintingFlowEndToEnd) {
+    // Create from a built-in, add two views, upload painted targets (the session's own renders,
+    // tinted warm where the volume is), solve, read the events to `done`: renders move toward the
+    // targets, and the volume has a new version.
+    std::string id = createSession(24);
+    const std::string base = "/api/v1/sessions/" + id;
+    std::vector<std::string> views;
+    for (json eye : {json{0, 0.2, 3}, json{3, 0.4, 0.5}}) {
+        auto r = client().Post((base + "/views").c_str(), json{{"camera", {{"eye", eye}, {"target", {0, 0, 0}}, {"width", 24}, {"height", 24}}}}.dump(), "application/json");
+        ASSERT_EQ(r->status, 201) << r->body;
+        views.push_back(json::parse(r->body)["id"]);
+    }
+    std::vector<core::Image> targets;
+    for (const auto& v : views) {
+        auto r = client().Get((base + "/views/" + v + "/render.exr").c_str());
+        ASSERT_EQ(r->status, 200);
+        core::Image img = core::loadImageFromMemory(r->body.data(), r->body.size(), "render").image;
+        for (size_t i = 0; i < img.pixelCount(); ++i) {
+            float a = img.rgba[4 * i + 3];
+            img.rgba[4 * i] = std::min(1.0f, img.rgba[4 * i] + 0.4f * a);  // paint it warmer
+            img.rgba[4 * i + 3] = 1;
+        }
+        auto put = client().Put((base + "/views/" + v + "/target").c_str(), pngOf(img), "image/png");
+        ASSERT_EQ(put->status, 200) << put->body;
+        EXPECT_TRUE(json::parse(put->body)["has_target"]);
+        targets.push_back(core::loadImageFromMemory(pngOf(img).data(), pngOf(img).size(), "t").image);
+    }
+    auto before = client().Get((base + "/views/" + views[0] + "/render.exr").c_str());
+    auto r = client().Post((base + "/solve").c_str(), R"({"unknowns": ["emission"], "max_iterations": 8})", "application/json");
+    ASSERT_EQ(r->status, 202) << r->body;
+    std::string job = json::parse(r->body)["job"];
+    auto events = readEvents(client(), "/api/v1/jobs/" + job + "/events");
+    ASSERT_FALSE(events.empty());
+    EXPECT_EQ(events.back(), "done");
+    EXPECT_NE(std::find(events.begin(), events.end(), "progress"), events.end());
+    EXPECT_NE(std::find(events.begin(), events.end(), "preview"), events.end());
+    json status = json::parse(client().Get(("/api/v1/jobs/" + job).c_str())->body);
+    EXPECT_EQ(status["state"], "done");
+    EXPECT_EQ(status["result"]["version"], 2);
+    auto after = client().Get((base + "/views/" + views[0] + "/render.exr").c_str());
+    auto rmsTo = [&](const std::string& bytes, const core::Image& t) {
+        core::Image img = core::loadImageFromMemory(bytes.data(), bytes.size(), "r").image;
+        double s = 0;
+        for (size_t i = 0; i < img.pixelCount(); ++i)
+            for (int c = 0; c < 3; ++c) s += std::pow(img.rgba[4 * i + size_t(c)] - t.rgba[4 * i + size_t(c)], 2);
+        return std::sqrt(s / double(3 * img.pixelCount()));
+    };
+    double e0 = rmsTo(before->body, targets[0]), e1 = rmsTo(after->body, targets[0]);
+    std::cout << "[ measured ] view RMS to its target: " << e0 << " -> " << e1 << "\n";
+    EXPECT_LT(e1, 0.5 * e0);
+    // Undo: version 1 comes back as version 3; both downloadable.
+    r = client().Post((base + "/revert").c_str(), R"({"version": 1})", "application/json");
+    EXPECT_EQ(json::parse(r->body)["volume"]["version"], 3);
+    auto vdb = client().Get((base + "/volume.vdb?version=2").c_str());
+    EXPECT_EQ(vdb->status, 200);
+    EXPECT_GT(vdb->body.size(), 1000u);
+}
+
+TEST_F(Api, CancellingASolveLeavesTheVolumeAlone) {
+    std::string id = createSession(24);
+    const std::string base = "/api/v1/sessions/" + id;
+    auto v = client().Post((base + "/views").c_str(), R"({"camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "width": 32, "height": 32}})", "application/json");
+    std::string vid = json::parse(v->body)["id"];
+    core::Image target(32, 32);
+    for (float& x : target.rgba) x = 0.8f;
+    ASSERT_EQ(client().Put((base + "/views/" + vid + "/target").c_str(), pngOf(target), "image/png")->status, 200);
+    auto r = client().Post((base + "/solve").c_str(), R"({"max_iterations": 500, "tolerance": 0})", "application/json");
+    std::string job = json::parse(r->body)["job"];
+    // While it runs, /health answers quickly (p99 of 50 probes under 100 ms).
+    std::vector<double> ms;
+    for (int i = 0; i < 50; ++i) {
+        auto t0 = std::chrono::steady_clock::now();
+        EXPECT_EQ(client().Get("/api/v1/health")->status, 200);
+        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    }
+    std::sort(ms.begin(), ms.end());
+    std::cout << "[ measured ] /health during a solve: p50 " << ms[25] << " ms, p99 " << ms[49] << " ms\n";
+    EXPECT_LT(ms[49], 100.0);
+    EXPECT_EQ(client().Delete(("/api/v1/jobs/" + job).c_str())->status, 202);
+    auto events = readEvents(client(), "/api/v1/jobs/" + job + "/events");
+    ASSERT_FALSE(events.empty());
+    EXPECT_EQ(events.back(), "cancelled");
+    EXPECT_EQ(json::parse(client().Get(base.c_str())->body)["volume"]["version"], 1);
+}
+
+TEST_F(Api, UploadErrors) {
+    std::string id = createSession();
+    const std::string base = "/api/v1/sessions/" + id;
+    auto v = client().Post((base + "/views").c_str(), R"({"camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "width": 8, "height": 8}})", "application/json");
+    std::string vid = json::parse(v->body)["id"];
+    expectError(client().Put((base + "/views/" + vid + "/target").c_str(), "not an image", "image/png"), 422, "unsupported_media");
+    expectError(client().Put((base + "/views/" + vid + "/target").c_str(), pngOf(core::Image(9, 8)), "image/png"), 400, "invalid_argument");
+    expectError(client().Put((base + "/volume").c_str(), std::string(2000, 'v'), "application/octet-stream"), 422, "unsupported_media");
+    expectError(client().Post((base + "/solve").c_str(), "{}", "application/json"), 400, "invalid_argument");  // no target yet
+    expectError(client().Get((base + "/views/v99").c_str()), 404, "not_found");
+    expectError(client().Get("/api/v1/jobs/0123456789abcdef0123456789abcdef"), 404, "not_found");
 }
