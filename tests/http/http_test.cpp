@@ -289,3 +289,33 @@ TEST_F(Api, UploadErrors) {
     expectError(client().Get((base + "/views/v99").c_str()), 404, "not_found");
     expectError(client().Get("/api/v1/jobs/0123456789abcdef0123456789abcdef"), 404, "not_found");
 }
+
+TEST_F(Api, ConcurrentRendersDuringASolveAllSucceed) {
+    std::string id = createSession(24);
+    const std::string base = "/api/v1/sessions/" + id;
+    auto v = client().Post((base + "/views").c_str(), R"({"camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "width": 24, "height": 24}})", "application/json");
+    std::string vid = json::parse(v->body)["id"];
+    core::Image target(24, 24);
+    for (float& x : target.rgba) x = 0.7f;
+    client().Put((base + "/views/" + vid + "/target").c_str(), pngOf(target), "image/png");
+    auto r = client().Post((base + "/solve").c_str(), R"({"max_iterations": 40, "tolerance": 0})", "application/json");
+    std::string job = json::parse(r->body)["job"];
+    // 8 clients, 3 renders each, while the solve runs: renders are served between iterations.
+    std::atomic<int> ok{0}, failed{0};
+    std::vector<std::thread> clients;
+    for (int c = 0; c < 8; ++c)
+        clients.emplace_back([&, c] {
+            httplib::Client cl("127.0.0.1", m_port);
+            cl.set_read_timeout(60, 0);
+            for (int i = 0; i < 3; ++i) {
+                json body = {{"camera", {{"eye", {3 * std::sin(c + i), 0.5, 3 * std::cos(c + i)}}, {"target", {0, 0, 0}}, {"width", 32}, {"height", 32}}}};
+                auto res = cl.Post((base + "/render").c_str(), body.dump(), "application/json");
+                (res && res->status == 200 ? ok : failed)++;
+            }
+        });
+    for (auto& t : clients) t.join();
+    EXPECT_EQ(ok.load(), 24);
+    EXPECT_EQ(failed.load(), 0);
+    client().Delete(("/api/v1/jobs/" + job).c_str());
+    readEvents(client(), "/api/v1/jobs/" + job + "/events");
+}
