@@ -152,6 +152,12 @@ struct HttpServer::Impl {
         return core::encodeImage(image, format, save);
     }
 
+    /// Frees a GPU volume on the GL thread. Call without holding a session's mutex: the GL thread
+    /// may be finishing a solve that needs it.
+    void release(std::shared_ptr<core::GpuVolume> gpu) {
+        if (gpu) gl->run([gpu = std::move(gpu)](core::Renderer&) mutable { gpu.reset(); });
+    }
+
     void runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr<Session>& s, core::SolveOptions options,
                   core::Renderer& renderer);
 
@@ -174,8 +180,7 @@ HttpServer::HttpServer(ServerOptions options) : m(std::make_unique<Impl>(std::mo
 HttpServer::~HttpServer() {
     stop();
     // GPU copies of volumes die on the GL thread.
-    for (auto& s : m->sessions.all())
-        if (s->gpu) m->gl->run([gpu = std::move(s->gpu)](core::Renderer&) mutable { gpu.reset(); });
+    for (auto& s : m->sessions.all()) m->release(std::move(s->gpu));
 }
 
 int HttpServer::bind() {
@@ -282,8 +287,12 @@ void HttpServer::Impl::routes() {
     http.Delete(api + R"(/sessions/([0-9a-f]+))", [this](const httplib::Request& req, httplib::Response& res) {
         auto s = sessions.remove(req.matches[1]);
         if (!s) throw ApiError("not_found", "no session '" + std::string(req.matches[1]) + "'");
-        std::lock_guard lock(s->mutex);
-        if (s->gpu) gl->run([gpu = std::move(s->gpu)](core::Renderer&) mutable { gpu.reset(); });
+        std::shared_ptr<core::GpuVolume> gpu;
+        {
+            std::lock_guard lock(s->mutex);
+            gpu = std::move(s->gpu);
+        }
+        release(std::move(gpu));
         res.status = 204;
     });
     http.Get(api + R"(/sessions/([0-9a-f]+)/lighting)", [this](const httplib::Request& req, httplib::Response& res) {
@@ -321,14 +330,9 @@ void HttpServer::Impl::routes() {
                 r.fail("/camera", "images are limited to " + std::to_string(opt.maxImageSide) + " pixels a side");
         }
         r.throwIfErrors();
-        std::lock_guard lock(s->mutex);
-        core::Image image = gl->run([&](core::Renderer& renderer) {
-            if (!s->gpu) s->gpu = std::make_shared<core::GpuVolume>(s->volume);
-            return renderer.render(*s->gpu, camera, s->lighting);
-        });
-        core::SaveOptions save;
-        save.exposure = format == "png" ? exposure : 0;
-        res.set_content(core::encodeImage(image, format, save), format == "png" ? "image/png" : "image/x-exr");
+        // Never hold the session's mutex while waiting for the GL thread (renderImage locks inside).
+        const std::string bytes = renderImage(*s, nullptr, camera, format, exposure);
+        res.set_content(bytes, format == "png" ? "image/png" : "image/x-exr");
     });
     const std::string sid = R"(/sessions/([0-9a-f]+))", vid = R"(/views/(v[0-9]+))", jid = R"(/jobs/([0-9a-f]+))";
     http.Post(api + sid + "/views", [this](const httplib::Request& req, httplib::Response& res) {
@@ -439,17 +443,21 @@ void HttpServer::Impl::routes() {
         auto job = jobs.find(req.matches[1]);
         if (!job) throw ApiError("not_found", "no job '" + std::string(req.matches[1]) + "'");
         res.set_header("Cache-Control", "no-cache");
+        // The stream ends after the final event (done, failed or cancelled) has been written; the
+        // job's state flips before that event is queued, so the events decide, not the state.
         res.set_chunked_content_provider("text/event-stream", [job, sent = size_t(0)](size_t, httplib::DataSink& sink) mutable {
             std::unique_lock lock(job->mutex);
-            job->changed.wait_for(lock, std::chrono::milliseconds(500), [&] { return job->events.size() > sent || job->isFinished(); });
+            job->changed.wait_for(lock, std::chrono::milliseconds(500), [&] { return job->events.size() > sent; });
+            bool final = false;
             while (sent < job->events.size()) {
                 const auto& [event, data] = job->events[sent++];
+                final = event == "done" || event == "failed" || event == "cancelled";
                 std::string message = "event: " + event + "\ndata: " + data.dump() + "\n\n";
                 lock.unlock();
                 if (!sink.write(message.data(), message.size())) return false;  // the client left
                 lock.lock();
             }
-            if (job->isFinished()) {
+            if (final) {
                 lock.unlock();
                 sink.done();
             }
@@ -504,13 +512,15 @@ void HttpServer::Impl::routes() {
             throw ApiError(msg.find("over the limit") != std::string::npos ? "too_large" : "unsupported_media", msg);
         }
         std::filesystem::remove(tmp);
+        std::shared_ptr<core::GpuVolume> stale;
         {
             std::lock_guard lock(s->mutex);
             s->volume = std::move(v);
             s->version = s->versions.rbegin()->first + 1;
             s->versions[s->version] = s->volume;
-            if (s->gpu) gl->run([gpu = std::move(s->gpu)](core::Renderer&) mutable { gpu.reset(); });
+            stale = std::move(s->gpu);
         }
+        release(std::move(stale));
         reply(res, 200, sessionJson(*s));
     });
     http.Post(api + sid + "/revert", [this](const httplib::Request& req, httplib::Response& res) {
@@ -523,6 +533,7 @@ void HttpServer::Impl::routes() {
             else version = r.integer(body["version"], "/version").value_or(0);
         }
         r.throwIfErrors();
+        std::shared_ptr<core::GpuVolume> stale;
         {
             std::lock_guard lock(s->mutex);
             auto it = s->versions.find(version);
@@ -531,8 +542,9 @@ void HttpServer::Impl::routes() {
             s->volume = it->second;
             s->version = s->versions.rbegin()->first + 1;
             s->versions[s->version] = s->volume;
-            if (s->gpu) gl->run([gpu = std::move(s->gpu)](core::Renderer&) mutable { gpu.reset(); });
+            stale = std::move(s->gpu);
         }
+        release(std::move(stale));
         reply(res, 200, sessionJson(*s));
     });
     if (!opt.webDir.empty()) http.set_mount_point("/", opt.webDir);  // httplib refuses '..' paths
