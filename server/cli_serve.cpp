@@ -17,9 +17,10 @@
 namespace volstyle::server {
 
 int runServe(const std::vector<std::string>& argv) {
-    Arguments args = parseArguments(argv, {"host", "port", "token", "web-dir"}, {"help"});
+    Arguments args = parseArguments(argv, {"host", "port", "token", "web-dir", "data-dir"}, {"help"});
     if (args.has("help")) {
-        std::cout << "usage: volstyle serve [--host 127.0.0.1] [--port 8080] [--token T] [--web-dir web]\n";
+        std::cout << "usage: volstyle serve [--host 127.0.0.1] [--port 8080] [--data-dir volstyle-data] [--token T]\n"
+                     "                      [--web-dir web]\n";
         return 0;
     }
     ServerOptions opt;
@@ -30,6 +31,7 @@ int runServe(const std::vector<std::string>& argv) {
     const char* envToken = std::getenv("VOLSTYLE_TOKEN");
     opt.token = args.get("token", envToken ? envToken : "");
     opt.webDir = args.get("web-dir", opt.webDir);
+    opt.dataDir = args.get("data-dir", opt.dataDir);
 
     // Block the stop signals before any thread starts, so only the waiter below receives them.
     sigset_t stopSignals;

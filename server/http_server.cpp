@@ -22,6 +22,7 @@
 #include "protocol/solve_json.h"
 #include "server/gl_worker.h"
 #include "server/job_store.h"
+#include "server/persistence.h"
 #include "server/session_store.h"
 
 namespace volstyle::server {
@@ -67,7 +68,16 @@ struct HttpServer::Impl {
     std::unique_ptr<GlWorker> gl;
     SessionStore sessions;
     JobStore jobs;
+    std::unique_ptr<Persistence> persist;  ///< null: in memory only
     static constexpr size_t kMaxQueuedJobs = 4;
+
+    // Durability hooks: each runs before the answer is sent.
+    void saved(const Session& s) {
+        if (persist) persist->saveSession(s);
+    }
+    void saved(const Job& j) {
+        if (persist) persist->saveJob(j);
+    }
     std::atomic<uint64_t> requestCounter{0};
 
     explicit Impl(ServerOptions o) : opt(std::move(o)), sessions(opt.maxSessions) {}
@@ -174,6 +184,12 @@ HttpServer::HttpServer(ServerOptions options) : m(std::make_unique<Impl>(std::mo
         throw InvalidArgument("serve: binding " + m->opt.host +
                               " exposes the API beyond this machine; give --token (or VOLSTYLE_TOKEN)");
     m->gl = std::make_unique<GlWorker>();
+    if (!m->opt.dataDir.empty()) {
+        m->persist = std::make_unique<Persistence>(m->opt.dataDir);
+        for (auto& s : m->persist->loadSessions()) m->sessions.restore(s);
+        for (auto& j : m->persist->loadJobs()) m->jobs.restore(j);
+        spdlog::info("restored {} session(s) from '{}'", m->sessions.size(), m->opt.dataDir);
+    }
     m->routes();
 }
 
@@ -274,6 +290,7 @@ void HttpServer::Impl::routes() {
         s->lighting = core::defaultLighting();
         s->versions[1] = s->volume;
         sessions.add(s);
+        saved(*s);
         reply(res, 201, sessionJson(*s));
     });
     http.Get(api + "/sessions", [this](const httplib::Request&, httplib::Response& res) {
@@ -287,6 +304,7 @@ void HttpServer::Impl::routes() {
     http.Delete(api + R"(/sessions/([0-9a-f]+))", [this](const httplib::Request& req, httplib::Response& res) {
         auto s = sessions.remove(req.matches[1]);
         if (!s) throw ApiError("not_found", "no session '" + std::string(req.matches[1]) + "'");
+        if (persist) persist->removeSession(s->id);
         std::shared_ptr<core::GpuVolume> gpu;
         {
             std::lock_guard lock(s->mutex);
@@ -305,6 +323,7 @@ void HttpServer::Impl::routes() {
         core::Lighting l = protocol::lightingFromJson(parseBody(req)).lighting;
         std::lock_guard lock(s->mutex);
         s->lighting = l;
+        saved(*s);
         reply(res, 200, protocol::lightingToJson(s->lighting));
     });
     http.Post(api + R"(/sessions/([0-9a-f]+)/render)", [this](const httplib::Request& req, httplib::Response& res) {
@@ -353,6 +372,7 @@ void HttpServer::Impl::routes() {
         r.throwIfErrors();
         std::lock_guard lock(s->mutex);
         s->views.push_back({"v" + std::to_string(s->nextView++), camera, std::nullopt, std::nullopt});
+        saved(*s);
         reply(res, 201, viewJson(s->views.back()));
     });
     http.Get(api + sid + "/views", [this](const httplib::Request& req, httplib::Response& res) {
@@ -370,6 +390,8 @@ void HttpServer::Impl::routes() {
         std::lock_guard lock(s->mutex);
         view(*s, req.matches[2]);  // 404 if absent
         std::erase_if(s->views, [&](const SessionView& v) { return v.id == req.matches[2]; });
+        if (persist) persist->removeView(s->id, req.matches[2]);
+        saved(*s);
         res.status = 204;
     });
     for (const char* part : {"target", "weights"}) {
@@ -383,7 +405,9 @@ void HttpServer::Impl::routes() {
                 throw ApiError("invalid_argument", "the image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                                                        " but view " + v.id + " renders " + std::to_string(v.camera.width) + "x" +
                                                        std::to_string(v.camera.height));
+            if (persist) persist->saveViewImage(s->id, v.id, isTarget ? "target" : "weights", image);
             (isTarget ? v.target : v.weights) = std::move(image);
+            saved(*s);
             reply(res, 200, viewJson(v));
         });
     }
@@ -420,9 +444,11 @@ void HttpServer::Impl::routes() {
             if (!anyTarget) throw ApiError("invalid_argument", "no view has a target; PUT …/views/{vid}/target first");
         }
         auto job = jobs.add(s->id);
+        saved(*job);
         {
             std::lock_guard lock(s->mutex);
             s->jobs.push_back(job->id);
+            saved(*s);
         }
         spdlog::info("job {} queued (session {})", job->id, s->id);
         gl->submit([this, job, s, options](core::Renderer& renderer) { runSolve(job, s, options, renderer); });
@@ -518,6 +544,7 @@ void HttpServer::Impl::routes() {
             s->volume = std::move(v);
             s->version = s->versions.rbegin()->first + 1;
             s->versions[s->version] = s->volume;
+            saved(*s);
             stale = std::move(s->gpu);
         }
         release(std::move(stale));
@@ -542,6 +569,7 @@ void HttpServer::Impl::routes() {
             s->volume = it->second;
             s->version = s->versions.rbegin()->first + 1;
             s->versions[s->version] = s->volume;
+            saved(*s);
             stale = std::move(s->gpu);
         }
         release(std::move(stale));
@@ -561,6 +589,7 @@ void HttpServer::Impl::runSolve(const std::shared_ptr<Job>& job, const std::shar
             std::lock_guard lock(job->mutex);
             job->state = "running";
         }
+        saved(*job);
         spdlog::info("job {} running", job->id);
         try {
             // Snapshot the session: the solve works on copies; the session changes only on success.
@@ -606,6 +635,7 @@ void HttpServer::Impl::runSolve(const std::shared_ptr<Job>& job, const std::shar
                 s->volume = std::move(result.volume);
                 version = s->version = s->versions.rbegin()->first + 1;
                 s->versions[s->version] = s->volume;
+                saved(*s);  // the new version is on disk before the job reads done
                 s->gpu = std::make_shared<core::GpuVolume>(s->volume);  // on the GL thread
             }
             std::lock_guard lock(job->mutex);
@@ -635,6 +665,11 @@ void HttpServer::Impl::runSolve(const std::shared_ptr<Job>& job, const std::shar
         state = job->state;
     }
     spdlog::info("job {} {}", job->id, state);
+    try {
+        saved(*job);
+    } catch (const std::exception& e) {
+        spdlog::error("job {}: cannot record its end: {}", job->id, e.what());
+    }
     job->emit(state, job->toJson());
 }
 

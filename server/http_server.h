@@ -16,6 +16,7 @@ struct ServerOptions {
     int port = 8080;                 ///< 0: any free port (tests)
     std::string token;               ///< required when host is not loopback
     std::string webDir = "web";
+    std::string dataDir = "volstyle-data";  ///< empty: keep everything in memory (tests)
     size_t maxSessions = 64;
     size_t maxJsonBytes = 1 << 20;   ///< 1 MiB
     int maxImageSide = 4096;

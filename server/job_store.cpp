@@ -26,6 +26,11 @@ std::shared_ptr<Job> JobStore::add(const std::string& session) {
     return job;
 }
 
+void JobStore::restore(std::shared_ptr<Job> job) {
+    std::lock_guard lock(m_mutex);
+    m_jobs[job->id] = std::move(job);
+}
+
 std::shared_ptr<Job> JobStore::find(const std::string& id) const {
     std::lock_guard lock(m_mutex);
     auto it = m_jobs.find(id);

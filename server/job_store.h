@@ -39,6 +39,7 @@ class JobStore {
 public:
     std::shared_ptr<Job> add(const std::string& session);
     std::shared_ptr<Job> find(const std::string& id) const;
+    void restore(std::shared_ptr<Job> job);
     /// Jobs of a session not yet finished (the queue limit counts them).
     size_t pending(const std::string& session) const;
 

@@ -30,6 +30,11 @@ std::shared_ptr<Session> SessionStore::add(std::shared_ptr<Session> s) {
     return s;
 }
 
+void SessionStore::restore(std::shared_ptr<Session> s) {
+    std::lock_guard lock(m_mutex);
+    m_sessions[s->id] = std::move(s);
+}
+
 std::shared_ptr<Session> SessionStore::find(const std::string& id) const {
     std::lock_guard lock(m_mutex);
     auto it = m_sessions.find(id);

@@ -44,6 +44,7 @@ public:
     explicit SessionStore(size_t maxSessions) : m_max(maxSessions) {}
     /// Adds a session with a fresh id; throws TooMany when full.
     std::shared_ptr<Session> add(std::shared_ptr<Session> s);
+    void restore(std::shared_ptr<Session> s);  ///< keeps its id (restart)
     std::shared_ptr<Session> find(const std::string& id) const;  ///< nullptr if unknown
     std::shared_ptr<Session> remove(const std::string& id);      ///< nullptr if unknown
     std::vector<std::shared_ptr<Session>> all() const;

@@ -24,6 +24,7 @@ protected:
         opt.port = 0;
         opt.webDir = VOLSTYLE_SOURCE_DIR "/web";
         opt.maxJsonBytes = 4096;
+        opt.dataDir.clear();  // in memory; the durability test uses the real binary
         try {
             m_server = std::make_unique<server::HttpServer>(opt);
         } catch (const GpuError& e) {

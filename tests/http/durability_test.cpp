@@ -1,0 +1,101 @@
+// Durability with the real binary: kill -9 during a solve, restart on the same data directory;
+// sessions, views, targets, lighting and versions come back, and the job reads failed/interrupted.
+#include <gtest/gtest.h>
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <thread>
+
+#include "core/image/image_io.h"
+
+using json = nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// `volstyle serve --port 0` as a child process; reads the port it prints.
+struct ServerProcess {
+    pid_t pid = -1;
+    int port = 0;
+    explicit ServerProcess(const fs::path& dataDir) {
+        int out[2];
+        EXPECT_EQ(pipe(out), 0);
+        pid = fork();
+        if (pid == 0) {
+            dup2(out[1], STDOUT_FILENO);
+            close(out[0]);
+            execl(VOLSTYLE_BINARY, VOLSTYLE_BINARY, "serve", "--port", "0", "--data-dir", dataDir.c_str(), "--web-dir",
+                  VOLSTYLE_SOURCE_DIR "/web", static_cast<char*>(nullptr));
+            _exit(127);
+        }
+        close(out[1]);
+        FILE* f = fdopen(out[0], "r");
+        char line[256] = {};
+        if (fgets(line, sizeof line, f)) std::sscanf(line, "volstyle: serving http://127.0.0.1:%d/", &port);
+        fclose(f);
+        EXPECT_GT(port, 0) << "the server did not print its address: " << line;
+    }
+    int stop(int sig) {
+        kill(pid, sig);
+        int status = 0;
+        waitpid(pid, &status, 0);
+        return status;
+    }
+};
+
+}  // namespace
+
+TEST(Durability, KillDuringASolveThenRestart) {
+    const fs::path dir = fs::temp_directory_path() / "volstyle-durability-test";
+    fs::remove_all(dir);
+    std::string sid, job;
+    {
+        ServerProcess server(dir);
+        httplib::Client c("127.0.0.1", server.port);
+        auto r = c.Post("/api/v1/sessions", R"({"scene": "builtin:sphere", "resolution": 24})", "application/json");
+        ASSERT_EQ(r->status, 201) << r->body;
+        sid = json::parse(r->body)["id"];
+        const std::string base = "/api/v1/sessions/" + sid;
+        ASSERT_EQ(c.Put((base + "/lighting").c_str(), R"({"sun": {"direction": [0, 1, 0], "irradiance": [5, 5, 5]}, "background": [0.1, 0.1, 0.1]})", "application/json")->status, 200);
+        for (int i = 0; i < 2; ++i) {
+            r = c.Post((base + "/views").c_str(), R"({"camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "width": 32, "height": 32}})", "application/json");
+            ASSERT_EQ(r->status, 201);
+            volstyle::core::Image target(32, 32);
+            for (float& x : target.rgba) x = 0.6f;
+            ASSERT_EQ(c.Put((base + "/views/v" + std::to_string(i + 1) + "/target").c_str(), volstyle::core::encodeImage(target, "png"), "image/png")->status, 200);
+        }
+        r = c.Post((base + "/solve").c_str(), R"({"max_iterations": 10000, "tolerance": 0})", "application/json");
+        ASSERT_EQ(r->status, 202);
+        job = json::parse(r->body)["job"];
+        for (int i = 0; i < 200; ++i) {
+            if (json::parse(c.Get(("/api/v1/jobs/" + job).c_str())->body)["state"] == "running") break;
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(200));  // a few iterations in
+        server.stop(SIGKILL);
+    }
+    ServerProcess server(dir);
+    httplib::Client c("127.0.0.1", server.port);
+    auto r = c.Get(("/api/v1/sessions/" + sid).c_str());
+    ASSERT_EQ(r->status, 200) << r->body;
+    json s = json::parse(r->body);
+    EXPECT_EQ(s["volume"]["version"], 1);
+    EXPECT_EQ(s["views"].size(), 2u);
+    EXPECT_TRUE(s["views"][1]["has_target"]);
+    EXPECT_EQ(s["lighting"]["sun"]["irradiance"], json::array({5.0, 5.0, 5.0}));
+    json j = json::parse(c.Get(("/api/v1/jobs/" + job).c_str())->body);
+    EXPECT_EQ(j["state"], "failed");
+    EXPECT_EQ(j["error"]["code"], "interrupted");
+    auto target = c.Get(("/api/v1/sessions/" + sid + "/views/v2/target.png").c_str());
+    EXPECT_EQ(target->status, 200);
+    // A graceful stop: SIGTERM ends the process with status 0.
+    int status = server.stop(SIGTERM);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+    fs::remove_all(dir);
+}
