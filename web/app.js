@@ -1,0 +1,308 @@
+// volstyle painting page: talks only to /api/v1 (docs/API.md). No build step.
+'use strict';
+
+const api = '/api/v1';
+const $ = (id) => document.getElementById(id);
+const state = {
+  sid: null, version: 1,
+  orbit: { azimuth: 0, elevation: 0.06, distance: 3.4 }, target: [0, -0.05, 0],
+  views: [], selected: null, job: null, events: null, objectives: [], maxIterations: 30,
+  renderBusy: false, renderPending: false,
+};
+
+function status(message, kind = '') {
+  const s = $('status');
+  s.textContent = message;
+  s.className = kind;
+}
+
+// fetch wrapper: JSON in, JSON or Blob out; API errors become exceptions with the server's words.
+async function call(method, path, body, { raw = false, type = 'application/json' } = {}) {
+  const init = { method, headers: {} };
+  if (body !== undefined) {
+    init.body = type === 'application/json' ? JSON.stringify(body) : body;
+    init.headers['Content-Type'] = type;
+  }
+  const res = await fetch(api + path, init);
+  if (!res.ok) {
+    let message = `${res.status} ${res.statusText}`;
+    try {
+      const e = (await res.json()).error;
+      message = e.message + (e.details.length ? ' — ' + e.details.map((d) => `${d.path}: ${d.message}`).join('; ') : '');
+    } catch (_) { /* not JSON */ }
+    throw new Error(message);
+  }
+  if (res.status === 204) return null;
+  return raw ? res.blob() : res.json();
+}
+
+function guard(fn) {
+  return async (...args) => {
+    try { await fn(...args); } catch (e) { status(e.message, 'error'); }
+  };
+}
+
+function camera(size) {
+  const { azimuth, elevation, distance } = state.orbit;
+  const t = state.target;
+  return {
+    eye: [t[0] + distance * Math.sin(azimuth) * Math.cos(elevation), t[1] + distance * Math.sin(elevation),
+          t[2] + distance * Math.cos(azimuth) * Math.cos(elevation)],
+    target: t, up: [0, 1, 0], fov_y_deg: 38, width: size, height: size,
+  };
+}
+
+async function renderViewport() {
+  if (!state.sid) return;
+  if (state.renderBusy) { state.renderPending = true; return; }
+  state.renderBusy = true;
+  $('viewport-busy').style.display = 'block';
+  try {
+    const blob = await call('POST', `/sessions/${state.sid}/render`, { camera: camera(320), format: 'png' }, { raw: true });
+    $('viewport').src = URL.createObjectURL(blob);
+  } catch (e) {
+    status(e.message, 'error');
+  } finally {
+    state.renderBusy = false;
+    $('viewport-busy').style.display = 'none';
+    if (state.renderPending) { state.renderPending = false; renderViewport(); }
+  }
+}
+
+function showSession(s) {
+  state.sid = s.id;
+  state.version = s.volume.version;
+  $('session-info').textContent = `${s.scene} · ${s.volume.dims.join('×')} · version ${s.volume.version}`;
+  $('download-vdb').href = `${api}/sessions/${s.id}/volume.vdb`;
+}
+
+const newSession = guard(async () => {
+  status('creating session…');
+  const s = await call('POST', '/sessions', { scene: 'builtin:' + $('scene').value, resolution: Number($('resolution').value) });
+  showSession(s);
+  state.views = []; state.selected = null;
+  renderViews(); clearPaint(); $('paint-base').removeAttribute('src');
+  await renderViewport();
+  status('session ready: orbit the view, add views, paint them, solve', 'ok');
+});
+
+const uploadVdb = guard(async (file) => {
+  if (!state.sid) await newSession();
+  status(`uploading ${file.name}…`);
+  const s = await call('PUT', `/sessions/${state.sid}/volume`, file, { type: 'application/octet-stream' });
+  showSession(s);
+  await renderViewport();
+  status(`${file.name} loaded`, 'ok');
+});
+
+// Views and their thumbnails.
+function renderViews() {
+  const box = $('views');
+  box.innerHTML = '';
+  for (const v of state.views) {
+    const b = document.createElement('button');
+    b.className = v.id === state.selected ? 'selected' : '';
+    const img = document.createElement('img');
+    img.src = `${api}/sessions/${state.sid}/views/${v.id}/${v.has_target ? 'target.png' : 'render.png'}?t=${Date.now()}`;
+    b.append(img, `${v.id}${v.has_target ? ' ✓' : ''}`);
+    b.onclick = () => selectView(v.id);
+    box.append(b);
+  }
+}
+
+async function refreshViews() {
+  state.views = await call('GET', `/sessions/${state.sid}/views`);
+  renderViews();
+}
+
+const addView = guard(async () => {
+  if (!state.sid) return;
+  const v = await call('POST', `/sessions/${state.sid}/views`, { camera: camera(256) });
+  await refreshViews();
+  selectView(v.id);
+  status(`${v.id} added: paint over it, then "Use as target" (or drop a painted PNG/EXR)`, 'ok');
+});
+
+function selectView(id) {
+  state.selected = id;
+  $('paint-view').textContent = id;
+  $('paint-base').src = `${api}/sessions/${state.sid}/views/${id}/render.png?t=${Date.now()}`;
+  clearPaint();
+  renderViews();
+}
+
+// Painting: strokes on a visible canvas; erased areas in a mask become weight 0.
+const paint = $('paint'), ctx = paint.getContext('2d');
+const mask = document.createElement('canvas');
+mask.width = paint.width; mask.height = paint.height;
+const maskCtx = mask.getContext('2d');
+let drawing = false;
+
+function clearPaint() {
+  ctx.clearRect(0, 0, paint.width, paint.height);
+  maskCtx.clearRect(0, 0, mask.width, mask.height);
+}
+
+function stroke(e) {
+  const r = paint.getBoundingClientRect();
+  const x = (e.clientX - r.left) * paint.width / r.width, y = (e.clientY - r.top) * paint.height / r.height;
+  const size = Number($('brush-size').value) * paint.width / 256;
+  if ($('eraser').checked) {
+    maskCtx.fillStyle = '#000';
+    maskCtx.beginPath(); maskCtx.arc(x, y, size, 0, 2 * Math.PI); maskCtx.fill();
+    ctx.globalAlpha = 1; ctx.fillStyle = 'rgba(20,20,20,0.65)';
+  } else {
+    ctx.globalAlpha = Number($('brush-opacity').value) / 100; ctx.fillStyle = $('brush-colour').value;
+  }
+  ctx.beginPath(); ctx.arc(x, y, size, 0, 2 * Math.PI); ctx.fill();
+  ctx.globalAlpha = 1;
+}
+paint.addEventListener('pointerdown', (e) => { if (!state.selected) return; drawing = true; paint.setPointerCapture(e.pointerId); stroke(e); });
+paint.addEventListener('pointermove', (e) => { if (drawing) stroke(e); });
+paint.addEventListener('pointerup', () => { drawing = false; });
+
+const uploadTarget = guard(async () => {
+  if (!state.selected) throw new Error('add a view first');
+  const base = $('paint-base');
+  await base.decode();
+  const out = document.createElement('canvas');
+  out.width = base.naturalWidth; out.height = base.naturalHeight;
+  const o = out.getContext('2d');
+  o.drawImage(base, 0, 0);
+  // Paint strokes (not the eraser's grey marks) over the rendering.
+  const strokes = document.createElement('canvas');
+  strokes.width = paint.width; strokes.height = paint.height;
+  const s = strokes.getContext('2d');
+  s.drawImage(paint, 0, 0);
+  s.globalCompositeOperation = 'destination-out';
+  s.drawImage(mask, 0, 0);
+  o.drawImage(strokes, 0, 0, out.width, out.height);
+  // Erased pixels: alpha 0 = unconstrained.
+  const m = document.createElement('canvas');
+  m.width = out.width; m.height = out.height;
+  m.getContext('2d').drawImage(mask, 0, 0, out.width, out.height);
+  const img = o.getImageData(0, 0, out.width, out.height), mk = m.getContext('2d').getImageData(0, 0, out.width, out.height);
+  for (let i = 3; i < img.data.length; i += 4) if (mk.data[i] > 0) img.data[i] = 0;
+  o.putImageData(img, 0, 0);
+  const blob = await new Promise((ok) => out.toBlob(ok, 'image/png'));
+  await call('PUT', `/sessions/${state.sid}/views/${state.selected}/target`, blob, { type: 'image/png' });
+  await refreshViews();
+  status(`target of ${state.selected} uploaded`, 'ok');
+});
+
+const dropTarget = guard(async (file) => {
+  if (!state.selected) throw new Error('add a view first, then drop its painted target');
+  await call('PUT', `/sessions/${state.sid}/views/${state.selected}/target`, file, { type: file.type || 'application/octet-stream' });
+  await refreshViews();
+  status(`${file.name} is the target of ${state.selected}`, 'ok');
+});
+
+// Solving, with live progress, a convergence plot and previews.
+function drawPlot() {
+  const c = $('plot'), g = c.getContext('2d');
+  g.clearRect(0, 0, c.width, c.height);
+  const v = state.objectives.filter((x) => x > 0);
+  if (v.length < 1) return;
+  const lo = Math.log10(Math.min(...v)), hi = Math.log10(Math.max(...v)) + 1e-9;
+  g.strokeStyle = '#ff8a3d'; g.lineWidth = 2; g.beginPath();
+  v.forEach((x, i) => {
+    const px = 8 + (c.width - 16) * i / Math.max(1, state.maxIterations), py = c.height - 8 - (c.height - 16) * (Math.log10(x) - lo) / (hi - lo || 1);
+    i ? g.lineTo(px, py) : g.moveTo(px, py);
+  });
+  g.stroke();
+}
+
+const solve = guard(async () => {
+  if (!state.sid) return;
+  state.maxIterations = Number($('iterations').value);
+  const options = {
+    unknowns: $('unknowns').value.split(','),
+    regularization: { laplacian: Number($('laplacian').value) },
+    max_iterations: state.maxIterations,
+  };
+  const { job } = await call('POST', `/sessions/${state.sid}/solve`, options);
+  state.job = job; state.objectives = []; drawPlot();
+  $('solve').disabled = true; $('cancel').disabled = false;
+  $('progress').value = 0; $('progress-text').textContent = 'queued';
+  const es = new EventSource(`${api}/jobs/${job}/events`);
+  state.events = es;
+  es.addEventListener('progress', (e) => {
+    const p = JSON.parse(e.data);
+    state.objectives.push(p.objective);
+    $('progress').value = p.iteration / state.maxIterations;
+    const rms = p.rms_per_view.reduce((a, b) => a + b, 0) / Math.max(1, p.rms_per_view.length);
+    $('progress-text').textContent = `iteration ${p.iteration}/${state.maxIterations} · RMS ${rms.toPrecision(3)} · ${(p.elapsed_ms / 1000).toFixed(1)} s`;
+    drawPlot();
+  });
+  es.addEventListener('preview', (e) => {
+    const p = JSON.parse(e.data), url = p.urls[state.selected] || Object.values(p.urls)[0];
+    if (url) $('preview').src = url + '?t=' + Date.now();
+  });
+  const finish = async (e, kind) => {
+    es.close();
+    $('solve').disabled = false; $('cancel').disabled = true;
+    const j = JSON.parse(e.data);
+    if (kind === 'done') {
+      $('progress').value = 1;
+      const r = j.result.report;
+      status(`solved: ${r.iterations} iterations (${r.stop_reason}), version ${j.result.version}`, 'ok');
+      showSession(await call('GET', `/sessions/${state.sid}`));
+      renderViewport(); renderViews();
+    } else {
+      status(`${kind}: ${j.error ? j.error.message : ''}`, kind === 'failed' ? 'error' : '');
+    }
+  };
+  for (const kind of ['done', 'failed', 'cancelled']) es.addEventListener(kind, (e) => finish(e, kind));
+});
+
+const cancel = guard(async () => { if (state.job) await call('DELETE', `/jobs/${state.job}`); });
+
+const undo = guard(async () => {
+  if (!state.sid || state.version <= 1) throw new Error('nothing to undo');
+  const s = await call('POST', `/sessions/${state.sid}/revert`, { version: state.version - 1 });
+  showSession(s);
+  await renderViewport();
+  status(`reverted to the content of version ${state.version - 1}`, 'ok');
+});
+
+// Orbit and zoom.
+let dragging = null;
+$('viewport').addEventListener('pointerdown', (e) => { dragging = { x: e.clientX, y: e.clientY }; e.target.setPointerCapture(e.pointerId); e.preventDefault(); });
+$('viewport').addEventListener('pointermove', (e) => {
+  if (!dragging) return;
+  state.orbit.azimuth -= (e.clientX - dragging.x) * 0.01;
+  state.orbit.elevation = Math.max(-1.4, Math.min(1.4, state.orbit.elevation + (e.clientY - dragging.y) * 0.01));
+  dragging = { x: e.clientX, y: e.clientY };
+  renderViewport();
+});
+$('viewport').addEventListener('pointerup', () => { dragging = null; });
+$('viewport').addEventListener('wheel', (e) => {
+  e.preventDefault();
+  state.orbit.distance = Math.max(1.2, Math.min(10, state.orbit.distance * (e.deltaY > 0 ? 1.1 : 0.9)));
+  renderViewport();
+}, { passive: false });
+
+// Drag and drop of painted images onto the paint area.
+const wrap = $('paint-wrap');
+wrap.addEventListener('dragover', (e) => { e.preventDefault(); wrap.classList.add('drop'); });
+wrap.addEventListener('dragleave', () => wrap.classList.remove('drop'));
+wrap.addEventListener('drop', (e) => { e.preventDefault(); wrap.classList.remove('drop'); if (e.dataTransfer.files[0]) dropTarget(e.dataTransfer.files[0]); });
+
+$('new-session').onclick = newSession;
+$('vdb-file').onchange = (e) => e.target.files[0] && uploadVdb(e.target.files[0]);
+$('add-view').onclick = addView;
+$('clear-paint').onclick = clearPaint;
+$('upload-target').onclick = uploadTarget;
+$('solve').onclick = solve;
+$('cancel').onclick = cancel;
+$('undo').onclick = undo;
+
+guard(async () => {
+  const scenes = await call('GET', '/scenes');
+  for (const s of scenes) {
+    const o = document.createElement('option');
+    o.value = s.name; o.textContent = s.name; o.title = s.description;
+    $('scene').append(o);
+  }
+  await newSession();
+})();
