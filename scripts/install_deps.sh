@@ -10,7 +10,10 @@ packages=(
   libopenimageio-dev                                       # images (found with pkg-config)
   libspdlog-dev libfmt-dev nlohmann-json3-dev libcpp-httplib-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  chromium                                                 # the browser end-to-end test
 )
+# Node and npm for the browser test: the machine's own if present (Debian's would clash with it).
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
 
 missing=()
 for p in "${packages[@]}"; do
