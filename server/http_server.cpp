@@ -133,8 +133,15 @@ struct HttpServer::Impl {
         throw ApiError("not_found", "no view '" + id + "' in session '" + s.id + "'");
     }
 
+    void checkUploadSize(const std::string& bytes, const std::string& what) {
+        if (bytes.size() > opt.maxUploadBytes)
+            throw ApiError("too_large", what + " is " + std::to_string(bytes.size()) + " bytes; the upload limit is " +
+                                            std::to_string(opt.maxUploadBytes) + " bytes");
+    }
+
     /// Decodes an uploaded image; anything undecodable is 422.
     core::Image decodeImage(const std::string& bytes, const std::string& what) {
+        checkUploadSize(bytes, what);
         try {
             return core::loadImageFromMemory(bytes.data(), bytes.size(), what, opt.maxImageSide).image;
         } catch (const Error& e) {
@@ -210,7 +217,7 @@ void HttpServer::listen() { m->http.listen_after_bind(); }
 void HttpServer::stop() { m->http.stop(); }
 
 void HttpServer::Impl::routes() {
-    http.set_payload_max_length(size_t(512) << 20);
+    http.set_payload_max_length(opt.maxUploadBytes + (1 << 20));
 
     // Request ids, timing, and the bearer token on /api when one is set.
     http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
@@ -526,6 +533,7 @@ void HttpServer::Impl::routes() {
     });
     http.Put(api + sid + "/volume", [this](const httplib::Request& req, httplib::Response& res) {
         auto s = session(req.matches[1]);
+        checkUploadSize(req.body, "the VDB");
         const std::string tmp = (std::filesystem::temp_directory_path() / ("volstyle-" + SessionStore::newId() + ".vdb")).string();
         std::ofstream(tmp, std::ios::binary).write(req.body.data(), std::streamsize(req.body.size()));
         core::Volume v;

@@ -19,6 +19,7 @@ struct ServerOptions {
     std::string dataDir = "volstyle-data";  ///< empty: keep everything in memory (tests)
     size_t maxSessions = 64;
     size_t maxJsonBytes = 1 << 20;   ///< 1 MiB
+    size_t maxUploadBytes = size_t(512) << 20;  ///< images and VDBs: 512 MiB
     int maxImageSide = 4096;
     core::VolumeLimits volumeLimits;
 };

@@ -24,6 +24,8 @@ protected:
         opt.port = 0;
         opt.webDir = VOLSTYLE_SOURCE_DIR "/web";
         opt.maxJsonBytes = 4096;
+        opt.maxUploadBytes = 64 * 1024;
+        opt.maxImageSide = 64;
         opt.dataDir.clear();  // in memory; the durability test uses the real binary
         try {
             m_server = std::make_unique<server::HttpServer>(opt);
@@ -288,6 +290,11 @@ TEST_F(Api, UploadErrors) {
     expectError(client().Put((base + "/volume").c_str(), std::string(2000, 'v'), "application/octet-stream"), 422, "unsupported_media");
     expectError(client().Post((base + "/solve").c_str(), "{}", "application/json"), 400, "invalid_argument");  // no target yet
     expectError(client().Get((base + "/views/v99").c_str()), 404, "not_found");
+    // Limits: over the upload size is 413; an image over the side limit or a VDB over the voxel
+    // limit is refused with the limit named.
+    expectError(client().Put((base + "/views/" + vid + "/target").c_str(), std::string(70 * 1024, 'x'), "image/png"), 413, "too_large");
+    json big = expectError(client().Put((base + "/views/" + vid + "/target").c_str(), pngOf(core::Image(65, 8)), "image/png"), 422, "unsupported_media");
+    EXPECT_NE(big["error"]["message"].get<std::string>().find("[1, 64]"), std::string::npos) << big;
     expectError(client().Get("/api/v1/jobs/0123456789abcdef0123456789abcdef"), 404, "not_found");
 }
 
