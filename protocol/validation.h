@@ -17,6 +17,10 @@ namespace volstyle::protocol {
 
 constexpr const char* kApiVersion = "v1";
 
+/// The JSON Schema of API v1 (protocol/schema/v1.json, embedded at build time), served at
+/// /api/v1/schema.json.
+extern const char* const kSchemaV1;
+
 struct FieldError {
     std::string path;     ///< JSON Pointer of the offending field
     std::string message;  ///< what is wrong and what is allowed

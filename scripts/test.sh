@@ -5,12 +5,12 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
 bash scripts/build.sh
-# playwright-core for the browser test (the browser itself is Debian's chromium). Without the npm
-# registry the test skips rather than fails.
-if [ ! -d build/web-test/node_modules/playwright-core ]; then
+# playwright-core (browser test; the browser is Debian's chromium) and ajv (schema test). Without
+# the npm registry those tests skip rather than fail.
+if [ ! -d build/web-test/node_modules/playwright-core ] || [ ! -d build/web-test/node_modules/ajv ]; then
   mkdir -p build/web-test
-  (cd build/web-test && npm install --no-save --no-audit --no-fund playwright-core@1.65.1) ||
-    echo "test.sh: could not install playwright-core; the browser test will be skipped" >&2
+  (cd build/web-test && npm install --no-save --no-audit --no-fund playwright-core@1.65.1 ajv@8.20.0) ||
+    echo "test.sh: could not install playwright-core/ajv; the browser and schema tests will be skipped" >&2
 fi
 cd build
 ctest --output-on-failure -j2 --timeout 900

@@ -268,6 +268,9 @@ void HttpServer::Impl::routes() {
         reply(res, 200, {{"status", "ok"}, {"version", "0.1.0"}, {"api", protocol::kApiVersion},
                          {"gl_renderer", caps.renderer}, {"gl_version", caps.version}});
     });
+    http.Get(api + "/schema.json", [](const httplib::Request&, httplib::Response& res) {
+        res.set_content(protocol::kSchemaV1, "application/schema+json");
+    });
     http.Get(api + "/scenes", [this](const httplib::Request&, httplib::Response& res) {
         json list = json::array();
         for (const auto& s : core::builtinScenes()) list.push_back({{"name", s.name}, {"description", s.description}});

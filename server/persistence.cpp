@@ -19,6 +19,15 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
+/// Flushes a written file to disk before it is renamed into place.
+void syncFile(const fs::path& p) {
+    int fd = ::open(p.c_str(), O_RDONLY);
+    if (fd >= 0) {
+        ::fsync(fd);
+        ::close(fd);
+    }
+}
+
 std::string readFile(const fs::path& p) {
     std::ifstream f(p, std::ios::binary);
     std::stringstream s;
@@ -63,7 +72,10 @@ void Persistence::saveSession(const Session& s) {
         const fs::path vdb = dir / "versions" / (std::to_string(n) + ".vdb");
         if (!fs::exists(vdb)) {
             fs::create_directories(vdb.parent_path());
-            core::saveVdb(vdb.string(), volume);  // itself temporary-then-rename
+            const fs::path tmp = vdb.string() + ".tmp.vdb";
+            core::saveVdb(tmp.string(), volume);
+            syncFile(tmp);
+            fs::rename(tmp, vdb);
         }
     }
     json views = json::array();
@@ -83,6 +95,7 @@ void Persistence::saveViewImage(const std::string& session, const std::string& v
     core::SaveOptions opt;
     opt.halfFloat = false;  // exact
     core::saveImage(tmp.string(), image, opt);
+    syncFile(tmp);
     fs::rename(tmp, path);
 }
 

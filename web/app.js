@@ -127,6 +127,8 @@ function selectView(id) {
   state.selected = id;
   $('paint-view').textContent = id;
   $('paint-base').src = `${api}/sessions/${state.sid}/views/${id}/render.png?t=${Date.now()}`;
+  $('download-view').href = `${api}/sessions/${state.sid}/views/${id}/render.png`;
+  $('download-view').download = `${id}.png`;
   clearPaint();
   renderViews();
 }

@@ -327,3 +327,28 @@ TEST_F(Api, ConcurrentRendersDuringASolveAllSucceed) {
     client().Delete(("/api/v1/jobs/" + job).c_str());
     readEvents(client(), "/api/v1/jobs/" + job + "/events");
 }
+
+TEST_F(Api, ViewEndpointsAndSchema) {
+    std::string id = createSession();
+    const std::string base = "/api/v1/sessions/" + id;
+    for (int i = 0; i < 2; ++i)
+        ASSERT_EQ(client().Post((base + "/views").c_str(), R"({"camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "width": 8, "height": 8}})", "application/json")->status, 201);
+    EXPECT_EQ(json::parse(client().Get((base + "/views").c_str())->body).size(), 2u);
+    EXPECT_EQ(json::parse(client().Get((base + "/views/v2").c_str())->body)["camera"]["width"], 8);
+    expectError(client().Get((base + "/views/v1/target.png").c_str()), 404, "not_found");  // none yet
+    core::Image weights(8, 8);
+    for (float& x : weights.rgba) x = 0.5f;
+    auto r = client().Put((base + "/views/v1/weights").c_str(), pngOf(weights), "image/png");
+    EXPECT_TRUE(json::parse(r->body)["has_weights"]);
+    core::Image target(8, 8);
+    for (float& x : target.rgba) x = 0.25f;
+    client().Put((base + "/views/v1/target").c_str(), pngOf(target), "image/png");
+    auto png = client().Get((base + "/views/v1/target.png").c_str());
+    EXPECT_EQ(png->status, 200);
+    EXPECT_NEAR(core::loadImageFromMemory(png->body.data(), png->body.size(), "t").image.rgba[0], 0.25f, 0.01f);
+    EXPECT_EQ(client().Delete((base + "/views/v2").c_str())->status, 204);
+    EXPECT_EQ(json::parse(client().Get(base.c_str())->body)["views"].size(), 1u);
+    auto schema = client().Get("/api/v1/schema.json");
+    EXPECT_EQ(schema->status, 200);
+    EXPECT_TRUE(json::parse(schema->body)["definitions"].contains("session"));
+}

@@ -128,3 +128,9 @@ TEST(SolveJson, ReportsBadFields) {
                                                 "/regularization/albedo/smooth", "/extra"}));
     }
 }
+
+TEST(Schema, EmbeddedSchemaParsesAndDefinesEveryBody) {
+    auto schema = nlohmann::json::parse(protocol::kSchemaV1);
+    for (const char* d : {"error", "health", "scenes", "session", "view", "lighting", "job", "job_accepted", "solve_options"})
+        EXPECT_TRUE(schema["definitions"].contains(d)) << d;
+}

@@ -6,7 +6,8 @@
 const { chromium } = require('playwright-core');
 
 (async () => {
-const [url, screenshot] = process.argv.slice(2);
+const [urlArg, screenshot] = process.argv.slice(2);
+const url = urlArg === '@URL@' ? process.env.VOLSTYLE_URL + '/' : urlArg;
 const browser = await chromium.launch({
   executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
   args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',

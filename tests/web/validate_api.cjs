@@ -1,0 +1,58 @@
+// Validates the server's answers against its own JSON Schema (/api/v1/schema.json) with ajv:
+// every endpoint kind, success and error bodies. Run by tests/web/run_schema.sh.
+'use strict';
+const Ajv = require('ajv');
+
+(async () => {
+  const base = process.env.VOLSTYLE_URL + '/api/v1';
+  const schema = await (await fetch(base + '/schema.json')).json();
+  const ajv = new Ajv({ strict: false, allErrors: true });
+  ajv.addSchema(schema, 'v1');
+  let checked = 0, failed = 0;
+  const check = (definition, data, what) => {
+    const validate = ajv.getSchema('v1#/definitions/' + definition);
+    ++checked;
+    if (!validate(data)) {
+      ++failed;
+      console.error(`FAIL ${what} against ${definition}: ${ajv.errorsText(validate.errors)}\n${JSON.stringify(data).slice(0, 400)}`);
+    }
+  };
+  const call = async (method, path, body, expect) => {
+    const res = await fetch(base + path, { method, body: typeof body === 'string' || body instanceof Uint8Array ? body : JSON.stringify(body),
+                                           headers: { 'Content-Type': 'application/json' } });
+    if (expect && res.status !== expect) { ++failed; console.error(`FAIL ${method} ${path}: status ${res.status}, expected ${expect}`); }
+    return res;
+  };
+  const json = async (...a) => (await call(...a)).json();
+
+  check('health', await json('GET', '/health', undefined, 200), 'GET /health');
+  check('scenes', await json('GET', '/scenes', undefined, 200), 'GET /scenes');
+  const session = await json('POST', '/sessions', { scene: 'builtin:sphere', resolution: 16 }, 201);
+  check('session', session, 'POST /sessions');
+  const sid = session.id;
+  check('sessions', await json('GET', '/sessions', undefined, 200), 'GET /sessions');
+  check('lighting', await json('GET', `/sessions/${sid}/lighting`, undefined, 200), 'GET lighting');
+  check('lighting', await json('PUT', `/sessions/${sid}/lighting`, { sun: { direction: [0, 1, 0], irradiance: [4, 4, 4] }, background: [0, 0, 0] }, 200), 'PUT lighting');
+  const view = await json('POST', `/sessions/${sid}/views`, { camera: { eye: [0, 0, 3], target: [0, 0, 0], width: 16, height: 16 } }, 201);
+  check('view', view, 'POST views');
+  const png = new Uint8Array(await (await call('GET', `/sessions/${sid}/views/${view.id}/render.png`, undefined, 200)).arrayBuffer());
+  check('view', await json('PUT', `/sessions/${sid}/views/${view.id}/target`, png, 200), 'PUT target');
+  const accepted = await json('POST', `/sessions/${sid}/solve`, { unknowns: ['emission'], max_iterations: 2 }, 202);
+  check('job_accepted', accepted, 'POST solve');
+  let job;
+  for (let i = 0; i < 600; ++i) {
+    job = await json('GET', `/jobs/${accepted.job}`, undefined, 200);
+    if (['done', 'failed', 'cancelled'].includes(job.state)) break;
+    await new Promise((r) => setTimeout(r, 50));
+  }
+  check('job', job, 'GET job');
+  check('session', await json('POST', `/sessions/${sid}/revert`, { version: 1 }, 200), 'POST revert');
+  // Errors.
+  check('error', await json('GET', '/sessions/0123456789abcdef0123456789abcdef', undefined, 404), '404');
+  check('error', await json('POST', '/sessions', { colour: 1 }, 400), 'unknown field');
+  check('error', await json('POST', '/sessions', '{nope', 400), 'malformed JSON');
+  check('error', await json('PUT', `/sessions/${sid}/lighting`, { phase: { type: 'rayleigh' } }, 400), 'bad lighting');
+  check('error', await json('POST', `/sessions/${sid}/render`, { camera: { eye: [0, 0, 0], target: [0, 0, 0] } }, 400), 'bad camera');
+  console.log(`${checked - failed} passed, ${failed} failed`);
+  process.exit(failed ? 1 : 0);
+})().catch((e) => { console.error('FAIL:', e.message); process.exit(1); });
