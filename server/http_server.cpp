@@ -169,6 +169,16 @@ struct HttpServer::Impl {
         return core::encodeImage(image, format, save);
     }
 
+    /// Makes `volume` the session's newest version, on disk before this returns. Call with the
+    /// session's mutex held; returns the stale GPU copy (release it after unlocking).
+    std::shared_ptr<core::GpuVolume> commitVersion(Session& s, core::Volume volume) {
+        s.volume = std::move(volume);
+        s.version = s.versions.rbegin()->first + 1;
+        s.versions[s.version] = s.volume;
+        saved(s);
+        return std::move(s.gpu);
+    }
+
     /// Frees a GPU volume on the GL thread. Call without holding a session's mutex: the GL thread
     /// may be finishing a solve that needs it.
     void release(std::shared_ptr<core::GpuVolume> gpu) {
@@ -552,11 +562,7 @@ void HttpServer::Impl::routes() {
         std::shared_ptr<core::GpuVolume> stale;
         {
             std::lock_guard lock(s->mutex);
-            s->volume = std::move(v);
-            s->version = s->versions.rbegin()->first + 1;
-            s->versions[s->version] = s->volume;
-            saved(*s);
-            stale = std::move(s->gpu);
+            stale = commitVersion(*s, std::move(v));
         }
         release(std::move(stale));
         reply(res, 200, sessionJson(*s));
@@ -577,11 +583,7 @@ void HttpServer::Impl::routes() {
             auto it = s->versions.find(version);
             if (it == s->versions.end()) throw ApiError("not_found", "session '" + s->id + "' has no version " + std::to_string(version));
             // Undo is a new version with the old content: nothing is lost.
-            s->volume = it->second;
-            s->version = s->versions.rbegin()->first + 1;
-            s->versions[s->version] = s->volume;
-            saved(*s);
-            stale = std::move(s->gpu);
+            stale = commitVersion(*s, it->second);
         }
         release(std::move(stale));
         reply(res, 200, sessionJson(*s));
@@ -643,11 +645,9 @@ void HttpServer::Impl::runSolve(const std::shared_ptr<Job>& job, const std::shar
             int version = 0;
             {
                 std::lock_guard lock(s->mutex);
-                s->volume = std::move(result.volume);
-                version = s->version = s->versions.rbegin()->first + 1;
-                s->versions[s->version] = s->volume;
-                saved(*s);  // the new version is on disk before the job reads done
-                s->gpu = std::make_shared<core::GpuVolume>(s->volume);  // on the GL thread
+                commitVersion(*s, std::move(result.volume));  // on disk before the job reads done
+                version = s->version;
+                s->gpu = std::make_shared<core::GpuVolume>(s->volume);  // on the GL thread, which frees the old one
             }
             std::lock_guard lock(job->mutex);
             job->state = "done";
