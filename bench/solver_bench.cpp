@@ -34,8 +34,6 @@ using namespace volstyle::core;
 
 namespace {
 
-using test::inLetters;
-
 struct Scene {
     Volume plain, truth;
 };
@@ -43,14 +41,7 @@ struct Scene {
 Scene makeScene(int res) {
     Scene s{test::thinCloud(res), {}};
     s.truth = s.plain;
-    auto& e = s.truth.ensureEmission();
-    for (int k = 0; k < res; ++k)
-        for (int j = 0; j < res; ++j)
-            for (int i = 0; i < res; ++i)
-                if (inLetters(s.truth.worldFromIndex().applyPoint({double(i), double(j), double(k)}))) {
-                    size_t n = 3 * s.truth.index(i, j, k);
-                    e[n] = 2.0f, e[n + 1] = 1.0f, e[n + 2] = 0.2f;
-                }
+    test::stampLetters(s.truth, s.truth.ensureEmission(), Vec3(2.0f, 1.0f, 0.2f));
     return s;
 }
 
@@ -188,13 +179,7 @@ int main(int argc, char** argv) {
         Scene s = makeScene(32);
         s.plain.ensureAlbedo(1.0f);
         Volume truth = s.plain;
-        for (int k = 0; k < 32; ++k)
-            for (int j = 0; j < 32; ++j)
-                for (int i = 0; i < 32; ++i)
-                    if (inLetters(truth.worldFromIndex().applyPoint({double(i), double(j), double(k)}))) {
-                        size_t n = 3 * truth.index(i, j, k);
-                        truth.albedo()[n] = 0.2f, truth.albedo()[n + 1] = 0.35f, truth.albedo()[n + 2] = 0.6f;
-                    }
+        test::stampLetters(truth, truth.albedo(), Vec3(0.2f, 0.35f, 0.6f));
         auto v = targets(renderer, truth, cameras(6, 32, 32), 0.5);
         std::printf("| bounds method (albedo, 32³, 6 views) | iterations | s | final RMS / start |\n|---|---|---|---|\n");
         for (BoundsMethod m : {BoundsMethod::Projected, BoundsMethod::CutAtBound}) {

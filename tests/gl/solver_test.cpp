@@ -20,7 +20,6 @@ using namespace volstyle::core;
 
 namespace {
 
-using test::inLetters;
 using test::thinCloud;
 
 std::vector<Camera> ringCameras(int count, int size, double phase = 0.3) {
@@ -88,16 +87,9 @@ TEST(Solver, RecoversStampedEmission) {
     const int res = 32;
     Volume plain = thinCloud(res);
     Volume truth = plain;
-    auto& e = truth.ensureEmission();
+    test::stampLetters(truth, truth.ensureEmission(), Vec3(2.0f, 1.0f, 0.2f));
     std::vector<bool> hull(truth.voxelCount());
-    for (int k = 0; k < res; ++k)
-        for (int j = 0; j < res; ++j)
-            for (int i = 0; i < res; ++i) {
-                size_t n = truth.index(i, j, k);
-                hull[n] = maxComponent(truth.extinctionAt(i, j, k)) > 0.5f;
-                if (inLetters(truth.worldFromIndex().applyPoint({double(i), double(j), double(k)})))
-                    e[3 * n] = 2.0f, e[3 * n + 1] = 1.0f, e[3 * n + 2] = 0.2f;
-            }
+    for (size_t n = 0; n < truth.voxelCount(); ++n) hull[n] = truth.extinction()[3 * n] > 0.5f;
     Lighting l = defaultLighting();
     auto cams = ringCameras(6, 32);
     auto views = targetsFrom(truth, l, cams);
@@ -145,14 +137,7 @@ TEST(Solver, RecoversDarkenedAlbedoWithinBounds) {
     Volume plain = thinCloud(res);
     plain.ensureAlbedo(1.0f);
     Volume truth = plain;
-    auto& alb = truth.albedo();
-    for (int k = 0; k < res; ++k)
-        for (int j = 0; j < res; ++j)
-            for (int i = 0; i < res; ++i)
-                if (inLetters(truth.worldFromIndex().applyPoint({double(i), double(j), double(k)}))) {
-                    size_t n = 3 * truth.index(i, j, k);
-                    alb[n] = 0.2f, alb[n + 1] = 0.35f, alb[n + 2] = 0.6f;
-                }
+    test::stampLetters(truth, truth.albedo(), Vec3(0.2f, 0.35f, 0.6f));
     Lighting l = defaultLighting();
     auto views = targetsFrom(truth, l, ringCameras(6, 32));
     SolveOptions opt;

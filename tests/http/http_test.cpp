@@ -193,6 +193,16 @@ std::vector<std::string> readEvents(httplib::Client& c, const std::string& path)
     return names;
 }
 
+/// Adds a `size`² view looking down -z and uploads a constant target; returns the view id.
+std::string addConstantTargetView(httplib::Client& c, const std::string& base, int size, float value) {
+    json camera = {{"camera", {{"eye", {0, 0, 3}}, {"target", {0, 0, 0}}, {"width", size}, {"height", size}}}};
+    std::string vid = json::parse(c.Post((base + "/views").c_str(), camera.dump(), "application/json")->body)["id"];
+    core::Image target(size, size);
+    for (float& x : target.rgba) x = value;
+    EXPECT_EQ(c.Put((base + "/views/" + vid + "/target").c_str(), pngOf(target), "image/png")->status, 200);
+    return vid;
+}
+
 }  // namespace
 
 TEST_F(Api, PaintingFlowEndToEnd) {
@@ -256,11 +266,7 @@ TEST_F(Api, PaintingFlowEndToEnd) {
 TEST_F(Api, CancellingASolveLeavesTheVolumeAlone) {
     std::string id = createSession(24);
     const std::string base = "/api/v1/sessions/" + id;
-    auto v = client().Post((base + "/views").c_str(), R"({"camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "width": 32, "height": 32}})", "application/json");
-    std::string vid = json::parse(v->body)["id"];
-    core::Image target(32, 32);
-    for (float& x : target.rgba) x = 0.8f;
-    ASSERT_EQ(client().Put((base + "/views/" + vid + "/target").c_str(), pngOf(target), "image/png")->status, 200);
+    addConstantTargetView(client(), base, 32, 0.8f);
     auto r = client().Post((base + "/solve").c_str(), R"({"max_iterations": 500, "tolerance": 0})", "application/json");
     std::string job = json::parse(r->body)["job"];
     // While it runs, /health answers quickly (p99 of 50 probes under 100 ms).
@@ -301,11 +307,7 @@ TEST_F(Api, UploadErrors) {
 TEST_F(Api, ConcurrentRendersDuringASolveAllSucceed) {
     std::string id = createSession(24);
     const std::string base = "/api/v1/sessions/" + id;
-    auto v = client().Post((base + "/views").c_str(), R"({"camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "width": 24, "height": 24}})", "application/json");
-    std::string vid = json::parse(v->body)["id"];
-    core::Image target(24, 24);
-    for (float& x : target.rgba) x = 0.7f;
-    client().Put((base + "/views/" + vid + "/target").c_str(), pngOf(target), "image/png");
+    addConstantTargetView(client(), base, 24, 0.7f);
     auto r = client().Post((base + "/solve").c_str(), R"({"max_iterations": 40, "tolerance": 0})", "application/json");
     std::string job = json::parse(r->body)["job"];
     // 8 clients, 3 renders each, while the solve runs: renders are served between iterations.
