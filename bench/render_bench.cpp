@@ -49,8 +49,8 @@ int main(int argc, char** argv) {
         if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
     }
     spdlog::set_level(spdlog::level::warn);
-    auto context = gl::Context::create();
-    Renderer renderer(*context);
+    auto device = GpuDevice::create();
+    Renderer renderer(*device);
     Camera cam;
     cam.eye = {0, 0.15, 3.4};
     cam.target = {0, -0.05, 0};
@@ -105,7 +105,7 @@ int main(int argc, char** argv) {
     }
     std::cerr << "\n";
 
-    const auto& caps = context->capabilities();
+    const auto& caps = device->capabilities();
     std::printf("renderer: %s | %s | EGL %s\n", caps.renderer.c_str(), caps.version.c_str(), caps.platform.c_str());
     std::printf("scene: builtin cloud, 480x480, 1 sun, median of %d runs (wall ms incl. readback)\n\n", reps);
     std::printf("| volume | step (vox) | ms skip | ms no-skip | speed-up | gpu ms | light-vol ms | skip err | term err | step err (RMS) | ms hw-filter | hw err |\n");

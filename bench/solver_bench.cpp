@@ -121,9 +121,9 @@ int main(int argc, char** argv) {
     }
     std::filesystem::create_directories(outDir);
     spdlog::set_level(spdlog::level::warn);
-    auto context = gl::Context::create();
-    Renderer renderer(*context);
-    const auto& caps = context->capabilities();
+    auto device = GpuDevice::create();
+    Renderer renderer(*device);
+    const auto& caps = device->capabilities();
     std::printf("renderer: %s | %s | EGL %s | float atomics %s\n\n", caps.renderer.c_str(), caps.version.c_str(),
                 caps.platform.c_str(), caps.hasFloatAtomics ? "yes" : "no");
 
@@ -152,14 +152,14 @@ int main(int argc, char** argv) {
         opt.maxIterations = 30;
         opt.tolerance = 1e-3;  // "converged": an iteration gains less than 0.1%
         auto t0 = std::chrono::steady_clock::now();
-        SolveResult r = Solver(renderer, scene.plain, defaultLighting(), views, opt).run();
+        SolveResult r = Solver(*device, scene.plain, defaultLighting(), views, opt).run();
         double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         const auto& rep = r.report;
         int n = std::max(1, rep.iterations);
         double rel = mean(rep.finalRms) / mean(rep.initialRms);
         std::printf("| %d³ | %d | %d | %dx%d | %.0f | %.0f | %.0f | %.0f | %d | %s | %.1f | %.3f |\n", c.res, c.stepsPerDiagonal,
                     c.views, c.w, c.h, rep.forwardMs / n, rep.adjointMs / n, rep.vectorMs / n,
-                    (rep.forwardMs + rep.adjointMs + rep.vectorMs) / n, rep.iterations, rep.stopReason.c_str(), total, rel);
+                    (rep.forwardMs + rep.adjointMs + rep.vectorMs) / n, rep.iterations, stopReasonName(rep.stopReason), total, rel);
         std::fflush(stdout);
         char line[512];
         std::snprintf(line, sizeof line,
@@ -167,7 +167,7 @@ int main(int argc, char** argv) {
                       "\"width\":%d,\"height\":%d,\"forward_ms_per_iteration\":%.1f,\"adjoint_ms_per_iteration\":%.1f,"
                       "\"vector_ms_per_iteration\":%.1f,\"iterations\":%d,\"stop\":\"%s\",\"total_s\":%.2f,\"final_rms_relative\":%.4f}",
                       caps.renderer.c_str(), c.res, c.stepsPerDiagonal, c.views, c.w, c.h, rep.forwardMs / n, rep.adjointMs / n,
-                      rep.vectorMs / n, rep.iterations, rep.stopReason.c_str(), total, rel);
+                      rep.vectorMs / n, rep.iterations, stopReasonName(rep.stopReason), total, rel);
         json.push_back(line);
     }
     std::printf("\n");
@@ -189,7 +189,7 @@ int main(int argc, char** argv) {
             opt.maxIterations = 60;
             opt.tolerance = 0;
             opt.boundsMethod = m;
-            SolveResult r = Solver(renderer, s.plain, defaultLighting(), v, opt).run();
+            SolveResult r = Solver(*device, s.plain, defaultLighting(), v, opt).run();
             double rel = mean(r.report.finalRms) / mean(r.report.initialRms);
             const char* name = m == BoundsMethod::Projected ? "projected steps (default)" : "steps cut at the first bound";
             std::printf("| %s | %d | %.1f | %.4f |\n", name, r.report.iterations, r.report.totalMs / 1000, rel);
@@ -214,7 +214,7 @@ int main(int argc, char** argv) {
         opt.maxIterations = iterations;
         opt.tolerance = 0;
         auto t0 = std::chrono::steady_clock::now();
-        SolveResult r = Solver(renderer, scene.plain, defaultLighting(), views, opt).run();
+        SolveResult r = Solver(*device, scene.plain, defaultLighting(), views, opt).run();
         seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         GpuVolume gpu(r.volume);
         RenderSettings fine;

@@ -119,7 +119,7 @@ nlohmann::json solveOptionsToJson(const core::SolveOptions& o) {
 }
 
 nlohmann::json solveReportToJson(const core::SolveReport& r) {
-    return {{"iterations", r.iterations}, {"stop_reason", r.stopReason}, {"initial_objective", r.initialObjective},
+    return {{"iterations", r.iterations}, {"stop_reason", core::stopReasonName(r.stopReason)}, {"initial_objective", r.initialObjective},
             {"final_objective", r.finalObjective}, {"initial_rms", r.initialRms}, {"final_rms", r.finalRms},
             {"unknowns", r.unknownCount}, {"hull_unknowns", r.hullCount}, {"constraint_pixels", r.constraintPixels},
             {"ignored_pixels", r.ignoredPixels}, {"clamped_pixels", r.clampedPixels}, {"total_ms", r.totalMs},

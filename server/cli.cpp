@@ -7,7 +7,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "core/image/image_io.h"
 #include "protocol/render_json.h"
 

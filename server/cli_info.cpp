@@ -5,7 +5,7 @@
 
 #include <iostream>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "core/volume/vdb_io.h"
 #include "server/cli.h"
 

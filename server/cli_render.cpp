@@ -8,8 +8,8 @@
 #include <iostream>
 #include <sstream>
 
-#include "core/errors.h"
-#include "core/gl/context.h"
+#include "core/base/errors.h"
+#include "core/gpu/gpu_device.h"
 #include "core/image/image_io.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/renderer.h"
@@ -60,13 +60,13 @@ int runRender(const std::vector<std::string>& argv) {
     const double exposure = args.number("exposure", 0);
 
     core::Volume volume = loadScene(args.get("scene"));
-    auto context = core::gl::Context::create();
+    auto device = core::GpuDevice::create();
     core::GpuVolume gpuVolume(volume);
-    core::Renderer renderer(*context);
+    core::Renderer renderer(*device);
     core::RenderStats stats;
     core::Image image = renderer.render(gpuVolume, camera, lighting, settings, &stats);
     spdlog::info("rendered {}x{} in {:.1f} ms on {} (light volumes {:.1f} ms)", camera.width, camera.height,
-                 stats.totalMs, context->capabilities().renderer, stats.lightMs);
+                 stats.totalMs, device->capabilities().renderer, stats.lightMs);
 
     if (fs::path(output).has_parent_path()) fs::create_directories(fs::path(output).parent_path());
     core::SaveOptions save;

@@ -10,7 +10,7 @@
 #include <iostream>
 #include <thread>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "server/cli.h"
 #include "server/http_server.h"
 

@@ -9,10 +9,9 @@
 #include <iostream>
 #include <sstream>
 
-#include "core/errors.h"
-#include "core/gl/context.h"
+#include "core/base/errors.h"
+#include "core/gpu/gpu_device.h"
 #include "core/image/image_io.h"
-#include "core/render/renderer.h"
 #include "core/solve/solver.h"
 #include "core/volume/vdb_io.h"
 #include "protocol/render_json.h"
@@ -203,9 +202,8 @@ int runSolve(const std::vector<std::string>& argv) {
     std::vector<core::SolveView> views = readViews(args.get("views"), lighting);
     core::Volume volume = loadScene(args.get("scene"));
 
-    auto context = core::gl::Context::create();
-    core::Renderer renderer(*context);
-    core::Solver solver(renderer, volume, lighting, std::move(views), opt);
+    auto device = core::GpuDevice::create();
+    core::Solver solver(*device, volume, lighting, std::move(views), opt);
     ProgressBar bar(opt.maxIterations, args.has("quiet"));
     core::SolveResult result = solver.run([&](const core::SolveProgress& p) { bar.update(p); });
     bar.finish();
@@ -217,7 +215,7 @@ int runSolve(const std::vector<std::string>& argv) {
     for (double x : rep.initialRms) rms0 += x / double(rep.initialRms.size());
     for (double x : rep.finalRms) rms1 += x / double(rep.finalRms.size());
     std::fprintf(stderr, "%s: %d iterations (%s), RMS %.4g -> %.4g, %.2f s (forward %.2f, back-projection %.2f, vectors %.2f); wrote %s\n",
-                 core::unknownName(opt.unknown), rep.iterations, rep.stopReason.c_str(), rms0, rms1, rep.totalMs / 1000,
+                 core::unknownName(opt.unknown), rep.iterations, core::stopReasonName(rep.stopReason), rms0, rms1, rep.totalMs / 1000,
                  rep.forwardMs / 1000, rep.adjointMs / 1000, rep.vectorMs / 1000, output.c_str());
     return 0;
 }

@@ -23,7 +23,7 @@ GlWorker::~GlWorker() {
     if (m_thread.joinable()) m_thread.join();
 }
 
-void GlWorker::post(std::function<void(core::Renderer&)> task, bool isLong) {
+void GlWorker::post(std::function<void(core::GpuDevice&)> task, bool isLong) {
     {
         std::lock_guard lock(m_mutex);
         (isLong ? m_long : m_short).push_back(std::move(task));
@@ -31,33 +31,31 @@ void GlWorker::post(std::function<void(core::Renderer&)> task, bool isLong) {
     m_wake.notify_one();
 }
 
-void GlWorker::runShortTasks(core::Renderer& renderer) {
+void GlWorker::runShortTasks(core::GpuDevice& device) {
     for (;;) {
-        std::function<void(core::Renderer&)> task;
+        std::function<void(core::GpuDevice&)> task;
         {
             std::lock_guard lock(m_mutex);
             if (m_short.empty()) return;
             task = std::move(m_short.front());
             m_short.pop_front();
         }
-        task(renderer);
+        task(device);
     }
 }
 
 void GlWorker::loop(std::promise<void>& started) {
-    std::unique_ptr<core::gl::Context> context;
-    std::unique_ptr<core::Renderer> renderer;
+    std::unique_ptr<core::GpuDevice> device;
     try {
-        context = core::gl::Context::create();
-        renderer = std::make_unique<core::Renderer>(*context);
-        m_caps = context->capabilities();
+        device = core::GpuDevice::create();
+        m_caps = device->capabilities();
         started.set_value();
     } catch (...) {
         started.set_exception(std::current_exception());
         return;
     }
     for (;;) {
-        std::function<void(core::Renderer&)> task;
+        std::function<void(core::GpuDevice&)> task;
         {
             std::unique_lock lock(m_mutex);
             m_wake.wait(lock, [&] { return m_stopping || !m_short.empty() || !m_long.empty(); });
@@ -66,9 +64,9 @@ void GlWorker::loop(std::promise<void>& started) {
             task = std::move(queue.front());
             queue.pop_front();
         }
-        task(*renderer);  // packaged tasks capture their own exceptions
+        task(*device);  // packaged tasks capture their own exceptions
     }
-    renderer.reset();  // GL objects die on this thread, before the context
+    device.reset();  // GL objects and the context die on this thread
 }
 
 }  // namespace volstyle::server

@@ -11,9 +11,10 @@
 #include <sstream>
 #include <unistd.h>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "core/image/image_io.h"
 #include "core/render/gpu_volume.h"
+#include "core/render/renderer.h"
 #include "core/volume/builtin_scenes.h"
 #include "protocol/error_body.h"
 #include "protocol/render_json.h"
@@ -158,7 +159,8 @@ struct HttpServer::Impl {
             std::lock_guard lock(s.mutex);
             lighting = s.lighting;
         }
-        core::Image image = gl->run([&](core::Renderer& renderer) {
+        core::Image image = gl->run([&](core::GpuDevice& device) {
+            core::Renderer renderer(device);
             if (volume) return renderer.render(*std::make_unique<core::GpuVolume>(*volume), camera, lighting);
             std::lock_guard lock(s.mutex);
             if (!s.gpu) s.gpu = std::make_shared<core::GpuVolume>(s.volume);
@@ -182,11 +184,11 @@ struct HttpServer::Impl {
     /// Frees a GPU volume on the GL thread. Call without holding a session's mutex: the GL thread
     /// may be finishing a solve that needs it.
     void release(std::shared_ptr<core::GpuVolume> gpu) {
-        if (gpu) gl->run([gpu = std::move(gpu)](core::Renderer&) mutable { gpu.reset(); });
+        if (gpu) gl->run([gpu = std::move(gpu)](core::GpuDevice&) mutable { gpu.reset(); });
     }
 
     void runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr<Session>& s, core::SolveOptions options,
-                  core::Renderer& renderer);
+                  core::GpuDevice& device);
 
     void reply(httplib::Response& res, int status, const json& body) {
         res.status = status;
@@ -471,7 +473,7 @@ void HttpServer::Impl::routes() {
             saved(*s);
         }
         spdlog::info("job {} queued (session {})", job->id, s->id);
-        gl->submit([this, job, s, options](core::Renderer& renderer) { runSolve(job, s, options, renderer); });
+        gl->submit([this, job, s, options](core::GpuDevice& device) { runSolve(job, s, options, device); });
         reply(res, 202, {{"job", job->id}});
     });
     http.Get(api + jid, [this](const httplib::Request& req, httplib::Response& res) {
@@ -592,7 +594,7 @@ void HttpServer::Impl::routes() {
 }
 
 void HttpServer::Impl::runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr<Session>& s,
-                                core::SolveOptions options, core::Renderer& renderer) {
+                                core::SolveOptions options, core::GpuDevice& device) {
     if (job->cancel) {
         std::lock_guard lock(job->mutex);
         job->state = "cancelled";
@@ -619,7 +621,7 @@ void HttpServer::Impl::runSolve(const std::shared_ptr<Job>& job, const std::shar
                     views.push_back({v.id, v.camera, v.target.value_or(core::Image()), v.weights});
                 }
             }
-            core::Solver solver(renderer, volume, lighting, std::move(views), options);
+            core::Solver solver(device, volume, lighting, std::move(views), options);
             auto lastPreview = Clock::now() - std::chrono::hours(1);
             core::SolveResult result = solver.run([&](const core::SolveProgress& p) {
                 json progress = protocol::solveProgressToJson(p);
@@ -640,7 +642,7 @@ void HttpServer::Impl::runSolve(const std::shared_ptr<Job>& job, const std::shar
                     }
                     job->emit("preview", {{"iteration", p.iteration}, {"urls", urls}});
                 }
-                gl->runShortTasks(renderer);  // renders waiting for the GL thread run between iterations
+                gl->runShortTasks(device);  // renders waiting for the GL thread run between iterations
             }, &job->cancel);
             int version = 0;
             {

@@ -7,7 +7,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "core/image/image_io.h"
 #include "core/volume/vdb_io.h"
 #include "protocol/error_body.h"

@@ -1,6 +1,6 @@
 #include "server/scene_source.h"
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "core/volume/builtin_scenes.h"
 #include "core/volume/vdb_io.h"
 

@@ -2,7 +2,7 @@
 
 #include <random>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 
 namespace volstyle::server {
 

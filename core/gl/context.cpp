@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 
 namespace volstyle::core::gl {
 

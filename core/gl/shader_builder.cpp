@@ -7,7 +7,7 @@
 #include <set>
 #include <sstream>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 
 namespace volstyle::core::gl {
 

@@ -12,7 +12,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 
 namespace volstyle::core {
 namespace {

@@ -3,7 +3,7 @@
 #include <atomic>
 #include <string_view>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "core/shaders/layout.h"
 
 namespace volstyle::core {

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 
 namespace volstyle::core {
 namespace {
@@ -54,11 +54,25 @@ Vec3d Camera::rayDirection(double px, double py) const {
     // Pixel centre (px+0.5, py+0.5) mapped to [-1,1]² with y up; the image plane sits at distance
     // 1 with half-height tan(fov/2).
     Frame f = frame();
-    double tanHalf = std::tan(fovYDeg * std::numbers::pi / 360.0);
+    double tanHalf = tanHalfFov();
     double aspect = double(width) / double(height);
     double sx = (2.0 * (px + 0.5) / width - 1.0) * tanHalf * aspect;
     double sy = (1.0 - 2.0 * (py + 0.5) / height) * tanHalf;
     return normalize(f.forward + f.right * sx + f.up * sy);
+}
+
+double Camera::tanHalfFov() const { return std::tan(fovYDeg * std::numbers::pi / 360.0); }
+
+std::optional<Camera::Pixel> Camera::project(const Vec3d& world) const {
+    const Frame f = frame();
+    const Vec3d rel = world - eye;
+    const double z = dot(rel, f.forward);
+    if (!(z > 0)) return std::nullopt;
+    const double tanHalf = tanHalfFov();
+    const double x = dot(rel, f.right) / (z * tanHalf * width / height), y = dot(rel, f.up) / (z * tanHalf);
+    const double px = std::floor((x + 1) / 2 * width), py = std::floor((1 - y) / 2 * height);
+    if (!(px >= 0 && py >= 0 && px < width && py < height)) return std::nullopt;
+    return Pixel{int(px), int(py)};
 }
 
 std::vector<FieldProblem> Lighting::check() const {

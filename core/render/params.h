@@ -45,6 +45,14 @@ struct Camera {
 
     /// World-space direction (unit length) of the ray through the centre of pixel (px, py).
     Vec3d rayDirection(double px, double py) const;
+    /// tan(fov_y / 2): the image plane's half-height at distance 1.
+    double tanHalfFov() const;
+    /// The pixel a world point projects into (the inverse of rayDirection), or nothing when the
+    /// point is behind the camera or outside the image.
+    struct Pixel {
+        int x, y;
+    };
+    std::optional<Pixel> project(const Vec3d& world) const;
 };
 
 /// A directional light (the sun): `direction` points from the scene toward the light.

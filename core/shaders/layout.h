@@ -27,6 +27,25 @@ VS_CONSTANT(int, kWorkgroup3D, 4);   /* volume kernels: 4x4x4 voxels */
 VS_CONSTANT(int, kBrickSize, 8);     /* occupancy brick edge, in voxels */
 VS_CONSTANT(int, kLightSlots, 4);    /* light-depth volumes bound at once */
 
+/* Kinds of solver unknowns (VOLSTYLE_UNKNOWN in project.comp; core::Unknown takes these values)
+ * and bases (VOLSTYLE_BASIS; core::BasisType). Macros: GLSL compares them in #if. */
+#define VOLSTYLE_UNKNOWN_EMISSION 1
+#define VOLSTYLE_UNKNOWN_ALBEDO 2
+#define VOLSTYLE_UNKNOWN_EMISSION_ALBEDO 3
+#define VOLSTYLE_UNKNOWN_EXTINCTION 4
+#define VOLSTYLE_BASIS_BOX 0
+#define VOLSTYLE_BASIS_TRILINEAR 1
+
+/* Operations of vector_ops.comp (VOLSTYLE_OP; core::VectorOps::Op takes these values). */
+#define VOLSTYLE_OP_AXPY 1
+#define VOLSTYLE_OP_XPBY 2
+#define VOLSTYLE_OP_MUL 3
+#define VOLSTYLE_OP_DOT 4
+#define VOLSTYLE_OP_LAPLACIAN 5
+#define VOLSTYLE_OP_FREE 6
+#define VOLSTYLE_OP_STEP 7
+#define VOLSTYLE_OP_CLAMP 8
+
 /* Binding points. */
 VS_CONSTANT(int, kBindingParams, 0);       /* UBO MarchParams */
 VS_CONSTANT(int, kBindingImageOut, 0);     /* SSBO vec4 pixels[] */
@@ -55,15 +74,19 @@ struct MarchParams {
     VS_VEC4 rayRange;        /* x: near, y: far (world distance from the eye) */
     VS_IVEC4 dims;           /* xyz: voxels of the extinction grid */
     VS_IVEC4 brickDims;      /* xyz: occupancy bricks */
-    VS_IVEC4 imageSize;      /* x: width, y: height; z: light index (light kernel) */
+    VS_IVEC4 imageSize;      /* x: width, y: height (pixels) */
     VS_VEC4 march;           /* x: step (voxels), y: termination budget ε, z: bound on radiance */
     VS_VEC4 background;      /* rgb: constant background radiance */
     VS_VEC4 phase;           /* x: 0 isotropic, 1 Henyey-Greenstein; y: g */
     VS_VEC4 lightDirection[kLightSlots];   /* xyz: unit world direction toward the light */
     VS_VEC4 lightIrradiance[kLightSlots];  /* rgb: E_l */
-    VS_IVEC4 unknownDims;    /* xyz: voxels of the solver's unknown grid; w: pixel offset of the view */
-    VS_VEC4 unknownScale;    /* xyz: unknown voxels per extinction voxel; w: termination T */
-    VS_IVEC4 unknownLayout;  /* x: elements per unknown block (the albedo block's offset in joint solves) */
+    VS_IVEC4 lightKernel;    /* light_depth.comp: x: the light it marches toward (index into lightDirection) */
+    /* The solver's projector (project.comp) only. */
+    VS_IVEC4 unknownDims;    /* xyz: voxels of the solver's unknown grid */
+    VS_VEC4 unknownScale;    /* xyz: unknown voxels per extinction voxel (both grids span one box) */
+    VS_IVEC4 unknownLayout;  /* x: elements per block of unknowns (the albedo block's offset in joint solves) */
+    VS_IVEC4 viewPixels;     /* x: index of this view's first pixel in the solver's pixel vector */
+    VS_VEC4 projectorCutoff; /* x: transmittance below which forward and adjoint rays both stop */
 };
 
 /* Parameters of the vector kernels (vector_ops.comp). Vectors are arrays of vec4 (rgb used). */

@@ -1,4 +1,4 @@
-// Optical depth from every voxel centre toward light u.imageSize.z, marched with the same
+// Optical depth from every voxel centre toward light u.lightKernel.x, marched with the same
 // segments and skipping as view rays. Recomputed only when extinction or the light changes.
 #include "common/march.glsl"
 
@@ -29,7 +29,7 @@ void main() {
     }
     if (isRead) {
         vec3 o = vec3(voxel);  // march from the voxel centre toward the light
-        vec3 d = mat3(u.indexFromWorld) * u.lightDirection[u.imageSize.z].xyz;
+        vec3 d = mat3(u.indexFromWorld) * u.lightDirection[u.lightKernel.x].xyz;
         vec2 range = vec2(0.0, intersectVolumeBox(o, d).y);
         if (range.y > 0.0) {
             RayMarch m = beginMarch(range, o, d);

@@ -13,16 +13,13 @@
 #include "common/lighting.glsl"
 #include "common/camera.glsl"
 
-#define UNKNOWN_EMISSION 1
-#define UNKNOWN_ALBEDO 2
-#define UNKNOWN_EMISSION_ALBEDO 3
-#define UNKNOWN_EXTINCTION 4
+// VOLSTYLE_UNKNOWN_* and VOLSTYLE_BASIS_* come from layout.h (core::Unknown, core::BasisType).
 
 #ifndef VOLSTYLE_ADJOINT
 #define VOLSTYLE_ADJOINT 0
 #endif
 #ifndef VOLSTYLE_BASIS
-#define VOLSTYLE_BASIS 1
+#define VOLSTYLE_BASIS VOLSTYLE_BASIS_TRILINEAR
 #endif
 #ifndef VOLSTYLE_HAS_FLOAT_ATOMICS
 #define VOLSTYLE_HAS_FLOAT_ATOMICS 0
@@ -72,7 +69,7 @@ struct Basis {
     ivec3 i1;
     vec3 f;
 };
-#if VOLSTYLE_BASIS == 0
+#if VOLSTYLE_BASIS == VOLSTYLE_BASIS_BOX
 const int kBasisCount = 1;
 #else
 const int kBasisCount = 8;
@@ -82,7 +79,7 @@ Basis basisAt(vec3 p) {
     Basis b;
     ivec3 n = u.unknownDims.xyz;
     vec3 q = (p + 0.5) * u.unknownScale.xyz - 0.5;  // unknown-grid index space, same box
-#if VOLSTYLE_BASIS == 0
+#if VOLSTYLE_BASIS == VOLSTYLE_BASIS_BOX
     b.i0 = b.i1 = clamp(ivec3(floor(q + 0.5)), ivec3(0), n - 1);
     b.f = vec3(0.0);
 #else
@@ -131,7 +128,7 @@ void apply(Basis b, uint block, vec3 weight, vec3 unusedResidual, inout vec3 sum
 void main() {
     ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
     if (pix.x >= u.imageSize.x || pix.y >= u.imageSize.y) return;
-    uint pixelIndex = uint(u.unknownDims.w + pix.y * u.imageSize.x + pix.x);
+    uint pixelIndex = uint(u.viewPixels.x + pix.y * u.imageSize.x + pix.x);
 #if VOLSTYLE_ADJOINT
     vec3 r = residual[pixelIndex].rgb;
     if (r == vec3(0.0)) return;  // weight-0 pixels scatter nothing
@@ -147,7 +144,7 @@ void main() {
     if (range.x < range.y) {
         RayMarch m = beginMarch(range, o, d);
         float tMid, dt;
-#if VOLSTYLE_UNKNOWN == UNKNOWN_EXTINCTION
+#if VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EXTINCTION
         // Log-space tomography: o_k = Σ σ_i ∫ v_i dt. The current extinction is not involved,
         // so no skipping: every segment of the box counts.
         while (nextSegment(m, false, tMid, dt)) apply(basisAt(o + tMid * d), 0u, vec3(dt), r, sum);
@@ -160,16 +157,16 @@ void main() {
             vec3 tau = sigma * dt;
             vec3 opacity = transmittance * oneMinusExp(tau);  // T · (1 − e^{−σΔt})
             Basis b = basisAt(p);
-#if VOLSTYLE_UNKNOWN == UNKNOWN_EMISSION || VOLSTYLE_UNKNOWN == UNKNOWN_EMISSION_ALBEDO
+#if VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION || VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO
             apply(b, 0u, opacity, r, sum);
 #endif
-#if VOLSTYLE_UNKNOWN == UNKNOWN_ALBEDO || VOLSTYLE_UNKNOWN == UNKNOWN_EMISSION_ALBEDO
-            uint albedoBlock = VOLSTYLE_UNKNOWN == UNKNOWN_EMISSION_ALBEDO ? uint(u.unknownLayout.x) : 0u;
+#if VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_ALBEDO || VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO
+            uint albedoBlock = VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO ? uint(u.unknownLayout.x) : 0u;
             apply(b, albedoBlock, opacity * inScattering(stencilAt(p), dir), r, sum);
 #endif
             transmittance *= exp(-tau);
             // Only a transmittance cut-off: forward and adjoint must stop at the same segment.
-            if (max3(transmittance) < u.unknownScale.w) break;
+            if (max3(transmittance) < u.projectorCutoff.x) break;
         }
 #endif
     }

@@ -1,17 +1,17 @@
 // The solver's vector operations, all on the GPU (TVCG Sec. 5.1: "all necessary steps of the
 // conjugate gradient method are carried out on the GPU"). Vectors are arrays of vec4 whose rgb
 // are three independent channels; scalars are per channel (vec4 alpha). VOLSTYLE_OP picks one:
-//   OP_AXPY      y[i] += alpha * x[i]
-//   OP_XPBY      y[i]  = x[i] + alpha * y[i]
-//   OP_MUL       y[i] *= x[i]
-//   OP_DOT       partial[workgroup] = Σ x[i]·y[i] per channel, accumulated in double: float sums
+//   VOLSTYLE_OP_AXPY      y[i] += alpha * x[i]
+//   VOLSTYLE_OP_XPBY      y[i]  = x[i] + alpha * y[i]
+//   VOLSTYLE_OP_MUL       y[i] *= x[i]
+//   VOLSTYLE_OP_DOT       partial[workgroup] = Σ x[i]·y[i] per channel, accumulated in double: float sums
 //                drift on large grids and would fake divergence (reductions run grid-stride loops
 //                over at most kReduceGroups workgroups)
-//   OP_LAPLACIAN y = alpha · L x, the 7-point Laplacian over the cells where z (the hull) is set:
+//   VOLSTYLE_OP_LAPLACIAN y = alpha · L x, the 7-point Laplacian over the cells where z (the hull) is set:
 //                (L x)_i = Σ_{j ∈ N6(i), j in hull} (x_j − x_i) (symmetric, so Lᵀ = L)
-//   OP_FREE      y[i] = 0 where x (the unknowns) sits at a bound and y would push past it
-//   OP_STEP      partial[workgroup] = min over i of the step t ≥ 0 at which x + t·y meets a bound
-//   OP_CLAMP     y = clamp(y, lower, upper)
+//   VOLSTYLE_OP_FREE      y[i] = 0 where x (the unknowns) sits at a bound and y would push past it
+//   VOLSTYLE_OP_STEP      partial[workgroup] = min over i of the step t ≥ 0 at which x + t·y meets a bound
+//   VOLSTYLE_OP_CLAMP     y = clamp(y, lower, upper)
 // Elements [first, first + count) are processed; element i belongs to block i / blockSize, whose
 // bounds are bounds.xy (block 0) or bounds.zw (block 1).
 #include "layout.h"
@@ -34,16 +34,9 @@ layout(std430, binding = kBindingPartials) writeonly buffer b_Partials {
     dvec4 partial[];
 };
 
-#define OP_AXPY 1
-#define OP_XPBY 2
-#define OP_MUL 3
-#define OP_DOT 4
-#define OP_LAPLACIAN 5
-#define OP_FREE 6
-#define OP_STEP 7
-#define OP_CLAMP 8
+// VOLSTYLE_OP_* come from layout.h (core::VectorOps::Op takes the same values).
 
-#if VOLSTYLE_OP == OP_DOT || VOLSTYLE_OP == OP_STEP
+#if VOLSTYLE_OP == VOLSTYLE_OP_DOT || VOLSTYLE_OP == VOLSTYLE_OP_STEP
 shared dvec4 s_reduce[kWorkgroup1D];
 #endif
 
@@ -55,13 +48,13 @@ void main() {
     bool inside = k < uint(v.count.x);
     uint i = uint(v.count.y) + k;
 
-#if VOLSTYLE_OP == OP_AXPY
+#if VOLSTYLE_OP == VOLSTYLE_OP_AXPY
     if (inside) y[i].rgb += v.alpha.rgb * x[i].rgb;
-#elif VOLSTYLE_OP == OP_XPBY
+#elif VOLSTYLE_OP == VOLSTYLE_OP_XPBY
     if (inside) y[i].rgb = x[i].rgb + v.alpha.rgb * y[i].rgb;
-#elif VOLSTYLE_OP == OP_MUL
+#elif VOLSTYLE_OP == VOLSTYLE_OP_MUL
     if (inside) y[i].rgb *= x[i].rgb;
-#elif VOLSTYLE_OP == OP_DOT
+#elif VOLSTYLE_OP == VOLSTYLE_OP_DOT
     // Grid-stride: few workgroups, so few barriers (costly on llvmpipe) and few partials to read.
     dvec4 acc = dvec4(0.0);
     for (uint e = k; e < uint(v.count.x); e += gl_NumWorkGroups.x * kWorkgroup1D) {
@@ -75,7 +68,7 @@ void main() {
         barrier();
     }
     if (local == 0) partial[gl_WorkGroupID.x] = s_reduce[0];
-#elif VOLSTYLE_OP == OP_LAPLACIAN
+#elif VOLSTYLE_OP == VOLSTYLE_OP_LAPLACIAN
     if (inside) {
         ivec3 n = v.dims.xyz;
         int block = int(i) / v.count.z, cell = int(i) % v.count.z;
@@ -93,7 +86,7 @@ void main() {
         }
         y[i] = vec4(v.alpha.rgb * sum, 0.0);
     }
-#elif VOLSTYLE_OP == OP_FREE
+#elif VOLSTYLE_OP == VOLSTYLE_OP_FREE
     if (inside) {
         vec2 b = boundsOf(i);
         bvec3 atLower = lessThanEqual(x[i].rgb, vec3(b.x)), atUpper = greaterThanEqual(x[i].rgb, vec3(b.y));
@@ -102,7 +95,7 @@ void main() {
         y[i].rgb = mix(y[i].rgb, vec3(0.0), bvec3(fixedLower.x || fixedUpper.x, fixedLower.y || fixedUpper.y,
                                                   fixedLower.z || fixedUpper.z));
     }
-#elif VOLSTYLE_OP == OP_STEP
+#elif VOLSTYLE_OP == VOLSTYLE_OP_STEP
     const double kNone = 1e300;
     dvec4 t = dvec4(kNone);
     for (uint e = k; e < uint(v.count.x); e += gl_NumWorkGroups.x * kWorkgroup1D) {
@@ -121,7 +114,7 @@ void main() {
         barrier();
     }
     if (local == 0) partial[gl_WorkGroupID.x] = s_reduce[0];
-#elif VOLSTYLE_OP == OP_CLAMP
+#elif VOLSTYLE_OP == VOLSTYLE_OP_CLAMP
     if (inside) {
         vec2 b = boundsOf(i);
         y[i].rgb = clamp(y[i].rgb, vec3(b.x), vec3(b.y));

@@ -2,8 +2,7 @@
 
 #include <algorithm>
 
-#include "core/errors.h"
-#include "core/render/renderer.h"
+#include "core/base/errors.h"
 #include "core/shaders/layout.h"
 
 namespace volstyle::core {
@@ -40,9 +39,7 @@ struct VectorOps::Dispatch {
     Int3 dims;
 };
 
-VectorOps::VectorOps(Renderer& renderer)
-    : m_renderer(renderer),
-      m_params(gl::createBuffer(sizeof(layout::VectorParams), nullptr, GL_DYNAMIC_STORAGE_BIT, "vector-params")) {}
+VectorOps::VectorOps(GpuDevice& device) : m_device(device) {}
 
 std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
     const size_t size = d.y ? d.y->size() : d.x->size();
@@ -54,8 +51,7 @@ std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
     p.count = {int(count), int(first), int(std::max<size_t>(d.bounds.blockSize, 1)), 0};
     if (op == kLaplacian) p.count.z = int(d.dims.volume());
     p.dims = {d.dims.x, d.dims.y, d.dims.z, 0};
-    glNamedBufferSubData(m_params.id(), 0, sizeof(p), &p);
-    glBindBufferBase(GL_UNIFORM_BUFFER, layout::kBindingParams, m_params.id());
+    m_device.setParams(p);
 
     const bool reduces = op == kDot || op == kStep;
     // Reductions loop over elements within fewer workgroups: fewer barriers and partials.
@@ -72,7 +68,7 @@ std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingVectorY, (d.y ? d.y : any)->id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingVectorZ, (d.z ? d.z : any)->id());
     if (m_partials) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingPartials, m_partials.id());
-    glUseProgram(m_renderer.program(gl::ShaderBuilder("vector_ops.comp").define("VOLSTYLE_OP", op)).id());
+    glUseProgram(m_device.program(gl::ShaderBuilder("vector_ops.comp").define("VOLSTYLE_OP", op)).id());
     if (count > 0) glDispatchCompute(GLuint(groups), 1, 1);
     gl::barrierAfterComputeWrites();
     if (!reduces) return {};

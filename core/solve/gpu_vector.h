@@ -8,11 +8,11 @@
 #include <vector>
 
 #include "core/gl/object.h"
+#include "core/gpu/gpu_device.h"
 #include "core/math/vec.h"
+#include "core/shaders/layout.h"
 
 namespace volstyle::core {
-
-class Renderer;
 
 class GpuVector {
 public:
@@ -44,7 +44,7 @@ struct Range {
 
 class VectorOps {
 public:
-    explicit VectorOps(Renderer& renderer);
+    explicit VectorOps(GpuDevice& device);
     void axpy(const Vec3d& alpha, const GpuVector& x, GpuVector& y, Range range = {});  ///< y += αx
     void xpby(const GpuVector& x, const Vec3d& beta, GpuVector& y);                     ///< y = x + βy
     void multiply(const GpuVector& x, GpuVector& y);                                   ///< y ⊙= x
@@ -59,12 +59,21 @@ public:
     void copy(const GpuVector& from, GpuVector& to);
 
 private:
-    enum Op { kAxpy = 1, kXpby, kMul, kDot, kLaplacian, kFree, kStep, kClamp };
+    /// The kernels of vector_ops.comp; the values are its VOLSTYLE_OP_* constants (layout.h).
+    enum Op {
+        kAxpy = VOLSTYLE_OP_AXPY,
+        kXpby = VOLSTYLE_OP_XPBY,
+        kMul = VOLSTYLE_OP_MUL,
+        kDot = VOLSTYLE_OP_DOT,
+        kLaplacian = VOLSTYLE_OP_LAPLACIAN,
+        kFree = VOLSTYLE_OP_FREE,
+        kStep = VOLSTYLE_OP_STEP,
+        kClamp = VOLSTYLE_OP_CLAMP,
+    };
     struct Dispatch;
     std::vector<double> run(Op op, const Dispatch& d);
 
-    Renderer& m_renderer;
-    gl::Buffer m_params;
+    GpuDevice& m_device;
     gl::Buffer m_partials;
     size_t m_partialCapacity = 0;
 };

@@ -7,13 +7,13 @@
 
 #include <vector>
 
+#include "core/gpu/gpu_device.h"
 #include "core/render/gpu_volume.h"
-#include "core/render/renderer.h"
+#include "core/render/march_setup.h"
 #include "core/solve/gpu_vector.h"
 #include "core/solve/solve_types.h"
 
 namespace volstyle::core {
-
 
 struct ProjectorStats {
     double forwardMs = 0;
@@ -25,10 +25,11 @@ struct ProjectorStats {
 class Projector {
 public:
     /// `unknownDims`: the unknown grid (the extinction grid's dims or coarser, same box).
-    Projector(Renderer& renderer, GpuVolume& volume, const Lighting& lighting, Unknown unknown,
+    Projector(GpuDevice& device, GpuVolume& volume, const Lighting& lighting, Unknown unknown,
               BasisType basis, Int3 unknownDims, double stepVoxels, bool exactTraversal = false);
 
     /// Adds a view; its pixels follow those of the views added before (row-major, top row first).
+    /// The view holds its light-depth volumes for the projector's lifetime.
     void addView(const Camera& camera);
     size_t viewCount() const { return m_views.size(); }
     size_t pixelCount() const { return m_pixelCount; }
@@ -48,12 +49,12 @@ public:
 private:
     struct View {
         Camera camera;
-        Renderer::MarchSetup setup;
+        MarchSetup setup;
         size_t offset;
     };
     void dispatch(bool adjoint, const GpuVector& unknowns, const GpuVector& pixels);
 
-    Renderer& m_renderer;
+    GpuDevice& m_device;
     GpuVolume& m_volume;
     Lighting m_lighting;
     Unknown m_unknown;

@@ -1,8 +1,9 @@
 #include "core/solve/solve_options.h"
 
 #include <cmath>
+#include <ostream>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 
 namespace volstyle::core {
 
@@ -15,6 +16,8 @@ const char* unknownName(Unknown u) {
     }
     return "?";
 }
+
+std::ostream& operator<<(std::ostream& out, StopReason r) { return out << stopReasonName(r); }
 
 std::vector<FieldProblem> SolveOptions::check() const {
     std::vector<FieldProblem> out;

@@ -3,6 +3,8 @@
 /// What a solve is asked to do (SPEC §2), GL-free: protocol/ parses it from JSON, the CLI from
 /// flags. `check()` lists every problem with the JSON field it belongs to.
 
+#include <iosfwd>
+#include <iterator>
 #include <optional>
 #include <string>
 #include <vector>
@@ -69,9 +71,42 @@ struct SolveProgress {
     double forwardMs = 0, adjointMs = 0, vectorMs = 0;  ///< this iteration's split
 };
 
+/// Why a solve stopped. The API reports the snake_case names of kStopReasons.
+enum class StopReason {
+    None,                ///< still running (never in a finished report)
+    Converged,           ///< an iteration lowered the objective by less than the tolerance
+    Stagnated,           ///< no decrease three iterations in a row
+    MaxIterations,       ///< max_iterations reached
+    ZeroGradient,        ///< the gradient over the free variables vanished: a minimum
+    NoConstraints,       ///< no pixel has a positive weight
+    EmptyHull,           ///< no unknown can influence any pixel
+    NumericalBreakdown,  ///< the objective became non-finite; the last finite iterate is kept
+};
+struct StopReasonName {
+    StopReason reason;
+    const char* name;
+};
+inline constexpr StopReasonName kStopReasons[] = {
+    {StopReason::None, "none"},
+    {StopReason::Converged, "converged"},
+    {StopReason::Stagnated, "stagnated"},
+    {StopReason::MaxIterations, "max_iterations"},
+    {StopReason::ZeroGradient, "zero_gradient"},
+    {StopReason::NoConstraints, "no_constraints"},
+    {StopReason::EmptyHull, "empty_hull"},
+    {StopReason::NumericalBreakdown, "numerical_breakdown"},
+};
+constexpr const char* stopReasonName(StopReason r) {
+    for (const auto& e : kStopReasons)
+        if (e.reason == r) return e.name;
+    return "none";
+}
+static_assert(std::size(kStopReasons) == size_t(StopReason::NumericalBreakdown) + 1, "a name for every reason");
+std::ostream& operator<<(std::ostream& out, StopReason r);
+
 struct SolveReport {
     int iterations = 0;
-    std::string stopReason;  ///< converged, stagnated, max_iterations, zero_gradient, no_constraints
+    StopReason stopReason = StopReason::None;
     double initialObjective = 0, finalObjective = 0;
     std::vector<double> initialRms, finalRms;
     std::vector<double> objectiveHistory;  ///< [0] before the first iteration

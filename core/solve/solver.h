@@ -12,14 +12,16 @@
 /// so the objective never rises. All vectors live on the GPU; reductions are float64.
 ///
 /// A Solver works on its own copy of the volume: a cancelled or failed solve changes nothing.
-/// GL thread only.
+/// It holds the light-depth volumes it binds for its whole life, so other GPU work on the device
+/// between iterations (renders of other sessions, previews) cannot disturb it. GL thread only.
 
 #include <atomic>
 #include <functional>
 #include <memory>
 #include <vector>
 
-#include "core/render/renderer.h"
+#include "core/gpu/gpu_device.h"
+#include "core/render/params.h"
 #include "core/solve/solve_options.h"
 #include "core/volume/volume.h"
 
@@ -34,7 +36,7 @@ class Solver {
 public:
     /// Validates everything up front (throws InvalidArgument): options, views (a target per view,
     /// sizes matching the camera, no NaN/Inf), the unknown's requirements.
-    Solver(Renderer& renderer, const Volume& volume, const Lighting& lighting, std::vector<SolveView> views,
+    Solver(GpuDevice& device, const Volume& volume, const Lighting& lighting, std::vector<SolveView> views,
            SolveOptions options);
     ~Solver();
 

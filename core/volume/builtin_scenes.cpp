@@ -7,7 +7,7 @@
 #include <cmath>
 #include <functional>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "core/volume/noise.h"
 
 namespace volstyle::core {

@@ -13,7 +13,7 @@
 #include <mutex>
 #include <sstream>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 
 namespace volstyle::core {
 namespace {

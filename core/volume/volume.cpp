@@ -5,7 +5,7 @@
 #include <limits>
 #include <sstream>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 
 namespace volstyle::core {
 

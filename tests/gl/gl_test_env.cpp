@@ -4,7 +4,7 @@
 #include <cmath>
 #include <memory>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 
 namespace volstyle::test {
 
@@ -22,8 +22,13 @@ core::gl::Context* glContext(std::string* reason) {
     return context.get();
 }
 
+core::GpuDevice& device() {
+    static core::GpuDevice device(*glContext());
+    return device;
+}
+
 core::Renderer& sharedRenderer() {
-    static core::Renderer renderer(*glContext());
+    static core::Renderer renderer(device());
     return renderer;
 }
 

@@ -6,13 +6,16 @@
 #include <string>
 
 #include "core/gl/context.h"
+#include "core/gpu/gpu_device.h"
 #include "core/render/renderer.h"
 
 namespace volstyle::test {
 
 /// The shared context, or nullptr with `reason` set.
 core::gl::Context* glContext(std::string* reason = nullptr);
-/// A renderer on the shared context (kept for the whole run so programs compile once).
+/// The device on the shared context (kept for the whole run so programs compile once).
+core::GpuDevice& device();
+/// A renderer on the shared device.
 core::Renderer& sharedRenderer();
 
 /// Largest |a − b| / (|b| + floor) over RGB of all pixels.

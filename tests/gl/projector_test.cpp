@@ -80,7 +80,7 @@ void checkCase(const Case& k, bool floatAtomics) {
     Problem prob = makeProblem(7);
     const Int3 udims = k.coarse ? Int3{5, 5, 7} : prob.volume.dims();
     GpuVolume gpu(prob.volume);
-    Projector W(test::sharedRenderer(), gpu, prob.lighting, k.unknown, k.basis, udims, 0.5);
+    Projector W(test::device(), gpu, prob.lighting, k.unknown, k.basis, udims, 0.5);
     if (!floatAtomics) W.setUseFloatAtomics(false);
     for (const auto& c : prob.cameras) W.addView(c);
     cpu_ref::ReferenceProjector ref(prob.volume, prob.lighting, prob.cameras, {k.unknown, k.basis, udims, 0.5});
@@ -165,7 +165,7 @@ TEST(Projector, EmissionForwardIsTheRenderersEmission) {
     GpuVolume gpu(v);
     Lighting dark;
     dark.lights.clear();
-    Projector W(test::sharedRenderer(), gpu, dark, Unknown::Emission, BasisType::Trilinear, v.dims(), 0.5);
+    Projector W(test::device(), gpu, dark, Unknown::Emission, BasisType::Trilinear, v.dims(), 0.5);
     W.addView(prob.cameras[0]);
     std::vector<float> a(v.voxelCount() * 4, 0.0f);
     for (size_t i = 0; i < v.voxelCount(); ++i)
@@ -187,7 +187,7 @@ TEST(Projector, ExactTraversalKeepsTheAdjointIdentity) {
     GpuVolume gpu(prob.volume);
     for (Unknown u : {Unknown::Emission, Unknown::Albedo, Unknown::Extinction})
         for (BasisType basis : {BasisType::Box, BasisType::Trilinear}) {
-            Projector W(test::sharedRenderer(), gpu, prob.lighting, u, basis, prob.volume.dims(), 0.5, /*exact=*/true);
+            Projector W(test::device(), gpu, prob.lighting, u, basis, prob.volume.dims(), 0.5, /*exact=*/true);
             for (const auto& c : prob.cameras) W.addView(c);
             auto a = randomVector(W.elementCount(), 3), r = randomVector(W.pixelCount(), 4);
             GpuVector ga(W.elementCount(), "a"), gr(W.pixelCount(), "r"), gWa(W.pixelCount(), "Wa"), gWtr(W.elementCount(), "Wtr");

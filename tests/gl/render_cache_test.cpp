@@ -2,6 +2,8 @@
 // extinction or the light changes.
 #include <gtest/gtest.h>
 
+#include "core/base/errors.h"
+#include "core/gpu/resource_cache.h"
 #include "core/render/gpu_volume.h"
 #include "core/volume/builtin_scenes.h"
 #include "gl_test_env.h"
@@ -11,7 +13,7 @@ using namespace volstyle::core;
 
 TEST(RenderCache, LightVolumesFollowExtinctionAndSun) {
     VOLSTYLE_REQUIRE_GL();
-    Renderer renderer(*test::glContext());
+    Renderer renderer(test::device());
     Volume v = makeBuiltinScene("sphere", 16);
     GpuVolume gpu(v);
     Camera cam;
@@ -48,4 +50,45 @@ TEST(RenderCache, LightVolumesFollowExtinctionAndSun) {
     l.lights[0].irradiance = {0, 0, 0};  // a dark sun needs no light volume at all
     renderer.render(gpu, cam, l, {}, &s);
     EXPECT_EQ(s.lightVolumesRecomputed, 0);
+}
+
+TEST(RenderCache, LightVolumeKeyCoversTheTransformAndDims) {
+    // The same extinction values on a moved or rotated grid see the light along another index-space
+    // direction: the cached light volume must not be reused (the old key had no transform).
+    VOLSTYLE_REQUIRE_GL();
+    Renderer renderer(test::device());
+    Volume v = makeBuiltinScene("sphere", 16);
+    GpuVolume gpu(v);
+    Camera cam;
+    cam.width = cam.height = 8;
+    Lighting l;
+    RenderStats s;
+    renderer.render(gpu, cam, l, {}, &s);
+    renderer.render(gpu, cam, l, {}, &s);
+    EXPECT_EQ(s.lightVolumesRecomputed, 0);
+    const uint64_t version = gpu.extinctionVersion();
+    Mat4 m = v.worldFromIndex();
+    std::swap(m(0, 0), m(0, 1));  // x and y of the index axes swap: a rotated grid, same values
+    std::swap(m(1, 0), m(1, 1));
+    v.setWorldFromIndex(m);
+    gpu.upload(v);
+    EXPECT_EQ(gpu.extinctionVersion(), version) << "same values: the version alone cannot tell";
+    renderer.render(gpu, cam, l, {}, &s);
+    EXPECT_EQ(s.lightVolumesRecomputed, 1);
+}
+
+TEST(RenderCache, EvictionNeverFreesWhatIsHeld) {
+    // The cache drops its reference beyond its capacity; a holder keeps the resource alive.
+    ResourceCache cache(2);
+    auto first = cache.insert<int>("a", std::make_shared<const int>(1));
+    cache.insert<int>("b", std::make_shared<const int>(2));
+    cache.insert<int>("c", std::make_shared<const int>(3));
+    EXPECT_EQ(cache.size(), 2u);
+    EXPECT_EQ(cache.find<int>("a"), nullptr) << "the least recently used went";
+    EXPECT_EQ(*first, 1) << "but its holder still has it";
+    EXPECT_EQ(*cache.find<int>("b"), 2);
+    cache.insert<int>("d", std::make_shared<const int>(4));
+    EXPECT_NE(cache.find<int>("b"), nullptr) << "b was used more recently than c";
+    EXPECT_EQ(cache.find<int>("c"), nullptr);
+    EXPECT_THROW(cache.find<float>("b"), InternalError);
 }

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "core/render/gpu_volume.h"
 #include "core/solve/solver.h"
 #include "core/volume/builtin_scenes.h"
@@ -40,8 +40,8 @@ std::vector<SolveView> views(const std::vector<Camera>& cams, const std::vector<
 /// Runs and checks the invariants every solve must keep.
 SolveResult solveChecked(const Volume& vol, const Lighting& l, std::vector<SolveView> vs, SolveOptions opt) {
     opt.maxIterations = std::min(opt.maxIterations, 20);
-    SolveResult r = Solver(test::sharedRenderer(), vol, l, std::move(vs), opt).run();
-    EXPECT_FALSE(r.report.stopReason.empty());
+    SolveResult r = Solver(test::device(), vol, l, std::move(vs), opt).run();
+    EXPECT_NE(r.report.stopReason, StopReason::None);
     for (size_t i = 1; i < r.report.objectiveHistory.size(); ++i) {
         EXPECT_TRUE(std::isfinite(r.report.objectiveHistory[i]));
         EXPECT_LE(r.report.objectiveHistory[i], r.report.objectiveHistory[i - 1] * (1 + 1e-6) + 1e-30) << i;
@@ -84,7 +84,7 @@ TEST(SolverStress, EmptyVolumeSaysSo) {
     Volume empty({16, 16, 16}, unitBoxWorldFromIndex({16, 16, 16}));
     auto cams = twoCameras(8);
     auto r = solveChecked(empty, defaultLighting(), views(cams, {constantImage(8, Vec3(0.5f)), constantImage(8, Vec3(0.5f))}), {});
-    EXPECT_EQ(r.report.stopReason, "empty_hull");
+    EXPECT_EQ(r.report.stopReason, StopReason::EmptyHull);
     EXPECT_EQ(r.report.iterations, 0);
 }
 
@@ -163,7 +163,7 @@ TEST(SolverStress, NanTargetIsRejectedBeforeSolving) {
     Image bad = constantImage(8, Vec3(0.5f));
     bad.pixel(3, 4)[1] = std::numeric_limits<float>::quiet_NaN();
     try {
-        Solver(test::sharedRenderer(), scaledSphere(1), defaultLighting(), views(cams, {bad, constantImage(8, Vec3(0.5f))}), {});
+        Solver(test::device(), scaledSphere(1), defaultLighting(), views(cams, {bad, constantImage(8, Vec3(0.5f))}), {});
         FAIL() << "a NaN target was accepted";
     } catch (const InvalidArgument& e) {
         EXPECT_NE(std::string(e.what()).find("view 'v1': the target has 1 non-finite"), std::string::npos) << e.what();
@@ -187,7 +187,7 @@ TEST(SolverStress, CancelledSolveLeavesNothingBehind) {
     auto cams = twoCameras(16);
     Volume v = scaledSphere(1);
     std::atomic<bool> cancel{false};
-    Solver solver(test::sharedRenderer(), v, defaultLighting(), views(cams, {constantImage(16, Vec3(0.7f)), constantImage(16, Vec3(0.7f))}), {});
+    Solver solver(test::device(), v, defaultLighting(), views(cams, {constantImage(16, Vec3(0.7f)), constantImage(16, Vec3(0.7f))}), {});
     int seen = 0;
     EXPECT_THROW(solver.run([&](const SolveProgress&) { if (++seen == 2) cancel = true; }, &cancel), Cancelled);
     EXPECT_EQ(seen, 2);

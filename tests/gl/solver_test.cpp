@@ -8,7 +8,7 @@
 #include <numbers>
 
 #include "core/cpu_ref/reference_projector.h"
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "core/render/gpu_volume.h"
 #include "core/solve/solver.h"
 #include "core/volume/builtin_scenes.h"
@@ -100,7 +100,7 @@ TEST(Solver, RecoversStampedEmission) {
     opt.regularization.laplacian = 2e-4;
     opt.maxIterations = 150;
     opt.tolerance = 1e-7;
-    Solver solver(test::sharedRenderer(), plain, l, views, opt);
+    Solver solver(test::device(), plain, l, views, opt);
     int progressCalls = 0;
     SolveResult r = solver.run([&](const SolveProgress& p) {
         ++progressCalls;
@@ -145,7 +145,7 @@ TEST(Solver, RecoversDarkenedAlbedoWithinBounds) {
     opt.regularization.laplacian = 2e-4;
     opt.maxIterations = 150;
     opt.tolerance = 1e-7;
-    SolveResult r = Solver(test::sharedRenderer(), plain, l, views, opt).run();
+    SolveResult r = Solver(test::device(), plain, l, views, opt).run();
     std::cout << "[ measured ] albedo: " << r.report.iterations << " iterations (" << r.report.stopReason << "), RMS "
               << meanOf(r.report.initialRms) << " -> " << meanOf(r.report.finalRms) << "\n";
     EXPECT_LE(meanOf(r.report.finalRms), 0.01 * meanOf(r.report.initialRms));
@@ -176,7 +176,7 @@ TEST(Solver, RecoversExtinctionFromMasks) {
     opt.mediumRadiance = Lm;
     opt.maxIterations = 80;
     opt.tolerance = 1e-6;
-    SolveResult r = Solver(test::sharedRenderer(), start, l, views, opt).run();
+    SolveResult r = Solver(test::device(), start, l, views, opt).run();
     std::cout << "[ measured ] extinction: " << r.report.iterations << " iterations (" << r.report.stopReason
               << "), log-ratio RMS " << meanOf(r.report.initialRms) << " -> " << meanOf(r.report.finalRms)
               << ", hull " << r.report.hullCount << "/" << r.report.unknownCount << "\n";
@@ -229,7 +229,7 @@ TEST(Solver, MatchesADirectSolveOfTheNormalEquations) {
     opt.enforceBounds = false;
     opt.maxIterations = 400;
     opt.tolerance = 0;
-    SolveResult r = Solver(test::sharedRenderer(), v, dark, views, opt).run();
+    SolveResult r = Solver(test::device(), v, dark, views, opt).run();
 
     // Normal equations in float64 (channel 0), with the solver's scaling.
     std::vector<double> A(M * M, 0.0), b(M, 0.0);
@@ -311,7 +311,7 @@ TEST(Solver, PerUnknownWeightsChooseWhichPropertyExplainsTheTargets) {
         opt.emissionRegularization = emission;
         opt.albedoRegularization = albedo;
         opt.maxIterations = 25;
-        SolveResult r = Solver(test::sharedRenderer(), plain, l, views, opt).run();
+        SolveResult r = Solver(test::device(), plain, l, views, opt).run();
         expectMonotone(r.report);
         float peak = 0;
         for (float x : r.volume.emission()) peak = std::max(peak, x);

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <thread>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "core/image/image_io.h"
 #include "server/http_server.h"
 

@@ -8,7 +8,7 @@
 #include <fstream>
 #include <iostream>
 
-#include "core/gl/context.h"
+#include "core/gpu/gpu_device.h"
 #include "core/image/image_io.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/renderer.h"
@@ -30,8 +30,8 @@ int main(int argc, char** argv) {
                 size_t n = 3 * cloud.index(i, j, k);
                 e[n] = float(0.8 * glow), e[n + 1] = float(0.3 * glow), e[n + 2] = float(0.07 * glow);
             }
-    auto context = gl::Context::create();
-    Renderer renderer(*context);
+    auto device = GpuDevice::create();
+    Renderer renderer(*device);
     GpuVolume gpu(cloud);
     Lighting lighting = defaultLighting();
     lighting.lights[0].irradiance = lighting.lights[0].irradiance * 0.45;

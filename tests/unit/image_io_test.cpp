@@ -3,7 +3,7 @@
 #include <cmath>
 #include <limits>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "core/image/image_io.h"
 #include "test_files.h"
 

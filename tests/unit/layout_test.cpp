@@ -19,11 +19,24 @@ static_assert(offsetof(MarchParams, dims) == 144);
 static_assert(offsetof(MarchParams, march) == 192);
 static_assert(offsetof(MarchParams, lightDirection) == 240);
 static_assert(offsetof(MarchParams, lightIrradiance) == 240 + 16 * volstyle::core::layout::kLightSlots);
-static_assert(offsetof(MarchParams, unknownDims) == 240 + 32 * volstyle::core::layout::kLightSlots);
-static_assert(sizeof(MarchParams) == 240 + 32 * volstyle::core::layout::kLightSlots + 48);
+static_assert(offsetof(MarchParams, lightKernel) == 240 + 32 * volstyle::core::layout::kLightSlots);
+static_assert(offsetof(MarchParams, unknownDims) == 240 + 32 * volstyle::core::layout::kLightSlots + 16);
+static_assert(offsetof(MarchParams, viewPixels) == 240 + 32 * volstyle::core::layout::kLightSlots + 64);
+static_assert(sizeof(MarchParams) == 240 + 32 * volstyle::core::layout::kLightSlots + 96);
 static_assert(sizeof(volstyle::core::layout::VectorParams) == 64);
 
 TEST(Layout, MarchParamsMatchesStd140) {
     // The static_asserts above are the test; this records the size in the test log.
-    EXPECT_EQ(sizeof(MarchParams), 416u);
+    // 416 bytes before issue #8 named the light index, pixel offset and cut-off (lightKernel,
+    // viewPixels, projectorCutoff) instead of hiding them in spare components.
+    EXPECT_EQ(sizeof(MarchParams), 464u);
+}
+
+TEST(Layout, SolverVocabularyIsSharedWithTheShaders) {
+    // The C++ enums take their values from layout.h; the shaders compare VOLSTYLE_UNKNOWN etc. to
+    // the same macros. These pin the values so a renumbering shows in review.
+    EXPECT_EQ(VOLSTYLE_UNKNOWN_EMISSION, 1);
+    EXPECT_EQ(VOLSTYLE_UNKNOWN_EXTINCTION, 4);
+    EXPECT_EQ(VOLSTYLE_OP_AXPY, 1);
+    EXPECT_EQ(VOLSTYLE_OP_CLAMP, 8);
 }

@@ -7,7 +7,7 @@
 #include <fstream>
 #include <map>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "core/gl/context.h"
 #include "core/gl/shader_builder.h"
 

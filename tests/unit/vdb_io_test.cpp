@@ -7,7 +7,7 @@
 #include <random>
 #include <set>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "core/volume/vdb_io.h"
 #include "test_files.h"
 

@@ -2,7 +2,7 @@
 
 #include <limits>
 
-#include "core/errors.h"
+#include "core/base/errors.h"
 #include "core/volume/builtin_scenes.h"
 #include "server/scene_source.h"
 

@@ -1,0 +1,55 @@
+#pragma once
+/// \file gpu_device.h
+/// The one GPU object every engine takes (renderer, projector, vector operations, and the
+/// engines to come): the GL context, the compiled programs, the parameter uniform buffer and the
+/// cache of derived resources. Engines share these through the device and never reach into each
+/// other. The server and the CLI create GL only through GpuDevice::create. GL thread only.
+
+#include <map>
+#include <memory>
+#include <string>
+
+#include "core/gl/context.h"
+#include "core/gl/object.h"
+#include "core/gl/shader_builder.h"
+#include "core/gpu/resource_cache.h"
+
+namespace volstyle::core {
+
+class GpuDevice {
+public:
+    /// Creates the GL context (throws GpuError with the reason) and the device on this thread.
+    static std::unique_ptr<GpuDevice> create(const gl::ContextOptions& options = {});
+    /// A device on a context the caller keeps alive (tests share one context).
+    explicit GpuDevice(gl::Context& context);
+    ~GpuDevice();
+    GpuDevice(const GpuDevice&) = delete;
+    GpuDevice& operator=(const GpuDevice&) = delete;
+
+    const gl::Capabilities& capabilities() const { return m_context.capabilities(); }
+    bool isOwnedByThisThread() const { return m_context.isOwnedByThisThread(); }
+    void finish() { m_context.finish(); }
+
+    /// The compiled program of a shader variant: compiled once, then cached by its variant key.
+    const gl::Program& program(const gl::ShaderBuilder& builder);
+    /// Uploads a parameter block (layout.h) and binds it at kBindingParams for the next dispatches.
+    void setParams(const void* data, size_t bytes);
+    template <typename Block>
+    void setParams(const Block& block) {
+        setParams(&block, sizeof(Block));
+    }
+    /// Derived resources shared by every engine (light-depth volumes, environment textures).
+    ResourceCache& cache() { return m_cache; }
+
+private:
+    GpuDevice(std::unique_ptr<gl::Context> owned, gl::Context& context);
+
+    std::unique_ptr<gl::Context> m_owned;
+    gl::Context& m_context;
+    std::map<std::string, gl::Program> m_programs;
+    gl::Buffer m_params;
+    size_t m_paramsCapacity = 0;
+    ResourceCache m_cache;
+};
+
+}  // namespace volstyle::core

@@ -1,0 +1,44 @@
+#pragma once
+/// \file derived_volumes.h
+/// GPU data derived from a volume and the lighting, computed once and reused until what it
+/// depends on changes: brick occupancy (kept in the GpuVolume), light-depth volumes and
+/// environment textures (kept in the device's cache under keys naming every input).
+/// GL thread only.
+
+#include <memory>
+#include <string>
+
+#include "core/gl/object.h"
+#include "core/gpu/gpu_device.h"
+#include "core/render/gpu_volume.h"
+#include "core/render/march_setup.h"
+#include "core/render/params.h"
+
+namespace volstyle::core {
+
+/// Recomputes the occupancy bricks (occupancy.comp) if the extinction changed since.
+void updateOccupancy(GpuDevice& device, GpuVolume& volume, RenderStats& stats);
+
+/// The cache key of a light-depth volume: everything light_depth.comp reads — the extinction
+/// (its version), the grid (dims, transform), the light's direction, the step and traversal.
+std::string lightDepthKey(const GpuVolume& volume, const Vec3d& direction, const RenderSettings& march);
+
+/// The optical depth toward `light` from every voxel centre (light_depth.comp), from the cache or
+/// computed now. Needs current occupancy.
+std::shared_ptr<const gl::Texture> lightDepthVolume(GpuDevice& device, const GpuVolume& volume, const DirectionalLight& light,
+                                                    const RenderSettings& march, RenderStats& stats);
+
+/// An environment map on the GPU, and its largest value (for the early-termination bound).
+struct EnvironmentTexture {
+    std::shared_ptr<const Image> source;  ///< held so the key (its address) is never reused while cached
+    gl::Texture texture;
+    double maxValue = 0;
+};
+std::shared_ptr<const EnvironmentTexture> environmentTexture(GpuDevice& device, const std::shared_ptr<const Image>& image);
+
+/// The MarchParams fields that depend only on the volume and the settings.
+layout::MarchParams volumeParams(const GpuVolume& volume, const RenderSettings& settings);
+/// One invocation per cell of `n`, in kWorkgroup3D³ groups.
+void dispatch3D(Int3 n);
+
+}  // namespace volstyle::core

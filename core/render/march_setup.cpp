@@ -1,0 +1,75 @@
+#include "core/render/march_setup.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "core/render/derived_volumes.h"
+#include "core/render/gl_convert.h"
+
+namespace volstyle::core {
+namespace {
+
+/// The largest phase-function value: 1/4π, or HG at cos = −1 (pbrt's sign puts its peak there).
+double maxPhase(const Phase& phase) {
+    const double inv4pi = 1.0 / (4.0 * std::numbers::pi);
+    if (phase.type == PhaseType::Isotropic) return inv4pi;
+    double g = std::abs(phase.g);
+    return inv4pi * (1 + g) / ((1 - g) * (1 - g));
+}
+
+/// An upper bound on the radiance a ray can gather per unit opacity (early termination):
+/// L_m ≤ max L_e + max ρ · Σ p_max E_l (ρ ≤ 1, T_l ≤ 1); the background is bounded by its max.
+double radianceBound(const GpuVolume& volume, const Lighting& lighting, const EnvironmentTexture* environment) {
+    double bound = volume.maxEmission();
+    for (const auto& l : lighting.lights) bound += maxPhase(lighting.phase) * maxComponent(l.irradiance);
+    return bound + (environment ? environment->maxValue : maxComponent(lighting.background.color));
+}
+
+}  // namespace
+
+MarchSetup prepareMarch(GpuDevice& device, GpuVolume& volume, const Camera& camera, const Lighting& lighting,
+                        const RenderSettings& settings, RenderStats& stats) {
+    updateOccupancy(device, volume, stats);
+
+    // Lights with zero irradiance add nothing: leave them out of the variant.
+    std::vector<const DirectionalLight*> lights;
+    for (const auto& l : lighting.lights)
+        if (maxComponent(l.irradiance) > 0) lights.push_back(&l);
+    MarchSetup setup;
+    for (const DirectionalLight* l : lights) setup.lightDepth.push_back(lightDepthVolume(device, volume, *l, settings, stats));
+    std::shared_ptr<const EnvironmentTexture> environment;
+    if (lighting.background.environment) {
+        environment = environmentTexture(device, lighting.background.environment);
+        setup.environment = std::shared_ptr<const gl::Texture>(environment, &environment->texture);  // shares ownership
+    }
+
+    // Camera and lighting parameters.
+    layout::MarchParams& p = setup.params;
+    p = volumeParams(volume, settings);
+    const Camera::Frame f = camera.frame();
+    p.eye = f4(camera.eye);
+    p.camForward = f4(f.forward, camera.tanHalfFov());
+    p.camRight = f4(f.right, double(camera.width) / double(camera.height));
+    p.camUp = f4(f.up);
+    p.rayRange = {float(camera.nearDist), float(std::min(camera.farDist, 3.0e38)), 0, 0};
+    p.imageSize = {camera.width, camera.height, 0, 0};
+    p.background = f4(lighting.background.color);
+    p.phase = {lighting.phase.type == PhaseType::HenyeyGreenstein ? 1.0f : 0.0f, float(lighting.phase.g), 0, 0};
+    for (size_t i = 0; i < lights.size(); ++i) {
+        p.lightDirection[i] = f4(normalize(lights[i]->direction));
+        p.lightIrradiance[i] = f4(lights[i]->irradiance);
+    }
+    p.march.z = float(radianceBound(volume, lighting, environment.get()));
+    return setup;
+}
+
+void bindMarch(GpuDevice& device, const GpuVolume& volume, const MarchSetup& setup) {
+    device.setParams(setup.params);
+    glBindTextureUnit(layout::kUnitExtinction, volume.extinctionTexture());
+    glBindTextureUnit(layout::kUnitOccupancy, volume.occupancyTexture());
+    if (setup.environment) glBindTextureUnit(layout::kUnitEnvironment, setup.environment->id());
+    for (size_t i = 0; i < setup.lightDepth.size(); ++i)
+        glBindTextureUnit(GLuint(layout::kUnitLightDepth0 + i), setup.lightDepth[i]->id());
+}
+
+}  // namespace volstyle::core

@@ -1,0 +1,43 @@
+#pragma once
+/// \file march_setup.h
+/// What every march kernel shares (the renderer's render.comp, the solver's project.comp and the
+/// engines to come): the uniform block for a camera, and the derived volumes a ray reads —
+/// occupancy bricks, a light-depth volume per lit light, the environment texture. The derived
+/// volumes come from the device's cache and are held by the MarchSetup, so nothing else on the
+/// device (another session's render, an eviction) can free or replace what it binds.
+/// GL thread only.
+
+#include <memory>
+#include <vector>
+
+#include "core/gl/object.h"
+#include "core/gpu/gpu_device.h"
+#include "core/render/gpu_volume.h"
+#include "core/render/params.h"
+#include "core/shaders/layout.h"
+
+namespace volstyle::core {
+
+/// What one frame recomputed, for benchmarks and logs.
+struct RenderStats {
+    double gpuMs = 0;          ///< the render dispatch (GPU timer query)
+    double lightMs = 0;        ///< light-depth volumes recomputed this frame (0 when cached)
+    double occupancyMs = 0;    ///< occupancy recomputed this frame (0 when cached)
+    double totalMs = 0;        ///< wall clock including readback
+    int lightVolumesRecomputed = 0;
+};
+
+struct MarchSetup {
+    layout::MarchParams params;
+    /// Light-depth volumes of the lights with non-zero irradiance, in lightDirection[] order.
+    std::vector<std::shared_ptr<const gl::Texture>> lightDepth;
+    std::shared_ptr<const gl::Texture> environment;  ///< null without an environment map
+};
+
+/// Updates occupancy if stale, finds or computes the derived volumes, fills the uniform block.
+MarchSetup prepareMarch(GpuDevice& device, GpuVolume& volume, const Camera& camera, const Lighting& lighting,
+                        const RenderSettings& settings, RenderStats& stats);
+/// Uploads the block and binds extinction, occupancy, environment and light-depth textures.
+void bindMarch(GpuDevice& device, const GpuVolume& volume, const MarchSetup& setup);
+
+}  // namespace volstyle::core

@@ -1,0 +1,317 @@
+// The solver's set-up (TVCG Sec. 4.2, 5.1–5.2): validated inputs, the observations and weights of
+// every pixel, the hull of unknowns that can matter, the bounds, the regularizer rows and the warm
+// start. Everything is built once, before the first iteration.
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "core/base/errors.h"
+#include "core/render/renderer.h"
+#include "core/solve/solver_state.h"
+#include "core/volume/resample.h"
+
+namespace volstyle::core {
+namespace {
+
+/// Extinction solves divide by L_bg − L_m: below this the pixel carries no information.
+constexpr double kMinRadianceContrast = 1e-6;
+/// A masked pixel whose observation is below this everywhere sees empty space (carves the hull).
+constexpr float kEmptyObservation = 1e-6f;
+/// An upper bound that means "none" in float vectors.
+constexpr float kUnbounded = 3e38f;
+
+std::string describeView(const SolveView& v) { return "view '" + v.name + "'"; }
+
+void validateView(const SolveView& v) {
+    const std::string name = describeView(v);
+    try {
+        v.camera.validate();
+    } catch (const InvalidArgument& e) {
+        throw InvalidArgument(name + ": " + e.what());
+    }
+    if (v.target.width != v.camera.width || v.target.height != v.camera.height)
+        throw InvalidArgument(name + ": the target is " + std::to_string(v.target.width) + "x" +
+                              std::to_string(v.target.height) + " but the camera renders " +
+                              std::to_string(v.camera.width) + "x" + std::to_string(v.camera.height));
+    if (size_t bad = v.target.countNonFinite())
+        throw InvalidArgument(name + ": the target has " + std::to_string(bad) + " non-finite (NaN/Inf) values");
+    if (v.weights) {
+        if (v.weights->width != v.target.width || v.weights->height != v.target.height)
+            throw InvalidArgument(name + ": the weight image size differs from the target's");
+        if (size_t bad = v.weights->countNonFinite())
+            throw InvalidArgument(name + ": the weight image has " + std::to_string(bad) + " non-finite values");
+    }
+}
+
+}  // namespace
+
+Solver::Solver(GpuDevice& device, const Volume& volume, const Lighting& lighting, std::vector<SolveView> views,
+               SolveOptions options)
+    : m_state(std::make_unique<State>(device, volume, lighting, std::move(views), std::move(options))) {
+    State& st = *m_state;
+    st.validateInputs();
+    st.udims = st.opt.resolution.value_or(st.volume.dims());
+    st.cells = size_t(st.udims.volume());
+    st.elements = st.cells * (st.opt.unknown == Unknown::EmissionAlbedo ? 2 : 1);
+    st.gpu = std::make_unique<GpuVolume>(st.volume);
+    st.W = std::make_unique<Projector>(device, *st.gpu, st.lighting, st.opt.unknown, st.opt.basis, st.udims,
+                                       st.opt.stepVoxels, st.opt.exactTraversal);
+    for (const auto& v : st.views) st.W->addView(v.camera);
+    st.allocate();
+    st.buildObservations();
+    st.buildHull();
+    st.initialUnknowns();
+    st.buildRegularizers();
+}
+
+Solver::~Solver() = default;
+
+void Solver::State::validateInputs() {
+    opt.validate();
+    volume.validate();
+    lighting.validate();
+    // Keep the requested views (all with a target by default).
+    std::vector<SolveView> chosen;
+    std::set<std::string> wanted(opt.views.begin(), opt.views.end());
+    for (auto& v : views) {
+        if (!wanted.empty() && !wanted.count(v.name)) continue;
+        wanted.erase(v.name);
+        if (v.target.empty()) {
+            if (!opt.views.empty()) throw InvalidArgument(describeView(v) + " has no target");
+            continue;
+        }
+        chosen.push_back(std::move(v));
+    }
+    if (!wanted.empty()) throw InvalidArgument("solve options: views: no view named '" + *wanted.begin() + "'");
+    if (chosen.empty()) throw InvalidArgument("solve: no view has a target image; upload a painted target first");
+    for (const auto& v : chosen) validateView(v);
+    views = std::move(chosen);
+}
+
+void Solver::State::allocate() {
+    const size_t P = W->pixelCount(), E = elements;
+    for (auto [vector, name] : {std::pair{&obs, "obs"}, {&sqrtW, "sqrt-weights"}, {&rImg, "r-img"}, {&qImg, "q-img"},
+                                {&tmpImg, "tmp-img"}, {&dImg, "d-img"}})
+        *vector = GpuVector(P, name);
+    for (auto [vector, name] : {std::pair{&a, "a"}, {&aPrev, "a-prev"}, {&s, "s"}, {&p, "p"}, {&hull, "hull"},
+                                {&rLap, "r-lap"}, {&qLap, "q-lap"}, {&dLap, "d-lap"}, {&tmpU, "tmp-u"}, {&rId, "r-id"}})
+        *vector = GpuVector(E, name);
+}
+
+void Solver::State::buildObservations() {
+    // The fixed part of each pixel (everything but the unknown's term, TVCG Eq. 5 and after):
+    // rendered from a copy of the volume with the unknown's contribution removed.
+    Volume fixed = volume;
+    Lighting fixedLighting = lighting;
+    const Unknown u = opt.unknown;
+    if (u == Unknown::Emission || u == Unknown::EmissionAlbedo) fixed.emission().clear();
+    if (u == Unknown::Albedo || u == Unknown::EmissionAlbedo) fixed.ensureAlbedo(0.0f).assign(fixed.voxelCount() * 3, 0.0f);
+    if (u == Unknown::Extinction) {
+        fixed.extinction().assign(fixed.voxelCount() * 3, 0.0f);  // what lies behind: L_bg per pixel
+        fixedLighting.lights.clear();
+    }
+    GpuVolume fixedGpu(fixed);
+    Renderer renderer(device);
+    RenderSettings settings;
+    settings.stepVoxels = opt.stepVoxels;
+    settings.exactTraversal = opt.exactTraversal;
+
+    const size_t P = W->pixelCount();
+    std::vector<float> o(P * 4, 0.0f), w(P * 4, 0.0f);
+    viewWeightSum.assign(views.size(), Vec3d(0.0));
+    const Vec3d Lm = opt.mediumRadiance.value_or(Vec3d(0.0));
+    size_t pixel = 0;
+    for (size_t vi = 0; vi < views.size(); ++vi) {
+        const SolveView& v = views[vi];
+        Image F = renderer.render(fixedGpu, v.camera, fixedLighting, settings);
+        for (size_t i = 0; i < v.target.pixelCount(); ++i, ++pixel) {
+            const float* t = &v.target.rgba[4 * i];
+            double weight = std::max(0.0f, t[3]) * (v.weights ? std::max(0.0f, v.weights->rgba[4 * i]) : 1.0f);
+            bool constrained = false;
+            for (int c = 0; c < 3; ++c) {
+                double wc = weight, oc = 0;
+                if (u == Unknown::Extinction) {
+                    // Sec. 4.2.4: o = −ln((L − L_m) / (L_bg − L_m)).
+                    double denom = double(F.rgba[4 * i + size_t(c)]) - Lm[c];
+                    double ratio = std::abs(denom) < kMinRadianceContrast ? -1 : (double(t[c]) - Lm[c]) / denom;
+                    if (wc > 0 && !(ratio > 0)) {
+                        wc = 0;
+                        report.ignoredPixels++;
+                    } else if (wc > 0 && ratio > 1) {
+                        ratio = 1;
+                        report.clampedPixels++;
+                    }
+                    oc = wc > 0 ? -std::log(ratio) : 0;
+                } else {
+                    oc = double(t[c]) - F.rgba[4 * i + size_t(c)];
+                }
+                o[4 * pixel + size_t(c)] = float(oc);
+                w[4 * pixel + size_t(c)] = float(wc);
+                weightSum[c] += wc;
+                viewWeightSum[vi][c] += wc;
+                constrained |= wc > 0;
+            }
+            report.constraintPixels += constrained ? 1 : 0;
+        }
+    }
+    for (size_t i = 0; i < P; ++i)
+        for (int c = 0; c < 3; ++c) {
+            double sum = weightSum[c];
+            w[4 * i + size_t(c)] = sum > 0 ? float(std::sqrt(w[4 * i + size_t(c)] / sum)) : 0.0f;
+        }
+    obs.upload(o);
+    sqrtW.upload(w);
+}
+
+void Solver::State::buildHull() {
+    hullHost.assign(elements * 4, 0.0f);
+    if (!opt.useHull) {
+        for (size_t e = 0; e < elements; ++e) hullHost[4 * e] = hullHost[4 * e + 1] = hullHost[4 * e + 2] = 1.0f;
+    } else if (opt.unknown != Unknown::Extinction) {
+        markHullFromExtinction();
+    } else {
+        markHullFromMasks(obs.download(), sqrtW.download());
+    }
+    hull.upload(hullHost);
+    size_t count = 0;
+    for (size_t e = 0; e < elements; ++e) count += hullHost[4 * e] > 0 ? 1 : 0;
+    report.unknownCount = elements;
+    report.hullCount = count;
+}
+
+namespace {
+
+/// Marks unknown (i, j, k) in every block.
+void markCell(std::vector<float>& hull, size_t cells, size_t blocks, Int3 udims, int i, int j, int k) {
+    for (size_t b = 0; b < blocks; ++b) {
+        size_t e = b * cells + (size_t(k) * udims.y + size_t(j)) * udims.x + size_t(i);
+        hull[4 * e] = hull[4 * e + 1] = hull[4 * e + 2] = 1.0f;
+    }
+}
+
+}  // namespace
+
+void Solver::State::markHullFromExtinction() {
+    // Unknowns whose basis support overlaps non-zero extinction (TVCG Sec. 5.2, visual hulls): the
+    // rest have no influence on any pixel.
+    const Int3 n = volume.dims();
+    const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
+    for (int k = 0; k < n.z; ++k)
+        for (int j = 0; j < n.y; ++j)
+            for (int i = 0; i < n.x; ++i) {
+                if (maxComponent(volume.extinctionAt(i, j, k)) <= 0) continue;
+                int lo[3], hi[3];
+                for (int a = 0; a < 3; ++a) {
+                    int v = a == 0 ? i : (a == 1 ? j : k);
+                    double qlo = (v - 1 + 0.5) * scale[a] - 0.5, qhi = (v + 1 + 0.5) * scale[a] - 0.5;
+                    lo[a] = std::clamp(int(std::floor(qlo)), 0, udims[a] - 1);
+                    hi[a] = std::clamp(int(std::ceil(qhi)), 0, udims[a] - 1);
+                }
+                for (int z = lo[2]; z <= hi[2]; ++z)
+                    for (int y = lo[1]; y <= hi[1]; ++y)
+                        for (int x = lo[0]; x <= hi[0]; ++x) markCell(hullHost, cells, elements / cells, udims, x, y, z);
+            }
+}
+
+void Solver::State::markHullFromMasks(const std::vector<float>& o, const std::vector<float>& w) {
+    // Extinction: carve with the targets' masks. An unknown whose centre a view sees through a
+    // constrained pixel that shows only background (o = 0) is outside the hull.
+    const Int3 n = volume.dims();
+    const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
+    for (int k = 0; k < udims.z; ++k)
+        for (int j = 0; j < udims.y; ++j)
+            for (int i = 0; i < udims.x; ++i) {
+                const Vec3d pw = volume.worldFromIndex().applyPoint((Vec3d(i, j, k) + Vec3d(0.5)) / scale - Vec3d(0.5));
+                bool inside = true;
+                size_t offset = 0;
+                for (const auto& v : views) {
+                    if (auto px = v.camera.project(pw)) {
+                        size_t idx = 4 * (offset + size_t(px->y) * v.camera.width + size_t(px->x));
+                        bool constrained = w[idx] > 0 || w[idx + 1] > 0 || w[idx + 2] > 0;
+                        bool empty = o[idx] <= kEmptyObservation && o[idx + 1] <= kEmptyObservation &&
+                                     o[idx + 2] <= kEmptyObservation;
+                        if (constrained && empty) inside = false;
+                    }
+                    offset += size_t(v.camera.width) * v.camera.height;
+                }
+                if (inside) markCell(hullHost, cells, elements / cells, udims, i, j, k);
+            }
+}
+
+void Solver::State::initialUnknowns() {
+    // Warm start from the volume's current values, resampled onto the unknown grid.
+    const Int3 n = volume.dims();
+    std::vector<float> init(elements * 4, 0.0f);
+    auto put = [&](const std::vector<float>& grid, size_t block) {
+        auto r = resample(GridView{grid, n}, udims, opt.basis, 4);
+        std::copy(r.begin(), r.end(), init.begin() + std::ptrdiff_t(4 * block * cells));
+    };
+    switch (opt.unknown) {
+        case Unknown::Emission:
+            if (volume.hasEmission()) put(volume.emission(), 0);
+            break;
+        case Unknown::Albedo: put(Volume(volume).ensureAlbedo(), 0); break;
+        case Unknown::EmissionAlbedo:
+            if (volume.hasEmission()) put(volume.emission(), 0);
+            put(Volume(volume).ensureAlbedo(), 1);
+            break;
+        case Unknown::Extinction: put(volume.extinction(), 0); break;
+    }
+    // Bounds (Sec. 5.1: a physically plausible, non-negative solution).
+    bounds.blockSize = cells;
+    if (opt.enforceBounds) {
+        bounds.lower[0] = bounds.lower[1] = 0.0f;
+        bounds.upper[0] = opt.unknown == Unknown::Albedo ? 1.0f : kUnbounded;
+        bounds.upper[1] = 1.0f;  // the albedo block of a joint solve
+    }
+    for (size_t e = 0; e < elements; ++e) {
+        size_t b = e / cells;
+        for (int c = 0; c < 3; ++c) init[4 * e + size_t(c)] = std::clamp(init[4 * e + size_t(c)], bounds.lower[b], bounds.upper[b]);
+    }
+    a.upload(init);
+}
+
+void Solver::State::buildRegularizers() {
+    // Regularizer scales per block, averaged over the block's hull unknowns.
+    std::vector<Unknown> kinds = {opt.unknown};
+    if (opt.unknown == Unknown::EmissionAlbedo) kinds = {Unknown::Emission, Unknown::Albedo};
+    for (size_t b = 0; b < kinds.size(); ++b) {
+        size_t inHull = 0;
+        for (size_t e = b * cells; e < (b + 1) * cells; ++e) inHull += hullHost[4 * e] > 0 ? 1 : 0;
+        const double Mh = std::max<double>(1.0, double(inHull));
+        const Regularization& reg = opt.regularizationFor(kinds[b]);
+        const double lambda = reg.l2 + reg.towardOne;
+        BlockRegularizer br;
+        br.range = {b * cells, cells};
+        br.cLap = std::sqrt(reg.laplacian / Mh);
+        br.cId = std::sqrt(lambda / Mh);
+        br.target = lambda > 0 ? reg.towardOne / lambda : 0;
+        blocks.push_back(br);
+        constant += Vec3d(lambda > 0 ? reg.l2 * reg.towardOne / lambda : 0);
+    }
+}
+
+Volume Solver::State::result() {
+    std::vector<float> av = a.download();
+    Volume out = volume;
+    const Int3 n = volume.dims();
+    auto take = [&](size_t block) { return resample(GridView{av, udims, 4, 4 * block * cells}, n, opt.basis, 3); };
+    switch (opt.unknown) {
+        case Unknown::Emission: out.emission() = take(0); break;
+        case Unknown::Albedo: out.albedo() = take(0); break;
+        case Unknown::EmissionAlbedo:
+            out.emission() = take(0);
+            out.albedo() = take(1);
+            break;
+        case Unknown::Extinction: out.extinction() = take(0); break;
+    }
+    // Resampling can step past a bound by rounding only; keep the volume valid.
+    if (opt.enforceBounds || opt.unknown == Unknown::Extinction) {
+        for (float& x : out.extinction()) x = std::max(0.0f, x);
+        for (float& x : out.emission()) x = std::max(0.0f, x);
+        for (float& x : out.albedo()) x = std::clamp(x, 0.0f, 1.0f);
+    }
+    return out;
+}
+
+}  // namespace volstyle::core

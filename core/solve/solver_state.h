@@ -1,0 +1,88 @@
+#pragma once
+/// \file solver_state.h
+/// The solver's working state (internal to core/solve): the problem set up once on the GPU
+/// (solver_setup.cpp: observations, weights, hull, bounds, regularizers, warm start) and the
+/// CGLS vectors the iterations update (solver.cpp).
+
+#include <memory>
+#include <vector>
+
+#include "core/gpu/gpu_device.h"
+#include "core/render/gpu_volume.h"
+#include "core/solve/gpu_vector.h"
+#include "core/solve/projector.h"
+#include "core/solve/solve_options.h"
+#include "core/solve/solver.h"
+
+namespace volstyle::core {
+
+/// Regularizer rows of one block of unknowns (emission, albedo or extinction): √(λ_lap/M) L and
+/// √((λ0+λ1)/M) (a − t) with t = λ1/(λ0+λ1), M the block's hull unknowns (SPEC §2).
+struct BlockRegularizer {
+    Range range;
+    double cLap = 0, cId = 0, target = 0;
+};
+
+/// Per channel: how far one step goes, and whether a bound cuts it short.
+struct StepLength {
+    Vec3d alpha;                ///< the exact line minimum p·s / ‖A p‖²
+    Vec3d toBound{1e300};       ///< the largest step inside the bounds
+    bool hit[3] = {false, false, false};
+    bool anyHit() const { return hit[0] || hit[1] || hit[2]; }
+};
+
+struct Solver::State {
+    GpuDevice& device;
+    Volume volume;
+    Lighting lighting;
+    std::vector<SolveView> views;
+    SolveOptions opt;
+
+    Int3 udims;
+    size_t cells = 0, elements = 0;
+    std::unique_ptr<GpuVolume> gpu;
+    std::unique_ptr<Projector> W;
+    VectorOps ops;
+    // The unknowns a, the previous iterate, gradient s and direction p; the image rows' data
+    // (observations, √weights) and residual/work vectors; the Laplacian rows' residual and work.
+    GpuVector a, aPrev, s, p, hull, obs, sqrtW, rImg, qImg, tmpImg, dImg, rLap, qLap, dLap, tmpU, rId;
+    Bounds bounds;
+    std::vector<BlockRegularizer> blocks;
+    Vec3d constant{0, 0, 0};  // λ0‖a‖² + λ1‖a−1‖² = λ‖a−t‖² + λ0λ1/λ per element
+    Vec3d weightSum{0, 0, 0};
+    std::vector<Vec3d> viewWeightSum;
+    std::vector<float> hullHost;
+    SolveReport report;
+
+    State(GpuDevice& d, const Volume& v, const Lighting& l, std::vector<SolveView> vs, SolveOptions o)
+        : device(d), volume(v), lighting(l), views(std::move(vs)), opt(std::move(o)), ops(d) {}
+
+    // Set-up (solver_setup.cpp).
+    void validateInputs();
+    void allocate();
+    void buildObservations();
+    void buildHull();
+    void markHullFromExtinction();
+    void markHullFromMasks(const std::vector<float>& o, const std::vector<float>& w);
+    void initialUnknowns();
+    void buildRegularizers();
+    Volume result();
+
+    // The operator and residuals (solver.cpp).
+    void applyA(const GpuVector& x, GpuVector& img, GpuVector& lap);  // [img; lap] = A x (identity rows implicit)
+    /// Moves a by step·x with residuals [rImg; rLap; rId] updated by the matching A x = [img; lap].
+    void move(const Vec3d& step, const GpuVector& x, const GpuVector& img, const GpuVector& lap);
+    void applyAt();  // s from rImg, rLap, rId
+    void restart(Vec3d& gamma);
+    Vec3d objective();
+    double totalObjective();
+    std::vector<double> rmsPerView();
+
+    // One iteration's named steps (solver.cpp).
+    StepLength stepLength(const Vec3d& slope);
+    void takeStep(const StepLength& step);
+    void projectedStep(const StepLength& step);
+    Vec3d nextDirection(int iteration, const Vec3d& gamma, Vec3d& slope);
+};
+
+}  // namespace volstyle::core
