@@ -1,24 +1,37 @@
 #include "protocol/error_body.h"
 
+#include "core/base/errors.h"
+
 namespace volstyle::protocol {
 
-nlohmann::json errorBody(const std::string& code, const std::string& message,
-                         const std::vector<FieldError>& details, const std::string& requestId) {
-    nlohmann::json d = nlohmann::json::array();
-    for (const auto& e : details) d.push_back({{"path", e.path}, {"message", e.message}});
-    return {{"error", {{"code", code}, {"message", message}, {"details", d}, {"request_id", requestId}}}};
+ErrorCode errorCodeFromName(std::string_view name) {
+    for (const auto& e : kErrorCodes)
+        if (name == e.name) return e.code;
+    return ErrorCode::InternalError;
 }
 
-int httpStatusFor(const std::string& code) {
-    if (code == "invalid_argument" || code == "unknown_field" || code == "invalid_json") return 400;
-    if (code == "unauthorized") return 401;
-    if (code == "not_found") return 404;
-    if (code == "busy" || code == "cancelled") return 409;
-    if (code == "too_large") return 413;
-    if (code == "unsupported_media" || code == "io_error" || code == "too_many_jobs" || code == "too_many_sessions")
-        return 422;
-    if (code == "out_of_memory") return 507;
-    return 500;
+nlohmann::json errorBody(ErrorCode code, const std::string& message, const std::vector<FieldError>& details,
+                         const std::string& requestId) {
+    nlohmann::json d = nlohmann::json::array();
+    for (const auto& e : details) d.push_back({{"path", e.path}, {"message", e.message}});
+    return {{"error", {{"code", errorName(code)}, {"message", message}, {"details", d}, {"request_id", requestId}}}};
+}
+
+ErrorReport describeException(std::exception_ptr error) {
+    ErrorReport r;
+    try {
+        std::rethrow_exception(error);
+    } catch (const ApiError& e) {
+        r = {e.code(), e.what(), e.details()};
+    } catch (const ValidationError& e) {
+        r = {e.onlyUnknownFields() ? ErrorCode::UnknownField : ErrorCode::InvalidArgument, e.what(), e.details()};
+    } catch (const Error& e) {
+        r = {errorCodeFromName(e.code()), e.what(), {}};
+    } catch (const std::exception& e) {
+        r.message = e.what();
+    } catch (...) {
+    }
+    return r;
 }
 
 }  // namespace volstyle::protocol

@@ -1,6 +1,8 @@
 #include "protocol/validation.h"
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
 
 namespace volstyle::protocol {
 namespace {
@@ -64,7 +66,16 @@ std::optional<int> JsonReader::integer(const nlohmann::json& j, const std::strin
         fail(path, std::string("must be an integer, got ") + typeName(j));
         return std::nullopt;
     }
-    return j.get<int>();
+    // Read wide, then range-check: get<int>() would wrap 4294967360 to 64.
+    const bool fits = j.is_number_unsigned() ? j.get<uint64_t>() <= uint64_t(std::numeric_limits<int>::max())
+                                             : j.get<int64_t>() >= std::numeric_limits<int>::min() &&
+                                                   j.get<int64_t>() <= std::numeric_limits<int>::max();
+    if (!fits) {
+        fail(path, "must be an integer in [" + std::to_string(std::numeric_limits<int>::min()) + ", " +
+                       std::to_string(std::numeric_limits<int>::max()) + "]");
+        return std::nullopt;
+    }
+    return int(j.get<int64_t>());
 }
 
 std::optional<std::string> JsonReader::string(const nlohmann::json& j, const std::string& path) {

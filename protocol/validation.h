@@ -12,6 +12,7 @@
 
 #include "core/base/errors.h"
 #include "core/math/vec.h"
+#include "protocol/error_code.h"
 
 namespace volstyle::protocol {
 
@@ -21,17 +22,13 @@ constexpr const char* kApiVersion = "v1";
 /// /api/v1/schema.json.
 extern const char* const kSchemaV1;
 
-struct FieldError {
-    std::string path;     ///< JSON Pointer of the offending field
-    std::string message;  ///< what is wrong and what is allowed
-};
-
 /// Thrown when a request has invalid fields; `details()` lists each. `code()` is
 /// "unknown_field" when every problem is an unknown field, "invalid_argument" otherwise.
 class ValidationError : public InvalidArgument {
 public:
     explicit ValidationError(std::vector<FieldError> details);
     const std::vector<FieldError>& details() const { return m_details; }
+    bool onlyUnknownFields() const { return m_onlyUnknownFields; }
     const char* code() const noexcept override;
 
 private:

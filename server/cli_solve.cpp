@@ -122,6 +122,76 @@ private:
     bool m_quiet, m_isTty;
 };
 
+/// `--regularization laplacian=0.002,albedo.toward_one=0.01`: "unknown.term" sets one unknown's
+/// weight, starting from the shared ones.
+void applyRegularizationFlag(const std::string& value, core::SolveOptions& opt) {
+    for (const auto& kv : split(value, ',')) {
+        auto eq = kv.find('=');
+        if (eq == std::string::npos) throw InvalidArgument("--regularization takes name=value pairs, got '" + kv + "'");
+        std::string name = kv.substr(0, eq);
+        const double weight = numbers("regularization", kv.substr(eq + 1), 1)[0];
+        core::Regularization* reg = &opt.regularization;
+        if (auto dot = name.find('.'); dot != std::string::npos) {
+            const std::string unknown = name.substr(0, dot);
+            auto& slot = unknown == "emission" ? opt.emissionRegularization : opt.albedoRegularization;
+            if (unknown != "emission" && unknown != "albedo")
+                throw InvalidArgument("--regularization: '" + unknown + "' is not emission or albedo");
+            if (!slot) slot = opt.regularization;
+            reg = &*slot;
+            name = name.substr(dot + 1);
+        }
+        if (name == "laplacian") reg->laplacian = weight;
+        else if (name == "l2") reg->l2 = weight;
+        else if (name == "toward_one") reg->towardOne = weight;
+        else throw InvalidArgument("--regularization: unknown term '" + name + "'; terms: laplacian, l2, toward_one (optionally emission. or albedo.)");
+    }
+}
+
+/// One of `choices` for `--flag`, or InvalidArgument listing them.
+std::string choice(const Arguments& args, const std::string& flag, const std::vector<std::string>& choices) {
+    const std::string v = args.get(flag);
+    for (const auto& c : choices)
+        if (v == c) return v;
+    std::string list;
+    for (const auto& c : choices) list += (list.empty() ? "" : " or ") + c;
+    throw InvalidArgument("--" + flag + " must be " + list);
+}
+
+/// Options: defaults, then OPTS.json, then flags; validated.
+core::SolveOptions solveOptions(const Arguments& args) {
+    core::SolveOptions opt;
+    if (args.has("options"))
+        opt = fromFile(args.get("options"), [&](const nlohmann::json& j) { return protocol::solveOptionsFromJson(j, "", opt); });
+    if (args.has("unknowns")) {
+        auto u = protocol::parseUnknowns(split(args.get("unknowns"), ','));
+        if (!u) throw InvalidArgument("--unknowns must be emission, albedo, emission,albedo or extinction");
+        opt.unknown = *u;
+    }
+    if (args.has("iterations")) opt.maxIterations = int(args.number("iterations", opt.maxIterations));
+    if (args.has("tolerance")) opt.tolerance = args.number("tolerance", opt.tolerance);
+    if (args.has("step")) opt.stepVoxels = args.number("step", opt.stepVoxels);
+    if (args.has("basis")) opt.basis = choice(args, "basis", {"trilinear", "box"}) == "box" ? core::BasisType::Box : core::BasisType::Trilinear;
+    if (args.has("traversal")) opt.exactTraversal = choice(args, "traversal", {"march", "exact"}) == "exact";
+    if (args.has("hull")) opt.useHull = choice(args, "hull", {"extinction", "none"}) == "extinction";
+    if (args.has("regularization")) applyRegularizationFlag(args.get("regularization"), opt);
+    if (args.has("resolution")) {
+        auto r = numbers("resolution", args.get("resolution"), 3);
+        opt.resolution = Int3{int(r[0]), int(r[1]), int(r[2])};
+    }
+    if (args.has("medium-radiance")) {
+        auto m = numbers("medium-radiance", args.get("medium-radiance"), 3);
+        opt.mediumRadiance = Vec3d(m[0], m[1], m[2]);
+    }
+    opt.validate();
+    return opt;
+}
+
+double meanOf(const std::vector<double>& v) {
+    double sum = 0;
+    for (double x : v) sum += x / double(v.size());
+    return sum;
+}
+
 }  // namespace
 
 int runSolve(const std::vector<std::string>& argv) {
@@ -137,66 +207,7 @@ int runSolve(const std::vector<std::string>& argv) {
         if (!args.has(required)) throw InvalidArgument(std::string("--") + (std::string(required) == "output" ? "o OUT.vdb" : required) + " is required\n" + kUsage);
     const std::string output = args.get("output");
     if (fs::path(output).extension() != ".vdb") throw InvalidArgument("-o must end in .vdb, got '" + output + "'");
-
-    // Options: defaults, then OPTS.json, then flags.
-    core::SolveOptions opt;
-    if (args.has("options"))
-        opt = fromFile(args.get("options"), [&](const nlohmann::json& j) { return protocol::solveOptionsFromJson(j, "", opt); });
-    if (args.has("unknowns")) {
-        auto u = protocol::parseUnknowns(split(args.get("unknowns"), ','));
-        if (!u) throw InvalidArgument("--unknowns must be emission, albedo, emission,albedo or extinction");
-        opt.unknown = *u;
-    }
-    if (args.has("iterations")) opt.maxIterations = int(args.number("iterations", opt.maxIterations));
-    if (args.has("tolerance")) opt.tolerance = args.number("tolerance", opt.tolerance);
-    if (args.has("step")) opt.stepVoxels = args.number("step", opt.stepVoxels);
-    if (args.has("basis")) {
-        const std::string b = args.get("basis");
-        if (b != "trilinear" && b != "box") throw InvalidArgument("--basis must be trilinear or box");
-        opt.basis = b == "box" ? core::BasisType::Box : core::BasisType::Trilinear;
-    }
-    if (args.has("traversal")) {
-        const std::string t = args.get("traversal");
-        if (t != "march" && t != "exact") throw InvalidArgument("--traversal must be march or exact");
-        opt.exactTraversal = t == "exact";
-    }
-    if (args.has("hull")) {
-        const std::string h = args.get("hull");
-        if (h != "extinction" && h != "none") throw InvalidArgument("--hull must be extinction or none");
-        opt.useHull = h == "extinction";
-    }
-    if (args.has("regularization")) {
-        for (const auto& kv : split(args.get("regularization"), ',')) {
-            auto eq = kv.find('=');
-            if (eq == std::string::npos) throw InvalidArgument("--regularization takes name=value pairs, got '" + kv + "'");
-            std::string name = kv.substr(0, eq);
-            double value = numbers("regularization", kv.substr(eq + 1), 1)[0];
-            // "albedo.toward_one=…" sets one unknown's weight (starting from the shared ones).
-            core::Regularization* reg = &opt.regularization;
-            if (auto dot = name.find('.'); dot != std::string::npos) {
-                const std::string unknown = name.substr(0, dot);
-                auto& slot = unknown == "emission" ? opt.emissionRegularization : opt.albedoRegularization;
-                if (unknown != "emission" && unknown != "albedo")
-                    throw InvalidArgument("--regularization: '" + unknown + "' is not emission or albedo");
-                if (!slot) slot = opt.regularization;
-                reg = &*slot;
-                name = name.substr(dot + 1);
-            }
-            if (name == "laplacian") reg->laplacian = value;
-            else if (name == "l2") reg->l2 = value;
-            else if (name == "toward_one") reg->towardOne = value;
-            else throw InvalidArgument("--regularization: unknown term '" + name + "'; terms: laplacian, l2, toward_one (optionally emission. or albedo.)");
-        }
-    }
-    if (args.has("resolution")) {
-        auto r = numbers("resolution", args.get("resolution"), 3);
-        opt.resolution = Int3{int(r[0]), int(r[1]), int(r[2])};
-    }
-    if (args.has("medium-radiance")) {
-        auto m = numbers("medium-radiance", args.get("medium-radiance"), 3);
-        opt.mediumRadiance = Vec3d(m[0], m[1], m[2]);
-    }
-    opt.validate();
+    const core::SolveOptions opt = solveOptions(args);
 
     core::Lighting lighting = core::defaultLighting();
     std::vector<core::SolveView> views = readViews(args.get("views"), lighting);
@@ -211,12 +222,10 @@ int runSolve(const std::vector<std::string>& argv) {
     if (fs::path(output).has_parent_path()) fs::create_directories(fs::path(output).parent_path());
     core::saveVdb(output, result.volume);
     const auto& rep = result.report;
-    double rms0 = 0, rms1 = 0;
-    for (double x : rep.initialRms) rms0 += x / double(rep.initialRms.size());
-    for (double x : rep.finalRms) rms1 += x / double(rep.finalRms.size());
     std::fprintf(stderr, "%s: %d iterations (%s), RMS %.4g -> %.4g, %.2f s (forward %.2f, back-projection %.2f, vectors %.2f); wrote %s\n",
-                 core::unknownName(opt.unknown), rep.iterations, core::stopReasonName(rep.stopReason), rms0, rms1, rep.totalMs / 1000,
-                 rep.forwardMs / 1000, rep.adjointMs / 1000, rep.vectorMs / 1000, output.c_str());
+                 core::unknownName(opt.unknown), rep.iterations, core::stopReasonName(rep.stopReason), meanOf(rep.initialRms),
+                 meanOf(rep.finalRms), rep.totalMs / 1000, rep.forwardMs / 1000, rep.adjointMs / 1000, rep.vectorMs / 1000,
+                 output.c_str());
     return 0;
 }
 

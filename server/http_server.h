@@ -1,8 +1,8 @@
 #pragma once
 /// \file http_server.h
-/// `volstyle serve`: the HTTP/JSON API of SPEC §3 over cpp-httplib. This first part serves
-/// health, the built-in scenes, sessions, lighting and renders; views, targets, solve jobs, events,
-/// durability and the painting page follow (issue #4).
+/// `volstyle serve`: the HTTP/JSON API of SPEC §3 over cpp-httplib. This file is the shell —
+/// options, request ids, the bearer token, the error body for every failure, static files — and
+/// the routes live by resource under server/routes/, calling the SessionService.
 
 #include <memory>
 #include <string>

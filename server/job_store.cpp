@@ -1,10 +1,23 @@
 #include "server/job_store.h"
 
+#include "protocol/error_body.h"
 #include "server/session_store.h"
 
 namespace volstyle::server {
 
-void Job::emit(const std::string& event, nlohmann::json data) {
+void Job::setState(protocol::JobState s) {
+    std::lock_guard lock(mutex);
+    state = s;
+}
+
+void Job::fail(protocol::JobState s, protocol::ErrorCode code, const std::string& message,
+               const std::vector<protocol::FieldError>& details) {
+    std::lock_guard lock(mutex);
+    state = s;
+    error = protocol::errorBody(code, message, details, "")["error"];
+}
+
+void Job::emit(protocol::JobEvent event, nlohmann::json data) {
     {
         std::lock_guard lock(mutex);
         events.emplace_back(event, std::move(data));
@@ -14,7 +27,12 @@ void Job::emit(const std::string& event, nlohmann::json data) {
 
 nlohmann::json Job::toJson() const {
     std::lock_guard lock(mutex);
-    return {{"id", id}, {"session", session}, {"state", state}, {"progress", progress}, {"result", result}, {"error", error}};
+    return {{"id", id},
+            {"session", session},
+            {"state", protocol::jobStateName(state)},
+            {"progress", progress},
+            {"result", result},
+            {"error", error}};
 }
 
 std::shared_ptr<Job> JobStore::add(const std::string& session) {
@@ -45,6 +63,13 @@ size_t JobStore::pending(const std::string& session) const {
         n += j->session == session && !j->isFinished() ? 1 : 0;
     }
     return n;
+}
+
+std::vector<std::shared_ptr<Job>> JobStore::all() const {
+    std::lock_guard lock(m_mutex);
+    std::vector<std::shared_ptr<Job>> out;
+    for (const auto& [id, j] : m_jobs) out.push_back(j);
+    return out;
 }
 
 }  // namespace volstyle::server

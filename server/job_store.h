@@ -1,7 +1,7 @@
 #pragma once
 /// \file job_store.h
 /// Solve jobs: their state, progress and result, and the events the SSE stream replays
-/// (`progress`, `preview`, then one of `done`, `failed`, `cancelled`).
+/// (`progress`, `preview`, then one final event named after the final state).
 
 #include <nlohmann/json.hpp>
 
@@ -10,11 +10,12 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <optional>
 #include <string>
 #include <vector>
 
-#include "core/volume/volume.h"
+#include "core/render/gpu_volume.h"
+#include "protocol/error_code.h"
+#include "protocol/vocabulary.h"
 
 namespace volstyle::server {
 
@@ -24,14 +25,20 @@ struct Job {
 
     mutable std::mutex mutex;
     std::condition_variable changed;
-    std::string state = "queued";  ///< queued, running, done, failed, cancelled
+    protocol::JobState state = protocol::JobState::Queued;
     nlohmann::json progress = nlohmann::json::object();
     nlohmann::json result = nullptr, error = nullptr;
-    std::vector<std::pair<std::string, nlohmann::json>> events;  ///< (event name, data)
-    std::optional<core::Volume> preview;                         ///< the latest iterate, for previews
+    std::vector<std::pair<protocol::JobEvent, nlohmann::json>> events;
+    /// The latest iterate on the GPU, for previews: created, updated and freed on the GL thread
+    /// while the job runs (one copy per job, not one upload per request); null otherwise.
+    std::shared_ptr<core::GpuVolume> preview;
 
-    bool isFinished() const { return state == "done" || state == "failed" || state == "cancelled"; }
-    void emit(const std::string& event, nlohmann::json data);   ///< appends and wakes listeners
+    bool isFinished() const { return protocol::isFinished(state); }
+    void setState(protocol::JobState s);
+    /// Ends the job in `s` with `error` (an ErrorCode and message) unless s is Done.
+    void fail(protocol::JobState s, protocol::ErrorCode code, const std::string& message,
+              const std::vector<protocol::FieldError>& details = {});
+    void emit(protocol::JobEvent event, nlohmann::json data);  ///< appends and wakes listeners
     nlohmann::json toJson() const;
 };
 
@@ -42,6 +49,7 @@ public:
     void restore(std::shared_ptr<Job> job);
     /// Jobs of a session not yet finished (the queue limit counts them).
     size_t pending(const std::string& session) const;
+    std::vector<std::shared_ptr<Job>> all() const;
 
 private:
     mutable std::mutex m_mutex;

@@ -153,20 +153,17 @@ std::vector<std::shared_ptr<Job>> Persistence::loadJobs() {
             auto job = std::make_shared<Job>();
             job->id = j["id"];
             job->session = j["session"];
-            job->state = j["state"];
+            const std::string state = j["state"];
+            job->state = protocol::jobStateFromName(state).value_or(protocol::JobState::Running);
             job->progress = j["progress"];
             job->result = j["result"];
             job->error = j["error"];
             if (!job->isFinished()) {
-                job->state = "failed";
-                job->error = protocol::errorBody("interrupted", "the server stopped while this job was " +
-                                                                     j["state"].get<std::string>() + "; the volume keeps its last committed version",
-                                                 {}, "")["error"];
-                job->events.emplace_back("failed", job->toJson());
+                job->fail(protocol::JobState::Failed, protocol::ErrorCode::Interrupted,
+                          "the server stopped while this job was " + state + "; the volume keeps its last committed version");
                 saveJob(*job);
-            } else {
-                job->events.emplace_back(job->state, job->toJson());
             }
+            job->events.emplace_back(protocol::finalEvent(job->state), job->toJson());
             out.push_back(job);
         } catch (const std::exception& e) {
             spdlog::error("restore: skipping job '{}': {}", entry.path().filename().string(), e.what());

@@ -3,6 +3,7 @@
 #include <random>
 
 #include "core/base/errors.h"
+#include "protocol/error_code.h"
 
 namespace volstyle::server {
 
@@ -23,8 +24,8 @@ std::string SessionStore::newId() {
 std::shared_ptr<Session> SessionStore::add(std::shared_ptr<Session> s) {
     std::lock_guard lock(m_mutex);
     if (m_sessions.size() >= m_max)
-        throw InvalidArgument("too_many_sessions: the server holds its limit of " + std::to_string(m_max) +
-                              " sessions; delete one first");
+        throw protocol::ApiError(protocol::ErrorCode::TooManySessions, "the server holds its limit of " +
+                                                                           std::to_string(m_max) + " sessions; delete one first");
     s->id = newId();
     m_sessions[s->id] = s;
     return s;

@@ -42,7 +42,8 @@ struct Session {
 class SessionStore {
 public:
     explicit SessionStore(size_t maxSessions) : m_max(maxSessions) {}
-    /// Adds a session with a fresh id; throws TooMany when full.
+    /// Adds a session with a fresh id; throws ApiError too_many_sessions when full (checked under
+    /// the store's lock, so concurrent creates cannot pass the limit).
     std::shared_ptr<Session> add(std::shared_ptr<Session> s);
     void restore(std::shared_ptr<Session> s);  ///< keeps its id (restart)
     std::shared_ptr<Session> find(const std::string& id) const;  ///< nullptr if unknown

@@ -35,6 +35,14 @@ VOLSTYLE_DECLARE_ERROR(InternalError, "internal_error");  ///< a broken invarian
 
 #undef VOLSTYLE_DECLARE_ERROR
 
+/// Input over a configured limit (voxels, image sides, bytes): bad input, so an InvalidArgument
+/// to callers that only know that, but typed so a server answers 413/422 without reading messages.
+class LimitExceeded : public InvalidArgument {
+public:
+    using InvalidArgument::InvalidArgument;
+    const char* code() const noexcept override { return "too_large"; }
+};
+
 namespace detail {
 template <typename A, typename B>
 [[noreturn]] void throwCheckFailure(const char* expr, const A& a, const B& b, const char* file,

@@ -74,7 +74,7 @@ LoadedImage loadImage(const std::string& path, int maxSide) {
     }
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.width < 1 || spec.height < 1 || spec.width > maxSide || spec.height > maxSide) {
-        throw InvalidArgument("loadImage(): '" + path + "' is " + std::to_string(spec.width) + "x" +
+        throw LimitExceeded("loadImage(): '" + path + "' is " + std::to_string(spec.width) + "x" +
                               std::to_string(spec.height) + "; each side must be in [1, " +
                               std::to_string(maxSide) + "]");
     }

@@ -4,11 +4,11 @@
 /// flags. `check()` lists every problem with the JSON field it belongs to.
 
 #include <iosfwd>
-#include <iterator>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "core/base/name_table.h"
 #include "core/image/image.h"
 #include "core/math/vec.h"
 #include "core/render/params.h"
@@ -82,11 +82,7 @@ enum class StopReason {
     EmptyHull,           ///< no unknown can influence any pixel
     NumericalBreakdown,  ///< the objective became non-finite; the last finite iterate is kept
 };
-struct StopReasonName {
-    StopReason reason;
-    const char* name;
-};
-inline constexpr StopReasonName kStopReasons[] = {
+inline constexpr Named<StopReason> kStopReasons[] = {
     {StopReason::None, "none"},
     {StopReason::Converged, "converged"},
     {StopReason::Stagnated, "stagnated"},
@@ -96,12 +92,8 @@ inline constexpr StopReasonName kStopReasons[] = {
     {StopReason::EmptyHull, "empty_hull"},
     {StopReason::NumericalBreakdown, "numerical_breakdown"},
 };
-constexpr const char* stopReasonName(StopReason r) {
-    for (const auto& e : kStopReasons)
-        if (e.reason == r) return e.name;
-    return "none";
-}
-static_assert(std::size(kStopReasons) == size_t(StopReason::NumericalBreakdown) + 1, "a name for every reason");
+static_assert(coversInOrder(kStopReasons), "a name for every reason");
+constexpr const char* stopReasonName(StopReason r) { return nameOf(kStopReasons, r); }
 std::ostream& operator<<(std::ostream& out, StopReason r);
 
 struct SolveReport {

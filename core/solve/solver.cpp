@@ -191,6 +191,24 @@ Vec3d Solver::State::nextDirection(int iteration, const Vec3d& gamma, Vec3d& slo
     return gammaNew;
 }
 
+SolveProgress Solver::State::recordIteration(int iteration, double objective, Clock::time_point start,
+                                             Clock::time_point iterationStart, const ProjectorStats& before) {
+    report.iterations = iteration;
+    report.objectiveHistory.push_back(objective);
+    report.finalRms = rmsPerView();
+    const ProjectorStats& after = W->stats();
+    SolveProgress pr;
+    pr.iteration = iteration;
+    pr.objective = objective;
+    pr.rmsPerView = report.finalRms;
+    pr.elapsedMs = msSince(start);
+    pr.forwardMs = after.forwardMs - before.forwardMs;
+    pr.adjointMs = after.adjointMs - before.adjointMs;
+    pr.vectorMs = std::max(0.0, msSince(iterationStart) - pr.forwardMs - pr.adjointMs);
+    report.forwardMs += pr.forwardMs, report.adjointMs += pr.adjointMs, report.vectorMs += pr.vectorMs;
+    return pr;
+}
+
 Volume Solver::currentVolume() { return m_state->result(); }
 
 namespace {
@@ -245,19 +263,7 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
         }
         gamma = st.nextDirection(it, gamma, slope);
 
-        rep.iterations = it;
-        rep.objectiveHistory.push_back(fNew);
-        rep.finalRms = st.rmsPerView();
-        const ProjectorStats& after = st.W->stats();
-        SolveProgress pr;
-        pr.iteration = it;
-        pr.objective = fNew;
-        pr.rmsPerView = rep.finalRms;
-        pr.elapsedMs = msSince(t0);
-        pr.forwardMs = after.forwardMs - before.forwardMs;
-        pr.adjointMs = after.adjointMs - before.adjointMs;
-        pr.vectorMs = std::max(0.0, msSince(tIt) - pr.forwardMs - pr.adjointMs);
-        rep.forwardMs += pr.forwardMs, rep.adjointMs += pr.adjointMs, rep.vectorMs += pr.vectorMs;
+        const SolveProgress pr = st.recordIteration(it, fNew, t0, tIt, before);
         if (progress) progress(pr);
 
         rep.stopReason = stopTest(f, fNew, step.anyHit(), st.opt.tolerance, flat);

@@ -43,6 +43,28 @@ void validateView(const SolveView& v) {
     }
 }
 
+/// One channel of one pixel: the observation o and its weight w.
+struct Observation {
+    double value = 0, weight = 0;
+};
+
+/// Extinction (TVCG Sec. 4.2.4): o = −ln((L − L_m) / (L_bg − L_m)) from the target L, the
+/// background seen through the empty box L_bg and the medium radiance L_m. A ratio that is not
+/// positive carries no information (weight 0); one above 1 is clamped to 1 (o = 0).
+Observation observeTransmittance(double target, double background, double medium, double weight, SolveReport& report) {
+    const double denom = background - medium;
+    double ratio = std::abs(denom) < kMinRadianceContrast ? -1 : (target - medium) / denom;
+    if (weight > 0 && !(ratio > 0)) {
+        report.ignoredPixels++;
+        return {0, 0};
+    }
+    if (weight > 0 && ratio > 1) {
+        ratio = 1;
+        report.clampedPixels++;
+    }
+    return {weight > 0 ? -std::log(ratio) : 0, weight};
+}
+
 }  // namespace
 
 Solver::Solver(GpuDevice& device, const Volume& volume, const Lighting& lighting, std::vector<SolveView> views,
@@ -126,30 +148,16 @@ void Solver::State::buildObservations() {
         Image F = renderer.render(fixedGpu, v.camera, fixedLighting, settings);
         for (size_t i = 0; i < v.target.pixelCount(); ++i, ++pixel) {
             const float* t = &v.target.rgba[4 * i];
-            double weight = std::max(0.0f, t[3]) * (v.weights ? std::max(0.0f, v.weights->rgba[4 * i]) : 1.0f);
+            const double weight = std::max(0.0f, t[3]) * (v.weights ? std::max(0.0f, v.weights->rgba[4 * i]) : 1.0f);
             bool constrained = false;
             for (int c = 0; c < 3; ++c) {
-                double wc = weight, oc = 0;
-                if (u == Unknown::Extinction) {
-                    // Sec. 4.2.4: o = −ln((L − L_m) / (L_bg − L_m)).
-                    double denom = double(F.rgba[4 * i + size_t(c)]) - Lm[c];
-                    double ratio = std::abs(denom) < kMinRadianceContrast ? -1 : (double(t[c]) - Lm[c]) / denom;
-                    if (wc > 0 && !(ratio > 0)) {
-                        wc = 0;
-                        report.ignoredPixels++;
-                    } else if (wc > 0 && ratio > 1) {
-                        ratio = 1;
-                        report.clampedPixels++;
-                    }
-                    oc = wc > 0 ? -std::log(ratio) : 0;
-                } else {
-                    oc = double(t[c]) - F.rgba[4 * i + size_t(c)];
-                }
-                o[4 * pixel + size_t(c)] = float(oc);
-                w[4 * pixel + size_t(c)] = float(wc);
-                weightSum[c] += wc;
-                viewWeightSum[vi][c] += wc;
-                constrained |= wc > 0;
+                const Observation ob = u == Unknown::Extinction ? observeTransmittance(t[c], F.rgba[4 * i + size_t(c)], Lm[c], weight, report)
+                                                                : Observation{double(t[c]) - F.rgba[4 * i + size_t(c)], weight};
+                o[4 * pixel + size_t(c)] = float(ob.value);
+                w[4 * pixel + size_t(c)] = float(ob.weight);
+                weightSum[c] += ob.weight;
+                viewWeightSum[vi][c] += ob.weight;
+                constrained |= ob.weight > 0;
             }
             report.constraintPixels += constrained ? 1 : 0;
         }

@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/base/stopwatch.h"
 #include "core/gpu/gpu_device.h"
 #include "core/render/gpu_volume.h"
 #include "core/solve/gpu_vector.h"
@@ -83,6 +84,9 @@ struct Solver::State {
     void takeStep(const StepLength& step);
     void projectedStep(const StepLength& step);
     Vec3d nextDirection(int iteration, const Vec3d& gamma, Vec3d& slope);
+    /// Adds the iteration to the report and returns its progress (with this iteration's times).
+    SolveProgress recordIteration(int iteration, double objective, Clock::time_point start,
+                                  Clock::time_point iterationStart, const ProjectorStats& before);
 };
 
 }  // namespace volstyle::core

@@ -144,7 +144,7 @@ Volume loadVdb(const std::string& path, const VolumeLimits& limits) {
         s << "loadVdb(): the active box of '" << extinction->getName() << "' in '" << path << "' is "
           << dims << " voxels, over the limit of " << limits.maxVoxels << " voxels (at most "
           << limits.maxSide << " on a side)";
-        throw InvalidArgument(s.str());
+        throw LimitExceeded(s.str());
     }
 
     // Dense voxel (0,0,0) is the box's minimum corner.

@@ -87,7 +87,7 @@ void Volume::validate(const VolumeLimits& limits) const {
         m_dims.y > limits.maxSide || m_dims.z > limits.maxSide) {
         s << "Volume::validate(): " << m_dims << " voxels is over the limit of " << limits.maxVoxels
           << " voxels (at most " << limits.maxSide << " on a side)";
-        throw InvalidArgument(s.str());
+        throw LimitExceeded(s.str());
     }
     (void)m_worldFromIndex.inverseAffine();  // throws when singular
     const float inf = std::numeric_limits<float>::max();

@@ -5,11 +5,15 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <fstream>
+#include <functional>
 #include <thread>
 
 #include "core/base/errors.h"
 #include "core/image/image_io.h"
+#include "core/volume/vdb_io.h"
 #include "server/http_server.h"
 
 using namespace volstyle;
@@ -353,4 +357,85 @@ TEST_F(Api, ViewEndpointsAndSchema) {
     auto schema = client().Get("/api/v1/schema.json");
     EXPECT_EQ(schema->status, 200);
     EXPECT_TRUE(json::parse(schema->body)["definitions"].contains("session"));
+}
+
+namespace {
+
+/// Lighting of three suns (light-depth volumes: three per volume on the GL thread's cache).
+json threeSuns(double turn) {
+    json lights = json::array();
+    for (int i = 0; i < 3; ++i) {
+        double a = turn + 2.1 * i;
+        lights.push_back({{"direction", {std::cos(a), 0.6, std::sin(a)}}, {"irradiance", {1.5 - 0.4 * i, 1.2, 1.0}}});
+    }
+    return {{"lights", lights}, {"background", {0.05, 0.05, 0.08}}};
+}
+
+/// A 24³ cloud under three suns with two painted views, ready for an albedo solve.
+std::string albedoSession(httplib::Client& c) {
+    auto r = c.Post("/api/v1/sessions", R"({"scene": "builtin:cloud", "resolution": 24})", "application/json");
+    const std::string base = "/api/v1/sessions/" + json::parse(r->body)["id"].get<std::string>();
+    EXPECT_EQ(c.Put((base + "/lighting").c_str(), threeSuns(0.3).dump(), "application/json")->status, 200);
+    addConstantTargetView(c, base, 32, 0.06f);  // darker than the cloud renders: the albedo must fall
+    json side = {{"camera", {{"eye", {2.8, 0.4, 1.0}}, {"target", {0, 0, 0}}, {"width", 32}, {"height", 32}}}};
+    std::string vid = json::parse(c.Post((base + "/views").c_str(), side.dump(), "application/json")->body)["id"];
+    core::Image target(32, 32);
+    for (size_t i = 0; i < target.pixelCount(); ++i) target.rgba[4 * i] = 0.09f, target.rgba[4 * i + 1] = 0.06f, target.rgba[4 * i + 2] = 0.04f, target.rgba[4 * i + 3] = 1;
+    EXPECT_EQ(c.Put((base + "/views/" + vid + "/target").c_str(), pngOf(target), "image/png")->status, 200);
+    return base;
+}
+
+/// Solves the session's albedo, returns the solved version's albedo grid (from its VDB).
+std::vector<float> solveAlbedo(httplib::Client& c, const std::string& base, const std::function<void(const std::string&)>& during = {}) {
+    auto r = c.Post((base + "/solve").c_str(), R"({"unknowns": ["albedo"], "max_iterations": 40, "tolerance": 0})", "application/json");
+    EXPECT_EQ(r->status, 202) << r->body;
+    const std::string job = json::parse(r->body)["job"];
+    if (during) during(job);
+    auto events = readEvents(c, "/api/v1/jobs/" + job + "/events");
+    EXPECT_EQ(events.back(), "done");
+    json report = json::parse(c.Get(("/api/v1/jobs/" + job).c_str())->body)["result"]["report"];
+    EXPECT_GE(report["iterations"].get<int>(), 20) << report;
+    auto vdb = c.Get((base + "/volume.vdb").c_str());
+    const std::string path = testing::TempDir() + "/solved-" + job + ".vdb";
+    std::ofstream(path, std::ios::binary) << vdb->body;
+    return core::loadVdb(path).albedo();
+}
+
+}  // namespace
+
+TEST_F(Api, PreviewsAndOtherSessionsDuringASolveChangeNothing) {
+    // Issue #8: a solve's light-depth volumes were freed by the GL thread's cache when other
+    // sessions rendered or previews were fetched, and the solve went on binding the dead names.
+    const std::vector<float> alone = solveAlbedo(client(), albedoSession(client()));
+
+    const std::string busy = albedoSession(client());
+    auto other = client().Post("/api/v1/sessions", R"({"scene": "builtin:plume", "resolution": 16})", "application/json");
+    const std::string otherBase = "/api/v1/sessions/" + json::parse(other->body)["id"].get<std::string>();
+    ASSERT_EQ(client().Put((otherBase + "/lighting").c_str(), threeSuns(1.7).dump(), "application/json")->status, 200);
+    std::atomic<int> otherRenders{0}, previews{0};
+    const std::vector<float> disturbed = solveAlbedo(client(), busy, [&](const std::string& job) {
+        // Until the job ends: another user renders their session, and this one fetches previews.
+        auto running = [&](httplib::Client& c) {
+            auto r = c.Get(("/api/v1/jobs/" + job).c_str());
+            return r && json::parse(r->body)["state"] != "done" && json::parse(r->body)["state"] != "failed";
+        };
+        std::thread renderer([&] {
+            httplib::Client c("127.0.0.1", m_port);
+            for (int i = 0; running(c); ++i) {
+                json body = {{"camera", {{"eye", {3 * std::sin(i), 0.3, 3 * std::cos(i)}}, {"target", {0, 0, 0}}, {"width", 12}, {"height", 12}}}};
+                if (c.Post((otherBase + "/render").c_str(), body.dump(), "application/json")->status == 200) otherRenders++;
+            }
+        });
+        httplib::Client c("127.0.0.1", m_port);
+        while (running(c))
+            if (c.Get(("/api/v1/jobs/" + job + "/preview/v1.png").c_str())->status == 200) previews++;
+        renderer.join();
+    });
+    ASSERT_EQ(alone.size(), disturbed.size());
+    double diff = 0;
+    for (size_t i = 0; i < alone.size(); ++i) diff = std::max(diff, double(std::abs(alone[i] - disturbed[i])));
+    std::cout << "[ measured ] albedo difference with " << otherRenders << " renders of another session and " << previews
+              << " previews during the solve: " << diff << "\n";
+    EXPECT_GT(otherRenders + previews, 2) << "the solve should have been disturbed";
+    EXPECT_LE(diff, 1e-5);
 }

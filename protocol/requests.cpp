@@ -1,0 +1,136 @@
+#include "protocol/requests.h"
+
+#include <charconv>
+#include <cmath>
+
+#include "protocol/render_json.h"
+#include "protocol/solve_json.h"
+
+namespace volstyle::protocol {
+
+const char* imageFormatName(ImageFormat f) { return f == ImageFormat::Png ? "png" : "exr"; }
+const char* imageMimeType(ImageFormat f) { return f == ImageFormat::Png ? "image/png" : "image/x-exr"; }
+
+core::Camera readCamera(JsonReader& r, const nlohmann::json& body, const std::string& path, const RequestLimits& limits) {
+    const std::string key = path.substr(path.rfind('/') + 1);
+    core::Camera camera;
+    if (!body.contains(key)) {
+        r.fail(path, "is required");
+        return camera;
+    }
+    try {
+        camera = cameraFromJson(body[key], path);
+    } catch (const ValidationError& e) {
+        for (const auto& d : e.details()) r.fail(d.path, d.message);
+        return camera;
+    }
+    if (camera.width > limits.maxImageSide || camera.height > limits.maxImageSide)
+        r.fail(path, "images are limited to " + std::to_string(limits.maxImageSide) + " pixels a side");
+    return camera;
+}
+
+CreateSessionRequest CreateSessionRequest::fromJson(const nlohmann::json& j, const RequestLimits& limits) {
+    JsonReader r;
+    CreateSessionRequest q;
+    if (r.object(j, "", {"scene", "resolution"})) {
+        if (j.contains("scene")) q.scene = r.string(j["scene"], "/scene").value_or(q.scene);
+        if (j.contains("resolution")) q.resolution = r.integer(j["resolution"], "/resolution").value_or(q.resolution);
+        if (q.scene.rfind("builtin:", 0) != 0) r.fail("/scene", "must be builtin:NAME (upload a VDB with PUT …/volume instead)");
+        if (q.resolution < limits.minSceneResolution || q.resolution > limits.maxSceneResolution)
+            r.fail("/resolution", "must be in [" + std::to_string(limits.minSceneResolution) + ", " +
+                                      std::to_string(limits.maxSceneResolution) + "]");
+    }
+    r.throwIfErrors();
+    return q;
+}
+
+RenderRequest RenderRequest::fromJson(const nlohmann::json& j, const RequestLimits& limits) {
+    JsonReader r;
+    RenderRequest q;
+    if (r.object(j, "", {"camera", "format", "exposure", "mode"})) {
+        q.camera = readCamera(r, j, "/camera", limits);
+        if (j.contains("format")) {
+            auto f = r.string(j["format"], "/format");
+            if (f == "png") q.format = ImageFormat::Png;
+            else if (f == "exr") q.format = ImageFormat::Exr;
+            else if (f) r.fail("/format", "must be 'png' or 'exr'");
+        }
+        if (j.contains("exposure")) q.exposure = r.number(j["exposure"], "/exposure").value_or(0);
+        if (j.contains("mode") && r.string(j["mode"], "/mode").value_or("") != "single_scattering")
+            r.fail("/mode", "must be 'single_scattering'");
+    }
+    r.throwIfErrors();
+    return q;
+}
+
+AddViewRequest AddViewRequest::fromJson(const nlohmann::json& j, const RequestLimits& limits) {
+    JsonReader r;
+    AddViewRequest q;
+    if (r.object(j, "", {"camera"})) q.camera = readCamera(r, j, "/camera", limits);
+    r.throwIfErrors();
+    return q;
+}
+
+RevertRequest RevertRequest::fromJson(const nlohmann::json& j) {
+    JsonReader r;
+    RevertRequest q;
+    if (r.object(j, "", {"version"})) {
+        if (!j.contains("version")) r.fail("/version", "is required");
+        else q.version = r.integer(j["version"], "/version").value_or(0);
+    }
+    r.throwIfErrors();
+    return q;
+}
+
+SetLightingRequest SetLightingRequest::fromJson(const nlohmann::json& j) { return {lightingFromJson(j).lighting}; }
+
+SolveRequest SolveRequest::fromJson(const nlohmann::json& j) { return {solveOptionsFromJson(j)}; }
+
+namespace {
+
+/// The last value of `name`, if given.
+std::optional<std::string> lastValue(const QueryParams& params, const std::string& name) {
+    auto [lo, hi] = params.equal_range(name);
+    if (lo == hi) return std::nullopt;
+    return std::prev(hi)->second;
+}
+
+/// The whole text as a number of type T, or nothing (no trailing characters, no NaN or ±inf).
+template <typename T>
+std::optional<T> parseWhole(const std::string& text) {
+    T value{};
+    const char* end = text.data() + text.size();
+    auto [ptr, ec] = std::from_chars(text.data(), end, value);
+    if (ec != std::errc() || ptr != end || text.empty()) return std::nullopt;
+    if constexpr (std::is_floating_point_v<T>)
+        if (!std::isfinite(value)) return std::nullopt;
+    return value;
+}
+
+}  // namespace
+
+ViewRenderQuery ViewRenderQuery::fromQuery(const QueryParams& params) {
+    JsonReader r;
+    ViewRenderQuery q;
+    if (auto text = lastValue(params, "exposure")) {
+        auto v = parseWhole<double>(*text);
+        if (!v) r.fail("?exposure", "must be a finite number of stops, got '" + *text + "'");
+        else q.exposure = *v;
+    }
+    r.throwIfErrors();
+    return q;
+}
+
+VolumeQuery VolumeQuery::fromQuery(const QueryParams& params) {
+    JsonReader r;
+    VolumeQuery q;
+    if (auto text = lastValue(params, "version")) {
+        auto v = parseWhole<int>(*text);
+        if (!v || *v < 1) r.fail("?version", "must be a version number (an integer >= 1), got '" + *text + "'");
+        else q.version = *v;
+    }
+    r.throwIfErrors();
+    return q;
+}
+
+}  // namespace volstyle::protocol

@@ -1,0 +1,91 @@
+#pragma once
+/// \file requests.h
+/// Every request body and query string of the API as a typed value, parsed once at the door:
+/// `fromJson(json, limits)` / `fromQuery(params)` list every invalid field with its JSON Pointer
+/// (query parameters as `?name`) and throw ValidationError, so handlers only ever see valid input.
+/// Unknown body fields are rejected; unknown query parameters are ignored (pages add cache
+/// busters such as `?t=…`).
+
+#include <nlohmann/json.hpp>
+
+#include <map>
+#include <optional>
+#include <string>
+
+#include "core/render/params.h"
+#include "core/solve/solve_options.h"
+#include "protocol/validation.h"
+
+namespace volstyle::protocol {
+
+/// The server's limits that decide what a request may ask for (SPEC §3 Limits).
+struct RequestLimits {
+    int maxImageSide = 4096;        ///< camera width and height, in pixels
+    int minSceneResolution = 8;     ///< built-in scenes' voxels a side
+    int maxSceneResolution = 256;
+};
+
+/// Query parameters as the HTTP layer hands them over (name → value, repeats allowed).
+using QueryParams = std::multimap<std::string, std::string>;
+
+enum class ImageFormat { Png, Exr };
+const char* imageFormatName(ImageFormat f);
+const char* imageMimeType(ImageFormat f);
+
+/// The camera block of a request at `path` (required), with the image-side limit applied:
+/// recorded into `r` like any other field. The one place cameras in requests are read.
+core::Camera readCamera(JsonReader& r, const nlohmann::json& body, const std::string& path, const RequestLimits& limits);
+
+/// POST /sessions: {"scene": "builtin:NAME", "resolution": N}, both optional.
+struct CreateSessionRequest {
+    std::string scene = "builtin:cloud";
+    int resolution = 128;
+    std::string builtinName() const { return scene.substr(8); }  ///< NAME of builtin:NAME
+    static CreateSessionRequest fromJson(const nlohmann::json& j, const RequestLimits& limits);
+};
+
+/// POST /sessions/{sid}/render: {"camera": {…}, "format": "png"|"exr", "exposure": 0, "mode": "single_scattering"}.
+struct RenderRequest {
+    core::Camera camera;
+    ImageFormat format = ImageFormat::Png;
+    double exposure = 0;  ///< stops, PNG only
+    static RenderRequest fromJson(const nlohmann::json& j, const RequestLimits& limits);
+};
+
+/// POST /sessions/{sid}/views: {"camera": {…}}.
+struct AddViewRequest {
+    core::Camera camera;
+    static AddViewRequest fromJson(const nlohmann::json& j, const RequestLimits& limits);
+};
+
+/// POST /sessions/{sid}/revert: {"version": N}.
+struct RevertRequest {
+    int version = 0;
+    static RevertRequest fromJson(const nlohmann::json& j);
+};
+
+/// PUT /sessions/{sid}/lighting: the lighting object (render_json.h); no server-side paths.
+struct SetLightingRequest {
+    core::Lighting lighting;
+    static SetLightingRequest fromJson(const nlohmann::json& j);
+};
+
+/// POST /sessions/{sid}/solve: the solver options (solve_json.h).
+struct SolveRequest {
+    core::SolveOptions options;
+    static SolveRequest fromJson(const nlohmann::json& j);
+};
+
+/// GET …/views/{vid}/render.{png,exr}?exposure=STOPS.
+struct ViewRenderQuery {
+    double exposure = 0;
+    static ViewRenderQuery fromQuery(const QueryParams& params);
+};
+
+/// GET /sessions/{sid}/volume.vdb?version=N (default: the newest).
+struct VolumeQuery {
+    std::optional<int> version;
+    static VolumeQuery fromQuery(const QueryParams& params);
+};
+
+}  // namespace volstyle::protocol

@@ -1,0 +1,60 @@
+// Solve jobs: POST /sessions/{sid}/solve, GET/DELETE /jobs/{jid}, GET …/events (SSE),
+// GET …/preview/{vid}.png.
+#include "server/routes/route_context.h"
+
+namespace volstyle::server {
+namespace {
+
+/// How long an event stream waits for news before checking whether its client is still there.
+constexpr auto kEventPoll = std::chrono::milliseconds(500);
+
+/// Streams a job's events from the first: every one written so far, then each as it comes; the
+/// stream ends after the final event (the job's state flips before that event is queued, so the
+/// events decide, not the state).
+void streamEvents(httplib::Response& res, std::shared_ptr<Job> job) {
+    res.set_header("Cache-Control", "no-cache");
+    res.set_chunked_content_provider("text/event-stream", [job, sent = size_t(0)](size_t, httplib::DataSink& sink) mutable {
+        std::unique_lock lock(job->mutex);
+        job->changed.wait_for(lock, kEventPoll, [&] { return job->events.size() > sent; });
+        bool final = false;
+        while (sent < job->events.size()) {
+            const auto& [event, data] = job->events[sent++];
+            final = protocol::isFinal(event);
+            std::string message = std::string("event: ") + protocol::jobEventName(event) + "\ndata: " + data.dump() + "\n\n";
+            lock.unlock();
+            if (!sink.write(message.data(), message.size())) return false;  // the client left
+            lock.lock();
+        }
+        if (final) {
+            lock.unlock();
+            sink.done();
+        }
+        return true;
+    });
+}
+
+}  // namespace
+
+void addJobRoutes(RouteContext& c) {
+    c.http.Post(kSessionPath + "/solve", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        auto request = protocol::SolveRequest::fromJson(c.body(req));
+        reply(res, 202, {{"job", c.service.startSolve(*s, request.options)->id}});
+    });
+    c.http.Get(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {
+        reply(res, 200, c.service.job(req.matches[1])->toJson());
+    });
+    c.http.Delete(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {
+        auto job = c.service.job(req.matches[1]);
+        c.service.cancel(*job);
+        reply(res, 202, job->toJson());
+    });
+    c.http.Get(kJobPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
+        streamEvents(res, c.service.job(req.matches[1]));
+    });
+    c.http.Get(kJobPath + R"(/preview/(v[0-9]+)\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
+        replyImage(res, c.service.renderPreview(req.matches[1], req.matches[2]), protocol::ImageFormat::Png);
+    });
+}
+
+}  // namespace volstyle::server

@@ -1,0 +1,45 @@
+#pragma once
+/// \file route_context.h
+/// What every route file shares: the httplib server to register on, the session service to
+/// call, the request limits, and the helpers that read a body and write an answer. Handlers are
+/// about twenty lines: parse a protocol request, call the service, reply.
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include <string>
+
+#include "core/image/image.h"
+#include "protocol/requests.h"
+#include "server/session_service.h"
+
+namespace volstyle::server {
+
+struct RouteContext {
+    httplib::Server& http;
+    SessionService& service;
+    protocol::RequestLimits limits;
+    size_t maxJsonBytes = 1 << 20;
+
+    /// The JSON body ({} when empty): 413 over maxJsonBytes, 400 invalid_json.
+    nlohmann::json body(const httplib::Request& req) const;
+};
+
+/// Path patterns (regular expressions; the groups are the ids).
+inline const std::string kApi = "/api/v1";
+inline const std::string kSessionPath = kApi + R"(/sessions/([0-9a-f]+))";
+inline const std::string kViewPath = kSessionPath + R"(/views/(v[0-9]+))";
+inline const std::string kJobPath = kApi + R"(/jobs/([0-9a-f]+))";
+
+void reply(httplib::Response& res, int status, const nlohmann::json& body);
+/// Encodes `image` (PNG: sRGB with `exposure` stops; EXR: linear) as the answer.
+void replyImage(httplib::Response& res, const core::Image& image, protocol::ImageFormat format, double exposure = 0);
+
+// Each file registers the routes of one resource.
+void addSystemRoutes(RouteContext& c);   ///< health, schema, scenes
+void addSessionRoutes(RouteContext& c);  ///< sessions, lighting, renders
+void addVolumeRoutes(RouteContext& c);   ///< volume upload, download, revert
+void addViewRoutes(RouteContext& c);     ///< views, targets, weights, view renders
+void addJobRoutes(RouteContext& c);      ///< solve, jobs, events, previews
+
+}  // namespace volstyle::server

@@ -1,0 +1,42 @@
+// Sessions, their lighting and renders: POST/GET /sessions, GET/DELETE /sessions/{sid},
+// GET/PUT …/lighting, POST …/render.
+#include "protocol/render_json.h"
+#include "server/responses.h"
+#include "server/routes/route_context.h"
+
+namespace volstyle::server {
+
+void addSessionRoutes(RouteContext& c) {
+    c.http.Post(kApi + "/sessions", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto request = protocol::CreateSessionRequest::fromJson(c.body(req), c.limits);
+        reply(res, 201, sessionJson(*c.service.create(request)));
+    });
+    c.http.Get(kApi + "/sessions", [&c](const httplib::Request&, httplib::Response& res) {
+        nlohmann::json list = nlohmann::json::array();
+        for (auto& s : c.service.all()) list.push_back(sessionJson(*s));
+        reply(res, 200, list);
+    });
+    c.http.Get(kSessionPath, [&c](const httplib::Request& req, httplib::Response& res) {
+        reply(res, 200, sessionJson(*c.service.find(req.matches[1])));
+    });
+    c.http.Delete(kSessionPath, [&c](const httplib::Request& req, httplib::Response& res) {
+        c.service.remove(req.matches[1]);
+        res.status = 204;
+    });
+    c.http.Get(kSessionPath + "/lighting", [&c](const httplib::Request& req, httplib::Response& res) {
+        reply(res, 200, protocol::lightingToJson(c.service.lighting(*c.service.find(req.matches[1]))));
+    });
+    c.http.Put(kSessionPath + "/lighting", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        auto request = protocol::SetLightingRequest::fromJson(c.body(req));
+        c.service.setLighting(*s, request.lighting);
+        reply(res, 200, protocol::lightingToJson(request.lighting));
+    });
+    c.http.Post(kSessionPath + "/render", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        auto request = protocol::RenderRequest::fromJson(c.body(req), c.limits);
+        replyImage(res, c.service.render(*s, request.camera), request.format, request.exposure);
+    });
+}
+
+}  // namespace volstyle::server

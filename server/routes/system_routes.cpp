@@ -1,0 +1,24 @@
+// GET /health, /schema.json, /scenes.
+#include "core/volume/builtin_scenes.h"
+#include "protocol/validation.h"
+#include "server/routes/route_context.h"
+
+namespace volstyle::server {
+
+void addSystemRoutes(RouteContext& c) {
+    c.http.Get(kApi + "/health", [&c](const httplib::Request&, httplib::Response& res) {
+        const auto& caps = c.service.capabilities();
+        reply(res, 200, {{"status", "ok"}, {"version", "0.1.0"}, {"api", protocol::kApiVersion},
+                         {"gl_renderer", caps.renderer}, {"gl_version", caps.version}});
+    });
+    c.http.Get(kApi + "/schema.json", [](const httplib::Request&, httplib::Response& res) {
+        res.set_content(protocol::kSchemaV1, "application/schema+json");
+    });
+    c.http.Get(kApi + "/scenes", [](const httplib::Request&, httplib::Response& res) {
+        nlohmann::json list = nlohmann::json::array();
+        for (const auto& s : core::builtinScenes()) list.push_back({{"name", s.name}, {"description", s.description}});
+        reply(res, 200, list);
+    });
+}
+
+}  // namespace volstyle::server

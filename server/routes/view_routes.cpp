@@ -1,0 +1,49 @@
+// A session's views: POST/GET …/views, GET/DELETE …/views/{vid}, PUT …/target and …/weights,
+// GET …/target.png and …/render.{png,exr}.
+#include "core/image/image_io.h"
+#include "server/responses.h"
+#include "server/routes/route_context.h"
+
+namespace volstyle::server {
+
+void addViewRoutes(RouteContext& c) {
+    c.http.Post(kSessionPath + "/views", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        auto request = protocol::AddViewRequest::fromJson(c.body(req), c.limits);
+        reply(res, 201, viewJson(c.service.addView(*s, request.camera)));
+    });
+    c.http.Get(kSessionPath + "/views", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        std::lock_guard lock(s->mutex);
+        reply(res, 200, viewsJson(*s));
+    });
+    c.http.Get(kViewPath, [&c](const httplib::Request& req, httplib::Response& res) {
+        reply(res, 200, viewJson(c.service.view(*c.service.find(req.matches[1]), req.matches[2])));
+    });
+    c.http.Delete(kViewPath, [&c](const httplib::Request& req, httplib::Response& res) {
+        c.service.removeView(*c.service.find(req.matches[1]), req.matches[2]);
+        res.status = 204;
+    });
+    for (ViewImage kind : {ViewImage::Target, ViewImage::Weights}) {
+        const std::string part = kind == ViewImage::Target ? "/target" : "/weights";
+        c.http.Put(kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res) {
+            auto s = c.service.find(req.matches[1]);
+            reply(res, 200, viewJson(c.service.setViewImage(*s, req.matches[2], kind, req.body)));
+        });
+    }
+    c.http.Get(kViewPath + "/target.png", [&c](const httplib::Request& req, httplib::Response& res) {
+        SessionView v = c.service.view(*c.service.find(req.matches[1]), req.matches[2]);
+        if (!v.target) throw protocol::ApiError(protocol::ErrorCode::NotFound, "view " + v.id + " has no target yet");
+        core::SaveOptions save;
+        save.writeAlpha = true;  // alpha is the painted weight
+        res.set_content(core::encodeImage(*v.target, "png", save), "image/png");
+    });
+    c.http.Get(kViewPath + R"(/render\.(png|exr))", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        auto query = protocol::ViewRenderQuery::fromQuery(req.params);
+        const auto format = req.matches[3] == "png" ? protocol::ImageFormat::Png : protocol::ImageFormat::Exr;
+        replyImage(res, c.service.renderView(*s, req.matches[2]), format, query.exposure);
+    });
+}
+
+}  // namespace volstyle::server

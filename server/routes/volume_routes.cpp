@@ -1,0 +1,27 @@
+// A session's volume versions: PUT …/volume (upload a VDB), GET …/volume.vdb[?version=N],
+// POST …/revert.
+#include "server/responses.h"
+#include "server/routes/route_context.h"
+
+namespace volstyle::server {
+
+void addVolumeRoutes(RouteContext& c) {
+    c.http.Put(kSessionPath + "/volume", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        c.service.uploadVdb(*s, req.body);
+        reply(res, 200, sessionJson(*s));
+    });
+    c.http.Get(kSessionPath + R"(/volume\.vdb)", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        auto query = protocol::VolumeQuery::fromQuery(req.params);
+        res.set_content(c.service.downloadVdb(*s, query.version), "application/octet-stream");
+    });
+    c.http.Post(kSessionPath + "/revert", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        auto request = protocol::RevertRequest::fromJson(c.body(req));
+        c.service.revert(*s, request.version);
+        reply(res, 200, sessionJson(*s));
+    });
+}
+
+}  // namespace volstyle::server

@@ -1,0 +1,288 @@
+#include "server/session_service.h"
+
+#include <spdlog/spdlog.h>
+
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/base/errors.h"
+#include "core/image/image_io.h"
+#include "core/render/gpu_volume.h"
+#include "core/render/renderer.h"
+#include "core/volume/builtin_scenes.h"
+#include "core/volume/vdb_io.h"
+
+namespace volstyle::server {
+namespace {
+
+using protocol::ApiError;
+using protocol::ErrorCode;
+
+std::string isoNow() {
+    std::time_t t = std::time(nullptr);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+    return buf;
+}
+
+SessionView& findView(Session& s, const std::string& id) {
+    for (auto& v : s.views)
+        if (v.id == id) return v;
+    throw ApiError(ErrorCode::NotFound, "no view '" + id + "' in session '" + s.id + "'");
+}
+
+/// A private temporary file, removed when this goes out of scope (OpenVDB reads and writes files).
+struct TempVdb {
+    std::filesystem::path path =
+        std::filesystem::temp_directory_path() / ("volstyle-" + SessionStore::newId() + ".vdb");
+    ~TempVdb() {
+        std::error_code ec;
+        std::filesystem::remove(path, ec);
+    }
+};
+
+}  // namespace
+
+SessionService::SessionService(ServiceLimits limits, const std::string& dataDir)
+    : m_limits(std::move(limits)), m_sessions(m_limits.maxSessions) {
+    if (!dataDir.empty()) {
+        m_persist = std::make_unique<Persistence>(dataDir);
+        for (auto& s : m_persist->loadSessions()) m_sessions.restore(s);
+        for (auto& j : m_persist->loadJobs()) m_jobs.restore(j);
+        spdlog::info("restored {} session(s) from '{}'", m_sessions.size(), dataDir);
+    }
+}
+
+SessionService::~SessionService() {
+    // GPU copies of volumes die on the GL thread.
+    for (auto& s : m_sessions.all()) release(std::move(s->gpu));
+    for (auto& j : m_jobs.all()) release(std::move(j->preview));
+}
+
+void SessionService::saved(const Session& s) {
+    if (m_persist) m_persist->saveSession(s);
+}
+
+void SessionService::saved(const Job& j) {
+    if (m_persist) m_persist->saveJob(j);
+}
+
+std::shared_ptr<Session> SessionService::create(const protocol::CreateSessionRequest& request) {
+    auto s = std::make_shared<Session>();
+    s->created = isoNow();
+    s->scene = request.scene;
+    s->volume = core::makeBuiltinScene(request.builtinName(), request.resolution);  // InvalidArgument lists the scenes
+    s->lighting = core::defaultLighting();
+    s->versions[1] = s->volume;
+    m_sessions.add(s);
+    std::lock_guard lock(s->mutex);
+    saved(*s);
+    return s;
+}
+
+std::shared_ptr<Session> SessionService::find(const std::string& id) const {
+    auto s = m_sessions.find(id);
+    if (!s) throw ApiError(ErrorCode::NotFound, "no session '" + id + "'");
+    return s;
+}
+
+void SessionService::remove(const std::string& id) {
+    auto s = m_sessions.remove(id);
+    if (!s) throw ApiError(ErrorCode::NotFound, "no session '" + id + "'");
+    if (m_persist) m_persist->removeSession(s->id);
+    std::shared_ptr<core::GpuVolume> gpu;
+    {
+        std::lock_guard lock(s->mutex);
+        gpu = std::move(s->gpu);
+    }
+    release(std::move(gpu));
+}
+
+core::Lighting SessionService::lighting(Session& s) const {
+    std::lock_guard lock(s.mutex);
+    return s.lighting;
+}
+
+void SessionService::setLighting(Session& s, const core::Lighting& lighting) {
+    std::lock_guard lock(s.mutex);
+    s.lighting = lighting;
+    saved(s);
+}
+
+SessionView SessionService::addView(Session& s, const core::Camera& camera) {
+    std::lock_guard lock(s.mutex);
+    s.views.push_back({"v" + std::to_string(s.nextView++), camera, std::nullopt, std::nullopt});
+    saved(s);
+    return s.views.back();
+}
+
+SessionView SessionService::view(Session& s, const std::string& viewId) const {
+    std::lock_guard lock(s.mutex);
+    return findView(s, viewId);
+}
+
+void SessionService::removeView(Session& s, const std::string& viewId) {
+    std::lock_guard lock(s.mutex);
+    findView(s, viewId);  // 404 if absent
+    std::erase_if(s.views, [&](const SessionView& v) { return v.id == viewId; });
+    if (m_persist) m_persist->removeView(s.id, viewId);
+    saved(s);
+}
+
+void SessionService::checkUploadSize(const std::string& bytes, const std::string& what) const {
+    if (bytes.size() > m_limits.maxUploadBytes)
+        throw ApiError(ErrorCode::TooLarge, what + " is " + std::to_string(bytes.size()) + " bytes; the upload limit is " +
+                                                std::to_string(m_limits.maxUploadBytes) + " bytes");
+}
+
+SessionView SessionService::setViewImage(Session& s, const std::string& viewId, ViewImage kind, const std::string& bytes) {
+    const bool isTarget = kind == ViewImage::Target;
+    const std::string what = isTarget ? "the target" : "the weight image";
+    checkUploadSize(bytes, what);
+    core::Image image;
+    try {
+        image = core::loadImageFromMemory(bytes.data(), bytes.size(), what, m_limits.maxImageSide).image;
+    } catch (const Error& e) {
+        throw ApiError(ErrorCode::UnsupportedMedia, e.what());  // undecodable, or over the side limit
+    }
+    std::lock_guard lock(s.mutex);
+    SessionView& v = findView(s, viewId);
+    if (image.width != v.camera.width || image.height != v.camera.height)
+        throw ApiError(ErrorCode::InvalidArgument, "the image is " + std::to_string(image.width) + "x" +
+                                                       std::to_string(image.height) + " but view " + v.id + " renders " +
+                                                       std::to_string(v.camera.width) + "x" + std::to_string(v.camera.height));
+    if (m_persist) m_persist->saveViewImage(s.id, v.id, isTarget ? "target" : "weights", image);
+    (isTarget ? v.target : v.weights) = std::move(image);
+    saved(s);
+    return v;
+}
+
+std::shared_ptr<core::GpuVolume> SessionService::commitVersion(Session& s, core::Volume volume) {
+    s.volume = std::move(volume);
+    s.version = s.versions.rbegin()->first + 1;
+    s.versions[s.version] = s.volume;
+    saved(s);
+    return std::move(s.gpu);
+}
+
+void SessionService::release(std::shared_ptr<core::GpuVolume> gpu) {
+    if (gpu) m_gl.run([gpu = std::move(gpu)](core::GpuDevice&) mutable { gpu.reset(); });
+}
+
+int SessionService::revert(Session& s, int version) {
+    std::shared_ptr<core::GpuVolume> stale;
+    int now = 0;
+    {
+        std::lock_guard lock(s.mutex);
+        auto it = s.versions.find(version);
+        if (it == s.versions.end())
+            throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no version " + std::to_string(version));
+        stale = commitVersion(s, it->second);  // undo is a new version with the old content: nothing is lost
+        now = s.version;
+    }
+    release(std::move(stale));
+    return now;
+}
+
+void SessionService::uploadVdb(Session& s, const std::string& bytes) {
+    checkUploadSize(bytes, "the VDB");
+    TempVdb tmp;
+    std::ofstream(tmp.path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+    core::Volume v;
+    try {
+        v = core::loadVdb(tmp.path.string(), m_limits.volumeLimits);
+    } catch (const Error& e) {
+        std::string msg = e.what();
+        const std::string path = tmp.path.string();
+        for (size_t pos; (pos = msg.find(path)) != std::string::npos;) msg.replace(pos, path.size(), "the upload");
+        throw ApiError(dynamic_cast<const LimitExceeded*>(&e) ? ErrorCode::TooLarge : ErrorCode::UnsupportedMedia, msg);
+    }
+    std::shared_ptr<core::GpuVolume> stale;
+    {
+        std::lock_guard lock(s.mutex);
+        stale = commitVersion(s, std::move(v));
+    }
+    release(std::move(stale));
+}
+
+std::string SessionService::downloadVdb(Session& s, std::optional<int> version) {
+    core::Volume v;
+    {
+        std::lock_guard lock(s.mutex);
+        const int n = version.value_or(s.version);
+        auto it = s.versions.find(n);
+        if (it == s.versions.end()) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no version " + std::to_string(n));
+        v = it->second;
+    }
+    TempVdb tmp;
+    core::saveVdb(tmp.path.string(), v);
+    std::ifstream f(tmp.path, std::ios::binary);
+    std::stringstream bytes;
+    bytes << f.rdbuf();
+    return bytes.str();
+}
+
+core::Image SessionService::renderOnGl(Session& s, const core::Camera& camera, const core::Lighting& lighting) {
+    return m_gl.run([&](core::GpuDevice& device) {
+        std::lock_guard lock(s.mutex);  // on the GL thread: no solve is between iterations here
+        if (!s.gpu) s.gpu = std::make_shared<core::GpuVolume>(s.volume);
+        return core::Renderer(device).render(*s.gpu, camera, lighting);
+    });
+}
+
+core::Image SessionService::render(Session& s, const core::Camera& camera) { return renderOnGl(s, camera, lighting(s)); }
+
+core::Image SessionService::renderView(Session& s, const std::string& viewId) {
+    return render(s, view(s, viewId).camera);
+}
+
+core::Image SessionService::renderPreview(const std::string& jobId, const std::string& viewId) {
+    auto j = job(jobId);
+    auto s = find(j->session);
+    const core::Camera camera = view(*s, viewId).camera;
+    const core::Lighting light = lighting(*s);
+    return m_gl.run([&](core::GpuDevice& device) {
+        std::shared_ptr<core::GpuVolume> preview;
+        {
+            std::lock_guard lock(j->mutex);
+            preview = j->preview;
+        }
+        if (preview) return core::Renderer(device).render(*preview, camera, light);
+        std::lock_guard lock(s->mutex);
+        if (!s->gpu) s->gpu = std::make_shared<core::GpuVolume>(s->volume);
+        return core::Renderer(device).render(*s->gpu, camera, light);
+    });
+}
+
+std::shared_ptr<Job> SessionService::job(const std::string& id) const {
+    auto j = m_jobs.find(id);
+    if (!j) throw ApiError(ErrorCode::NotFound, "no job '" + id + "'");
+    return j;
+}
+
+std::shared_ptr<Job> SessionService::startSolve(Session& s, const core::SolveOptions& options) {
+    if (m_jobs.pending(s.id) >= m_limits.maxQueuedJobs)
+        throw ApiError(ErrorCode::TooManyJobs, "session '" + s.id + "' already has " + std::to_string(m_limits.maxQueuedJobs) +
+                                                   " queued jobs (the limit); wait or cancel one");
+    {
+        std::lock_guard lock(s.mutex);
+        bool anyTarget = false;
+        for (const auto& v : s.views) anyTarget |= v.target.has_value();
+        if (!anyTarget) throw ApiError(ErrorCode::InvalidArgument, "no view has a target; PUT …/views/{vid}/target first");
+    }
+    auto job = m_jobs.add(s.id);
+    saved(*job);
+    {
+        std::lock_guard lock(s.mutex);
+        s.jobs.push_back(job->id);
+        saved(s);
+    }
+    spdlog::info("job {} queued (session {})", job->id, s.id);
+    std::shared_ptr<Session> session = find(s.id);
+    m_gl.submit([this, job, session, options](core::GpuDevice& device) { runSolve(job, session, options, device); });
+    return job;
+}
+
+}  // namespace volstyle::server

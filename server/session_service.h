@@ -1,0 +1,98 @@
+#pragma once
+/// \file session_service.h
+/// What the API does to sessions, views, volume versions and solve jobs, without HTTP: route
+/// handlers parse a protocol request and call one method here. Every change is on disk
+/// (Persistence) before the method returns; GL work runs on the GL thread (GlWorker); a session's
+/// lock is never held while waiting for the GL thread (a finishing solve needs it).
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/image/image.h"
+#include "core/render/params.h"
+#include "core/solve/solve_options.h"
+#include "core/volume/volume.h"
+#include "protocol/requests.h"
+#include "server/gl_worker.h"
+#include "server/job_store.h"
+#include "server/persistence.h"
+#include "server/session_store.h"
+
+namespace volstyle::server {
+
+struct ServiceLimits {
+    size_t maxSessions = 64;
+    size_t maxQueuedJobs = 4;  ///< per session
+    size_t maxUploadBytes = size_t(512) << 20;
+    int maxImageSide = 4096;
+    core::VolumeLimits volumeLimits;
+};
+
+enum class ViewImage { Target, Weights };
+
+class SessionService {
+public:
+    /// Restores sessions and jobs from `dataDir` (empty: in memory only) and starts the GL thread.
+    SessionService(ServiceLimits limits, const std::string& dataDir);
+    ~SessionService();  ///< frees GPU copies on the GL thread, then stops it
+
+    const core::gl::Capabilities& capabilities() const { return m_gl.capabilities(); }
+
+    // Sessions.
+    std::shared_ptr<Session> create(const protocol::CreateSessionRequest& request);
+    std::shared_ptr<Session> find(const std::string& id) const;  ///< ApiError not_found
+    std::vector<std::shared_ptr<Session>> all() const { return m_sessions.all(); }
+    void remove(const std::string& id);
+    core::Lighting lighting(Session& s) const;
+    void setLighting(Session& s, const core::Lighting& lighting);
+
+    // Views.
+    SessionView addView(Session& s, const core::Camera& camera);
+    SessionView view(Session& s, const std::string& viewId) const;  ///< a copy; ApiError not_found
+    void removeView(Session& s, const std::string& viewId);
+    /// Decodes an uploaded image (413 over the upload limit, 422 undecodable or over the side
+    /// limit) and stores it as the view's target or weights.
+    SessionView setViewImage(Session& s, const std::string& viewId, ViewImage kind, const std::string& bytes);
+
+    // Volume versions.
+    int revert(Session& s, int version);                          ///< the new version number
+    void uploadVdb(Session& s, const std::string& bytes);          ///< a new version
+    std::string downloadVdb(Session& s, std::optional<int> version);  ///< the newest by default
+
+    // Renders (on the GL thread).
+    core::Image render(Session& s, const core::Camera& camera);
+    core::Image renderView(Session& s, const std::string& viewId);
+    /// A view rendered from a running job's latest iterate; after the job, the session's volume.
+    core::Image renderPreview(const std::string& jobId, const std::string& viewId);
+
+    // Solve jobs.
+    std::shared_ptr<Job> startSolve(Session& s, const core::SolveOptions& options);
+    std::shared_ptr<Job> job(const std::string& id) const;  ///< ApiError not_found
+    void cancel(Job& job) { job.cancel = true; }
+
+private:
+    void checkUploadSize(const std::string& bytes, const std::string& what) const;
+    /// Makes `volume` the newest version, on disk before it returns. Call with the session's
+    /// lock held; returns the stale GPU copy (release() it after unlocking).
+    std::shared_ptr<core::GpuVolume> commitVersion(Session& s, core::Volume volume);
+    void release(std::shared_ptr<core::GpuVolume> gpu);
+    core::Image renderOnGl(Session& s, const core::Camera& camera, const core::Lighting& lighting);
+    void saved(const Session& s);
+    void saved(const Job& j);
+
+    // The solve job on the GL thread (solve_job.cpp).
+    void runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,
+                  core::GpuDevice& device);
+    void solveAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options, core::GpuDevice& device);
+    void finishJob(Job& job);
+
+    ServiceLimits m_limits;
+    SessionStore m_sessions;
+    JobStore m_jobs;
+    std::unique_ptr<Persistence> m_persist;  ///< null: in memory only
+    GlWorker m_gl;
+};
+
+}  // namespace volstyle::server

@@ -1,0 +1,127 @@
+// A solve job on the GL thread: snapshot the session, solve with progress and previews, commit
+// the result as a new version, record the final state (SessionService, SPEC §3 jobs).
+#include <spdlog/spdlog.h>
+
+#include "core/base/errors.h"
+#include "core/base/stopwatch.h"
+#include "core/solve/solver.h"
+#include "protocol/error_body.h"
+#include "protocol/solve_json.h"
+#include "server/session_service.h"
+
+namespace volstyle::server {
+namespace {
+
+using protocol::JobEvent;
+using protocol::JobState;
+
+/// Previews are announced at most this often: each costs a download and an upload of the iterate.
+constexpr auto kPreviewInterval = std::chrono::seconds(1);
+
+/// A copy of what the solve reads, so the session can change (or be read) while it runs.
+struct SolveInputs {
+    core::Volume volume;
+    core::Lighting lighting;
+    std::vector<core::SolveView> views;
+    std::vector<std::string> viewIds;
+};
+
+SolveInputs snapshot(Session& s) {
+    std::lock_guard lock(s.mutex);
+    SolveInputs in{s.volume, s.lighting, {}, {}};
+    for (const auto& v : s.views) {
+        in.viewIds.push_back(v.id);
+        in.views.push_back({v.id, v.camera, v.target.value_or(core::Image()), v.weights});
+    }
+    return in;
+}
+
+}  // namespace
+
+void SessionService::runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr<Session>& s,
+                              const core::SolveOptions& options, core::GpuDevice& device) {
+    if (job->cancel) {
+        job->fail(JobState::Cancelled, protocol::ErrorCode::Cancelled, "cancelled before it started");
+    } else {
+        job->setState(JobState::Running);
+        saved(*job);
+        spdlog::info("job {} running", job->id);
+        try {
+            solveAndCommit(*job, s, options, device);
+        } catch (...) {
+            const protocol::ErrorReport e = protocol::describeException(std::current_exception());
+            job->fail(e.code == protocol::ErrorCode::Cancelled ? JobState::Cancelled : JobState::Failed, e.code, e.message,
+                      e.details);
+        }
+    }
+    std::shared_ptr<core::GpuVolume> preview;
+    {
+        std::lock_guard lock(job->mutex);
+        preview = std::move(job->preview);  // on the GL thread: freed here
+    }
+    finishJob(*job);
+}
+
+void SessionService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,
+                                    core::GpuDevice& device) {
+    SolveInputs in = snapshot(*s);
+    core::Solver solver(device, in.volume, in.lighting, std::move(in.views), options);
+    auto lastPreview = Clock::now() - std::chrono::hours(1);
+    core::SolveResult result = solver.run(
+        [&](const core::SolveProgress& p) {
+            nlohmann::json progress = protocol::solveProgressToJson(p);
+            {
+                std::lock_guard lock(job.mutex);
+                job.progress = progress;
+            }
+            job.emit(JobEvent::Progress, progress);
+            if (Clock::now() - lastPreview >= kPreviewInterval) {
+                // The latest iterate in the job's one GPU copy (its extinction is unchanged for
+                // emission and albedo solves, so its light volumes stay cached).
+                lastPreview = Clock::now();
+                std::shared_ptr<core::GpuVolume> preview;
+                {
+                    std::lock_guard lock(job.mutex);
+                    preview = job.preview;
+                }
+                if (preview) preview->upload(solver.currentVolume());
+                else preview = std::make_shared<core::GpuVolume>(solver.currentVolume());
+                nlohmann::json urls = nlohmann::json::object();
+                for (const auto& id : in.viewIds) urls[id] = "/api/v1/jobs/" + job.id + "/preview/" + id + ".png";
+                {
+                    std::lock_guard lock(job.mutex);
+                    job.preview = std::move(preview);
+                }
+                job.emit(JobEvent::Preview, {{"iteration", p.iteration}, {"urls", urls}});
+            }
+            m_gl.runShortTasks(device);  // renders waiting for the GL thread run between iterations
+        },
+        &job.cancel);
+    int version = 0;
+    {
+        std::lock_guard lock(s->mutex);
+        commitVersion(*s, std::move(result.volume));  // on disk before the job reads done; on the GL thread,
+        version = s->version;                         // which frees the old GPU copy here
+        s->gpu = std::make_shared<core::GpuVolume>(s->volume);
+    }
+    std::lock_guard lock(job.mutex);
+    job.state = JobState::Done;
+    job.result = {{"version", version}, {"report", protocol::solveReportToJson(result.report)}};
+}
+
+void SessionService::finishJob(Job& job) {
+    JobState state;
+    {
+        std::lock_guard lock(job.mutex);
+        state = job.state;
+    }
+    spdlog::info("job {} {}", job.id, protocol::jobStateName(state));
+    try {
+        saved(job);
+    } catch (const std::exception& e) {
+        spdlog::error("job {}: cannot record its end: {}", job.id, e.what());
+    }
+    job.emit(protocol::finalEvent(state), job.toJson());
+}
+
+}  // namespace volstyle::server

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# The layers of docs/ARCHITECTURE.md, checked on every #include: server -> protocol -> core
+# (values <- gl <- engines) -> core/base. CMake links enforce what links; this enforces what a
+# file may even include, so a header cannot smuggle GL into protocol or HTTP into core.
+set -uo pipefail
+root="${1:-$(dirname "$0")/../..}"
+cd "$root"
+status=0
+
+# The GL-free value headers of core (the volstyle_values target) that protocol may include.
+values='core/base/|core/math/|core/image/image\.h|core/render/params\.h|core/solve/solve_options\.h|core/solve/solve_types\.h|core/shaders/layout\.h|core/volume/volume\.h|core/volume/resample\.h'
+
+# check FILES... -- ALLOWED_REGEX: every project include ("core/…", "protocol/…", "server/…") and
+# every forbidden system header must match the allowed pattern.
+check() {
+  local what="$1" allowed="$2"
+  shift 2
+  for f in "$@"; do
+    [ -f "$f" ] || continue
+    while IFS= read -r inc; do
+      if ! [[ "$inc" =~ ^($allowed) ]]; then
+        echo "layering: $f includes \"$inc\" ($what)"
+        status=1
+      fi
+    done < <(grep -oE '^#include "(core|protocol|server)/[^"]+"' "$f" | sed -E 's/^#include "([^"]+)"/\1/')
+  done
+}
+
+check "core/base depends on nothing" 'core/base/' core/base/*
+check "core/gl depends only on core/base" 'core/base/|core/gl/' core/gl/*
+check "value types are GL-free" "$values" core/math/* core/image/image.* core/render/params.* core/solve/solve_options.* \
+  core/solve/solve_types.h core/volume/volume.* core/volume/resample.*
+check "protocol sees only core's value types" "$values|protocol/" protocol/*.h protocol/*.cpp
+check "core never includes protocol or server" 'core/' $(find core -name '*.h' -o -name '*.cpp')
+
+# No HTTP or JSON in core; no GL in protocol.
+if grep -rlE '#include <(httplib|nlohmann/)' core; then echo "layering: core includes HTTP or JSON headers"; status=1; fi
+if grep -rlE '#include <(epoxy/|EGL/)' protocol; then echo "layering: protocol includes GL headers"; status=1; fi
+# Raw GL object creation and deletion only in core/gl (STYLE: RAII owners).
+if grep -rnE '\bgl(Gen|Create|Delete)(Textures|Buffers|Programs?|Shader|Samplers|Queries)\b' core server --include='*.cpp' --include='*.h' | grep -v '^core/gl/'; then
+  echo "layering: raw glCreate*/glDelete* outside core/gl"; status=1
+fi
+[ $status -eq 0 ] && echo "layering: every include follows the layers"
+exit $status
