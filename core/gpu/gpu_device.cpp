@@ -1,7 +1,11 @@
 #include "core/gpu/gpu_device.h"
 
 #include <algorithm>
+#include <map>
+#include <string>
 
+#include "core/gl/object.h"
+#include "core/gl/shader_builder.h"
 #include "core/shaders/layout.h"
 
 namespace volstyle::core {
@@ -18,6 +22,13 @@ void ResourceCache::evict() {
     }
 }
 
+/// The GL objects the device owns.
+struct GpuDevice::Programs {
+    std::map<std::string, gl::Program> byVariant;
+    gl::Buffer params;
+    size_t paramsCapacity = 0;
+};
+
 std::unique_ptr<GpuDevice> GpuDevice::create(const gl::ContextOptions& options) {
     std::unique_ptr<gl::Context> context = gl::Context::create(options);
     gl::Context& ref = *context;
@@ -27,29 +38,30 @@ std::unique_ptr<GpuDevice> GpuDevice::create(const gl::ContextOptions& options) 
 GpuDevice::GpuDevice(gl::Context& context) : GpuDevice(nullptr, context) {}
 
 GpuDevice::GpuDevice(std::unique_ptr<gl::Context> owned, gl::Context& context)
-    : m_owned(std::move(owned)), m_context(context), m_cache(kCachedResources) {}
+    : m_owned(std::move(owned)), m_context(context), m_programs(std::make_unique<Programs>()), m_cache(kCachedResources) {}
 
 GpuDevice::~GpuDevice() {
     // GL objects go before the context that owns them.
     m_cache.clear();
-    m_programs.clear();
-    m_params.reset();
+    m_programs.reset();
 }
 
 const gl::Program& GpuDevice::program(const gl::ShaderBuilder& builder) {
     std::string key = builder.variantKey();
-    auto it = m_programs.find(key);
-    if (it == m_programs.end()) it = m_programs.emplace(key, builder.buildCompute()).first;
+    auto& programs = m_programs->byVariant;
+    auto it = programs.find(key);
+    if (it == programs.end()) it = programs.emplace(key, builder.buildCompute()).first;
     return it->second;
 }
 
 void GpuDevice::setParams(const void* data, size_t bytes) {
-    if (bytes > m_paramsCapacity) {
-        m_params = gl::createBuffer(bytes, nullptr, GL_DYNAMIC_STORAGE_BIT, "params");
-        m_paramsCapacity = bytes;
+    Programs& p = *m_programs;
+    if (bytes > p.paramsCapacity) {
+        p.params = gl::createBuffer(bytes, nullptr, GL_DYNAMIC_STORAGE_BIT, "params");
+        p.paramsCapacity = bytes;
     }
-    glNamedBufferSubData(m_params.id(), 0, GLsizeiptr(bytes), data);
-    glBindBufferBase(GL_UNIFORM_BUFFER, layout::kBindingParams, m_params.id());
+    glNamedBufferSubData(p.params.id(), 0, GLsizeiptr(bytes), data);
+    glBindBufferBase(GL_UNIFORM_BUFFER, layout::kBindingParams, p.params.id());
 }
 
 }  // namespace volstyle::core

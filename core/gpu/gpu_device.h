@@ -4,17 +4,24 @@
 /// engines to come): the GL context, the compiled programs, the parameter uniform buffer and the
 /// cache of derived resources. Engines share these through the device and never reach into each
 /// other. The server and the CLI create GL only through GpuDevice::create. GL thread only.
+///
+/// This header is GL-free (no epoxy): the server and CLI include it; kernels' C++ sides use
+/// program() and setParams(), whose GL types they include themselves.
 
-#include <map>
 #include <memory>
-#include <string>
 
 #include "core/gl/context.h"
-#include "core/gl/object.h"
-#include "core/gl/shader_builder.h"
 #include "core/gpu/resource_cache.h"
 
 namespace volstyle::core {
+
+namespace gl {
+class ShaderBuilder;
+template <typename Traits>
+class Object;
+struct ProgramTraits;
+using Program = Object<ProgramTraits>;
+}  // namespace gl
 
 class GpuDevice {
 public:
@@ -42,13 +49,12 @@ public:
     ResourceCache& cache() { return m_cache; }
 
 private:
+    struct Programs;
     GpuDevice(std::unique_ptr<gl::Context> owned, gl::Context& context);
 
     std::unique_ptr<gl::Context> m_owned;
     gl::Context& m_context;
-    std::map<std::string, gl::Program> m_programs;
-    gl::Buffer m_params;
-    size_t m_paramsCapacity = 0;
+    std::unique_ptr<Programs> m_programs;
     ResourceCache m_cache;
 };
 

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/gl/object.h"
+#include "core/gl/shader_builder.h"
 #include "core/gpu/gpu_device.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/march_setup.h"

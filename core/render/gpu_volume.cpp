@@ -4,6 +4,7 @@
 #include <string_view>
 
 #include "core/base/errors.h"
+#include "core/gl/object.h"
 #include "core/shaders/layout.h"
 
 namespace volstyle::core {
@@ -26,7 +27,19 @@ gl::Texture uploadRgb(const std::vector<float>& rgb, Int3 dims, const char* labe
 
 }  // namespace
 
-GpuVolume::GpuVolume(const Volume& volume) { upload(volume); }
+struct GpuVolume::Textures {
+    gl::Texture extinction, albedo, emission, occupancy;
+};
+
+GpuVolume::GpuVolume(const Volume& volume) : m_textures(std::make_unique<Textures>()) { upload(volume); }
+GpuVolume::~GpuVolume() = default;
+
+bool GpuVolume::hasAlbedo() const { return bool(m_textures->albedo); }
+bool GpuVolume::hasEmission() const { return bool(m_textures->emission); }
+unsigned GpuVolume::extinctionTexture() const { return m_textures->extinction.id(); }
+unsigned GpuVolume::albedoTexture() const { return m_textures->albedo.id(); }
+unsigned GpuVolume::emissionTexture() const { return m_textures->emission.id(); }
+unsigned GpuVolume::occupancyTexture() const { return m_textures->occupancy.id(); }
 
 void GpuVolume::upload(const Volume& volume) {
     volume.validate();
@@ -40,21 +53,22 @@ void GpuVolume::upload(const Volume& volume) {
     const auto& ext = volume.extinction();
     const size_t hash = std::hash<std::string_view>()(
         std::string_view(reinterpret_cast<const char*>(ext.data()), ext.size() * sizeof(float)));
-    const bool sameExtinction = m_extinction && d == m_dims && hash == m_extinctionHash;
+    Textures& t = *m_textures;
+    const bool sameExtinction = t.extinction && d == m_dims && hash == m_extinctionHash;
     m_dims = d;
     m_worldFromIndex = volume.worldFromIndex();
     m_brickDims = {(d.x + layout::kBrickSize - 1) / layout::kBrickSize,
                    (d.y + layout::kBrickSize - 1) / layout::kBrickSize,
                    (d.z + layout::kBrickSize - 1) / layout::kBrickSize};
     if (!sameExtinction) {
-        m_extinction = uploadRgb(volume.extinction(), d, "extinction");
+        t.extinction = uploadRgb(volume.extinction(), d, "extinction");
         m_extinctionHash = hash;
         m_extinctionVersion = g_nextVersion++;
-        m_occupancy = gl::createTexture(GL_TEXTURE_3D, "occupancy");
-        glTextureStorage3D(m_occupancy.id(), 1, GL_R32F, m_brickDims.x, m_brickDims.y, m_brickDims.z);
+        t.occupancy = gl::createTexture(GL_TEXTURE_3D, "occupancy");
+        glTextureStorage3D(t.occupancy.id(), 1, GL_R32F, m_brickDims.x, m_brickDims.y, m_brickDims.z);
     }
-    m_albedo = volume.hasAlbedo() ? uploadRgb(volume.albedo(), d, "albedo") : gl::Texture();
-    m_emission = volume.hasEmission() ? uploadRgb(volume.emission(), d, "emission") : gl::Texture();
+    t.albedo = volume.hasAlbedo() ? uploadRgb(volume.albedo(), d, "albedo") : gl::Texture();
+    t.emission = volume.hasEmission() ? uploadRgb(volume.emission(), d, "emission") : gl::Texture();
     m_maxEmission = volume.hasEmission() ? maxComponent(Volume::range(volume.emission()).second) : 0.0f;
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("GpuVolume: out of GPU memory uploading the volume");
 }

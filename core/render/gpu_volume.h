@@ -2,10 +2,11 @@
 /// \file gpu_volume.h
 /// A Volume resident on the GPU: RGB32F 3D textures for extinction, albedo and emission (absent
 /// grids are not uploaded), and the occupancy bricks used for empty-space skipping. GL thread only.
+/// GL-free header: texture names are plain unsigned integers (GLuint) for the kernels' C++ sides.
 
 #include <cstdint>
+#include <memory>
 
-#include "core/gl/object.h"
 #include "core/math/vec.h"
 #include "core/volume/volume.h"
 
@@ -15,6 +16,9 @@ class GpuVolume {
 public:
     /// Uploads `volume` (validated first; throws InvalidArgument, GpuError if too large for GL).
     explicit GpuVolume(const Volume& volume);
+    ~GpuVolume();
+    GpuVolume(const GpuVolume&) = delete;
+    GpuVolume& operator=(const GpuVolume&) = delete;
 
     /// Re-uploads from `volume` (same or different dimensions). Bumps the extinction version
     /// only if the extinction grid changed, so light volumes and occupancy are kept otherwise.
@@ -23,14 +27,14 @@ public:
     Int3 dims() const { return m_dims; }
     Int3 brickDims() const { return m_brickDims; }
     const Mat4& worldFromIndex() const { return m_worldFromIndex; }
-    bool hasAlbedo() const { return bool(m_albedo); }
-    bool hasEmission() const { return bool(m_emission); }
+    bool hasAlbedo() const;
+    bool hasEmission() const;
     /// Largest emission value (any channel), for bounding what a ray can still gather.
     float maxEmission() const { return m_maxEmission; }
-    GLuint extinctionTexture() const { return m_extinction.id(); }
-    GLuint albedoTexture() const { return m_albedo.id(); }
-    GLuint emissionTexture() const { return m_emission.id(); }
-    GLuint occupancyTexture() const { return m_occupancy.id(); }
+    unsigned extinctionTexture() const;
+    unsigned albedoTexture() const;
+    unsigned emissionTexture() const;
+    unsigned occupancyTexture() const;
 
     /// A number unique to this volume's current extinction (across all GpuVolumes): caches of
     /// derived data (occupancy, light depth) compare it to know when to recompute.
@@ -39,11 +43,12 @@ public:
     void markOccupancyCurrent() { m_occupancyVersion = m_extinctionVersion; }
 
 private:
+    struct Textures;
+    std::unique_ptr<Textures> m_textures;
     Int3 m_dims, m_brickDims;
     Mat4 m_worldFromIndex;
-    gl::Texture m_extinction, m_albedo, m_emission, m_occupancy;
-    size_t m_extinctionHash = 0;
-    float m_maxEmission = 0;  // to detect unchanged extinction on re-upload
+    size_t m_extinctionHash = 0;  // to detect unchanged extinction on re-upload
+    float m_maxEmission = 0;
     uint64_t m_extinctionVersion = 0;
     uint64_t m_occupancyVersion = 0;
 };

@@ -11,21 +11,14 @@
 #include <vector>
 
 #include "core/gl/object.h"
+#include "core/gl/shader_builder.h"
 #include "core/gpu/gpu_device.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/params.h"
+#include "core/render/render_stats.h"
 #include "core/shaders/layout.h"
 
 namespace volstyle::core {
-
-/// What one frame recomputed, for benchmarks and logs.
-struct RenderStats {
-    double gpuMs = 0;          ///< the render dispatch (GPU timer query)
-    double lightMs = 0;        ///< light-depth volumes recomputed this frame (0 when cached)
-    double occupancyMs = 0;    ///< occupancy recomputed this frame (0 when cached)
-    double totalMs = 0;        ///< wall clock including readback
-    int lightVolumesRecomputed = 0;
-};
 
 struct MarchSetup {
     layout::MarchParams params;

@@ -2,11 +2,22 @@
 
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
+#include "core/gl/object.h"
+#include "core/gl/shader_builder.h"
+#include "core/render/march_setup.h"
 #include "core/shaders/layout.h"
 
 namespace volstyle::core {
 
-Renderer::Renderer(GpuDevice& device) : m_device(device) {}
+/// The output pixels (grown as needed) and the GPU timer.
+struct Renderer::Buffers {
+    gl::Buffer pixels;
+    size_t pixelBytes = 0;
+    gl::GpuTimer timer;
+};
+
+Renderer::Renderer(GpuDevice& device) : m_device(device), m_buffers(std::make_unique<Buffers>()) {}
+Renderer::~Renderer() = default;
 
 Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& lighting,
                        const RenderSettings& settings, RenderStats* statsOut) {
@@ -32,22 +43,23 @@ Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& 
     if (volume.hasAlbedo()) glBindTextureUnit(layout::kUnitAlbedo, volume.albedoTexture());
     if (volume.hasEmission()) glBindTextureUnit(layout::kUnitEmission, volume.emissionTexture());
 
+    Buffers& b = *m_buffers;
     const size_t bytes = size_t(camera.width) * camera.height * 4 * sizeof(float);
-    if (bytes > m_pixelBytes) {
-        m_pixels = gl::createBuffer(bytes, nullptr, GL_DYNAMIC_STORAGE_BIT, "render-pixels");
-        m_pixelBytes = bytes;
+    if (bytes > b.pixelBytes) {
+        b.pixels = gl::createBuffer(bytes, nullptr, GL_DYNAMIC_STORAGE_BIT, "render-pixels");
+        b.pixelBytes = bytes;
     }
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingImageOut, m_pixels.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingImageOut, b.pixels.id());
 
     // March every pixel, then read the image back.
     const int g = layout::kWorkgroup2D;
-    m_timer.begin();
+    b.timer.begin();
     glDispatchCompute(GLuint((camera.width + g - 1) / g), GLuint((camera.height + g - 1) / g), 1);
-    m_timer.end();
+    b.timer.end();
     gl::barrierAfterComputeWrites();
     Image image(camera.width, camera.height);
-    glGetNamedBufferSubData(m_pixels.id(), 0, GLsizeiptr(image.rgba.size() * sizeof(float)), image.rgba.data());
-    stats.gpuMs = m_timer.elapsedMs();
+    glGetNamedBufferSubData(b.pixels.id(), 0, GLsizeiptr(image.rgba.size() * sizeof(float)), image.rgba.data());
+    stats.gpuMs = b.timer.elapsedMs();
     stats.totalMs = msSince(t0);
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("Renderer::render(): out of GPU memory");
     if (statsOut) *statsOut = stats;

@@ -2,20 +2,22 @@
 /// \file renderer.h
 /// The single-scattering renderer on GL compute (SPEC §1). Derived data (occupancy, light-depth
 /// volumes, environment textures) is shared through the device and recomputed only when what it
-/// depends on changes (march_setup.h). GL thread only.
+/// depends on changes (march_setup.h). GL thread only; GL-free header.
 
-#include "core/gl/object.h"
+#include <memory>
+
 #include "core/gpu/gpu_device.h"
 #include "core/image/image.h"
 #include "core/render/gpu_volume.h"
-#include "core/render/march_setup.h"
 #include "core/render/params.h"
+#include "core/render/render_stats.h"
 
 namespace volstyle::core {
 
 class Renderer {
 public:
     explicit Renderer(GpuDevice& device);
+    ~Renderer();
 
     /// Renders linear RGBA (alpha = 1 − mean transmittance). Throws InvalidArgument for an
     /// invalid camera, lighting or settings.
@@ -23,10 +25,9 @@ public:
                  const RenderSettings& settings = {}, RenderStats* stats = nullptr);
 
 private:
+    struct Buffers;
     GpuDevice& m_device;
-    gl::Buffer m_pixels;
-    size_t m_pixelBytes = 0;
-    gl::GpuTimer m_timer;
+    std::unique_ptr<Buffers> m_buffers;
 };
 
 }  // namespace volstyle::core

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/gl/object.h"
+#include "core/gl/shader_builder.h"
 #include "core/gpu/gpu_device.h"
 #include "core/math/vec.h"
 #include "core/shaders/layout.h"

@@ -33,6 +33,20 @@ check "value types are GL-free" "$values" core/math/* core/image/image.* core/re
 check "protocol sees only core's value types" "$values|protocol/" protocol/*.h protocol/*.cpp
 check "core never includes protocol or server" 'core/' $(find core -name '*.h' -o -name '*.cpp')
 
+# The server, CLI and benchmarks see core's engines through GL-free headers only: no core/gl
+# beyond the context's description, no kernel internals.
+internal='core/gl/object\.h|core/gl/shader_builder\.h|core/render/(march_setup|derived_volumes|gl_convert)\.h|core/solve/(projector|gpu_vector|solver_state)\.h|core/shaders/'
+for f in $(find server bench tests/http tests/cli -name '*.h' -o -name '*.cpp'); do
+  if grep -qE "^#include \"($internal)" "$f" || grep -qE '^#include <(epoxy|EGL)/' "$f"; then
+    echo "layering: $f includes GL or a kernel's internals; use GpuDevice, GpuVolume, Renderer, Solver"; status=1
+  fi
+done
+check "public engine headers are GL-free" 'core/base/|core/math/|core/image/image\.h|core/render/(params|gpu_volume|render_stats)\.h|core/gl/context\.h|core/gpu/|core/solve/(solve_options|solve_types)\.h|core/shaders/layout\.h|core/volume/volume\.h' \
+  core/gpu/gpu_device.h core/gpu/resource_cache.h core/render/gpu_volume.h core/render/renderer.h core/render/render_stats.h core/solve/solver.h
+for f in core/gpu/gpu_device.h core/gpu/resource_cache.h core/render/gpu_volume.h core/render/renderer.h core/solve/solver.h core/gl/context.h; do
+  if grep -qE '^#include <(epoxy|EGL)/' "$f"; then echo "layering: $f is a public header and includes GL"; status=1; fi
+done
+
 # No HTTP or JSON in core; no GL in protocol.
 if grep -rlE '#include <(httplib|nlohmann/)' core; then echo "layering: core includes HTTP or JSON headers"; status=1; fi
 if grep -rlE '#include <(epoxy/|EGL/)' protocol; then echo "layering: protocol includes GL headers"; status=1; fi
