@@ -29,13 +29,15 @@ struct Job {
     nlohmann::json progress = nlohmann::json::object();
     nlohmann::json result = nullptr, error = nullptr;
     std::vector<std::pair<protocol::JobEvent, nlohmann::json>> events;
-    /// The latest iterate on the GPU, for previews: created, updated and freed on the GL thread
-    /// while the job runs (one copy per job, not one upload per request); null otherwise.
+    /// The latest iterate on the GPU, for previews: created and updated on the GL thread while the
+    /// job runs (one copy per job, not one upload per request). A done job frees it (previews
+    /// then show the session's version, the solution); a failed or cancelled one keeps it until
+    /// the session's next solve starts or the session is deleted.
     std::shared_ptr<core::GpuVolume> preview;
 
     bool isFinished() const { return protocol::isFinished(state); }
     void setState(protocol::JobState s);
-    /// Ends the job in `s` with `error` (an ErrorCode and message) unless s is Done.
+    /// Ends the job in state `s` (failed or cancelled) with an error body of `code` and `message`.
     void fail(protocol::JobState s, protocol::ErrorCode code, const std::string& message,
               const std::vector<protocol::FieldError>& details = {});
     void emit(protocol::JobEvent event, nlohmann::json data);  ///< appends and wakes listeners

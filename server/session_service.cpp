@@ -56,12 +56,25 @@ SessionService::SessionService(ServiceLimits limits, const std::string& dataDir)
 }
 
 SessionService::~SessionService() {
-    // GPU copies of volumes die on the GL thread.
-    for (auto& s : m_sessions.all()) release(std::move(s->gpu));
-    for (auto& j : m_jobs.all()) release(std::move(j->preview));
+    // Stop the solves (a running one ends at its next iteration, queued ones before they start),
+    // then free every GPU object on the GL thread while the context lives: the last short task
+    // runs before the worker drains the cancelled solves, which create nothing on the way out.
+    for (auto& j : m_jobs.all()) j->cancel = true;
+    m_gl.run([this](core::GpuDevice&) {
+        for (auto& s : m_sessions.all()) {
+            std::lock_guard lock(s->mutex);
+            s->gpu.reset();
+        }
+        for (auto& j : m_jobs.all()) {
+            std::lock_guard lock(j->mutex);
+            j->preview.reset();
+        }
+        m_renderer.reset();
+    });
 }
 
 void SessionService::saved(const Session& s) {
+    if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
     if (m_persist) m_persist->saveSession(s);
 }
 
@@ -70,6 +83,8 @@ void SessionService::saved(const Job& j) {
 }
 
 std::shared_ptr<Session> SessionService::create(const protocol::CreateSessionRequest& request) {
+    // Refuse before building the scene (a 256³ one takes seconds); add() re-checks under its lock.
+    if (m_sessions.size() >= m_limits.maxSessions) throw tooManySessions(m_limits.maxSessions);
     auto s = std::make_shared<Session>();
     s->created = isoNow();
     s->scene = request.scene;
@@ -91,13 +106,20 @@ std::shared_ptr<Session> SessionService::find(const std::string& id) const {
 void SessionService::remove(const std::string& id) {
     auto s = m_sessions.remove(id);
     if (!s) throw ApiError(ErrorCode::NotFound, "no session '" + id + "'");
-    if (m_persist) m_persist->removeSession(s->id);
-    std::shared_ptr<core::GpuVolume> gpu;
+    std::vector<std::string> jobs;
     {
         std::lock_guard lock(s->mutex);
-        gpu = std::move(s->gpu);
+        s->removed = true;  // from now on nothing writes it back or caches a GPU copy
+        jobs = s->jobs;
+        if (m_persist) m_persist->removeSession(s->id);
     }
-    release(std::move(gpu));
+    for (const auto& jid : jobs)
+        if (auto j = m_jobs.find(jid)) j->cancel = true;
+    m_gl.run([this, s](core::GpuDevice&) {
+        std::lock_guard lock(s->mutex);
+        s->gpu.reset();
+        dropPreviews(*s);
+    });
 }
 
 core::Lighting SessionService::lighting(Session& s) const {
@@ -224,11 +246,32 @@ std::string SessionService::downloadVdb(Session& s, std::optional<int> version) 
     return bytes.str();
 }
 
+core::Renderer& SessionService::renderer(core::GpuDevice& device) {
+    if (!m_renderer) m_renderer = std::make_unique<core::Renderer>(device);
+    return *m_renderer;
+}
+
+core::GpuVolume& SessionService::sessionGpu(Session& s) {
+    if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+    if (!s.gpu) s.gpu = std::make_shared<core::GpuVolume>(s.volume);
+    return *s.gpu;
+}
+
+void SessionService::dropPreviews(const Session& s) {
+    for (const auto& jid : s.jobs) {
+        auto j = m_jobs.find(jid);
+        if (!j) continue;
+        std::lock_guard lock(j->mutex);
+        if (j->isFinished()) j->preview.reset();
+    }
+}
+
 core::Image SessionService::renderOnGl(Session& s, const core::Camera& camera, const core::Lighting& lighting) {
     return m_gl.run([&](core::GpuDevice& device) {
-        std::lock_guard lock(s.mutex);  // on the GL thread: no solve is between iterations here
-        if (!s.gpu) s.gpu = std::make_shared<core::GpuVolume>(s.volume);
-        return core::Renderer(device).render(*s.gpu, camera, lighting);
+        // Locking here, on the GL thread, is safe even between a solve's iterations: the solve
+        // holds no session lock while it runs short tasks.
+        std::lock_guard lock(s.mutex);
+        return renderer(device).render(sessionGpu(s), camera, lighting);
     });
 }
 
@@ -249,10 +292,9 @@ core::Image SessionService::renderPreview(const std::string& jobId, const std::s
             std::lock_guard lock(j->mutex);
             preview = j->preview;
         }
-        if (preview) return core::Renderer(device).render(*preview, camera, light);
+        if (preview) return renderer(device).render(*preview, camera, light);
         std::lock_guard lock(s->mutex);
-        if (!s->gpu) s->gpu = std::make_shared<core::GpuVolume>(s->volume);
-        return core::Renderer(device).render(*s->gpu, camera, light);
+        return renderer(device).render(sessionGpu(*s), camera, light);
     });
 }
 
@@ -262,7 +304,8 @@ std::shared_ptr<Job> SessionService::job(const std::string& id) const {
     return j;
 }
 
-std::shared_ptr<Job> SessionService::startSolve(Session& s, const core::SolveOptions& options) {
+std::shared_ptr<Job> SessionService::startSolve(const std::shared_ptr<Session>& session, const core::SolveOptions& options) {
+    Session& s = *session;
     if (m_jobs.pending(s.id) >= m_limits.maxQueuedJobs)
         throw ApiError(ErrorCode::TooManyJobs, "session '" + s.id + "' already has " + std::to_string(m_limits.maxQueuedJobs) +
                                                    " queued jobs (the limit); wait or cancel one");
@@ -280,7 +323,6 @@ std::shared_ptr<Job> SessionService::startSolve(Session& s, const core::SolveOpt
         saved(s);
     }
     spdlog::info("job {} queued (session {})", job->id, s.id);
-    std::shared_ptr<Session> session = find(s.id);
     m_gl.submit([this, job, session, options](core::GpuDevice& device) { runSolve(job, session, options, device); });
     return job;
 }

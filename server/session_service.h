@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/image/image.h"
+#include "core/render/renderer.h"
 #include "core/render/params.h"
 #include "core/solve/solve_options.h"
 #include "core/volume/volume.h"
@@ -68,7 +69,7 @@ public:
     core::Image renderPreview(const std::string& jobId, const std::string& viewId);
 
     // Solve jobs.
-    std::shared_ptr<Job> startSolve(Session& s, const core::SolveOptions& options);
+    std::shared_ptr<Job> startSolve(const std::shared_ptr<Session>& s, const core::SolveOptions& options);
     std::shared_ptr<Job> job(const std::string& id) const;  ///< ApiError not_found
     void cancel(Job& job) { job.cancel = true; }
 
@@ -79,6 +80,13 @@ private:
     std::shared_ptr<core::GpuVolume> commitVersion(Session& s, core::Volume volume);
     void release(std::shared_ptr<core::GpuVolume> gpu);
     core::Image renderOnGl(Session& s, const core::Camera& camera, const core::Lighting& lighting);
+    /// On the GL thread: the session's GPU copy, uploaded if there is none (not_found once removed).
+    core::GpuVolume& sessionGpu(Session& s);
+    /// On the GL thread: the one renderer of the service (created on first use).
+    core::Renderer& renderer(core::GpuDevice& device);
+    /// On the GL thread: frees the preview copies of the session's finished jobs.
+    void dropPreviews(const Session& s);
+    /// Throws not_found if `s` was deleted; else writes it (call with its lock held).
     void saved(const Session& s);
     void saved(const Job& j);
 
@@ -89,6 +97,7 @@ private:
     void finishJob(Job& job);
 
     ServiceLimits m_limits;
+    std::unique_ptr<core::Renderer> m_renderer;  ///< GL thread only
     SessionStore m_sessions;
     JobStore m_jobs;
     std::unique_ptr<Persistence> m_persist;  ///< null: in memory only

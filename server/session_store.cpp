@@ -3,7 +3,6 @@
 #include <random>
 
 #include "core/base/errors.h"
-#include "protocol/error_code.h"
 
 namespace volstyle::server {
 
@@ -21,11 +20,15 @@ std::string SessionStore::newId() {
     return id;
 }
 
+protocol::ApiError tooManySessions(size_t max) {
+    return protocol::ApiError(protocol::ErrorCode::TooManySessions,
+                              "the server holds its limit of " + std::to_string(max) + " sessions; delete one first");
+}
+
 std::shared_ptr<Session> SessionStore::add(std::shared_ptr<Session> s) {
     std::lock_guard lock(m_mutex);
     if (m_sessions.size() >= m_max)
-        throw protocol::ApiError(protocol::ErrorCode::TooManySessions, "the server holds its limit of " +
-                                                                           std::to_string(m_max) + " sessions; delete one first");
+        throw tooManySessions(m_max);
     s->id = newId();
     m_sessions[s->id] = s;
     return s;

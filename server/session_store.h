@@ -13,6 +13,7 @@
 #include "core/render/gpu_volume.h"
 #include "core/render/params.h"
 #include "core/volume/volume.h"
+#include "protocol/error_code.h"
 
 namespace volstyle::server {
 
@@ -36,8 +37,14 @@ struct Session {
     std::vector<std::string> jobs;
     core::Lighting lighting;
     std::shared_ptr<core::GpuVolume> gpu;  ///< created and destroyed on the GL thread
+    /// Set by DELETE: work still queued for the session neither caches GPU copies nor writes it
+    /// back to disk (it answers not_found instead).
+    bool removed = false;
     std::mutex mutex;                      ///< guards the fields above
 };
+
+/// The answer when the server holds `max` sessions already.
+protocol::ApiError tooManySessions(size_t max);
 
 class SessionStore {
 public:

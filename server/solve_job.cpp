@@ -40,6 +40,10 @@ SolveInputs snapshot(Session& s) {
 
 void SessionService::runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr<Session>& s,
                               const core::SolveOptions& options, core::GpuDevice& device) {
+    {
+        std::lock_guard lock(s->mutex);
+        dropPreviews(*s);  // earlier jobs' last iterates: this job's previews replace them
+    }
     if (job->cancel) {
         job->fail(JobState::Cancelled, protocol::ErrorCode::Cancelled, "cancelled before it started");
     } else {
@@ -54,10 +58,10 @@ void SessionService::runSolve(const std::shared_ptr<Job>& job, const std::shared
                       e.details);
         }
     }
-    std::shared_ptr<core::GpuVolume> preview;
+    std::shared_ptr<core::GpuVolume> preview;  // freed here, on the GL thread, when the job is done
     {
         std::lock_guard lock(job->mutex);
-        preview = std::move(job->preview);  // on the GL thread: freed here
+        if (job->state == JobState::Done) preview = std::move(job->preview);
     }
     finishJob(*job);
 }
@@ -98,11 +102,11 @@ void SessionService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s,
         },
         &job.cancel);
     int version = 0;
+    std::shared_ptr<core::GpuVolume> stale;  // freed here, on the GL thread
     {
         std::lock_guard lock(s->mutex);
-        commitVersion(*s, std::move(result.volume));  // on disk before the job reads done; on the GL thread,
-        version = s->version;                         // which frees the old GPU copy here
-        s->gpu = std::make_shared<core::GpuVolume>(s->volume);
+        stale = commitVersion(*s, std::move(result.volume));  // on disk before the job reads done;
+        version = s->version;                                 // not_found if the session was deleted
     }
     std::lock_guard lock(job.mutex);
     job.state = JobState::Done;

@@ -25,8 +25,7 @@ void ResourceCache::evict() {
 /// The GL objects the device owns.
 struct GpuDevice::Programs {
     std::map<std::string, gl::Program> byVariant;
-    gl::Buffer params;
-    size_t paramsCapacity = 0;
+    std::map<std::type_index, gl::Buffer> paramsByBlock;
 };
 
 std::unique_ptr<GpuDevice> GpuDevice::create(const gl::ContextOptions& options) {
@@ -54,14 +53,11 @@ const gl::Program& GpuDevice::program(const gl::ShaderBuilder& builder) {
     return it->second;
 }
 
-void GpuDevice::setParams(const void* data, size_t bytes) {
-    Programs& p = *m_programs;
-    if (bytes > p.paramsCapacity) {
-        p.params = gl::createBuffer(bytes, nullptr, GL_DYNAMIC_STORAGE_BIT, "params");
-        p.paramsCapacity = bytes;
-    }
-    glNamedBufferSubData(p.params.id(), 0, GLsizeiptr(bytes), data);
-    glBindBufferBase(GL_UNIFORM_BUFFER, layout::kBindingParams, p.params.id());
+void GpuDevice::setParams(std::type_index block, const void* data, size_t bytes) {
+    gl::Buffer& buffer = m_programs->paramsByBlock[block];
+    if (!buffer) buffer = gl::createBuffer(bytes, nullptr, GL_DYNAMIC_STORAGE_BIT, "params");
+    glNamedBufferSubData(buffer.id(), 0, GLsizeiptr(bytes), data);
+    glBindBufferBase(GL_UNIFORM_BUFFER, layout::kBindingParams, buffer.id());
 }
 
 }  // namespace volstyle::core

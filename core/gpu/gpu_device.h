@@ -9,6 +9,7 @@
 /// program() and setParams(), whose GL types they include themselves.
 
 #include <memory>
+#include <typeindex>
 
 #include "core/gl/context.h"
 #include "core/gpu/resource_cache.h"
@@ -39,17 +40,19 @@ public:
 
     /// The compiled program of a shader variant: compiled once, then cached by its variant key.
     const gl::Program& program(const gl::ShaderBuilder& builder);
-    /// Uploads a parameter block (layout.h) and binds it at kBindingParams for the next dispatches.
-    void setParams(const void* data, size_t bytes);
+    /// Uploads a parameter block (layout.h) and binds it at kBindingParams for the next
+    /// dispatches. Each block type has a buffer of its own, so the vector kernels' updates never
+    /// rewrite the buffer a march kernel still reads (drivers would stall or copy).
     template <typename Block>
     void setParams(const Block& block) {
-        setParams(&block, sizeof(Block));
+        setParams(std::type_index(typeid(Block)), &block, sizeof(Block));
     }
     /// Derived resources shared by every engine (light-depth volumes, environment textures).
     ResourceCache& cache() { return m_cache; }
 
 private:
     struct Programs;
+    void setParams(std::type_index block, const void* data, size_t bytes);
     GpuDevice(std::unique_ptr<gl::Context> owned, gl::Context& context);
 
     std::unique_ptr<gl::Context> m_owned;

@@ -39,7 +39,7 @@ void addJobRoutes(RouteContext& c) {
     c.http.Post(kSessionPath + "/solve", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);
         auto request = protocol::SolveRequest::fromJson(c.body(req));
-        reply(res, 202, {{"job", c.service.startSolve(*s, request.options)->id}});
+        reply(res, 202, {{"job", c.service.startSolve(s, request.options)->id}});
     });
     c.http.Get(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {
         reply(res, 200, c.service.job(req.matches[1])->toJson());

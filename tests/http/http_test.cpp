@@ -439,3 +439,22 @@ TEST_F(Api, PreviewsAndOtherSessionsDuringASolveChangeNothing) {
     EXPECT_GT(otherRenders + previews, 2) << "the solve should have been disturbed";
     EXPECT_LE(diff, 1e-5);
 }
+
+TEST_F(Api, DeletingASessionDuringASolveCancelsItsJob) {
+    // The job must not commit into (or write back) a deleted session, and the GPU copies of the
+    // session and of the job's previews are freed on the GL thread.
+    std::string id = createSession(24);
+    const std::string base = "/api/v1/sessions/" + id;
+    const std::string vid = addConstantTargetView(client(), base, 24, 0.7f);
+    auto r = client().Post((base + "/solve").c_str(), R"({"max_iterations": 500, "tolerance": 0})", "application/json");
+    const std::string job = json::parse(r->body)["job"];
+    for (int i = 0; i < 100 && json::parse(client().Get(("/api/v1/jobs/" + job).c_str())->body)["state"] != "running"; ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    EXPECT_EQ(client().Get(("/api/v1/jobs/" + job + "/preview/" + vid + ".png").c_str())->status, 200);
+    EXPECT_EQ(client().Delete(base.c_str())->status, 204);
+    auto events = readEvents(client(), "/api/v1/jobs/" + job + "/events");
+    ASSERT_FALSE(events.empty());
+    EXPECT_EQ(events.back(), "cancelled");
+    expectError(client().Get(base.c_str()), 404, "not_found");
+    expectError(client().Get(("/api/v1/jobs/" + job + "/preview/" + vid + ".png").c_str()), 404, "not_found");
+}

@@ -78,7 +78,7 @@ TEST(Vocabulary, EveryCoreErrorHasAnApiCode) {
     EXPECT_EQ(protocol::errorCodeFromName("no_such_code"), protocol::ErrorCode::InternalError);
 }
 
-TEST(Vocabulary, JobStatesAndEventsMatchTheSchema) {
+TEST(Vocabulary, JobStatesAndEventsMatchTheSchemaAndTheDocs) {
     std::set<std::string> states, events;
     for (const auto& s : protocol::kJobStates) {
         states.insert(s.name);
@@ -93,6 +93,9 @@ TEST(Vocabulary, JobStatesAndEventsMatchTheSchema) {
         EXPECT_STREQ(protocol::jobEventName(protocol::finalEvent(s)), protocol::jobStateName(s)) << "final event = final state";
     }
     EXPECT_FALSE(protocol::isFinished(protocol::JobState::Running));
+    const std::string doc = apiDoc();
+    for (const auto& n : states) EXPECT_NE(doc.find("`" + n + "`"), std::string::npos) << n << " is not in docs/API.md";
+    for (const auto& n : events) EXPECT_NE(doc.find("`" + n + "`"), std::string::npos) << n << " is not in docs/API.md";
 }
 
 TEST(Vocabulary, StopReasonsMatchTheSchemaAndTheDocs) {
