@@ -24,8 +24,11 @@ core::Camera readCamera(JsonReader& r, const nlohmann::json& body, const std::st
         for (const auto& d : e.details()) r.fail(d.path, d.message);
         return camera;
     }
-    if (camera.width > limits.maxImageSide || camera.height > limits.maxImageSide)
-        r.fail(path, "images are limited to " + std::to_string(limits.maxImageSide) + " pixels a side");
+    for (auto [side, name] : {std::pair{camera.width, "width"}, std::pair{camera.height, "height"}})
+        if (side > limits.maxImageSide) {
+            const std::string message = "images are limited to " + std::to_string(limits.maxImageSide) + " pixels a side";
+            throw ApiError(ErrorCode::TooLarge, message, {{path + "/" + name, message}});
+        }
     return camera;
 }
 
@@ -84,7 +87,16 @@ RevertRequest RevertRequest::fromJson(const nlohmann::json& j) {
 
 SetLightingRequest SetLightingRequest::fromJson(const nlohmann::json& j) { return {lightingFromJson(j).lighting}; }
 
-SolveRequest SolveRequest::fromJson(const nlohmann::json& j) { return {solveOptionsFromJson(j)}; }
+SolveRequest SolveRequest::fromJson(const nlohmann::json& j, const RequestLimits& limits) {
+    SolveRequest q{solveOptionsFromJson(j)};
+    if (q.options.resolution && q.options.resolution->volume() > limits.maxSolveVoxels) {
+        const Int3 r = *q.options.resolution;
+        const std::string message = std::to_string(r.x) + "x" + std::to_string(r.y) + "x" + std::to_string(r.z) +
+                                    " unknowns per grid is over the limit of " + std::to_string(limits.maxSolveVoxels) + " voxels";
+        throw ApiError(ErrorCode::TooLarge, message, {{"/resolution", message}});
+    }
+    return q;
+}
 
 namespace {
 

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
@@ -23,6 +24,7 @@ struct RequestLimits {
     int maxImageSide = 4096;        ///< camera width and height, in pixels
     int minSceneResolution = 8;     ///< built-in scenes' voxels a side
     int maxSceneResolution = 256;
+    int64_t maxSolveVoxels = int64_t(256) * 256 * 256;  ///< a solve's unknown grid (its "resolution")
 };
 
 /// Query parameters as the HTTP layer hands them over (name → value, repeats allowed).
@@ -32,8 +34,9 @@ enum class ImageFormat { Png, Exr };
 const char* imageFormatName(ImageFormat f);
 const char* imageMimeType(ImageFormat f);
 
-/// The camera block of a request at `path` (required), with the image-side limit applied:
-/// recorded into `r` like any other field. The one place cameras in requests are read.
+/// The camera block of a request at `path` (required): its problems are recorded into `r` like
+/// any other field's; over the image-side limit it throws ApiError too_large (413) naming the
+/// limit. The one place cameras in requests are read.
 core::Camera readCamera(JsonReader& r, const nlohmann::json& body, const std::string& path, const RequestLimits& limits);
 
 /// POST /sessions: {"scene": "builtin:NAME", "resolution": N}, both optional.
@@ -70,10 +73,11 @@ struct SetLightingRequest {
     static SetLightingRequest fromJson(const nlohmann::json& j);
 };
 
-/// POST /sessions/{sid}/solve: the solver options (solve_json.h).
+/// POST /sessions/{sid}/solve: the solver options (solve_json.h); a `resolution` over
+/// maxSolveVoxels is too_large (413).
 struct SolveRequest {
     core::SolveOptions options;
-    static SolveRequest fromJson(const nlohmann::json& j);
+    static SolveRequest fromJson(const nlohmann::json& j, const RequestLimits& limits);
 };
 
 /// GET …/views/{vid}/render.{png,exr}?exposure=STOPS.

@@ -105,10 +105,14 @@ void JsonReader::throwIfErrors() const {
     if (!m_errors.empty()) throw ValidationError(m_errors);
 }
 
+std::string toText(const nlohmann::json& j, int indent) {
+    return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 nlohmann::json parseJson(const std::string& text, const std::string& what) {
     try {
         return nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
+    } catch (const nlohmann::json::exception& e) {
         throw ValidationError({{"", what + " is not valid JSON: " + e.what()}});
     }
 }

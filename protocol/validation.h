@@ -56,6 +56,10 @@ private:
     std::vector<FieldError> m_errors;
 };
 
+/// JSON text of `j`. Invalid UTF-8 in any string (echoed from a request: a path, a field, a
+/// parser message) becomes U+FFFD instead of throwing: an answer must always be writable.
+std::string toText(const nlohmann::json& j, int indent = -1);
+
 /// Parses JSON text, throwing ValidationError (path "") with the parser's message.
 nlohmann::json parseJson(const std::string& text, const std::string& what);
 

@@ -45,6 +45,7 @@ protocol::RequestLimits requestLimits(const ServerOptions& o) {
     protocol::RequestLimits l;
     l.maxImageSide = o.maxImageSide;
     l.maxSceneResolution = core::kMaxSceneResolution;
+    l.maxSolveVoxels = o.volumeLimits.maxVoxels;
     return l;
 }
 
@@ -63,6 +64,12 @@ struct HttpServer::Impl {
           routes{http, service, requestLimits(opt), opt.maxJsonBytes} {}
 
     void addMiddleware();
+    /// A fresh request id for this thread's request, also sent as X-Request-Id.
+    void beginRequest(httplib::Response& res) {
+        t_requestStart = Clock::now();
+        t_requestId = fmt::format("{:08x}", ++requestCounter);
+        res.set_header("X-Request-Id", t_requestId);
+    }
 };
 
 HttpServer::HttpServer(ServerOptions options) {
@@ -96,9 +103,7 @@ void HttpServer::Impl::addMiddleware() {
 
     // Request ids, timing, and the bearer token on /api when one is set.
     http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
-        t_requestStart = Clock::now();
-        t_requestId = fmt::format("{:08x}", ++requestCounter);
-        res.set_header("X-Request-Id", t_requestId);
+        beginRequest(res);
         if (!opt.token.empty() && req.path.rfind("/api/", 0) == 0 &&
             !constantTimeEquals(req.get_header_value("Authorization"), "Bearer " + opt.token)) {
             replyError(res, protocol::ErrorCode::Unauthorized, "send 'Authorization: Bearer <token>'");
@@ -116,9 +121,19 @@ void HttpServer::Impl::addMiddleware() {
             spdlog::error("request {}: {}: {}", t_requestId, protocol::errorName(e.code), e.message);
         replyError(res, e.code, e.message, e.details);
     });
-    http.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
-        if (res.status == 404 && res.body.empty())
-            replyError(res, protocol::ErrorCode::NotFound, "no route " + req.method + " " + req.path);
+    // Errors the HTTP library raises itself (no route, a body over the payload limit, a URI or
+    // headers too long, a bad range or request line) get the SPEC body too.
+    http.set_error_handler([this](const httplib::Request& req, httplib::Response& res) {
+        if (!res.body.empty()) return;
+        if (!res.has_header("X-Request-Id")) beginRequest(res);  // refused before routing began
+        const int status = res.status;
+        if (status == 404) replyError(res, protocol::ErrorCode::NotFound, "no route " + req.method + " " + req.path);
+        else if (status == 413) replyError(res, protocol::ErrorCode::TooLarge, "the request body is over the server's payload limit");
+        else if (status == 414 || status == 431) replyError(res, protocol::ErrorCode::TooLarge, "the request's URI or headers are too long");
+        else if (status == 416) replyError(res, protocol::ErrorCode::InvalidArgument, "the requested range cannot be served");
+        else if (status >= 400 && status < 500) replyError(res, protocol::ErrorCode::InvalidArgument, "the request is malformed (HTTP " + std::to_string(status) + ")");
+        else if (status >= 500) replyError(res, protocol::ErrorCode::InternalError, "the server failed to handle the request");
+        res.status = status;  // keep the library's status (replyError sets the code's own)
     });
 }
 

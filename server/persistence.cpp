@@ -84,7 +84,7 @@ void Persistence::saveSession(const Session& s) {
                          {"has_weights", v.weights.has_value()}});
     json j = {{"id", s.id}, {"created", s.created}, {"scene", s.scene}, {"version", s.version}, {"versions", versions},
               {"lighting", protocol::lightingToJson(s.lighting)}, {"views", views}, {"next_view", s.nextView}, {"jobs", s.jobs}};
-    atomicWrite(dir / "session.json", j.dump(2));
+    atomicWrite(dir / "session.json", protocol::toText(j, 2));
 }
 
 void Persistence::saveViewImage(const std::string& session, const std::string& view, const std::string& kind,
@@ -109,7 +109,7 @@ void Persistence::removeSession(const std::string& session) {
     fs::remove_all(sessionDir(session), ec);
 }
 
-void Persistence::saveJob(const Job& job) { atomicWrite(m_dir / "jobs" / (job.id + ".json"), job.toJson().dump(2)); }
+void Persistence::saveJob(const Job& job) { atomicWrite(m_dir / "jobs" / (job.id + ".json"), protocol::toText(job.toJson(), 2)); }
 
 std::vector<std::shared_ptr<Session>> Persistence::loadSessions() {
     std::vector<std::shared_ptr<Session>> out;

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -169,6 +170,15 @@ SessionView SessionService::setViewImage(Session& s, const std::string& viewId, 
     } catch (const Error& e) {
         throw ApiError(ErrorCode::UnsupportedMedia, e.what());  // undecodable, or over the side limit
     }
+    // Weights are the target's alpha (or the weight image's first channel): negative values would
+    // be solved on silently; refuse them here, where the client can fix the file. (The decoder
+    // already refuses NaN and Inf.)
+    size_t negative = 0;
+    for (size_t i = 0; i < image.pixelCount(); ++i)
+        for (int c = 0; c < (isTarget ? 4 : 1); ++c) negative += image.rgba[4 * i + size_t(c)] < 0 ? 1 : 0;
+    if (negative)
+        throw ApiError(ErrorCode::InvalidArgument, what + " has " + std::to_string(negative) +
+                                                       " negative values; colours and weights must be >= 0");
     std::lock_guard lock(s.mutex);
     SessionView& v = findView(s, viewId);
     if (image.width != v.camera.width || image.height != v.camera.height)
@@ -314,6 +324,14 @@ std::shared_ptr<Job> SessionService::startSolve(const std::shared_ptr<Session>& 
         bool anyTarget = false;
         for (const auto& v : s.views) anyTarget |= v.target.has_value();
         if (!anyTarget) throw ApiError(ErrorCode::InvalidArgument, "no view has a target; PUT …/views/{vid}/target first");
+        // "views" names views of this session that have targets: check now, not when the job runs.
+        std::vector<protocol::FieldError> problems;
+        for (size_t i = 0; i < options.views.size(); ++i) {
+            auto it = std::find_if(s.views.begin(), s.views.end(), [&](const SessionView& v) { return v.id == options.views[i]; });
+            if (it == s.views.end()) problems.push_back({"/views/" + std::to_string(i), "no view '" + options.views[i] + "' in this session"});
+            else if (!it->target) problems.push_back({"/views/" + std::to_string(i), "view '" + options.views[i] + "' has no target yet"});
+        }
+        if (!problems.empty()) throw protocol::ValidationError(problems);
     }
     auto job = m_jobs.add(s.id);
     saved(*job);

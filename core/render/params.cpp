@@ -26,7 +26,10 @@ std::vector<FieldProblem> Camera::check() const {
     if (!isFinite(up) || length(up) < 1e-12) out.push_back({"up", "must be a finite non-zero vector"});
     if (out.empty()) {
         Vec3d view = target - eye;
-        if (length(view) < 1e-9) {
+        if (!isFinite(view) || !std::isfinite(length(view)) || !std::isfinite(length(up))) {
+            // e.g. eye 1e308 and target −1e308: the direction overflows and the frame would be NaN.
+            out.push_back({"target", "is too far from eye (the view direction overflows); keep coordinates below 1e150"});
+        } else if (length(view) < 1e-9) {
             out.push_back({"target", "must differ from eye"});
         } else if (length(cross(normalize(view), normalize(up))) < 1e-6) {
             out.push_back({"up", "must not be parallel to the view direction (target - eye)"});

@@ -94,17 +94,18 @@ void Solver::State::validateInputs() {
     lighting.validate();
     // Keep the requested views (all with a target by default).
     std::vector<SolveView> chosen;
-    std::set<std::string> wanted(opt.views.begin(), opt.views.end());
+    const std::set<std::string> requested(opt.views.begin(), opt.views.end());
+    std::set<std::string> missing = requested;
     for (auto& v : views) {
-        if (!wanted.empty() && !wanted.count(v.name)) continue;
-        wanted.erase(v.name);
+        if (!requested.empty() && !requested.count(v.name)) continue;  // "views": only these
+        missing.erase(v.name);
         if (v.target.empty()) {
             if (!opt.views.empty()) throw InvalidArgument(describeView(v) + " has no target");
             continue;
         }
         chosen.push_back(std::move(v));
     }
-    if (!wanted.empty()) throw InvalidArgument("solve options: views: no view named '" + *wanted.begin() + "'");
+    if (!missing.empty()) throw InvalidArgument("solve options: views: no view named '" + *missing.begin() + "'");
     if (chosen.empty()) throw InvalidArgument("solve: no view has a target image; upload a painted target first");
     for (const auto& v : chosen) validateView(v);
     views = std::move(chosen);

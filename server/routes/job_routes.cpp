@@ -20,7 +20,7 @@ void streamEvents(httplib::Response& res, std::shared_ptr<Job> job) {
         while (sent < job->events.size()) {
             const auto& [event, data] = job->events[sent++];
             final = protocol::isFinal(event);
-            std::string message = std::string("event: ") + protocol::jobEventName(event) + "\ndata: " + data.dump() + "\n\n";
+            std::string message = std::string("event: ") + protocol::jobEventName(event) + "\ndata: " + protocol::toText(data) + "\n\n";
             lock.unlock();
             if (!sink.write(message.data(), message.size())) return false;  // the client left
             lock.lock();
@@ -38,7 +38,7 @@ void streamEvents(httplib::Response& res, std::shared_ptr<Job> job) {
 void addJobRoutes(RouteContext& c) {
     c.http.Post(kSessionPath + "/solve", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);
-        auto request = protocol::SolveRequest::fromJson(c.body(req));
+        auto request = protocol::SolveRequest::fromJson(c.body(req), c.limits);
         reply(res, 202, {{"job", c.service.startSolve(s, request.options)->id}});
     });
     c.http.Get(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {

@@ -12,14 +12,14 @@ nlohmann::json RouteContext::body(const httplib::Request& req) const {
     if (req.body.empty()) return nlohmann::json::object();
     try {
         return nlohmann::json::parse(req.body);
-    } catch (const nlohmann::json::parse_error& e) {
+    } catch (const nlohmann::json::exception& e) {  // parse_error, and out_of_range for numbers like 1e400
         throw ApiError(ErrorCode::InvalidJson, std::string("the body is not valid JSON: ") + e.what());
     }
 }
 
 void reply(httplib::Response& res, int status, const nlohmann::json& body) {
     res.status = status;
-    res.set_content(body.dump(), "application/json");
+    res.set_content(protocol::toText(body), "application/json");
 }
 
 void replyImage(httplib::Response& res, const core::Image& image, protocol::ImageFormat format, double exposure) {

@@ -28,6 +28,9 @@ void addSessionRoutes(RouteContext& c) {
     });
     c.http.Put(kSessionPath + "/lighting", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);
+        // An empty body is a client mistake, not "no lights" (send {} for that).
+        if (req.body.find_first_not_of(" \t\r\n") == std::string::npos)
+            throw protocol::ApiError(protocol::ErrorCode::InvalidArgument, "the body is empty; send the lighting object ({} means no light)");
         auto request = protocol::SetLightingRequest::fromJson(c.body(req));
         c.service.setLighting(*s, request.lighting);
         reply(res, 200, protocol::lightingToJson(request.lighting));

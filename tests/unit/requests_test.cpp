@@ -50,8 +50,18 @@ TEST(Requests, OneCameraBlockWithTheImageLimit) {
     protocol::RequestLimits limits;
     limits.maxImageSide = 64;
     json body = {{"camera", {{"eye", {0, 0, 3}}, {"target", {0, 0, 0}}, {"width", 65}, {"height", 8}}}};
-    EXPECT_EQ(problemPaths([&] { protocol::RenderRequest::fromJson(body, limits); }), std::vector<std::string>{"/camera"});
-    EXPECT_EQ(problemPaths([&] { protocol::AddViewRequest::fromJson(body, limits); }), std::vector<std::string>{"/camera"});
+    for (auto parse : {+[](const json& b, const protocol::RequestLimits& l) { protocol::RenderRequest::fromJson(b, l); },
+                       +[](const json& b, const protocol::RequestLimits& l) { protocol::AddViewRequest::fromJson(b, l); }}) {
+        try {
+            parse(body, limits);
+            ADD_FAILURE() << "a 65-pixel side passed a 64-pixel limit";
+        } catch (const protocol::ApiError& e) {
+            EXPECT_EQ(e.code(), protocol::ErrorCode::TooLarge) << "over a limit: 413, the limit named";
+            ASSERT_EQ(e.details().size(), 1u);
+            EXPECT_EQ(e.details()[0].path, "/camera/width");
+            EXPECT_NE(std::string(e.what()).find("64"), std::string::npos);
+        }
+    }
     EXPECT_EQ(problemPaths([&] { protocol::AddViewRequest::fromJson(json::object(), limits); }), std::vector<std::string>{"/camera"});
     body["camera"]["width"] = 32;
     body["format"] = "exr";

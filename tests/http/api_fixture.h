@@ -1,0 +1,106 @@
+#pragma once
+// The HTTP API in-process (cpp-httplib's own test pattern): a server on a free loopback port in a
+// thread, stopped by the fixture; every answer checked for status and, on errors, the SPEC's body.
+#include <gtest/gtest.h>
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/base/errors.h"
+#include "core/image/image_io.h"
+#include "server/http_server.h"
+
+namespace volstyle::test {
+
+using json = nlohmann::json;
+
+class Api : public ::testing::Test {
+protected:
+    void start(server::ServerOptions opt = {}) {
+        opt.host = "127.0.0.1";
+        opt.port = 0;
+        opt.webDir = VOLSTYLE_SOURCE_DIR "/web";
+        opt.maxJsonBytes = 4096;
+        opt.maxUploadBytes = 64 * 1024;
+        opt.maxImageSide = 64;
+        opt.dataDir.clear();  // in memory; the durability test uses the real binary
+        try {
+            m_server = std::make_unique<server::HttpServer>(opt);
+        } catch (const GpuError& e) {
+            GTEST_SKIP() << "no EGL/OpenGL 4.5 context: " << e.what();
+        }
+        m_port = m_server->bind();
+        m_thread = std::thread([this] { m_server->listen(); });
+        m_client = std::make_unique<httplib::Client>("127.0.0.1", m_port);
+        for (int i = 0; i < 100 && !m_client->Get("/api/v1/health"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    void SetUp() override { start(); }
+    void TearDown() override {
+        if (m_server) m_server->stop();
+        if (m_thread.joinable()) m_thread.join();
+    }
+    httplib::Client& client() { return *m_client; }
+
+    /// Checks the SPEC's error body and returns it.
+    json expectError(const httplib::Result& r, int status, const std::string& code) {
+        EXPECT_TRUE(r) << "no answer";
+        if (!r) return {};
+        EXPECT_EQ(r->status, status) << r->body;
+        EXPECT_EQ(r->get_header_value("Content-Type"), "application/json");
+        json j = json::parse(r->body);
+        EXPECT_EQ(j["error"]["code"], code) << r->body;
+        EXPECT_FALSE(j["error"]["message"].get<std::string>().empty());
+        EXPECT_TRUE(j["error"]["details"].is_array());
+        EXPECT_FALSE(j["error"]["request_id"].get<std::string>().empty());
+        return j;
+    }
+
+    std::string createSession(int resolution = 16) {
+        auto r = client().Post("/api/v1/sessions", json{{"scene", "builtin:sphere"}, {"resolution", resolution}}.dump(), "application/json");
+        EXPECT_EQ(r->status, 201) << r->body;
+        return json::parse(r->body)["id"];
+    }
+
+    std::unique_ptr<server::HttpServer> m_server;
+    std::unique_ptr<httplib::Client> m_client;
+    std::thread m_thread;
+    int m_port = 0;
+};
+
+
+inline std::string pngOf(const core::Image& img) { return core::encodeImage(img, "png"); }
+
+/// Reads an SSE stream to its end; returns the event names in order.
+inline std::vector<std::string> readEvents(httplib::Client& c, const std::string& path) {
+    std::string buffer;
+    std::vector<std::string> names;
+    c.set_read_timeout(120, 0);
+    c.Get(path.c_str(), [&](const char* data, size_t n) {
+        buffer.append(data, n);
+        for (size_t pos; (pos = buffer.find("\n\n")) != std::string::npos;) {
+            std::string block = buffer.substr(0, pos);
+            buffer.erase(0, pos + 2);
+            if (block.rfind("event: ", 0) == 0) names.push_back(block.substr(7, block.find('\n') - 7));
+        }
+        return true;
+    });
+    return names;
+}
+
+/// Adds a `size`² view looking down -z and uploads a constant target; returns the view id.
+inline std::string addConstantTargetView(httplib::Client& c, const std::string& base, int size, float value) {
+    json camera = {{"camera", {{"eye", {0, 0, 3}}, {"target", {0, 0, 0}}, {"width", size}, {"height", size}}}};
+    std::string vid = json::parse(c.Post((base + "/views").c_str(), camera.dump(), "application/json")->body)["id"];
+    core::Image target(size, size);
+    for (float& x : target.rgba) x = value;
+    EXPECT_EQ(c.Put((base + "/views/" + vid + "/target").c_str(), pngOf(target), "image/png")->status, 200);
+    return vid;
+}
+
+
+}  // namespace volstyle::test
