@@ -136,16 +136,18 @@ Volume loadVdb(const std::string& path, const VolumeLimits& limits) {
         throw InvalidArgument("loadVdb(): grid '" + extinction->getName() + "' in '" + path +
                               "' has no active voxels");
     }
-    const openvdb::Coord size = box.dim();
-    const Int3 dims{size.x(), size.y(), size.z()};
-    if (dims.volume() > limits.maxVoxels || dims.x > limits.maxSide || dims.y > limits.maxSide ||
-        dims.z > limits.maxSide) {
+    // The box's extent in 64 bits: voxels at ±2e9 overflow OpenVDB's 32-bit Coord::dim().
+    int64_t extent[3];
+    for (int a = 0; a < 3; ++a) extent[a] = int64_t(box.max()[a]) - int64_t(box.min()[a]) + 1;
+    const bool sideOver = extent[0] > limits.maxSide || extent[1] > limits.maxSide || extent[2] > limits.maxSide;
+    if (sideOver || extent[0] * extent[1] * extent[2] > limits.maxVoxels) {  // sides ≤ 2³², product fits
         std::ostringstream s;
-        s << "loadVdb(): the active box of '" << extinction->getName() << "' in '" << path << "' is "
-          << dims << " voxels, over the limit of " << limits.maxVoxels << " voxels (at most "
+        s << "loadVdb(): the active box of '" << extinction->getName() << "' in '" << path << "' is " << extent[0] << "x"
+          << extent[1] << "x" << extent[2] << " voxels, over the limit of " << limits.maxVoxels << " voxels (at most "
           << limits.maxSide << " on a side)";
         throw LimitExceeded(s.str());
     }
+    const Int3 dims{int(extent[0]), int(extent[1]), int(extent[2])};
 
     // Dense voxel (0,0,0) is the box's minimum corner.
     const openvdb::Coord o = box.min();
@@ -167,6 +169,8 @@ Volume loadVdb(const std::string& path, const VolumeLimits& limits) {
     }
     try {
         volume.validate(limits);
+    } catch (const LimitExceeded& e) {
+        throw LimitExceeded(std::string(e.what()) + " (in '" + path + "')");
     } catch (const InvalidArgument& e) {
         throw InvalidArgument(std::string(e.what()) + " (in '" + path + "')");
     }

@@ -150,6 +150,22 @@ TEST(VdbIo, OverTheLimitIsRejectedBeforeAllocating) {
     }
 }
 
+TEST(VdbIo, AnActiveBoxBeyond32BitsIsOverTheLimitNotAnOverflow) {
+    // Two voxels at ±2e9: Coord::dim() wraps in 32 bits and once slipped past the 256³ check.
+    auto dir = test::scratchDir();
+    auto grid = openvdb::FloatGrid::create();
+    grid->setName("density");
+    grid->tree().setValue(openvdb::Coord(-2000000000, 0, 0), 1.0f);
+    grid->tree().setValue(openvdb::Coord(2000000000, 0, 0), 1.0f);
+    openvdb::io::File((dir / "far.vdb").string()).write({grid});
+    try {
+        loadVdb((dir / "far.vdb").string());
+        FAIL() << "a 4e9-voxel-wide box loaded";
+    } catch (const LimitExceeded& e) {
+        EXPECT_NE(std::string(e.what()).find("4000000001x1x1"), std::string::npos) << e.what();
+    }
+}
+
 TEST(VdbIo, GridsWithAnotherTransformAreResampled) {
     auto dir = test::scratchDir();
     auto density = openvdb::FloatGrid::create();
