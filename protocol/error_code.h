@@ -28,6 +28,7 @@ enum class ErrorCode {
     IoError,             ///< a file could not be read or written
     TooManyJobs,         ///< the session's queue is at its limit
     TooManySessions,     ///< the server holds its session limit
+    TooManyStreams,      ///< the client (or the server) holds its limit of open event streams
     Interrupted,         ///< the server stopped while the job was queued or running
     GpuError,            ///< the GL context or driver failed
     ShaderCompileError,  ///< a kernel did not compile (a bug or a driver problem)
@@ -54,6 +55,7 @@ inline constexpr ErrorCodeInfo kErrorCodes[] = {
     {ErrorCode::IoError, "io_error", 422},
     {ErrorCode::TooManyJobs, "too_many_jobs", 422},
     {ErrorCode::TooManySessions, "too_many_sessions", 422},
+    {ErrorCode::TooManyStreams, "too_many_streams", 429},
     {ErrorCode::Interrupted, "interrupted", 500},
     {ErrorCode::GpuError, "gpu_error", 500},
     {ErrorCode::ShaderCompileError, "shader_compile_error", 500},

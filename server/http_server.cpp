@@ -55,13 +55,15 @@ struct HttpServer::Impl {
     ServerOptions opt;
     httplib::Server http;
     SessionService service;
+    StreamLimiter streams;
     RouteContext routes;
     std::atomic<uint64_t> requestCounter{0};
 
     explicit Impl(ServerOptions o)
         : opt(std::move(o)),
           service(serviceLimits(opt), opt.dataDir),
-          routes{http, service, requestLimits(opt), opt.maxJsonBytes} {}
+          streams(opt.maxEventStreams, opt.maxEventStreamsPerClient),
+          routes{http, service, requestLimits(opt), opt.maxJsonBytes, streams} {}
 
     void addMiddleware();
     /// A fresh request id for this thread's request, also sent as X-Request-Id.
@@ -100,6 +102,8 @@ void HttpServer::stop() { m->http.stop(); }
 
 void HttpServer::Impl::addMiddleware() {
     http.set_payload_max_length(opt.maxUploadBytes + (1 << 20));
+    const size_t threads = size_t(std::max(opt.httpThreads, opt.maxEventStreams + 4));
+    http.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
 
     // Request ids, timing, and the bearer token on /api when one is set.
     http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {

@@ -22,6 +22,9 @@ struct ServerOptions {
     size_t maxUploadBytes = size_t(512) << 20;  ///< images and VDBs: 512 MiB
     int maxImageSide = 4096;
     core::VolumeLimits volumeLimits;
+    int httpThreads = 32;            ///< HTTP worker threads (an open event stream holds one)
+    int maxEventStreams = 16;        ///< open event streams in all (below httpThreads)
+    int maxEventStreamsPerClient = 8;
 };
 
 class HttpServer {

@@ -11,7 +11,8 @@ constexpr auto kEventPoll = std::chrono::milliseconds(500);
 /// Streams a job's events from the first: every one written so far, then each as it comes; the
 /// stream ends after the final event (the job's state flips before that event is queued, so the
 /// events decide, not the state).
-void streamEvents(httplib::Response& res, std::shared_ptr<Job> job) {
+void streamEvents(httplib::Response& res, std::shared_ptr<Job> job, StreamLimiter& streams, const std::string& client) {
+    streams.acquire(client);  // released when the response is destroyed, however the stream ends
     res.set_header("Cache-Control", "no-cache");
     res.set_chunked_content_provider("text/event-stream", [job, sent = size_t(0)](size_t, httplib::DataSink& sink) mutable {
         std::unique_lock lock(job->mutex);
@@ -30,7 +31,7 @@ void streamEvents(httplib::Response& res, std::shared_ptr<Job> job) {
             sink.done();
         }
         return true;
-    });
+    }, [&streams, client](bool) { streams.release(client); });
 }
 
 }  // namespace
@@ -50,7 +51,7 @@ void addJobRoutes(RouteContext& c) {
         reply(res, 202, job->toJson());
     });
     c.http.Get(kJobPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
-        streamEvents(res, c.service.job(req.matches[1]));
+        streamEvents(res, c.service.job(req.matches[1]), c.streams, req.remote_addr);
     });
     c.http.Get(kJobPath + R"(/preview/(v[0-9]+)\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
         replyImage(res, c.service.renderPreview(req.matches[1], req.matches[2]), protocol::ImageFormat::Png);

@@ -7,6 +7,8 @@
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
+#include <map>
+#include <mutex>
 #include <string>
 
 #include "core/image/image.h"
@@ -15,11 +17,28 @@
 
 namespace volstyle::server {
 
+/// Open event streams, by client address: each holds an HTTP worker thread until its job ends,
+/// so they are bounded per client and in all, below the pool's size (/health always has threads).
+class StreamLimiter {
+public:
+    StreamLimiter(int maxTotal, int maxPerClient) : m_maxTotal(maxTotal), m_maxPerClient(maxPerClient) {}
+    /// Counts a new stream of `client`; ApiError too_many_streams (429) over a limit.
+    void acquire(const std::string& client);
+    void release(const std::string& client);
+
+private:
+    std::mutex m_mutex;
+    std::map<std::string, int> m_open;
+    int m_total = 0;
+    const int m_maxTotal, m_maxPerClient;
+};
+
 struct RouteContext {
     httplib::Server& http;
     SessionService& service;
     protocol::RequestLimits limits;
     size_t maxJsonBytes = 1 << 20;
+    StreamLimiter& streams;
 
     /// The JSON body ({} when empty): 413 over maxJsonBytes, 400 invalid_json.
     nlohmann::json body(const httplib::Request& req) const;

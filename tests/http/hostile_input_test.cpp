@@ -2,8 +2,11 @@
 // the error body naming the field or the limit — and the server stays up (a health check after).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <thread>
 
 #include "api_fixture.h"
 
@@ -142,4 +145,55 @@ TEST_F(Hostile, ErrorsFromInsideTheHttpLibraryHaveTheErrorBody) {
                              "application/octet-stream"),
                 413, "too_large");
     expectError(client().Get(("/api/v1/" + std::string(20000, 'a')).c_str()), 414, "too_large");
+}
+
+TEST_F(Hostile, OpenEventStreamsCannotStarveTheServer) {
+    // Each open stream holds an HTTP thread until its job ends. Twelve used to take all eight
+    // threads and /health timed out; now a client may hold 8, the server 16, out of 32 threads.
+    const std::string base = "/api/v1/sessions/" + createSession(24);
+    addConstantTargetView(client(), base, 24, 0.7f);
+    auto r = postJson(base + "/solve", R"({"max_iterations": 5000, "tolerance": 0})");
+    const std::string events = "/api/v1/jobs/" + json::parse(r->body)["job"].get<std::string>() + "/events";
+    const std::string job = events.substr(0, events.size() - 7);
+    std::atomic<int> connected{0}, ended{0};
+    std::vector<std::thread> streams;
+    struct CancelAndJoin {  // however the test ends: cancel the job, so every stream ends
+        httplib::Client& c;
+        const std::string& job;
+        std::vector<std::thread>& threads;
+        ~CancelAndJoin() {
+            c.Delete(job.c_str());
+            for (auto& t : threads) t.join();
+        }
+    } guard{client(), job, streams};
+    for (int i = 0; i < 8; ++i)
+        streams.emplace_back([&] {
+            httplib::Client c("127.0.0.1", m_port);
+            c.set_read_timeout(120, 0);
+            bool first = true;
+            c.Get(events.c_str(), [&](const char*, size_t) {
+                if (first) connected++, first = false;
+                return true;
+            });
+            ended++;
+        });
+    for (int i = 0; i < 500 && connected < 8; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    ASSERT_EQ(connected.load(), 8) << "the eight streams should be open and receiving";
+    json e = expectError(client().Get(events.c_str()), 429, "too_many_streams");
+    EXPECT_NE(e["error"]["message"].get<std::string>().find("8"), std::string::npos);
+    std::vector<double> ms;
+    for (int i = 0; i < 30; ++i) {
+        auto t0 = std::chrono::steady_clock::now();
+        auto h = client().Get("/api/v1/health");
+        EXPECT_TRUE(h && h->status == 200);
+        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    }
+    std::sort(ms.begin(), ms.end());
+    std::cout << "[ measured ] /health with 8 open event streams and a solve: p50 " << ms[15] << " ms, max " << ms.back() << " ms\n";
+    EXPECT_LT(ms.back(), 100.0);
+    EXPECT_EQ(ended.load(), 0) << "the streams stay open while the job runs";
+    client().Delete(job.c_str());  // cancel: every stream ends
+    for (int i = 0; i < 500 && ended < 8; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    EXPECT_EQ(ended.load(), 8);
+    EXPECT_EQ(readEvents(client(), events).back(), "cancelled") << "the slots were released";
 }
