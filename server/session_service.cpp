@@ -261,10 +261,10 @@ core::Renderer& SessionService::renderer(core::GpuDevice& device) {
     return *m_renderer;
 }
 
-core::GpuVolume& SessionService::sessionGpu(Session& s) {
+std::shared_ptr<core::GpuVolume> SessionService::sessionGpu(Session& s) {
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
     if (!s.gpu) s.gpu = std::make_shared<core::GpuVolume>(s.volume);
-    return *s.gpu;
+    return s.gpu;
 }
 
 void SessionService::dropPreviews(const Session& s) {
@@ -278,10 +278,15 @@ void SessionService::dropPreviews(const Session& s) {
 
 core::Image SessionService::renderOnGl(Session& s, const core::Camera& camera, const core::Lighting& lighting) {
     return m_gl.run([&](core::GpuDevice& device) {
-        // Locking here, on the GL thread, is safe even between a solve's iterations: the solve
-        // holds no session lock while it runs short tasks.
-        std::lock_guard lock(s.mutex);
-        return renderer(device).render(sessionGpu(s), camera, lighting);
+        // The lock covers only finding (or uploading) the GPU copy, not the render: reads of the
+        // session (a VDB download, its JSON) never wait for GL work. Locking on the GL thread is
+        // safe even between a solve's iterations: the solve holds no session lock then.
+        std::shared_ptr<core::GpuVolume> gpu;
+        {
+            std::lock_guard lock(s.mutex);
+            gpu = sessionGpu(s);
+        }
+        return renderer(device).render(*gpu, camera, lighting);  // a commit meanwhile frees it after us
     });
 }
 
@@ -302,9 +307,11 @@ core::Image SessionService::renderPreview(const std::string& jobId, const std::s
             std::lock_guard lock(j->mutex);
             preview = j->preview;
         }
-        if (preview) return renderer(device).render(*preview, camera, light);
-        std::lock_guard lock(s->mutex);
-        return renderer(device).render(sessionGpu(*s), camera, light);
+        if (!preview) {
+            std::lock_guard lock(s->mutex);
+            preview = sessionGpu(*s);
+        }
+        return renderer(device).render(*preview, camera, light);
     });
 }
 

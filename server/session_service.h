@@ -80,8 +80,9 @@ private:
     std::shared_ptr<core::GpuVolume> commitVersion(Session& s, core::Volume volume);
     void release(std::shared_ptr<core::GpuVolume> gpu);
     core::Image renderOnGl(Session& s, const core::Camera& camera, const core::Lighting& lighting);
-    /// On the GL thread: the session's GPU copy, uploaded if there is none (not_found once removed).
-    core::GpuVolume& sessionGpu(Session& s);
+    /// On the GL thread, with the session's lock held: the session's GPU copy, uploaded if there
+    /// is none (not_found once removed). Shared, so a render can drop the lock and keep it alive.
+    std::shared_ptr<core::GpuVolume> sessionGpu(Session& s);
     /// On the GL thread: the one renderer of the service (created on first use).
     core::Renderer& renderer(core::GpuDevice& device);
     /// On the GL thread: frees the preview copies of the session's finished jobs.
