@@ -11,15 +11,28 @@
 using namespace volstyle;
 using namespace volstyle::core;
 
-TEST(RenderCache, LightVolumesFollowExtinctionAndSun) {
-    VOLSTYLE_REQUIRE_GL();
-    Renderer renderer(test::device());
+namespace {
+
+/// A 16³ sphere, an 8×8 camera and the default sun: small enough that only the caching shows.
+struct SmallScene {
+    Renderer renderer{test::device()};
     Volume v = makeBuiltinScene("sphere", 16);
-    GpuVolume gpu(v);
-    Camera cam;
-    cam.width = cam.height = 8;
+    GpuVolume gpu{v};
+    Camera cam = [] {
+        Camera c;
+        c.width = c.height = 8;
+        return c;
+    }();
     Lighting l;
     RenderStats s;
+};
+
+}  // namespace
+
+TEST(RenderCache, LightVolumesFollowExtinctionAndSun) {
+    VOLSTYLE_REQUIRE_GL();
+    SmallScene scene;
+    auto& [renderer, v, gpu, cam, l, s] = scene;
 
     renderer.render(gpu, cam, l, {}, &s);
     EXPECT_EQ(s.lightVolumesRecomputed, 1);
@@ -56,13 +69,8 @@ TEST(RenderCache, LightVolumeKeyCoversTheTransformAndDims) {
     // The same extinction values on a moved or rotated grid see the light along another index-space
     // direction: the cached light volume must not be reused (the old key had no transform).
     VOLSTYLE_REQUIRE_GL();
-    Renderer renderer(test::device());
-    Volume v = makeBuiltinScene("sphere", 16);
-    GpuVolume gpu(v);
-    Camera cam;
-    cam.width = cam.height = 8;
-    Lighting l;
-    RenderStats s;
+    SmallScene scene;
+    auto& [renderer, v, gpu, cam, l, s] = scene;
     renderer.render(gpu, cam, l, {}, &s);
     renderer.render(gpu, cam, l, {}, &s);
     EXPECT_EQ(s.lightVolumesRecomputed, 0);
