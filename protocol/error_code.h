@@ -29,6 +29,8 @@ enum class ErrorCode {
     TooManyJobs,         ///< the session's queue is at its limit
     TooManySessions,     ///< the server holds its session limit
     TooManyStreams,      ///< the client (or the server) holds its limit of open event streams
+    TooManyConnections,  ///< the client holds its limit of open connections
+    OverBudget,          ///< a render stopped at the server's time budget
     Interrupted,         ///< the server stopped while the job was queued or running
     GpuError,            ///< the GL context or driver failed
     ShaderCompileError,  ///< a kernel did not compile (a bug or a driver problem)
@@ -56,6 +58,8 @@ inline constexpr ErrorCodeInfo kErrorCodes[] = {
     {ErrorCode::TooManyJobs, "too_many_jobs", 422},
     {ErrorCode::TooManySessions, "too_many_sessions", 422},
     {ErrorCode::TooManyStreams, "too_many_streams", 429},
+    {ErrorCode::TooManyConnections, "too_many_connections", 429},
+    {ErrorCode::OverBudget, "over_budget", 422},
     {ErrorCode::Interrupted, "interrupted", 500},
     {ErrorCode::GpuError, "gpu_error", 500},
     {ErrorCode::ShaderCompileError, "shader_compile_error", 500},

@@ -17,10 +17,11 @@
 namespace volstyle::server {
 
 int runServe(const std::vector<std::string>& argv) {
-    Arguments args = parseArguments(argv, {"host", "port", "token", "web-dir", "data-dir"}, {"help"});
+    Arguments args = parseArguments(argv, {"host", "port", "token", "web-dir", "data-dir", "render-budget"}, {"help"});
     if (args.has("help")) {
         std::cout << "usage: volstyle serve [--host 127.0.0.1] [--port 8080] [--data-dir volstyle-data] [--token T]\n"
-                     "                      [--web-dir web]\n";
+                     "                      [--web-dir web] [--render-budget 60]\n"
+                     "  --render-budget S  seconds one render may hold the GL thread (422 over_budget past it; 0: no limit)\n";
         return 0;
     }
     ServerOptions opt;
@@ -32,6 +33,9 @@ int runServe(const std::vector<std::string>& argv) {
     opt.token = args.get("token", envToken ? envToken : "");
     opt.webDir = args.get("web-dir", opt.webDir);
     opt.dataDir = args.get("data-dir", opt.dataDir);
+    opt.renderBudgetSeconds = args.number("render-budget", opt.renderBudgetSeconds);
+    if (!(opt.renderBudgetSeconds >= 0) || !std::isfinite(opt.renderBudgetSeconds))
+        throw InvalidArgument("--render-budget must be a number of seconds >= 0 (0: no limit)");
 
     // Block the stop signals before any thread starts, so only the waiter below receives them.
     sigset_t stopSignals;

@@ -9,6 +9,7 @@
 #include "core/base/stopwatch.h"
 #include "core/volume/builtin_scenes.h"
 #include "protocol/error_body.h"
+#include "protocol/validation.h"
 #include "server/routes/route_context.h"
 #include "server/session_service.h"
 
@@ -38,6 +39,7 @@ ServiceLimits serviceLimits(const ServerOptions& o) {
     l.maxUploadBytes = o.maxUploadBytes;
     l.maxImageSide = o.maxImageSide;
     l.volumeLimits = o.volumeLimits;
+    l.renderBudgetSeconds = o.renderBudgetSeconds;
     return l;
 }
 
@@ -53,7 +55,7 @@ protocol::RequestLimits requestLimits(const ServerOptions& o) {
 
 struct HttpServer::Impl {
     ServerOptions opt;
-    httplib::Server http;
+    GuardedHttpServer http;
     SessionService service;
     StreamLimiter streams;
     RouteContext routes;
@@ -61,6 +63,7 @@ struct HttpServer::Impl {
 
     explicit Impl(ServerOptions o)
         : opt(std::move(o)),
+          http(opt.connections),
           service(serviceLimits(opt), opt.dataDir),
           streams(opt.maxEventStreams, opt.maxEventStreamsPerClient),
           routes{http, service, requestLimits(opt), opt.maxJsonBytes, streams} {}
@@ -102,6 +105,15 @@ void HttpServer::stop() { m->http.stop(); }
 
 void HttpServer::Impl::addMiddleware() {
     http.set_payload_max_length(opt.maxUploadBytes + (1 << 20));
+    http.refusal = [this](const std::string& client) {
+        const std::string id = fmt::format("{:08x}", ++requestCounter);
+        spdlog::warn("refused a connection from {}: it holds {} already (id={})", client,
+                     opt.connections.maxConnectionsPerClient, id);
+        return protocol::toText(protocol::errorBody(protocol::ErrorCode::TooManyConnections,
+                                                    "this client holds " + std::to_string(opt.connections.maxConnectionsPerClient) +
+                                                        " open connections (the limit); close some, or reuse them with keep-alive",
+                                                    {}, id));
+    };
     const size_t threads = size_t(std::max(opt.httpThreads, opt.maxEventStreams + 4));
     http.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
 

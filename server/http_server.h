@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/volume/volume.h"
+#include "server/guarded_http_server.h"
 
 namespace volstyle::server {
 
@@ -22,9 +23,11 @@ struct ServerOptions {
     size_t maxUploadBytes = size_t(512) << 20;  ///< images and VDBs: 512 MiB
     int maxImageSide = 4096;
     core::VolumeLimits volumeLimits;
-    int httpThreads = 32;            ///< HTTP worker threads (an open event stream holds one)
+    int httpThreads = 48;            ///< HTTP worker threads (an open event stream holds one)
     int maxEventStreams = 16;        ///< open event streams in all (below httpThreads)
     int maxEventStreamsPerClient = 8;
+    ConnectionLimits connections;    ///< read deadlines and connections per client (guarded_http_server.h)
+    double renderBudgetSeconds = 60;  ///< a render's limit on the GL thread (422 over_budget); <= 0: none
 };
 
 class HttpServer {

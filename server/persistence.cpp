@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 
@@ -64,27 +65,97 @@ void Persistence::atomicWrite(const fs::path& path, const std::string& bytes) {
     fs::rename(tmp, path);
 }
 
-void Persistence::saveSession(const Session& s) {
+void Persistence::saveSession(Session& s) {
     const fs::path dir = sessionDir(s.id);
-    json versions = json::array();
-    for (const auto& [n, volume] : s.versions) {
-        versions.push_back(n);
-        const fs::path vdb = dir / "versions" / (std::to_string(n) + ".vdb");
-        if (!fs::exists(vdb)) {
-            fs::create_directories(vdb.parent_path());
-            const fs::path tmp = vdb.string() + ".tmp.vdb";
-            core::saveVdb(tmp.string(), volume);
-            syncFile(tmp);
-            fs::rename(tmp, vdb);
-        }
+    for (int n : s.versions.unstored()) {
+        std::shared_ptr<const core::Volume> older;
+        if (n != s.version && !(older = s.versions.inMemory(n))) continue;  // cannot happen: unstored ones stay in memory
+        const fs::path vdb = dir / versionFile(n);
+        fs::create_directories(vdb.parent_path());
+        const fs::path tmp = vdb.string() + ".tmp.vdb";
+        core::saveVdb(tmp.string(), n == s.version ? s.volume : *older);
+        syncFile(tmp);
+        fs::rename(tmp, vdb);
+        s.versions.markStored(n, fs::file_size(vdb));
     }
+    json bytes = json::object(), damaged = json::array();
+    for (int n : s.versions.numbers())
+        if (auto b = s.versions.storedBytes(n)) bytes[std::to_string(n)] = *b;
+    for (const auto& d : s.damaged) damaged.push_back({{"file", d.file}, {"reason", d.reason}});
     json views = json::array();
     for (const auto& v : s.views)
         views.push_back({{"id", v.id}, {"camera", protocol::cameraToJson(v.camera)}, {"has_target", v.target.has_value()},
                          {"has_weights", v.weights.has_value()}});
-    json j = {{"id", s.id}, {"created", s.created}, {"scene", s.scene}, {"version", s.version}, {"versions", versions},
+    json j = {{"id", s.id}, {"created", s.created}, {"scene", s.scene}, {"version", s.version},
+              {"versions", s.versions.numbers()}, {"version_bytes", bytes}, {"damaged", damaged},
               {"lighting", protocol::lightingToJson(s.lighting)}, {"views", views}, {"next_view", s.nextView}, {"jobs", s.jobs}};
     atomicWrite(dir / "session.json", protocol::toText(j, 2));
+}
+
+std::string Persistence::readVersionFile(const std::string& session, int version, std::uintmax_t expectedBytes) const {
+    const fs::path path = sessionDir(session) / versionFile(version);
+    std::error_code ec;
+    const std::uintmax_t size = fs::file_size(path, ec);
+    if (ec) throw IoError("version " + std::to_string(version) + "'s file is missing");
+    if (size != expectedBytes)
+        throw IoError("version " + std::to_string(version) + "'s file is " + std::to_string(size) + " bytes; it was written with " +
+                      std::to_string(expectedBytes));
+    std::string bytes = readFile(path);
+    if (bytes.size() != expectedBytes) throw IoError("version " + std::to_string(version) + "'s file could not be read whole");
+    return bytes;
+}
+
+core::Volume Persistence::loadVersion(const std::string& session, int version, std::uintmax_t expectedBytes) const {
+    const fs::path path = sessionDir(session) / versionFile(version);
+    std::error_code ec;
+    const std::uintmax_t size = fs::file_size(path, ec);
+    if (ec) throw IoError("version " + std::to_string(version) + "'s file is missing");
+    if (expectedBytes && size != expectedBytes)
+        throw IoError("version " + std::to_string(version) + "'s file is " + std::to_string(size) + " bytes; it was written with " +
+                      std::to_string(expectedBytes));
+    return core::loadVdb(path.string());
+}
+
+void Persistence::quarantineFile(const std::string& session, const std::string& file, const std::string& reason) {
+    const fs::path from = sessionDir(session) / file, to = m_dir / "quarantine" / session / file;
+    std::error_code ec;
+    fs::create_directories(to.parent_path(), ec);
+    if (fs::exists(from)) fs::rename(from, to, ec);
+    json r = {{"session", session}, {"file", file}, {"reason", reason}, {"time", isoNow()}};
+    atomicWrite(to.string() + ".reason.json", protocol::toText(r, 2));
+    spdlog::error("quarantined session {}'s {}: {}", session, file, reason);
+}
+
+void Persistence::quarantineSession(const fs::path& dir, const std::string& reason) {
+    const std::string session = dir.filename().string();
+    const fs::path to = m_dir / "quarantine" / session / "session";
+    std::error_code ec;
+    fs::create_directories(to.parent_path(), ec);
+    fs::remove_all(to, ec);  // an earlier quarantine of the same id
+    fs::rename(dir, to, ec);
+    if (ec) spdlog::error("restore: cannot move '{}' to the quarantine: {}", dir.string(), ec.message());
+    json r = {{"session", session}, {"file", ""}, {"reason", reason}, {"time", isoNow()}};
+    atomicWrite(to.string() + ".reason.json", protocol::toText(r, 2));
+    spdlog::error("quarantined session {} whole: {}", session, reason);
+}
+
+std::vector<QuarantineEntry> Persistence::quarantine() const {
+    std::vector<QuarantineEntry> out;
+    std::error_code ec;
+    const fs::path root = m_dir / "quarantine";
+    if (!fs::exists(root, ec)) return out;
+    for (auto it = fs::recursive_directory_iterator(root, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        if (!it->is_regular_file() || !name.ends_with(".reason.json")) continue;
+        try {
+            json j = json::parse(readFile(it->path()));
+            out.push_back({j.at("session"), j.at("file"), j.at("reason"), j.at("time")});
+        } catch (const std::exception&) {
+            out.push_back({"", fs::relative(it->path(), root).string(), "the reason file is unreadable", ""});
+        }
+    }
+    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.time < b.time; });
+    return out;
 }
 
 void Persistence::saveViewImage(const std::string& session, const std::string& view, const std::string& kind,
@@ -113,40 +184,98 @@ void Persistence::saveJob(const Job& job) { atomicWrite(m_dir / "jobs" / (job.id
 
 std::vector<std::shared_ptr<Session>> Persistence::loadSessions() {
     std::vector<std::shared_ptr<Session>> out;
-    for (const auto& entry : fs::directory_iterator(m_dir / "sessions")) {
-        const fs::path file = entry.path() / "session.json";
-        if (!fs::exists(file)) continue;
+    std::vector<fs::path> dirs;
+    for (const auto& entry : fs::directory_iterator(m_dir / "sessions"))
+        if (entry.is_directory()) dirs.push_back(entry.path());
+    for (const auto& dir : dirs) {
+        if (!fs::exists(dir / "session.json")) continue;  // a session being created when the server stopped
         try {
-            json j = json::parse(readFile(file));
-            auto s = std::make_shared<Session>();
-            s->id = j["id"];
-            s->created = j["created"];
-            s->scene = j["scene"];
-            s->version = j["version"];
-            s->nextView = j["next_view"];
-            s->jobs = j["jobs"].get<std::vector<std::string>>();
-            s->lighting = protocol::lightingFromJson(j["lighting"]).lighting;
-            for (int n : j["versions"])
-                s->versions[n] = core::loadVdb((entry.path() / "versions" / (std::to_string(n) + ".vdb")).string());
-            s->volume = s->versions.at(s->version);
-            for (const auto& v : j["views"]) {
-                SessionView view{v["id"], protocol::cameraFromJson(v["camera"]), std::nullopt, std::nullopt};
-                const fs::path dir = entry.path() / "views" / view.id;
-                if (v["has_target"].get<bool>()) view.target = core::loadImage((dir / "target.exr").string()).image;
-                if (v["has_weights"].get<bool>()) view.weights = core::loadImage((dir / "weights.exr").string()).image;
-                s->views.push_back(std::move(view));
-            }
-            out.push_back(s);
+            out.push_back(loadSession(dir));
         } catch (const std::exception& e) {
-            spdlog::error("restore: skipping session '{}': {}", entry.path().filename().string(), e.what());
+            quarantineSession(dir, e.what());
         }
     }
     return out;
 }
 
+std::shared_ptr<Session> Persistence::loadSession(const fs::path& dir) {
+    json j;
+    try {
+        j = json::parse(readFile(dir / "session.json"));
+    } catch (const std::exception& e) {
+        throw IoError(std::string("session.json is unreadable: ") + e.what());
+    }
+    auto s = std::make_shared<Session>();
+    s->id = j.at("id");
+    s->created = j.at("created");
+    s->scene = j.at("scene");
+    s->nextView = j.at("next_view");
+    s->jobs = j.at("jobs").get<std::vector<std::string>>();
+    s->lighting = protocol::lightingFromJson(j.at("lighting")).lighting;
+    for (const auto& d : j.value("damaged", json::array())) s->damaged.push_back({d.at("file"), d.at("reason")});
+    const size_t damagedBefore = s->damaged.size();
+    restoreVersions(*s, j);
+    for (const auto& v : j.at("views")) {
+        SessionView view{v.at("id"), protocol::cameraFromJson(v.at("camera")), std::nullopt, std::nullopt};
+        for (const char* kind : {"target", "weights"}) {
+            if (!v.at(std::string("has_") + kind).get<bool>()) continue;
+            const std::string file = "views/" + view.id + "/" + kind + ".exr";
+            try {
+                core::Image image = core::loadImage((dir / file).string()).image;
+                (std::string(kind) == "target" ? view.target : view.weights) = std::move(image);
+            } catch (const std::exception& e) {
+                quarantineFile(s->id, file, e.what());  // the view stays, without this image
+                s->damaged.push_back({file, e.what()});
+            }
+        }
+        s->views.push_back(std::move(view));
+    }
+    if (s->damaged.size() != damagedBefore) saveSession(*s);  // the damage (and any fall-back) is recorded
+    return s;
+}
+
+void Persistence::restoreVersions(Session& s, const json& j) {
+    const json bytes = j.value("version_bytes", json::object());
+    for (int n : j.at("versions")) s.versions.add(n);
+    for (const auto& d : s.damaged)  // damage found before a restart stays listed
+        for (int n : s.versions.numbers())
+            if (d.file == versionFile(n)) s.versions.markDamaged(n, d.reason);
+    const auto damage = [&](int n, const std::string& reason) {
+        quarantineFile(s.id, versionFile(n), reason);
+        s.versions.markDamaged(n, reason);
+        s.damaged.push_back({versionFile(n), reason});
+    };
+    // Every version's file must exist with the size it was written with (a stat, not a read).
+    for (int n : s.versions.numbers()) {
+        if (s.versions.damage(n)) continue;
+        std::error_code ec;
+        const std::uintmax_t size = fs::file_size(sessionDir(s.id) / versionFile(n), ec);
+        const std::uintmax_t expected = bytes.contains(std::to_string(n)) ? bytes[std::to_string(n)].get<std::uintmax_t>() : size;
+        if (ec) damage(n, "the file is missing");
+        else if (size != expected) damage(n, "the file is " + std::to_string(size) + " bytes; it was written with " + std::to_string(expected));
+        else s.versions.markStored(n, size);
+    }
+    // The current version is read now; if it is damaged, the newest readable one becomes current.
+    const int recorded = j.at("version");
+    for (auto it = s.versions.numbers().rbegin(); it != s.versions.numbers().rend(); ++it) {
+        const int n = *it;
+        if (n > recorded || s.versions.damage(n)) continue;
+        try {
+            s.volume = loadVersion(s.id, n, *s.versions.storedBytes(n));
+            s.version = n;
+            if (n != recorded) spdlog::warn("restore: session {} falls back from version {} to {}", s.id, recorded, n);
+            return;
+        } catch (const std::exception& e) {
+            damage(n, e.what());
+        }
+    }
+    throw IoError("no version of the volume is readable");
+}
+
 std::vector<std::shared_ptr<Job>> Persistence::loadJobs() {
     std::vector<std::shared_ptr<Job>> out;
-    for (const auto& entry : fs::directory_iterator(m_dir / "jobs")) {
+    std::vector<fs::directory_entry> entries(fs::directory_iterator(m_dir / "jobs"), fs::directory_iterator{});
+    for (const auto& entry : entries) {
         if (entry.path().extension() != ".json") continue;
         try {
             json j = json::parse(readFile(entry.path()));
@@ -166,7 +295,15 @@ std::vector<std::shared_ptr<Job>> Persistence::loadJobs() {
             job->events.emplace_back(protocol::finalEvent(job->state), job->toJson());
             out.push_back(job);
         } catch (const std::exception& e) {
-            spdlog::error("restore: skipping job '{}': {}", entry.path().filename().string(), e.what());
+            // Out of the way, with its reason: a job record holds no work to lose.
+            const std::string file = entry.path().filename().string();
+            const fs::path to = m_dir / "quarantine" / "jobs" / file;
+            std::error_code ec;
+            fs::create_directories(to.parent_path(), ec);
+            fs::rename(entry.path(), to, ec);
+            json r = {{"session", ""}, {"file", "jobs/" + file}, {"reason", e.what()}, {"time", isoNow()}};
+            atomicWrite(to.string() + ".reason.json", protocol::toText(r, 2));
+            spdlog::error("restore: quarantined job record '{}': {}", file, e.what());
         }
     }
     return out;

@@ -6,7 +6,15 @@
 /// `failed` with code `interrupted`.
 ///
 /// Layout: DIR/sessions/<sid>/session.json, versions/<N>.vdb, views/<vid>/{target,weights}.exr;
-/// DIR/jobs/<jid>.json.
+/// DIR/jobs/<jid>.json; DIR/quarantine/.
+///
+/// Damage (issue #9): a file found unreadable is moved to DIR/quarantine/<sid>/<file> beside a
+/// `<file>.reason.json`, and only what it held is lost: a damaged old version stays listed as
+/// damaged, a damaged target leaves its view without one, a damaged current version falls back
+/// to the newest readable one. A session whose session.json is unreadable (or that has no
+/// readable version) moves whole to DIR/quarantine/<sid>/session/. Versions are not read on
+/// start (only the current one is): their sizes, recorded when written, are checked instead, and
+/// again before a version is read back or sent.
 
 #include <filesystem>
 #include <memory>
@@ -18,16 +26,34 @@
 
 namespace volstyle::server {
 
+/// What the quarantine holds: a file of a session, or a whole session (`file` empty).
+struct QuarantineEntry {
+    std::string session;
+    std::string file;
+    std::string reason;
+    std::string time;  ///< ISO 8601, UTC
+};
+
 class Persistence {
 public:
     explicit Persistence(std::filesystem::path dir);
 
-    /// Writes session.json and any version not on disk yet. Call with the session's mutex held.
-    void saveSession(const Session& s);
+    /// Writes session.json and any version not on disk yet (marking it stored). Call with the
+    /// session's mutex held.
+    void saveSession(Session& s);
     void saveViewImage(const std::string& session, const std::string& view, const std::string& kind, const core::Image& image);
     void removeView(const std::string& session, const std::string& view);
     void removeSession(const std::string& session);
     void saveJob(const Job& job);
+
+    /// The bytes of a stored version's file, unchanged (IoError if missing or not the size it
+    /// was written with).
+    std::string readVersionFile(const std::string& session, int version, std::uintmax_t expectedBytes) const;
+    /// A stored version read back (IoError if it is damaged).
+    core::Volume loadVersion(const std::string& session, int version, std::uintmax_t expectedBytes) const;
+    /// Moves a session's file (relative to its directory) to the quarantine with its reason.
+    void quarantineFile(const std::string& session, const std::string& file, const std::string& reason);
+    std::vector<QuarantineEntry> quarantine() const;
 
     std::vector<std::shared_ptr<Session>> loadSessions();
     /// Loads jobs; unfinished ones become failed/interrupted (and are written back).
@@ -35,9 +61,16 @@ public:
 
     /// Writes `bytes` to `path` atomically: a temporary file beside it, fsync, rename.
     static void atomicWrite(const std::filesystem::path& path, const std::string& bytes);
+    static std::string versionFile(int version) { return "versions/" + std::to_string(version) + ".vdb"; }
 
 private:
     std::filesystem::path sessionDir(const std::string& id) const { return m_dir / "sessions" / id; }
+    void quarantineSession(const std::filesystem::path& dir, const std::string& reason);
+    /// Restores one session directory; throws if nothing of it is usable.
+    std::shared_ptr<Session> loadSession(const std::filesystem::path& dir);
+    /// Restores the versions listed in session.json; the current one is read (or the newest
+    /// readable one, if it is damaged). Throws if no version is readable.
+    void restoreVersions(Session& s, const nlohmann::json& j);
     std::filesystem::path m_dir;
 };
 

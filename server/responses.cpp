@@ -20,6 +20,12 @@ nlohmann::json viewsJson(const Session& s) {
     return list;
 }
 
+nlohmann::json damagedJson(const std::vector<DamagedFile>& damaged) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const auto& d : damaged) list.push_back({{"file", d.file}, {"reason", d.reason}});
+    return list;
+}
+
 nlohmann::json sessionJson(Session& s) {
     std::lock_guard lock(s.mutex);
     const core::Volume& v = s.volume;
@@ -34,7 +40,9 @@ nlohmann::json sessionJson(Session& s) {
                         {"voxel_size", vec(v.voxelSize())}, {"grids", grids}, {"version", s.version}}},
             {"lighting", protocol::lightingToJson(s.lighting)},
             {"views", viewsJson(s)},
-            {"jobs", s.jobs}};
+            {"jobs", s.jobs},
+            {"versions", s.versions.numbers()},
+            {"damaged", damagedJson(s.damaged)}};
 }
 
 }  // namespace volstyle::server

@@ -21,13 +21,6 @@ namespace {
 using protocol::ApiError;
 using protocol::ErrorCode;
 
-std::string isoNow() {
-    std::time_t t = std::time(nullptr);
-    char buf[32];
-    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
-    return buf;
-}
-
 SessionView& findView(Session& s, const std::string& id) {
     for (auto& v : s.views)
         if (v.id == id) return v;
@@ -74,7 +67,7 @@ SessionService::~SessionService() {
     });
 }
 
-void SessionService::saved(const Session& s) {
+void SessionService::saved(Session& s) {
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
     if (m_persist) m_persist->saveSession(s);
 }
@@ -91,7 +84,7 @@ std::shared_ptr<Session> SessionService::create(const protocol::CreateSessionReq
     s->scene = request.scene;
     s->volume = core::makeBuiltinScene(request.builtinName(), request.resolution);  // InvalidArgument lists the scenes
     s->lighting = core::defaultLighting();
-    s->versions[1] = s->volume;
+    s->versions.add(1);
     m_sessions.add(s);
     std::lock_guard lock(s->mutex);
     saved(*s);
@@ -164,9 +157,21 @@ SessionView SessionService::setViewImage(Session& s, const std::string& viewId, 
     const bool isTarget = kind == ViewImage::Target;
     const std::string what = isTarget ? "the target" : "the weight image";
     checkUploadSize(bytes, what);
+    const core::Camera camera = view(s, viewId).camera;  // 404 before any decode
+    // The size is checked from the header, before any pixel is decoded, and at most
+    // kConcurrentDecodes uploads decode at once: six parallel 4096² PNGs to a 64² view once took
+    // 5.8 GiB to refuse.
+    std::optional<DecodeSlot> slot;
+    const auto checkHeader = [&](int width, int height) {
+        if (width != camera.width || height != camera.height)
+            throw ApiError(ErrorCode::InvalidArgument, "the image is " + std::to_string(width) + "x" + std::to_string(height) +
+                                                           " but view " + viewId + " renders " + std::to_string(camera.width) +
+                                                           "x" + std::to_string(camera.height));
+        slot.emplace(m_decodeSlots);
+    };
     core::Image image;
     try {
-        image = core::loadImageFromMemory(bytes.data(), bytes.size(), what, m_limits.maxImageSide).image;
+        image = core::loadImageFromMemory(bytes.data(), bytes.size(), what, m_limits.maxImageSide, checkHeader).image;
     } catch (const Error& e) {
         throw ApiError(ErrorCode::UnsupportedMedia, e.what());  // undecodable, or over the side limit
     }
@@ -179,12 +184,9 @@ SessionView SessionService::setViewImage(Session& s, const std::string& viewId, 
     if (negative)
         throw ApiError(ErrorCode::InvalidArgument, what + " has " + std::to_string(negative) +
                                                        " negative values; colours and weights must be >= 0");
+    slot.reset();
     std::lock_guard lock(s.mutex);
-    SessionView& v = findView(s, viewId);
-    if (image.width != v.camera.width || image.height != v.camera.height)
-        throw ApiError(ErrorCode::InvalidArgument, "the image is " + std::to_string(image.width) + "x" +
-                                                       std::to_string(image.height) + " but view " + v.id + " renders " +
-                                                       std::to_string(v.camera.width) + "x" + std::to_string(v.camera.height));
+    SessionView& v = findView(s, viewId);  // views keep their camera: the header check still holds
     if (m_persist) m_persist->saveViewImage(s.id, v.id, isTarget ? "target" : "weights", image);
     (isTarget ? v.target : v.weights) = std::move(image);
     saved(s);
@@ -192,11 +194,57 @@ SessionView SessionService::setViewImage(Session& s, const std::string& viewId, 
 }
 
 std::shared_ptr<core::GpuVolume> SessionService::commitVersion(Session& s, core::Volume volume) {
+    const int n = s.versions.newest() + 1;  // after damaged ones too: numbers are never reused
+    s.versions.retire(s.version, std::move(s.volume));
     s.volume = std::move(volume);
-    s.version = s.versions.rbegin()->first + 1;
-    s.versions[s.version] = s.volume;
+    s.version = n;
+    s.versions.add(n);
     saved(s);
     return std::move(s.gpu);
+}
+
+void SessionService::checkVersion(const Session& s, int n) const {
+    if (!s.versions.has(n)) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no version " + std::to_string(n));
+    if (auto reason = s.versions.damage(n))
+        throw ApiError(ErrorCode::IoError, "version " + std::to_string(n) + " of session '" + s.id +
+                                               "' is damaged and was quarantined (" + *reason + "); choose another version");
+}
+
+void SessionService::recordDamage(Session& s, int n, const std::string& reason) {
+    std::lock_guard lock(s.mutex);
+    if (s.removed || s.versions.damage(n)) return;
+    const std::string file = Persistence::versionFile(n);
+    m_persist->quarantineFile(s.id, file, reason);
+    s.versions.markDamaged(n, reason);
+    s.damaged.push_back({file, reason});
+    saved(s);
+}
+
+core::Volume SessionService::olderVersion(Session& s, int n) {
+    std::uintmax_t bytes = 0;
+    {
+        std::lock_guard lock(s.mutex);
+        checkVersion(s, n);
+        if (n == s.version) return s.volume;
+        if (auto v = s.versions.inMemory(n)) return *v;
+        bytes = s.versions.storedBytes(n).value_or(0);
+    }
+    // Read from disk without the lock (a 256³ version takes a second).
+    core::Volume v;
+    try {
+        v = m_persist->loadVersion(s.id, n, bytes);
+    } catch (const Error& e) {
+        recordDamage(s, n, e.what());
+        checkVersion(s, n);  // io_error, or not_found if the session went meanwhile
+        throw;
+    }
+    std::lock_guard lock(s.mutex);
+    s.versions.remember(n, v);
+    return v;
+}
+
+std::vector<QuarantineEntry> SessionService::quarantine() const {
+    return m_persist ? m_persist->quarantine() : std::vector<QuarantineEntry>{};
 }
 
 void SessionService::release(std::shared_ptr<core::GpuVolume> gpu) {
@@ -204,14 +252,12 @@ void SessionService::release(std::shared_ptr<core::GpuVolume> gpu) {
 }
 
 int SessionService::revert(Session& s, int version) {
+    core::Volume old = olderVersion(s, version);
     std::shared_ptr<core::GpuVolume> stale;
     int now = 0;
     {
         std::lock_guard lock(s.mutex);
-        auto it = s.versions.find(version);
-        if (it == s.versions.end())
-            throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no version " + std::to_string(version));
-        stale = commitVersion(s, it->second);  // undo is a new version with the old content: nothing is lost
+        stale = commitVersion(s, std::move(old));  // undo is a new version with the old content: nothing is lost
         now = s.version;
     }
     release(std::move(stale));
@@ -240,14 +286,24 @@ void SessionService::uploadVdb(Session& s, const std::string& bytes) {
 }
 
 std::string SessionService::downloadVdb(Session& s, std::optional<int> version) {
-    core::Volume v;
+    int n = 0;
+    std::optional<std::uintmax_t> stored;
     {
         std::lock_guard lock(s.mutex);
-        const int n = version.value_or(s.version);
-        auto it = s.versions.find(n);
-        if (it == s.versions.end()) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no version " + std::to_string(n));
-        v = it->second;
+        n = version.value_or(s.version);
+        checkVersion(s, n);
+        if (m_persist) stored = s.versions.storedBytes(n);
     }
+    if (stored) {  // the file as written: no decode, no encode
+        try {
+            return m_persist->readVersionFile(s.id, n, *stored);
+        } catch (const Error& e) {
+            recordDamage(s, n, e.what());
+            checkVersion(s, n);
+            throw;
+        }
+    }
+    const core::Volume v = olderVersion(s, n);
     TempVdb tmp;
     core::saveVdb(tmp.path.string(), v);
     std::ifstream f(tmp.path, std::ios::binary);
@@ -286,8 +342,15 @@ core::Image SessionService::renderOnGl(Session& s, const core::Camera& camera, c
             std::lock_guard lock(s.mutex);
             gpu = sessionGpu(s);
         }
-        return renderer(device).render(*gpu, camera, lighting);  // a commit meanwhile frees it after us
+        return renderBudgeted(device, *gpu, camera, lighting);  // a commit meanwhile frees it after us
     });
+}
+
+core::Image SessionService::renderBudgeted(core::GpuDevice& device, core::GpuVolume& gpu, const core::Camera& camera,
+                                           const core::Lighting& lighting) {
+    // Other sessions' renders and a solve's next iteration wait behind this one: bound it.
+    const WorkBudget budget(m_limits.renderBudgetSeconds);
+    return renderer(device).render(gpu, camera, lighting, {}, nullptr, budget);
 }
 
 core::Image SessionService::render(Session& s, const core::Camera& camera) { return renderOnGl(s, camera, lighting(s)); }
@@ -311,7 +374,7 @@ core::Image SessionService::renderPreview(const std::string& jobId, const std::s
             std::lock_guard lock(s->mutex);
             preview = sessionGpu(*s);
         }
-        return renderer(device).render(*preview, camera, light);
+        return renderBudgeted(device, *preview, camera, light);
     });
 }
 

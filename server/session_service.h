@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <optional>
+#include <semaphore>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,8 @@ struct ServiceLimits {
     size_t maxUploadBytes = size_t(512) << 20;
     int maxImageSide = 4096;
     core::VolumeLimits volumeLimits;
+    /// Seconds a render or preview may hold the GL thread (over: 422 over_budget); <= 0: unbounded.
+    double renderBudgetSeconds = 60;
 };
 
 enum class ViewImage { Target, Weights };
@@ -60,7 +63,11 @@ public:
     // Volume versions.
     int revert(Session& s, int version);                          ///< the new version number
     void uploadVdb(Session& s, const std::string& bytes);          ///< a new version
-    std::string downloadVdb(Session& s, std::optional<int> version);  ///< the newest by default
+    /// The VDB of a version (the current one by default): a stored version's file is sent as it
+    /// was written (its size checked). A damaged version answers io_error (422).
+    std::string downloadVdb(Session& s, std::optional<int> version);
+    /// What the data directory's quarantine holds (empty without one).
+    std::vector<QuarantineEntry> quarantine() const;
 
     // Renders (on the GL thread).
     core::Image render(Session& s, const core::Camera& camera);
@@ -79,7 +86,17 @@ private:
     /// lock held; returns the stale GPU copy (release() it after unlocking).
     std::shared_ptr<core::GpuVolume> commitVersion(Session& s, core::Volume volume);
     void release(std::shared_ptr<core::GpuVolume> gpu);
+    /// not_found if `n` is not a version of `s`, io_error if it is damaged (call with the lock held).
+    void checkVersion(const Session& s, int n) const;
+    /// A copy of version `n`: the current volume, the older one kept in memory, or read from disk
+    /// (without the lock; a file found damaged is quarantined and answers io_error).
+    core::Volume olderVersion(Session& s, int n);
+    /// Quarantines version `n`'s file and lists it as damaged.
+    void recordDamage(Session& s, int n, const std::string& reason);
     core::Image renderOnGl(Session& s, const core::Camera& camera, const core::Lighting& lighting);
+    /// On the GL thread: renders `gpu` under the render budget.
+    core::Image renderBudgeted(core::GpuDevice& device, core::GpuVolume& gpu, const core::Camera& camera,
+                               const core::Lighting& lighting);
     /// On the GL thread, with the session's lock held: the session's GPU copy, uploaded if there
     /// is none (not_found once removed). Shared, so a render can drop the lock and keep it alive.
     std::shared_ptr<core::GpuVolume> sessionGpu(Session& s);
@@ -88,7 +105,7 @@ private:
     /// On the GL thread: frees the preview copies of the session's finished jobs.
     void dropPreviews(const Session& s);
     /// Throws not_found if `s` was deleted; else writes it (call with its lock held).
-    void saved(const Session& s);
+    void saved(Session& s);
     void saved(const Job& j);
 
     // The solve job on the GL thread (solve_job.cpp).
@@ -96,6 +113,15 @@ private:
                   core::GpuDevice& device);
     void solveAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options, core::GpuDevice& device);
     void finishJob(Job& job);
+
+    /// A slot of m_decodeSlots, held while an upload's pixels are decoded.
+    struct DecodeSlot {
+        explicit DecodeSlot(std::counting_semaphore<>& s) : slots(s) { slots.acquire(); }
+        ~DecodeSlot() { slots.release(); }
+        std::counting_semaphore<>& slots;
+    };
+    static constexpr int kConcurrentDecodes = 2;
+    std::counting_semaphore<> m_decodeSlots{kConcurrentDecodes};
 
     ServiceLimits m_limits;
     std::unique_ptr<core::Renderer> m_renderer;  ///< GL thread only

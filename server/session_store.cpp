@@ -1,10 +1,21 @@
 #include "server/session_store.h"
 
+#include <ctime>
+
 #include <random>
 
 #include "core/base/errors.h"
 
 namespace volstyle::server {
+
+std::string isoNow() {
+    std::time_t t = std::time(nullptr);
+    std::tm utc{};
+    gmtime_r(&t, &utc);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &utc);
+    return buf;
+}
 
 std::string SessionStore::newId() {
     // 128 bits from the OS's entropy source (std::random_device reads /dev/urandom on Linux).

@@ -14,8 +14,15 @@
 #include "core/render/params.h"
 #include "core/volume/volume.h"
 #include "protocol/error_code.h"
+#include "server/version_history.h"
 
 namespace volstyle::server {
+
+/// A file of a session found unreadable and moved to the quarantine (persistence.h).
+struct DamagedFile {
+    std::string file;    ///< relative to the session's directory, e.g. "versions/3.vdb"
+    std::string reason;
+};
 
 /// A view of a session: a camera, and the painted target (alpha = weight) and weights once uploaded.
 struct SessionView {
@@ -31,7 +38,8 @@ struct Session {
     std::string scene;    ///< where the volume came from
     core::Volume volume;
     int version = 1;
-    std::map<int, core::Volume> versions;  ///< every committed version, for revert and download
+    VersionHistory versions;               ///< every committed version, for revert and download
+    std::vector<DamagedFile> damaged;      ///< files of the session found unreadable (quarantined)
     std::vector<SessionView> views;
     int nextView = 1;
     std::vector<std::string> jobs;
@@ -42,6 +50,9 @@ struct Session {
     bool removed = false;
     std::mutex mutex;                      ///< guards the fields above
 };
+
+/// Now, as ISO 8601 UTC ("2026-12-02T03:37:32Z").
+std::string isoNow();
 
 /// The answer when the server holds `max` sessions already.
 protocol::ApiError tooManySessions(size_t max);

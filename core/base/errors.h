@@ -31,6 +31,7 @@ VOLSTYLE_DECLARE_ERROR(GpuError, "gpu_error");                ///< GL context or
 VOLSTYLE_DECLARE_ERROR(ShaderCompileError, "shader_compile_error");
 VOLSTYLE_DECLARE_ERROR(OutOfMemory, "out_of_memory");
 VOLSTYLE_DECLARE_ERROR(Cancelled, "cancelled");
+VOLSTYLE_DECLARE_ERROR(OverBudget, "over_budget");  ///< work stopped at its time budget (work_budget.h)
 VOLSTYLE_DECLARE_ERROR(InternalError, "internal_error");  ///< a broken invariant (a bug)
 
 #undef VOLSTYLE_DECLARE_ERROR

@@ -6,6 +6,8 @@
 
 #include <cstdlib>
 #include <cstring>
+#include <map>
+#include <mutex>
 
 #include "core/base/errors.h"
 
@@ -68,6 +70,31 @@ std::vector<std::string> missingFeatures(int glVersion, const std::function<bool
     return missing;
 }
 
+namespace {
+
+/// EGL hands every context on a platform the same display, and eglTerminate ends all of their
+/// contexts at once: a second context in the process (a restarted server in tests, an engine
+/// with a context of its own) lost its context when the first was destroyed. Displays are
+/// counted, and terminated when their last context goes.
+std::mutex g_displayMutex;
+std::map<EGLDisplay, int> g_displayUsers;
+
+bool initializeDisplay(EGLDisplay display, EGLint& major, EGLint& minor) {
+    std::lock_guard lock(g_displayMutex);
+    if (!eglInitialize(display, &major, &minor)) return false;
+    ++g_displayUsers[display];
+    return true;
+}
+
+void releaseDisplay(EGLDisplay display) {
+    std::lock_guard lock(g_displayMutex);
+    if (--g_displayUsers[display] > 0) return;
+    g_displayUsers.erase(display);
+    eglTerminate(display);
+}
+
+}  // namespace
+
 std::unique_ptr<Context> Context::create(const ContextOptions& options) {
     std::unique_ptr<Context> ctx(new Context());
     ctx->m_egl = std::make_unique<Egl>();
@@ -92,8 +119,10 @@ std::unique_ptr<Context> Context::create(const ContextOptions& options) {
         ctx->m_caps.platform = "surfaceless";
     }
     EGLint major = 0, minor = 0;
-    if (egl.display == EGL_NO_DISPLAY || !eglInitialize(egl.display, &major, &minor))
+    if (egl.display == EGL_NO_DISPLAY || !initializeDisplay(egl.display, major, minor)) {
+        egl.display = EGL_NO_DISPLAY;  // nothing for the destructor to release
         throw GpuError("gl::Context: eglInitialize failed on the " + ctx->m_caps.platform + " platform");
+    }
     if (!eglBindAPI(EGL_OPENGL_API)) throw GpuError("gl::Context: this EGL has no desktop OpenGL");
 
     // A configless, surfaceless GL 4.5 core context: compute work only, no default framebuffer.
@@ -140,7 +169,7 @@ Context::~Context() {
     if (!m_egl || m_egl->display == EGL_NO_DISPLAY) return;
     eglMakeCurrent(m_egl->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     if (m_egl->context != EGL_NO_CONTEXT) eglDestroyContext(m_egl->display, m_egl->context);
-    eglTerminate(m_egl->display);
+    releaseDisplay(m_egl->display);
 }
 
 void Context::makeCurrent() {

@@ -63,7 +63,7 @@ std::string sniffExtension(const unsigned char* p, size_t n) {
 
 }  // namespace
 
-LoadedImage loadImage(const std::string& path, int maxSide) {
+LoadedImage loadImage(const std::string& path, int maxSide, const ImageHeaderCheck& checkHeader) {
     if (!fs::exists(path)) throw IoError("loadImage(): no such file '" + path + "'");
     // Alpha is a weight, not coverage: keep colours unassociated (OIIO would premultiply).
     OIIO::ImageSpec config;
@@ -79,6 +79,7 @@ LoadedImage loadImage(const std::string& path, int maxSide) {
                               std::to_string(maxSide) + "]");
     }
     if (spec.depth > 1) throw InvalidArgument("loadImage(): '" + path + "' is a volume image");
+    if (checkHeader) checkHeader(spec.width, spec.height);
     const int nch = spec.nchannels;
     std::vector<float> pixels(size_t(spec.width) * spec.height * nch);
     if (!in->read_image(0, 0, 0, nch, OIIO::TypeDesc::FLOAT, pixels.data())) {
@@ -115,7 +116,7 @@ LoadedImage loadImage(const std::string& path, int maxSide) {
 }
 
 LoadedImage loadImageFromMemory(const void* data, size_t size, const std::string& nameHint,
-                                int maxSide) {
+                                int maxSide, const ImageHeaderCheck& checkHeader) {
     std::string ext = sniffExtension(static_cast<const unsigned char*>(data), size);
     if (ext.empty()) {
         throw InvalidArgument("loadImageFromMemory(): '" + nameHint +
@@ -128,7 +129,7 @@ LoadedImage loadImageFromMemory(const void* data, size_t size, const std::string
         if (!f) throw IoError("loadImageFromMemory(): cannot write a temporary file");
     }
     try {
-        return loadImage(tmp.path, maxSide);
+        return loadImage(tmp.path, maxSide, checkHeader);
     } catch (const Error& e) {
         // Name the upload, not the temporary file, in the message.
         std::string msg = e.what();

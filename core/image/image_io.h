@@ -4,6 +4,7 @@
 /// TIFF) are sRGB: linearised on load, encoded on save. Float formats (EXR, HDR, float TIFF) are
 /// linear. Alpha, when present, is kept (as a weight for targets).
 
+#include <functional>
 #include <string>
 
 #include "core/image/image.h"
@@ -17,13 +18,17 @@ struct LoadedImage {
     bool wasSrgb = false;  ///< the file was 8/16-bit and was linearised
 };
 
+/// Called with an image's size once its header is read and before any pixel is decoded: it may
+/// throw to refuse the image (an upload of the wrong size never costs its decode).
+using ImageHeaderCheck = std::function<void(int width, int height)>;
+
 /// Loads an image file. Throws IoError (missing, corrupt or truncated file) or InvalidArgument
 /// (non-finite values, more than `maxSide` pixels on a side).
-LoadedImage loadImage(const std::string& path, int maxSide = 8192);
+LoadedImage loadImage(const std::string& path, int maxSide = 8192, const ImageHeaderCheck& checkHeader = {});
 
 /// Loads an image from bytes in memory (an upload); `nameHint` is used in error messages.
 LoadedImage loadImageFromMemory(const void* data, size_t size, const std::string& nameHint,
-                                int maxSide = 8192);
+                                int maxSide = 8192, const ImageHeaderCheck& checkHeader = {});
 
 struct SaveOptions {
     double exposure = 0;        ///< stops; applied as 2^exposure before encoding

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "core/base/stopwatch.h"
+#include "core/render/chunked_dispatch.h"
 #include "core/render/gl_convert.h"
 #include "core/shaders/layout.h"
 
@@ -47,7 +48,8 @@ std::string lightDepthKey(const GpuVolume& volume, const Vec3d& direction, const
 }
 
 std::shared_ptr<const gl::Texture> lightDepthVolume(GpuDevice& device, const GpuVolume& volume, const DirectionalLight& light,
-                                                    const RenderSettings& march, RenderStats& stats) {
+                                                    const RenderSettings& march, RenderStats& stats,
+                                                    const WorkBudget& budget) {
     const Vec3d dir = normalize(light.direction);
     const std::string key = lightDepthKey(volume, dir, march);
     if (auto cached = device.cache().find<gl::Texture>(key)) return cached;
@@ -61,14 +63,13 @@ std::shared_ptr<const gl::Texture> lightDepthVolume(GpuDevice& device, const Gpu
     layout::MarchParams p = volumeParams(volume, settings);
     p.lightKernel = {0, 0, 0, 0};
     p.lightDirection[0] = f4(dir);
-    device.setParams(p);
     glUseProgram(device.program(gl::ShaderBuilder("light_depth.comp")
                                     .define("VOLSTYLE_EXACT_TRAVERSAL", march.exactTraversal ? 1 : 0))
                      .id());
     glBindTextureUnit(layout::kUnitExtinction, volume.extinctionTexture());
     glBindTextureUnit(layout::kUnitOccupancy, volume.occupancyTexture());
     glBindImageTexture(layout::kImageUnitOut, texture->id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-    dispatch3D(d);
+    dispatchChunked(device, p, d, DispatchShape::Volume, budget, "light-depth pass");
     gl::barrierAfterComputeWrites();
     device.finish();  // rare: wait so the timing is this pass's own
     stats.lightMs += msSince(t0);

@@ -8,6 +8,7 @@
 #include <memory>
 #include <string>
 
+#include "core/base/work_budget.h"
 #include "core/gl/object.h"
 #include "core/gl/shader_builder.h"
 #include "core/gpu/gpu_device.h"
@@ -25,9 +26,11 @@ void updateOccupancy(GpuDevice& device, GpuVolume& volume, RenderStats& stats);
 std::string lightDepthKey(const GpuVolume& volume, const Vec3d& direction, const RenderSettings& march);
 
 /// The optical depth toward `light` from every voxel centre (light_depth.comp), from the cache or
-/// computed now. Needs current occupancy.
+/// computed now, in chunks checked against `budget` (a pass stopped early caches nothing). Needs
+/// current occupancy.
 std::shared_ptr<const gl::Texture> lightDepthVolume(GpuDevice& device, const GpuVolume& volume, const DirectionalLight& light,
-                                                    const RenderSettings& march, RenderStats& stats);
+                                                    const RenderSettings& march, RenderStats& stats,
+                                                    const WorkBudget& budget = WorkBudget());
 
 /// An environment map on the GPU, and its largest value (for the early-termination bound).
 struct EnvironmentTexture {

@@ -28,7 +28,7 @@ double radianceBound(const GpuVolume& volume, const Lighting& lighting, const En
 }  // namespace
 
 MarchSetup prepareMarch(GpuDevice& device, GpuVolume& volume, const Camera& camera, const Lighting& lighting,
-                        const RenderSettings& settings, RenderStats& stats) {
+                        const RenderSettings& settings, RenderStats& stats, const WorkBudget& budget) {
     updateOccupancy(device, volume, stats);
 
     // Lights with zero irradiance add nothing: leave them out of the variant.
@@ -36,7 +36,7 @@ MarchSetup prepareMarch(GpuDevice& device, GpuVolume& volume, const Camera& came
     for (const auto& l : lighting.lights)
         if (maxComponent(l.irradiance) > 0) lights.push_back(&l);
     MarchSetup setup;
-    for (const DirectionalLight* l : lights) setup.lightDepth.push_back(lightDepthVolume(device, volume, *l, settings, stats));
+    for (const DirectionalLight* l : lights) setup.lightDepth.push_back(lightDepthVolume(device, volume, *l, settings, stats, budget));
     std::shared_ptr<const EnvironmentTexture> environment;
     if (lighting.background.environment) {
         environment = environmentTexture(device, lighting.background.environment);

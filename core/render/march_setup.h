@@ -10,6 +10,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/base/work_budget.h"
 #include "core/gl/object.h"
 #include "core/gl/shader_builder.h"
 #include "core/gpu/gpu_device.h"
@@ -28,8 +29,9 @@ struct MarchSetup {
 };
 
 /// Updates occupancy if stale, finds or computes the derived volumes, fills the uniform block.
+/// Light-depth passes run under `budget` (OverBudget or Cancelled between chunks).
 MarchSetup prepareMarch(GpuDevice& device, GpuVolume& volume, const Camera& camera, const Lighting& lighting,
-                        const RenderSettings& settings, RenderStats& stats);
+                        const RenderSettings& settings, RenderStats& stats, const WorkBudget& budget = WorkBudget());
 /// Uploads the block and binds extinction, occupancy, environment and light-depth textures.
 void bindMarch(GpuDevice& device, const GpuVolume& volume, const MarchSetup& setup);
 

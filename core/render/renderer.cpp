@@ -4,6 +4,7 @@
 #include "core/base/stopwatch.h"
 #include "core/gl/object.h"
 #include "core/gl/shader_builder.h"
+#include "core/render/chunked_dispatch.h"
 #include "core/render/march_setup.h"
 #include "core/shaders/layout.h"
 
@@ -20,14 +21,14 @@ Renderer::Renderer(GpuDevice& device) : m_device(device), m_buffers(std::make_un
 Renderer::~Renderer() = default;
 
 Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& lighting,
-                       const RenderSettings& settings, RenderStats* statsOut) {
+                       const RenderSettings& settings, RenderStats* statsOut, const WorkBudget& budget) {
     VOLSTYLE_CHECK(m_device.isOwnedByThisThread(), ==, true);
     camera.validate();
     lighting.validate();
     settings.validate();
     const auto t0 = Clock::now();
     RenderStats stats;
-    const MarchSetup setup = prepareMarch(m_device, volume, camera, lighting, settings, stats);
+    const MarchSetup setup = prepareMarch(m_device, volume, camera, lighting, settings, stats, budget);
 
     // Pick the variant: passes for absent features are compiled out.
     gl::ShaderBuilder builder("render.comp");
@@ -39,7 +40,7 @@ Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& 
         .define("VOLSTYLE_HW_FILTER", settings.hardwareFilter ? 1 : 0)
         .define("VOLSTYLE_EXACT_TRAVERSAL", settings.exactTraversal ? 1 : 0);
     glUseProgram(m_device.program(builder).id());
-    bindMarch(m_device, volume, setup);
+    bindMarch(m_device, volume, setup);  // dispatchChunked re-uploads the block per chunk
     if (volume.hasAlbedo()) glBindTextureUnit(layout::kUnitAlbedo, volume.albedoTexture());
     if (volume.hasEmission()) glBindTextureUnit(layout::kUnitEmission, volume.emissionTexture());
 
@@ -52,9 +53,13 @@ Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& 
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingImageOut, b.pixels.id());
 
     // March every pixel, then read the image back.
-    const int g = layout::kWorkgroup2D;
     b.timer.begin();
-    glDispatchCompute(GLuint((camera.width + g - 1) / g), GLuint((camera.height + g - 1) / g), 1);
+    try {
+        dispatchChunked(m_device, setup.params, {camera.width, camera.height, 1}, DispatchShape::Image, budget, "render's march");
+    } catch (...) {
+        b.timer.end();  // a query left open would fail the next render's begin()
+        throw;
+    }
     b.timer.end();
     gl::barrierAfterComputeWrites();
     Image image(camera.width, camera.height);

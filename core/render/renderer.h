@@ -6,6 +6,7 @@
 
 #include <memory>
 
+#include "core/base/work_budget.h"
 #include "core/gpu/gpu_device.h"
 #include "core/image/image.h"
 #include "core/render/gpu_volume.h"
@@ -20,9 +21,11 @@ public:
     ~Renderer();
 
     /// Renders linear RGBA (alpha = 1 − mean transmittance). Throws InvalidArgument for an
-    /// invalid camera, lighting or settings.
+    /// invalid camera, lighting or settings; OverBudget or Cancelled when `budget` runs out
+    /// (checked between chunks of the light-depth passes and the march; nothing half-made is kept).
     Image render(GpuVolume& volume, const Camera& camera, const Lighting& lighting,
-                 const RenderSettings& settings = {}, RenderStats* stats = nullptr);
+                 const RenderSettings& settings = {}, RenderStats* stats = nullptr,
+                 const WorkBudget& budget = WorkBudget());
 
 private:
     struct Buffers;

@@ -87,6 +87,8 @@ struct MarchParams {
     VS_IVEC4 unknownLayout;  /* x: elements per block of unknowns (the albedo block's offset in joint solves) */
     VS_IVEC4 viewPixels;     /* x: index of this view's first pixel in the solver's pixel vector */
     VS_VEC4 projectorCutoff; /* x: transmittance below which forward and adjoint rays both stop */
+    /* Chunked dispatches (chunked_dispatch.h): the first cell (voxel or pixel) of this chunk. */
+    VS_IVEC4 dispatchOffset;
 };
 
 /* Parameters of the vector kernels (vector_ops.comp). Vectors are arrays of vec4 (rgb used). */

@@ -9,7 +9,7 @@ layout(binding = kImageUnitOut, rgba32f) uniform writeonly image3D img_lightDept
 const float kOpaqueDepth = 64.0;
 
 void main() {
-    ivec3 voxel = ivec3(gl_GlobalInvocationID);
+    ivec3 voxel = ivec3(gl_GlobalInvocationID) + u.dispatchOffset.xyz;  // chunked_dispatch.h
     if (any(greaterThanEqual(voxel, u.dims.xyz))) return;
 
     // A voxel's depth is read only by samples whose trilinear stencil holds it; the rest of such a

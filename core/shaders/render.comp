@@ -23,7 +23,7 @@ layout(binding = kUnitAlbedo) uniform sampler3D s_albedo;
 #endif
 
 void main() {
-    ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 pix = ivec2(gl_GlobalInvocationID.xy) + u.dispatchOffset.xy;  // chunked_dispatch.h
     if (pix.x >= u.imageSize.x || pix.y >= u.imageSize.y) return;
 
     // Set up the view ray in index space, parameterised by world distance t.

@@ -1,4 +1,4 @@
-// GET /health, /schema.json, /scenes.
+// GET /health, /schema.json, /scenes, /quarantine.
 #include "core/volume/builtin_scenes.h"
 #include "protocol/validation.h"
 #include "server/routes/route_context.h"
@@ -17,6 +17,13 @@ void addSystemRoutes(RouteContext& c) {
     c.http.Get(kApi + "/scenes", [](const httplib::Request&, httplib::Response& res) {
         nlohmann::json list = nlohmann::json::array();
         for (const auto& s : core::builtinScenes()) list.push_back({{"name", s.name}, {"description", s.description}});
+        reply(res, 200, list);
+    });
+    // Files (or whole sessions) found damaged in the data directory and moved aside, with why.
+    c.http.Get(kApi + "/quarantine", [&c](const httplib::Request&, httplib::Response& res) {
+        nlohmann::json list = nlohmann::json::array();
+        for (const auto& q : c.service.quarantine())
+            list.push_back({{"session", q.session}, {"file", q.file}, {"reason", q.reason}, {"time", q.time}});
         reply(res, 200, list);
     });
 }

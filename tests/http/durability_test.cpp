@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <set>
 #include <thread>
 
 #include "core/image/image_io.h"
@@ -97,5 +98,86 @@ TEST(Durability, KillDuringASolveThenRestart) {
     // A graceful stop: SIGTERM ends the process with status 0.
     int status = server.stop(SIGTERM);
     EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+    fs::remove_all(dir);
+}
+
+namespace {
+
+void truncateFile(const fs::path& p, std::uintmax_t keep) {
+    ASSERT_TRUE(fs::exists(p)) << p;
+    fs::resize_file(p, std::min(keep, fs::file_size(p) / 2));
+}
+
+std::vector<std::string> damagedFiles(const json& session) {
+    std::vector<std::string> out;
+    for (const auto& d : session["damaged"]) out.push_back(d["file"]);
+    return out;
+}
+
+}  // namespace
+
+TEST(Durability, ADamagedFileQuarantinesOnlyWhatItHolds) {
+    // Before issue #9 a truncated old version or target dropped the whole session (a log line).
+    const fs::path dir = fs::temp_directory_path() / "volstyle-damage-test";
+    fs::remove_all(dir);
+    std::string sid, other;
+    {
+        ServerProcess server(dir);
+        httplib::Client c("127.0.0.1", server.port);
+        for (std::string* id : {&sid, &other}) {
+            auto r = c.Post("/api/v1/sessions", R"({"scene": "builtin:sphere", "resolution": 16})", "application/json");
+            ASSERT_EQ(r->status, 201) << r->body;
+            *id = json::parse(r->body)["id"];
+        }
+        const std::string base = "/api/v1/sessions/" + sid;
+        for (int i = 0; i < 2; ++i) ASSERT_EQ(c.Post((base + "/revert").c_str(), R"({"version": 1})", "application/json")->status, 200);
+        ASSERT_EQ(c.Post((base + "/views").c_str(), R"({"camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "width": 16, "height": 16}})", "application/json")->status, 201);
+        volstyle::core::Image target(16, 16);
+        for (float& x : target.rgba) x = 0.5f;
+        ASSERT_EQ(c.Put((base + "/views/v1/target").c_str(), volstyle::core::encodeImage(target, "png"), "image/png")->status, 200);
+        EXPECT_EQ(server.stop(SIGTERM), 0);
+    }
+    const fs::path sdir = dir / "sessions" / sid;
+    truncateFile(sdir / "versions" / "1.vdb", 100);
+    truncateFile(sdir / "views" / "v1" / "target.exr", 100);
+    {
+        fs::resize_file(dir / "sessions" / other / "session.json", 10);  // the other session is unreadable
+        ServerProcess server(dir);
+        httplib::Client c("127.0.0.1", server.port);
+        const std::string base = "/api/v1/sessions/" + sid;
+        auto r = c.Get(base.c_str());
+        ASSERT_EQ(r->status, 200) << "the session survives its damaged files: " << r->body;
+        json s = json::parse(r->body);
+        EXPECT_EQ(s["volume"]["version"], 3);
+        EXPECT_EQ(s["versions"], json::array({1, 2, 3}));
+        EXPECT_EQ(damagedFiles(s), (std::vector<std::string>{"versions/1.vdb", "views/v1/target.exr"}));
+        EXPECT_FALSE(s["views"][0]["has_target"]) << "the view stays, without its damaged target";
+        r = c.Post((base + "/revert").c_str(), R"({"version": 1})", "application/json");
+        EXPECT_EQ(r->status, 422) << r->body;
+        EXPECT_EQ(json::parse(r->body)["error"]["code"], "io_error");
+        EXPECT_EQ(c.Get((base + "/volume.vdb?version=1").c_str())->status, 422);
+        EXPECT_EQ(c.Get((base + "/volume.vdb?version=2").c_str())->status, 200);
+        EXPECT_EQ(c.Get(("/api/v1/sessions/" + other).c_str())->status, 404);
+        json q = json::parse(c.Get("/api/v1/quarantine")->body);
+        std::set<std::string> listed;
+        for (const auto& e : q) listed.insert(e["session"].get<std::string>() + ":" + e["file"].get<std::string>());
+        EXPECT_EQ(listed, (std::set<std::string>{sid + ":versions/1.vdb", sid + ":views/v1/target.exr", other + ":"})) << q.dump();
+        EXPECT_TRUE(fs::exists(dir / "quarantine" / other / "session" / "session.json"));
+        EXPECT_EQ(server.stop(SIGTERM), 0);
+    }
+    truncateFile(sdir / "versions" / "3.vdb", 100);  // now the current version
+    {
+        ServerProcess server(dir);
+        httplib::Client c("127.0.0.1", server.port);
+        auto r = c.Get(("/api/v1/sessions/" + sid).c_str());
+        ASSERT_EQ(r->status, 200) << r->body;
+        json s = json::parse(r->body);
+        EXPECT_EQ(s["volume"]["version"], 2) << "falls back to the newest readable version";
+        EXPECT_EQ(damagedFiles(s), (std::vector<std::string>{"versions/1.vdb", "views/v1/target.exr", "versions/3.vdb"}));
+        r = c.Post(("/api/v1/sessions/" + sid + "/revert").c_str(), R"({"version": 2})", "application/json");
+        ASSERT_EQ(r->status, 200) << r->body;
+        EXPECT_EQ(json::parse(r->body)["volume"]["version"], 4) << "numbers go on after the damaged one";
+        EXPECT_EQ(server.stop(SIGTERM), 0);
+    }
     fs::remove_all(dir);
 }

@@ -22,14 +22,16 @@ static_assert(offsetof(MarchParams, lightIrradiance) == 240 + 16 * volstyle::cor
 static_assert(offsetof(MarchParams, lightKernel) == 240 + 32 * volstyle::core::layout::kLightSlots);
 static_assert(offsetof(MarchParams, unknownDims) == 240 + 32 * volstyle::core::layout::kLightSlots + 16);
 static_assert(offsetof(MarchParams, viewPixels) == 240 + 32 * volstyle::core::layout::kLightSlots + 64);
-static_assert(sizeof(MarchParams) == 240 + 32 * volstyle::core::layout::kLightSlots + 96);
+static_assert(offsetof(MarchParams, dispatchOffset) == 240 + 32 * volstyle::core::layout::kLightSlots + 96);
+static_assert(sizeof(MarchParams) == 240 + 32 * volstyle::core::layout::kLightSlots + 112);
 static_assert(sizeof(volstyle::core::layout::VectorParams) == 64);
 
 TEST(Layout, MarchParamsMatchesStd140) {
     // The static_asserts above are the test; this records the size in the test log.
     // 416 bytes before issue #8 named the light index, pixel offset and cut-off (lightKernel,
-    // viewPixels, projectorCutoff) instead of hiding them in spare components.
-    EXPECT_EQ(sizeof(MarchParams), 464u);
+    // viewPixels, projectorCutoff) instead of hiding them in spare components; 480 since #9 added
+    // dispatchOffset for chunked (budgeted) dispatches.
+    EXPECT_EQ(sizeof(MarchParams), 480u);
 }
 
 TEST(Layout, SolverVocabularyIsSharedWithTheShaders) {

@@ -1,0 +1,167 @@
+#include "server/guarded_http_server.h"
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+
+namespace volstyle::server {
+namespace {
+
+using SteadyClock = std::chrono::steady_clock;
+
+double secondsSince(SteadyClock::time_point t) {
+    return std::chrono::duration<double>(SteadyClock::now() - t).count();
+}
+
+/// The numeric address and port of a socket's peer (or its own end).
+void socketAddress(socket_t sock, bool peer, std::string& ip, int& port) {
+    sockaddr_storage addr{};
+    socklen_t len = sizeof addr;
+    ip.clear();
+    port = -1;
+    if ((peer ? ::getpeername(sock, reinterpret_cast<sockaddr*>(&addr), &len)
+              : ::getsockname(sock, reinterpret_cast<sockaddr*>(&addr), &len)) != 0)
+        return;
+    char text[INET6_ADDRSTRLEN] = {};
+    if (addr.ss_family == AF_INET) {
+        auto* a = reinterpret_cast<sockaddr_in*>(&addr);
+        ::inet_ntop(AF_INET, &a->sin_addr, text, sizeof text);
+        port = ntohs(a->sin_port);
+    } else if (addr.ss_family == AF_INET6) {
+        auto* a = reinterpret_cast<sockaddr_in6*>(&addr);
+        ::inet_ntop(AF_INET6, &a->sin6_addr, text, sizeof text);
+        port = ntohs(a->sin6_port);
+    }
+    ip = text;
+}
+
+/// Polls `sock` for `events` in slices, until ready, `seconds` pass, or `stillWanted` says stop.
+/// Returns the revents (0 on time-out or stop).
+template <typename StillWanted>
+short pollSliced(socket_t sock, short events, double seconds, StillWanted stillWanted) {
+    const auto start = SteadyClock::now();
+    for (;;) {
+        const double left = seconds - secondsSince(start);
+        if (left <= 0 || !stillWanted()) return 0;
+        pollfd p{sock, events, 0};
+        const int ms = int(std::min<double>(GuardedHttpServer::kPollSliceMs, std::ceil(left * 1000)));
+        const int n = ::poll(&p, 1, std::max(ms, 1));
+        if (n > 0) return p.revents;
+        if (n < 0 && errno != EINTR) return POLLERR;
+    }
+}
+
+/// One request's stream: reads stop at the request's deadline, which moves with the bytes read.
+class DeadlineStream final : public httplib::Stream {
+public:
+    DeadlineStream(socket_t sock, const ConnectionLimits& limits, const httplib::Server& server)
+        : m_sock(sock), m_limits(limits), m_server(server), m_start(SteadyClock::now()) {}
+
+    bool is_readable() const override { return waitFor(POLLIN, allowanceLeft()); }
+    bool is_writable() const override { return waitFor(POLLOUT, m_limits.writeSeconds); }
+
+    ssize_t read(char* ptr, size_t size) override {
+        if (!is_readable()) return -1;  // past the allowance, stopping, or closed: drop the client
+        ssize_t n;
+        do n = ::recv(m_sock, ptr, size, 0);
+        while (n < 0 && errno == EINTR);
+        if (n > 0) m_received += size_t(n);
+        return n;
+    }
+    ssize_t write(const char* ptr, size_t size) override {
+        if (!is_writable()) return -1;
+        ssize_t n;
+        do n = ::send(m_sock, ptr, size, MSG_NOSIGNAL);
+        while (n < 0 && errno == EINTR);
+        return n;
+    }
+    void get_remote_ip_and_port(std::string& ip, int& port) const override { socketAddress(m_sock, true, ip, port); }
+    void get_local_ip_and_port(std::string& ip, int& port) const override { socketAddress(m_sock, false, ip, port); }
+    socket_t socket() const override { return m_sock; }
+
+private:
+    double allowanceLeft() const {
+        const double allowance = m_limits.headerSeconds + double(m_received) / m_limits.minBytesPerSecond;
+        return allowance - secondsSince(m_start);
+    }
+    bool waitFor(short events, double seconds) const {
+        const short r = pollSliced(m_sock, events, seconds, [this] { return m_server.is_running(); });
+        return (r & events) != 0;
+    }
+
+    socket_t m_sock;
+    const ConnectionLimits& m_limits;
+    const httplib::Server& m_server;
+    SteadyClock::time_point m_start;
+    size_t m_received = 0;
+};
+
+void closeSocket(socket_t sock) {
+    ::shutdown(sock, SHUT_RDWR);
+    ::close(sock);
+}
+
+}  // namespace
+
+bool GuardedHttpServer::admit(const std::string& client) {
+    std::lock_guard lock(m_mutex);
+    int& n = m_open[client];
+    if (n >= m_limits.maxConnectionsPerClient) {
+        if (n == 0) m_open.erase(client);
+        return false;
+    }
+    ++n;
+    return true;
+}
+
+void GuardedHttpServer::leave(const std::string& client) {
+    std::lock_guard lock(m_mutex);
+    if (--m_open[client] <= 0) m_open.erase(client);
+}
+
+void GuardedHttpServer::refuse(socket_t sock, const std::string& client) {
+    const std::string body = refusal ? refusal(client) : std::string("{}");
+    const std::string head = "HTTP/1.1 429 Too Many Requests\r\nContent-Type: application/json\r\nConnection: close\r\n"
+                             "Content-Length: " + std::to_string(body.size()) + "\r\n\r\n";
+    const std::string answer = head + body;
+    // Best effort, never blocking: the refused client's request is not read at all.
+    ::send(sock, answer.data(), answer.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+}
+
+bool GuardedHttpServer::awaitRequest(socket_t sock) const {
+    const short r = pollSliced(sock, POLLIN, m_limits.idleSeconds, [this] { return is_running(); });
+    return (r & POLLIN) != 0;
+}
+
+bool GuardedHttpServer::process_and_close_socket(socket_t sock) {
+    std::string client;
+    int port = 0;
+    socketAddress(sock, true, client, port);
+    if (!admit(client)) {
+        refuse(sock, client);
+        closeSocket(sock);
+        return false;
+    }
+    const int one = 1;
+    ::setsockopt(sock, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+
+    bool ok = true;
+    for (int served = 0; served < m_limits.maxRequestsPerConnection && ok; ++served) {
+        if (!awaitRequest(sock)) break;  // idle, closed by the client, or the server is stopping
+        DeadlineStream stream(sock, m_limits, *this);
+        bool closed = false;
+        const bool last = served + 1 == m_limits.maxRequestsPerConnection || !is_running();
+        ok = process_request(stream, last, closed, nullptr) && !closed;
+    }
+    closeSocket(sock);
+    leave(client);
+    return ok;
+}
+
+}  // namespace volstyle::server
