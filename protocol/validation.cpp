@@ -117,4 +117,16 @@ nlohmann::json parseJson(const std::string& text, const std::string& what) {
     }
 }
 
+nlohmann::json parseJsonBody(const std::string& body, size_t maxBytes) {
+    if (body.size() > maxBytes)
+        throw ApiError(ErrorCode::TooLarge, "the JSON body is " + std::to_string(body.size()) + " bytes; the limit is " +
+                                                std::to_string(maxBytes));
+    if (body.empty()) return nlohmann::json::object();
+    try {
+        return nlohmann::json::parse(body);
+    } catch (const nlohmann::json::exception& e) {  // parse_error, and out_of_range for numbers like 1e400
+        throw ApiError(ErrorCode::InvalidJson, std::string("the body is not valid JSON: ") + e.what());
+    }
+}
+
 }  // namespace volstyle::protocol

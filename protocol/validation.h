@@ -60,6 +60,10 @@ private:
 /// parser message) becomes U+FFFD instead of throwing: an answer must always be writable.
 std::string toText(const nlohmann::json& j, int indent = -1);
 
+/// A request's JSON body ({} when empty): ApiError too_large over `maxBytes`, invalid_json when it
+/// does not parse (including numbers beyond double range, e.g. 1e400).
+nlohmann::json parseJsonBody(const std::string& body, size_t maxBytes);
+
 /// Parses JSON text, throwing ValidationError (path "") with the parser's message.
 nlohmann::json parseJson(const std::string& text, const std::string& what);
 

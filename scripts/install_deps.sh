@@ -12,6 +12,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium                                                 # the browser end-to-end test
 )
+packages+=("$@")  # extra packages a script needs (scripts/fuzz.sh: clang)
 # Node and npm for the browser test: the machine's own if present (Debian's would clash with it).
 if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
 

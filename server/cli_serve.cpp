@@ -13,6 +13,7 @@
 #include "core/base/errors.h"
 #include "server/cli.h"
 #include "server/http_server.h"
+#include "server/vdb_reader.h"
 
 namespace volstyle::server {
 
@@ -33,6 +34,7 @@ int runServe(const std::vector<std::string>& argv) {
     opt.token = args.get("token", envToken ? envToken : "");
     opt.webDir = args.get("web-dir", opt.webDir);
     opt.dataDir = args.get("data-dir", opt.dataDir);
+    opt.vdbReader = thisExecutable();
     opt.renderBudgetSeconds = args.number("render-budget", opt.renderBudgetSeconds);
     if (!(opt.renderBudgetSeconds >= 0) || !std::isfinite(opt.renderBudgetSeconds))
         throw InvalidArgument("--render-budget must be a number of seconds >= 0 (0: no limit)");

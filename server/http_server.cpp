@@ -40,6 +40,7 @@ ServiceLimits serviceLimits(const ServerOptions& o) {
     l.maxImageSide = o.maxImageSide;
     l.volumeLimits = o.volumeLimits;
     l.renderBudgetSeconds = o.renderBudgetSeconds;
+    l.vdbReader.executable = o.vdbReader;
     return l;
 }
 

@@ -10,6 +10,7 @@
 
 #include "core/base/errors.h"
 #include "server/cli.h"
+#include "server/vdb_reader.h"
 
 namespace {
 
@@ -45,6 +46,7 @@ int main(int argc, char** argv) {
         if (command == "info") return volstyle::server::runInfo(args);
         if (command == "solve") return volstyle::server::runSolve(args);
         if (command == "serve") return volstyle::server::runServe(args);
+        if (command == "read-vdb") return volstyle::server::runReadVdb(args);  // the server's child reader
         std::cerr << "volstyle: unknown command '" << command << "'\n" << kUsage;
         return 2;
     } catch (const volstyle::InvalidArgument& e) {

@@ -270,7 +270,7 @@ void SessionService::uploadVdb(Session& s, const std::string& bytes) {
     std::ofstream(tmp.path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
     core::Volume v;
     try {
-        v = core::loadVdb(tmp.path.string(), m_limits.volumeLimits);
+        v = loadUntrustedVdb(tmp.path.string(), m_limits.volumeLimits, m_limits.vdbReader);
     } catch (const Error& e) {
         std::string msg = e.what();
         const std::string path = tmp.path.string();

@@ -21,6 +21,7 @@
 #include "server/job_store.h"
 #include "server/persistence.h"
 #include "server/session_store.h"
+#include "server/vdb_reader.h"
 
 namespace volstyle::server {
 
@@ -32,6 +33,7 @@ struct ServiceLimits {
     core::VolumeLimits volumeLimits;
     /// Seconds a render or preview may hold the GL thread (over: 422 over_budget); <= 0: unbounded.
     double renderBudgetSeconds = 60;
+    VdbReaderOptions vdbReader;  ///< uploads are read in a child process first (vdb_reader.h)
 };
 
 enum class ViewImage { Target, Weights };

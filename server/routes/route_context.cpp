@@ -4,18 +4,7 @@
 
 namespace volstyle::server {
 
-nlohmann::json RouteContext::body(const httplib::Request& req) const {
-    using protocol::ApiError, protocol::ErrorCode;
-    if (req.body.size() > maxJsonBytes)
-        throw ApiError(ErrorCode::TooLarge, "the JSON body is " + std::to_string(req.body.size()) +
-                                                " bytes; the limit is " + std::to_string(maxJsonBytes));
-    if (req.body.empty()) return nlohmann::json::object();
-    try {
-        return nlohmann::json::parse(req.body);
-    } catch (const nlohmann::json::exception& e) {  // parse_error, and out_of_range for numbers like 1e400
-        throw ApiError(ErrorCode::InvalidJson, std::string("the body is not valid JSON: ") + e.what());
-    }
-}
+nlohmann::json RouteContext::body(const httplib::Request& req) const { return protocol::parseJsonBody(req.body, maxJsonBytes); }
 
 void StreamLimiter::acquire(const std::string& client) {
     std::lock_guard lock(m_mutex);

@@ -29,6 +29,7 @@ protected:
         opt.maxUploadBytes = 64 * 1024;
         opt.maxImageSide = 64;
         opt.dataDir.clear();  // in memory; the durability test uses the real binary
+        opt.vdbReader = VOLSTYLE_BINARY;  // uploads are read in a child, as `serve` does
         try {
             m_server = std::make_unique<server::HttpServer>(opt);
         } catch (const GpuError& e) {
