@@ -28,9 +28,11 @@ class Acked:
         self.lock = threading.Lock()
         self.sessions = {}  # sid -> {"version": n, "versions": set, "targets": set, "lighting": [..], "pending": [..]}
         self.changes = 0
+        self.by_kind = {}
 
-    def note(self, sid, **kw):
+    def note(self, sid, kind="create", **kw):
         with self.lock:
+            self.by_kind[kind] = self.by_kind.get(kind, 0) + 1
             s = self.sessions.setdefault(sid, {"version": 1, "versions": {1}, "targets": set(), "lighting": None, "pending": None})
             if "version" in kw:
                 s["versions"].add(kw["version"])
@@ -60,26 +62,26 @@ def worker(port, acked, stop, rnd):
             with acked.lock:
                 acked.sessions[s[0]]["pending"] = irr
             if request(port, "PUT", base + "/lighting", {"sun": {"direction": [0, 1, 0], "irradiance": irr}})[0] == 200:
-                acked.note(s[0], lighting=irr)
+                acked.note(s[0], "lighting", lighting=irr)
         elif r < 0.4:
             st, p = request(port, "POST", base + "/views", {"camera": CAMERA})
             if st == 201:
                 vid = json.loads(p)["id"]
                 s[1] += 1
                 if request(port, "PUT", f"{base}/views/{vid}/target", png(16, 16, (200, 100, 50)), "image/png")[0] == 200:
-                    acked.note(s[0], target=vid)
+                    acked.note(s[0], "target", target=vid)
         elif r < 0.6:
             st, p = request(port, "POST", base + "/revert", {"version": 1})
             if st == 200:
-                acked.note(s[0], version=json.loads(p)["volume"]["version"])
+                acked.note(s[0], "revert", version=json.loads(p)["volume"]["version"])
         elif r < 0.75:
             st, vdb = request(port, "GET", base + "/volume.vdb")
             if st == 200:
                 st, p = request(port, "PUT", base + "/volume", vdb, "application/octet-stream")
                 if st == 200:
-                    acked.note(s[0], version=json.loads(p)["volume"]["version"])
+                    acked.note(s[0], "upload", version=json.loads(p)["volume"]["version"])
         elif s[1] > 0:
-            st, p = request(port, "POST", base + "/solve", {"max_iterations": 4, "resolution": 16})
+            st, p = request(port, "POST", base + "/solve", {"max_iterations": 4, "resolution": {"emission": [16, 16, 16]}})
             if st == 202:
                 job = json.loads(p)["job"]
                 while not stop.is_set():
@@ -88,7 +90,7 @@ def worker(port, acked, stop, rnd):
                         break
                     j = json.loads(p)
                     if j["state"] == "done":
-                        acked.note(s[0], version=j["result"]["version"])
+                        acked.note(s[0], "solve", version=j["result"]["version"])
                         break
                     if j["state"] in ("failed", "cancelled"):
                         break
@@ -164,7 +166,7 @@ def main():
                 t.join()
     finally:
         shutil.rmtree(data, ignore_errors=True)
-    result = {"kills": a.kills, "acknowledged_changes": acked.changes, "checks": total_checks, "lost": len(all_lost),
+    result = {"kills": a.kills, "acknowledged_changes": acked.changes, "by_kind": acked.by_kind, "checks": total_checks, "lost": len(all_lost),
               "restart_p50_ms": percentile(startup, 50), "restart_max_ms": max(startup)}
     print(json.dumps(result, indent=2))
     print("kill loop:", "PASS" if not all_lost else "FAIL")

@@ -65,7 +65,8 @@ def client(port, stats, stop, seed):
                 call("target", "PUT", f"{base}/views/v{s[1]}/target", png(24, 24, (rnd.randrange(256), 120, 60)),
                      ctype="image/png")
         elif r < 0.45 and s[1] > 0:
-            st, p = call("solve", "POST", base + "/solve", {"max_iterations": rnd.choice([3, 6]), "resolution": 16}, ok=(202,))
+            st, p = call("solve", "POST", base + "/solve", {"max_iterations": rnd.choice([3, 6]),
+                                                               "resolution": {"emission": [16, 16, 16]}}, ok=(202,))
             if st == 202 and rnd.random() < 0.4:
                 time.sleep(rnd.random() * 0.5)
                 call("cancel", "DELETE", "/jobs/" + json.loads(p)["job"], ok=(202,))

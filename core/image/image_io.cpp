@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "core/base/errors.h"
+#include "core/image/exr_structure.h"
 
 namespace volstyle::core {
 namespace {
@@ -122,6 +123,7 @@ LoadedImage loadImageFromMemory(const void* data, size_t size, const std::string
         throw InvalidArgument("loadImageFromMemory(): '" + nameHint +
                               "' is not a supported image (PNG, JPEG, TIFF, EXR or HDR)");
     }
+    if (ext == ".exr") checkExrStructure(static_cast<const unsigned char*>(data), size, maxSide, nameHint.c_str());
     TempFile tmp(ext);
     {
         std::ofstream f(tmp.path, std::ios::binary);

@@ -137,3 +137,32 @@ TEST(ImageIo, FromMemoryMatchesFile) {
     EXPECT_EQ(m.image.rgba, loadImage((dir / "a.png").string()).image.rgba);
     EXPECT_EQ(encodeImage(gradient(6, 6), "png"), bytes);
 }
+
+// Found by scripts/fuzz.sh: 74 bytes whose "capDate" attribute claims 1.97 GB. OpenEXR 3.1
+// allocated that (2 GiB, 7 s) before failing on the missing bytes; the header walk refuses it.
+TEST(ImageIo, ExrAttributesLargerThanTheFileAreRefusedBeforeOpenExrReadsThem) {
+    const unsigned char hostile[] = {
+        0x76, 0x2f, 0x31, 0x01, 0x02, 0x00, 0x00, 0x00, 0x63, 0x61, 0x70, 0x44, 0x61, 0x74, 0x65, 0x00, 0x73, 0x74, 0x72,
+        0x69, 0x6e, 0x67, 0x00, 0x13, 0x00, 0x00, 0x76, 0x2f, 0x31, 0x01, 0x02, 0x00, 0x00, 0x00, 0x63, 0x61, 0x70, 0x44,
+        0x61, 0x74, 0x65, 0x00, 0x73, 0x74, 0x72, 0x69, 0x00, 0x6e, 0x67, 0x00, 0x13, 0x00, 0x00, 0x00, 0x32, 0x30, 0x32,
+        0x36, 0x3a, 0x31, 0x32, 0x3a, 0x30, 0x32, 0x41, 0x30, 0x32, 0x30, 0x32, 0x36, 0x3a, 0x31, 0x34, 0x32};
+    try {
+        loadImageFromMemory(hostile, sizeof hostile, "upload");
+        FAIL() << "expected InvalidArgument";
+    } catch (const InvalidArgument& e) {
+        EXPECT_NE(std::string(e.what()).find("'capDate' claiming 1979711507 bytes where 47 remain"), std::string::npos) << e.what();
+    }
+}
+
+TEST(ImageIo, ExrHeaderWalkAcceptsRealFilesAndChecksTheDataWindow) {
+    auto dir = test::scratchDir();
+    SaveOptions half;
+    half.halfFloat = true;
+    saveImage((dir / "a.exr").string(), gradient(8, 6), half);
+    std::string bytes = test::readBytes(dir / "a.exr");
+    EXPECT_EQ(loadImageFromMemory(bytes.data(), bytes.size(), "upload", 8).image.width, 8);
+    EXPECT_THROW(loadImageFromMemory(bytes.data(), bytes.size(), "upload", 7), LimitExceeded);
+    for (size_t cut : {size_t(4), size_t(20), size_t(60), bytes.size() / 3}) {
+        EXPECT_THROW(loadImageFromMemory(bytes.data(), cut, "upload", 8), Error) << "cut at " << cut;
+    }
+}
