@@ -116,6 +116,9 @@ openvdb::GridPtrVecPtr readAllGrids(const std::string& path) {
         throw IoError("loadVdb(): '" + path + "' is truncated (it ends before its grids do)");
     } catch (const openvdb::Exception& e) {
         throw IoError("loadVdb(): '" + path + "' is not a readable OpenVDB file (corrupt or truncated): " + e.what());
+    } catch (const std::bad_alloc&) {
+        // Damaged block sizes make OpenVDB ask for more memory than exists (found by fuzzing).
+        throw IoError("loadVdb(): '" + path + "' is damaged: reading it asks for more memory than its grids can need");
     } catch (const std::exception& e) {
         throw IoError("loadVdb(): '" + path + "' could not be read: " + e.what());
     }

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "api_fixture.h"
+#include "tests/unit/test_files.h"
 
 using namespace volstyle;
 using json = nlohmann::json;
@@ -196,4 +197,22 @@ TEST_F(Hostile, OpenEventStreamsCannotStarveTheServer) {
     for (int i = 0; i < 500 && ended < 8; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
     EXPECT_EQ(ended.load(), 8);
     EXPECT_EQ(readEvents(client(), events).back(), "cancelled") << "the slots were released";
+}
+
+// Inputs found by scripts/fuzz.sh that break the libraries below us. The VDB corrupts OpenVDB
+// 10.0's heap (in-process it aborted the server); the child reader contains it. The EXR's header
+// claims 1.97 GB for one attribute; the header walk refuses it before OpenEXR allocates.
+TEST_F(Hostile, FilesThatBreakTheirLibrariesAreRefusedAndTheServerStaysUp) {
+    const std::string base = "/api/v1/sessions/" + createSession();
+    const std::string vdb = test::readBytes(std::string(VOLSTYLE_SOURCE_DIR) + "/tests/data/hostile/openvdb-heap-overflow.vdb");
+    json e = expectError(client().Put((base + "/volume").c_str(), vdb, "application/octet-stream"), 422, "unsupported_media");
+    EXPECT_NE(e["error"]["message"].get<std::string>().find("crashed the VDB reader"), std::string::npos) << e.dump();
+    EXPECT_EQ(client().Get(base.c_str())->status, 200);
+
+    addConstantTargetView(client(), base, 8, 0.5f);
+    const std::string exr = test::readBytes(std::string(VOLSTYLE_SOURCE_DIR) + "/tests/fuzz/corpus/image/exr-attribute-claims-2gb.exr");
+    const auto t0 = std::chrono::steady_clock::now();
+    e = expectError(client().Put((base + "/views/v1/target").c_str(), exr, "application/octet-stream"), 422, "unsupported_media");
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
+    EXPECT_NE(e["error"]["message"].get<std::string>().find("claiming 1979711507 bytes"), std::string::npos) << e.dump();
 }
