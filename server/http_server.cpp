@@ -41,6 +41,7 @@ ServiceLimits serviceLimits(const ServerOptions& o) {
     l.volumeLimits = o.volumeLimits;
     l.renderBudgetSeconds = o.renderBudgetSeconds;
     l.vdbReader.executable = o.vdbReader;
+    l.finishedJobsKept = o.finishedJobsKept;
     return l;
 }
 

@@ -27,10 +27,11 @@ struct ServerOptions {
     int maxEventStreams = 16;        ///< open event streams in all (below httpThreads)
     int maxEventStreamsPerClient = 8;
     ConnectionLimits connections;    ///< read deadlines and connections per client (guarded_http_server.h)
-    double renderBudgetSeconds = 60;
+    double renderBudgetSeconds = 60;  ///< a render's limit on the GL thread (422 over_budget); <= 0: none
     /// The volstyle binary that reads uploaded VDBs in a child process (`serve` sets itself);
     /// empty: read them in this process (a crash inside OpenVDB then ends the server).
-    std::string vdbReader;  ///< a render's limit on the GL thread (422 over_budget); <= 0: none
+    std::string vdbReader;
+    size_t finishedJobsKept = 256;  ///< older finished jobs are forgotten (GET /jobs/{id}: 404)
 };
 
 class HttpServer {

@@ -1,5 +1,7 @@
 #include "server/job_store.h"
 
+#include <algorithm>
+
 #include "protocol/error_body.h"
 #include "server/session_store.h"
 
@@ -40,13 +42,29 @@ std::shared_ptr<Job> JobStore::add(const std::string& session) {
     job->id = SessionStore::newId();
     job->session = session;
     std::lock_guard lock(m_mutex);
+    job->sequence = ++m_sequence;
     m_jobs[job->id] = job;
     return job;
 }
 
 void JobStore::restore(std::shared_ptr<Job> job) {
     std::lock_guard lock(m_mutex);
+    job->sequence = ++m_sequence;
     m_jobs[job->id] = std::move(job);
+}
+
+std::vector<std::shared_ptr<Job>> JobStore::prune(size_t keep) {
+    std::lock_guard lock(m_mutex);
+    std::vector<std::shared_ptr<Job>> finished;
+    for (const auto& [id, j] : m_jobs) {
+        std::lock_guard jl(j->mutex);
+        if (j->isFinished()) finished.push_back(j);
+    }
+    if (finished.size() <= keep) return {};
+    std::sort(finished.begin(), finished.end(), [](const auto& a, const auto& b) { return a->sequence < b->sequence; });
+    finished.resize(finished.size() - keep);
+    for (const auto& j : finished) m_jobs.erase(j->id);
+    return finished;
 }
 
 std::shared_ptr<Job> JobStore::find(const std::string& id) const {

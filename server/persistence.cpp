@@ -180,6 +180,11 @@ void Persistence::removeSession(const std::string& session) {
     fs::remove_all(sessionDir(session), ec);
 }
 
+void Persistence::removeJob(const std::string& job) {
+    std::error_code ec;
+    fs::remove(m_dir / "jobs" / (job + ".json"), ec);
+}
+
 void Persistence::saveJob(const Job& job) { atomicWrite(m_dir / "jobs" / (job.id + ".json"), protocol::toText(job.toJson(), 2)); }
 
 std::vector<std::shared_ptr<Session>> Persistence::loadSessions() {
@@ -275,6 +280,11 @@ void Persistence::restoreVersions(Session& s, const json& j) {
 std::vector<std::shared_ptr<Job>> Persistence::loadJobs() {
     std::vector<std::shared_ptr<Job>> out;
     std::vector<fs::directory_entry> entries(fs::directory_iterator(m_dir / "jobs"), fs::directory_iterator{});
+    // Oldest first: the store's creation order, which pruning follows.
+    std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) {
+        std::error_code ea, eb;
+        return a.last_write_time(ea) < b.last_write_time(eb);
+    });
     for (const auto& entry : entries) {
         if (entry.path().extension() != ".json") continue;
         try {

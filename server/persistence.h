@@ -45,6 +45,7 @@ public:
     void removeView(const std::string& session, const std::string& view);
     void removeSession(const std::string& session);
     void saveJob(const Job& job);
+    void removeJob(const std::string& job);
 
     /// The bytes of a stored version's file, unchanged (IoError if missing or not the size it
     /// was written with).

@@ -45,6 +45,7 @@ SessionService::SessionService(ServiceLimits limits, const std::string& dataDir)
         m_persist = std::make_unique<Persistence>(dataDir);
         for (auto& s : m_persist->loadSessions()) m_sessions.restore(s);
         for (auto& j : m_persist->loadJobs()) m_jobs.restore(j);
+        pruneJobs();
         spdlog::info("restored {} session(s) from '{}'", m_sessions.size(), dataDir);
     }
 }
@@ -73,7 +74,28 @@ void SessionService::saved(Session& s) {
 }
 
 void SessionService::saved(const Job& j) {
-    if (m_persist) m_persist->saveJob(j);
+    std::lock_guard lock(m_jobRecords);
+    if (m_persist && !j.forgotten) m_persist->saveJob(j);
+}
+
+void SessionService::pruneJobs() {
+    for (const auto& j : m_jobs.prune(m_limits.finishedJobsKept)) {
+        {
+            std::lock_guard lock(m_jobRecords);
+            j->forgotten = true;
+            if (m_persist) m_persist->removeJob(j->id);
+        }
+        if (auto s = m_sessions.find(j->session)) {
+            std::lock_guard lock(s->mutex);
+            std::erase(s->jobs, j->id);
+        }
+        std::shared_ptr<core::GpuVolume> preview;
+        {
+            std::lock_guard lock(j->mutex);
+            preview = std::move(j->preview);
+        }
+        release(std::move(preview));
+    }
 }
 
 std::shared_ptr<Session> SessionService::create(const protocol::CreateSessionRequest& request) {
@@ -403,6 +425,7 @@ std::shared_ptr<Job> SessionService::startSolve(const std::shared_ptr<Session>& 
         }
         if (!problems.empty()) throw protocol::ValidationError(problems);
     }
+    pruneJobs();
     auto job = m_jobs.add(s.id);
     saved(*job);
     {

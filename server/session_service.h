@@ -34,6 +34,9 @@ struct ServiceLimits {
     /// Seconds a render or preview may hold the GL thread (over: 422 over_budget); <= 0: unbounded.
     double renderBudgetSeconds = 60;
     VdbReaderOptions vdbReader;  ///< uploads are read in a child process first (vdb_reader.h)
+    /// Finished jobs kept (memory and disk; GET /jobs/{id} of an older one: 404). Unfinished
+    /// jobs are always kept.
+    size_t finishedJobsKept = 256;
 };
 
 enum class ViewImage { Target, Weights };
@@ -109,6 +112,9 @@ private:
     /// Throws not_found if `s` was deleted; else writes it (call with its lock held).
     void saved(Session& s);
     void saved(const Job& j);
+    /// Forgets the oldest finished jobs beyond ServiceLimits::finishedJobsKept: memory, record
+    /// on disk, the id in its session's list, and its preview copy (freed on the GL thread).
+    void pruneJobs();
 
     // The solve job on the GL thread (solve_job.cpp).
     void runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,
@@ -129,6 +135,7 @@ private:
     std::unique_ptr<core::Renderer> m_renderer;  ///< GL thread only
     SessionStore m_sessions;
     JobStore m_jobs;
+    std::mutex m_jobRecords;  ///< orders writing a job's record against forgetting it
     std::unique_ptr<Persistence> m_persist;  ///< null: in memory only
     GlWorker m_gl;
 };

@@ -21,14 +21,15 @@ using json = nlohmann::json;
 
 class Api : public ::testing::Test {
 protected:
-    void start(server::ServerOptions opt = {}) {
+    /// Starts a server in memory, or on `dataDir` (the durability tests use the real binary).
+    void start(server::ServerOptions opt = {}, const std::string& dataDir = "") {
         opt.host = "127.0.0.1";
         opt.port = 0;
         opt.webDir = VOLSTYLE_SOURCE_DIR "/web";
         opt.maxJsonBytes = 4096;
         opt.maxUploadBytes = 64 * 1024;
         opt.maxImageSide = 64;
-        opt.dataDir.clear();  // in memory; the durability test uses the real binary
+        opt.dataDir = dataDir;
         opt.vdbReader = VOLSTYLE_BINARY;  // uploads are read in a child, as `serve` does
         try {
             m_server = std::make_unique<server::HttpServer>(opt);

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "api_fixture.h"
+#include "tests/unit/test_files.h"
 
 using namespace volstyle;
 using json = nlohmann::json;
@@ -168,4 +169,32 @@ TEST_F(Starvation, ARenderStopsAtItsBudgetAndCachesNothing) {
         ASSERT_TRUE(h && h->status == 200);
         EXPECT_LT(msSince(h0), 100.0);
     }
+}
+
+TEST_F(Starvation, OnlyTheNewestFinishedJobsAreKept) {
+    // Every job a server ran used to stay in memory and on disk (the soak grew 16% in 10 min).
+    TearDown();
+    const auto dir = test::scratchDir();
+    server::ServerOptions opt;
+    opt.finishedJobsKept = 2;
+    start(opt, dir.string());
+    const std::string id = createSession();
+    const std::string base = "/api/v1/sessions/" + id;
+    test::addConstantTargetView(client(), base, 8, 0.5f);
+    std::vector<std::string> jobs;
+    for (int i = 0; i < 4; ++i) {
+        auto r = client().Post((base + "/solve").c_str(), R"({"max_iterations": 2})", "application/json");
+        ASSERT_EQ(r->status, 202) << r->body;
+        jobs.push_back(json::parse(r->body)["job"]);
+        ASSERT_EQ(test::readEvents(client(), "/api/v1/jobs/" + jobs.back() + "/events").back(), "done");
+    }
+    // Starting the 4th pruned the finished ones to 2 (jobs 2 and 3); the 4th finished since.
+    expectError(client().Get(("/api/v1/jobs/" + jobs[0]).c_str()), 404, "not_found");
+    EXPECT_FALSE(std::filesystem::exists(dir / "jobs" / (jobs[0] + ".json")));
+    for (int i = 1; i < 4; ++i) {
+        EXPECT_EQ(client().Get(("/api/v1/jobs/" + jobs[size_t(i)]).c_str())->status, 200) << i;
+        EXPECT_TRUE(std::filesystem::exists(dir / "jobs" / (jobs[size_t(i)] + ".json"))) << i;
+    }
+    const json listed = json::parse(client().Get(base.c_str())->body)["jobs"];
+    EXPECT_EQ(listed, json(std::vector<std::string>(jobs.begin() + 1, jobs.end())));
 }
