@@ -1,6 +1,7 @@
 // `volstyle serve`: the HTTP/JSON server (SPEC §3–4). SIGINT/SIGTERM stop it cleanly: a thread
 // waits for the signals (blocked everywhere else) and stops the listener.
 
+#include <malloc.h>
 #include <pthread.h>
 #include <signal.h>
 #include <spdlog/spdlog.h>
@@ -13,7 +14,6 @@
 #include "core/base/errors.h"
 #include "server/cli.h"
 #include "server/http_server.h"
-#include "server/vdb_reader.h"
 
 namespace volstyle::server {
 
@@ -34,7 +34,10 @@ int runServe(const std::vector<std::string>& argv) {
     opt.token = args.get("token", envToken ? envToken : "");
     opt.webDir = args.get("web-dir", opt.webDir);
     opt.dataDir = args.get("data-dir", opt.dataDir);
-    opt.vdbReader = thisExecutable();
+    // This process's own image, even if the file on disk is replaced while it runs (a rebuild or
+    // an upgrade: the soak saw uploads fail while the binary was relinked). posix_spawn execs in
+    // the child, whose /proc/self/exe is still this binary.
+    opt.vdbReader = "/proc/self/exe";
     opt.renderBudgetSeconds = args.number("render-budget", opt.renderBudgetSeconds);
     if (!(opt.renderBudgetSeconds >= 0) || !std::isfinite(opt.renderBudgetSeconds))
         throw InvalidArgument("--render-budget must be a number of seconds >= 0 (0: no limit)");
@@ -46,6 +49,10 @@ int runServe(const std::vector<std::string>& argv) {
     sigaddset(&stopSignals, SIGTERM);
     pthread_sigmask(SIG_BLOCK, &stopSignals, nullptr);
 
+    // Volumes and images above 256 KiB are mapped and unmapped on their own, not carved out of
+    // (and kept in) the malloc arenas: glibc's threshold otherwise rises to the largest block
+    // freed, and a long-running server holds on to every size it has seen.
+    ::mallopt(M_MMAP_THRESHOLD, 256 * 1024);
     spdlog::set_level(std::getenv("VOLSTYLE_LOG_LEVEL") ? spdlog::get_level() : spdlog::level::info);
     HttpServer server(opt);
     const int bound = server.bind();

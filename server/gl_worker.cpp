@@ -1,6 +1,13 @@
 #include "server/gl_worker.h"
 
+#include <malloc.h>
+
+#include <chrono>
+
 namespace volstyle::server {
+namespace {
+constexpr auto kTrimInterval = std::chrono::seconds(5);
+}  // namespace
 
 GlWorker::GlWorker() {
     std::promise<void> started;
@@ -54,10 +61,20 @@ void GlWorker::loop(std::promise<void>& started) {
         started.set_exception(std::current_exception());
         return;
     }
+    auto lastTrim = std::chrono::steady_clock::now();
     for (;;) {
         std::function<void(core::GpuDevice&)> task;
         {
             std::unique_lock lock(m_mutex);
+            if (m_short.empty() && m_long.empty() && std::chrono::steady_clock::now() - lastTrim > kTrimInterval) {
+                // Going idle: hand the memory freed by renders and solves back to the system.
+                // Without it glibc kept it in the arenas (the soak's RSS grew 16% in 10 min;
+                // malloc_trim returned 62 MiB of it).
+                lock.unlock();
+                ::malloc_trim(0);
+                lastTrim = std::chrono::steady_clock::now();
+                lock.lock();
+            }
             m_wake.wait(lock, [&] { return m_stopping || !m_short.empty() || !m_long.empty(); });
             auto& queue = !m_short.empty() ? m_short : m_long;  // short tasks first
             if (queue.empty()) break;                            // stopping and drained

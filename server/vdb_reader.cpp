@@ -76,12 +76,6 @@ std::string trimmed(std::string s) {
 
 }  // namespace
 
-std::string thisExecutable() {
-    char buf[4096];
-    const ssize_t n = ::readlink("/proc/self/exe", buf, sizeof buf - 1);
-    return n > 0 ? std::string(buf, size_t(n)) : std::string();
-}
-
 core::Volume loadUntrustedVdb(const std::string& path, const core::VolumeLimits& limits, const VdbReaderOptions& reader) {
     if (!reader.executable.empty()) {
         std::string errors;

@@ -28,7 +28,4 @@ core::Volume loadUntrustedVdb(const std::string& path, const core::VolumeLimits&
 /// (loads), 3 (over the limits), 4 (invalid), 5 (unreadable); the reason on stderr.
 int runReadVdb(const std::vector<std::string>& args);
 
-/// This process's executable (/proc/self/exe), for VdbReaderOptions::executable.
-std::string thisExecutable();
-
 }  // namespace volstyle::server
