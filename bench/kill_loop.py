@@ -45,9 +45,16 @@ class Acked:
 
 
 def worker(port, acked, stop, rnd):
+    # Carry on with sessions of earlier rounds (the server keeps at most 64), then add new ones.
+    with acked.lock:
+        earlier = rnd.sample(sorted(acked.sessions), min(2, len(acked.sessions)))
     mine = []
+    for sid in earlier:
+        st, p = request(port, "GET", "/sessions/" + sid)
+        if st == 200:
+            mine.append([sid, len(json.loads(p)["views"])])
     while not stop.is_set():
-        if not mine or rnd.random() < 0.1:
+        if not mine or (len(acked.sessions) < 48 and rnd.random() < 0.1):
             st, p = request(port, "POST", "/sessions", {"scene": "builtin:sphere", "resolution": rnd.choice([16, 24])})
             if st == 201:
                 sid = json.loads(p)["id"]
