@@ -111,8 +111,14 @@ TEST_F(Starvation, OneClientCannotHoldEveryConnection) {
     start(opt);
     m_client.reset();  // the fixture's keep-alive connection would count as one of the four
     std::vector<int> held;
-    for (int i = 0; i < 4; ++i) held.push_back(connectRaw());
-    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // admitted by the pool
+    // Each held connection completes one request, so it is certainly admitted and counted (a
+    // fixed sleep was not enough on a loaded machine); keep-alive then holds it open.
+    const std::string health = "GET /api/v1/health HTTP/1.1\r\nHost: x\r\n\r\n";
+    for (int i = 0; i < 4; ++i) {
+        held.push_back(connectRaw());
+        ASSERT_EQ(::send(held.back(), health.data(), health.size(), MSG_NOSIGNAL), ssize_t(health.size()));
+        ASSERT_EQ(readResponse(held.back()).rfind("HTTP/1.1 200", 0), 0u);
+    }
     int fifth = connectRaw();
     ASSERT_GE(fifth, 0);
     const std::string answer = readResponse(fifth);
