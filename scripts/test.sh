@@ -22,7 +22,7 @@ if [ -n "$sanitize" ]; then
   # Mesa's llvmpipe is not instrumented: leaks and races inside the driver are not ours to report.
   export ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:${ASAN_OPTIONS:-}"
   export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:suppressions=$PWD/tests/sanitizers/ubsan.supp:${UBSAN_OPTIONS:-}"
-  export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tests/sanitizers/tsan.supp:${TSAN_OPTIONS:-}"
+  export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:history_size=7:suppressions=$PWD/tests/sanitizers/tsan.supp:${TSAN_OPTIONS:-}"
   bash scripts/build.sh "-DVOLSTYLE_SANITIZE=$sanitize"
 else
   bash scripts/build.sh
