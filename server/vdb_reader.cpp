@@ -93,7 +93,13 @@ core::Volume loadUntrustedVdb(const std::string& path, const core::VolumeLimits&
         const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
         if (code == kOverLimits) throw LimitExceeded(why);
         if (code == kInvalid) throw InvalidArgument(why);
-        if (code != kLoads) throw IoError(why.empty() ? "the VDB reader failed on " + path : why);
+        if (code == kUnreadable) throw IoError(why.empty() ? "the VDB reader failed on " + path : why);
+        if (code != kLoads) {
+            // Any other status is an abnormal end (a sanitizer build reports OpenVDB's own memory
+            // errors and exits 66, for one): a crash of the reader, without its stderr in the answer.
+            throw IoError("reading " + path + " crashed the VDB reader (exit status " + std::to_string(code) +
+                          ", inside OpenVDB): the file is damaged or malicious");
+        }
     }
     return core::loadVdb(path, limits);  // the reader succeeded on these bytes: so does this
 }
