@@ -279,12 +279,15 @@ void Persistence::restoreVersions(Session& s, const json& j) {
 
 std::vector<std::shared_ptr<Job>> Persistence::loadJobs() {
     std::vector<std::shared_ptr<Job>> out;
-    std::vector<fs::directory_entry> entries(fs::directory_iterator(m_dir / "jobs"), fs::directory_iterator{});
-    // Oldest first: the store's creation order, which pruning follows.
-    std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) {
-        std::error_code ea, eb;
-        return a.last_write_time(ea) < b.last_write_time(eb);
-    });
+    // Oldest first: the store's creation order, which pruning follows (each file stat'ed once).
+    std::vector<std::pair<fs::file_time_type, fs::directory_entry>> byTime;
+    for (const auto& entry : fs::directory_iterator(m_dir / "jobs")) {
+        std::error_code ec;
+        byTime.emplace_back(entry.last_write_time(ec), entry);
+    }
+    std::sort(byTime.begin(), byTime.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<fs::directory_entry> entries;
+    for (auto& [time, entry] : byTime) entries.push_back(std::move(entry));
     for (const auto& entry : entries) {
         if (entry.path().extension() != ".json") continue;
         try {
