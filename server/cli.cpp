@@ -1,10 +1,12 @@
 #include "server/cli.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cmath>
 
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 #include "core/base/errors.h"
@@ -74,9 +76,69 @@ Arguments parseArguments(const std::vector<std::string>& args, const std::vector
     return out;
 }
 
+void requireParentFolder(const std::string& outputPath) {
+    const std::filesystem::path folder = std::filesystem::path(outputPath).parent_path();
+    std::error_code ec;
+    if (!folder.empty() && !std::filesystem::is_directory(folder, ec))
+        throw IoError("no such folder '" + folder.string() + "' for '" + outputPath + "' (create it first)");
+}
+
+std::string usageText(const CommandSpec& spec) {
+    std::ostringstream s;
+    s << "usage: volstyle " << spec.name << " " << spec.synopsis << "\n\n" << spec.summary << "\n";
+    if (!spec.options.empty()) {
+        s << "\noptions:\n";
+        size_t width = 0;
+        auto head = [](const OptionSpec& o) {
+            std::string h = (o.name == "output" ? "-o, --output" : "--" + o.name);
+            return o.value.empty() ? h : h + " " + o.value;
+        };
+        for (const auto& o : spec.options) width = std::max(width, head(o).size());
+        for (const auto& o : spec.options) {
+            const std::string h = head(o);
+            s << "  " << h << std::string(width - h.size() + 2, ' ') << o.help << "\n";
+        }
+        s << "  --help" << std::string(width > 4 ? width - 4 : 2, ' ') << "this text\n";
+    }
+    if (!spec.examples.empty()) s << "\nexamples:\n" << spec.examples;
+    return s.str();
+}
+
+bool printHelpIfAsked(const Arguments& args, const CommandSpec& spec) {
+    if (!args.has("help")) return false;
+    std::cout << usageText(spec);
+    return true;
+}
+
+Arguments parseArguments(const std::vector<std::string>& args, const CommandSpec& spec) {
+    std::vector<std::string> known, flags{"help"};
+    for (const auto& o : spec.options) (o.value.empty() ? flags : known).push_back(o.name);
+    return parseArguments(args, known, flags);
+}
+
+std::string defaultWebDir() {
+    namespace fs = std::filesystem;
+    std::vector<fs::path> candidates;
+    if (const char* env = std::getenv("VOLSTYLE_WEB_DIR")) candidates.emplace_back(env);
+    std::error_code ec;
+    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+    if (!ec) candidates.push_back(exe.parent_path().parent_path() / "share" / "volstyle" / "web");
+    candidates.emplace_back(fs::path(VOLSTYLE_INSTALL_DATADIR) / "web");
+    candidates.emplace_back(VOLSTYLE_SOURCE_WEB_DIR);
+    for (const auto& dir : candidates)
+        if (fs::is_regular_file(dir / "index.html", ec)) return fs::absolute(dir, ec).lexically_normal().string();
+    return "";
+}
+
+const char* versionString() { return VOLSTYLE_VERSION; }
+
 nlohmann::json readJsonFile(const std::string& path) {
     std::ifstream f(path);
-    if (!f) throw IoError("cannot read '" + path + "'");
+    if (!f) {
+        std::error_code ec;
+        if (!std::filesystem::exists(path, ec)) throw IoError("no such file '" + path + "'");
+        throw IoError("cannot read '" + path + "' (permission denied?)");
+    }
     std::stringstream s;
     s << f.rdbuf();
     try {

@@ -25,6 +25,47 @@ struct Arguments {
     double number(const std::string& name, double fallback) const;
 };
 
+/// One option of a subcommand, for parsing and for its --help.
+struct OptionSpec {
+    std::string name;   ///< without the dashes; "output" is also -o
+    std::string value;  ///< its placeholder ("FILE.vdb"); empty: a flag that takes no value
+    std::string help;   ///< what it does, ending with its default or "(required)"
+};
+
+/// A subcommand: what `volstyle help NAME` and `volstyle NAME --help` print, and what it accepts.
+struct CommandSpec {
+    std::string name;
+    std::string brief;     ///< a line for `volstyle help`
+    std::string synopsis;  ///< the usage line after "volstyle NAME"
+    std::string summary;   ///< one paragraph: what it does
+    std::vector<OptionSpec> options;
+    std::string examples;  ///< lines of shell, each run by the docs test
+};
+
+/// The --help text: usage, summary, every option with its description and default, examples.
+std::string usageText(const CommandSpec& spec);
+
+/// Prints usageText(spec) to stdout if --help was given (the command then exits 0).
+bool printHelpIfAsked(const Arguments& args, const CommandSpec& spec);
+
+/// Parses argv against `spec` (--help is always accepted).
+Arguments parseArguments(const std::vector<std::string>& args, const CommandSpec& spec);
+
+/// The page's folder when `serve` has no --web-dir: $VOLSTYLE_WEB_DIR, the installed
+/// share/volstyle/web next to the binary (../share) or at the install prefix, then this build's
+/// source tree — the first holding index.html, whatever the working directory. Empty if none.
+std::string defaultWebDir();
+
+/// The subcommands' specs (help texts and options), for `volstyle help`.
+const CommandSpec& renderCommand();
+const CommandSpec& solveCommand();
+const CommandSpec& serveCommand();
+const CommandSpec& infoCommand();
+const CommandSpec& convertCommand();
+
+/// The version of this build (the project's version in CMakeLists.txt).
+const char* versionString();
+
 /// A finite number, or InvalidArgument naming `--flag`.
 double parseNumber(const std::string& flag, const std::string& text);
 
@@ -32,6 +73,10 @@ double parseNumber(const std::string& flag, const std::string& text);
 /// throw InvalidArgument naming them and listing `known`.
 Arguments parseArguments(const std::vector<std::string>& args, const std::vector<std::string>& known,
                          const std::vector<std::string>& flags);
+
+/// An output path whose folder exists (IoError naming the folder otherwise: a typo in -o should not
+/// make folders silently).
+void requireParentFolder(const std::string& outputPath);
 
 /// Reads and parses a JSON file; InvalidArgument names the file.
 nlohmann::json readJsonFile(const std::string& path);
@@ -53,5 +98,6 @@ int runRender(const std::vector<std::string>& args);
 int runSolve(const std::vector<std::string>& args);
 int runServe(const std::vector<std::string>& args);
 int runInfo(const std::vector<std::string>& args);
+int runConvert(const std::vector<std::string>& args);
 
 }  // namespace volstyle::server

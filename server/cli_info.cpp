@@ -11,16 +11,24 @@
 
 namespace volstyle::server {
 
+namespace {
+const CommandSpec kInfo{"info", "describe a VDB file and whether volstyle loads it", "FILE.vdb",
+                        "Lists a VDB's grids (name, type, class, active voxels and index box, voxel size, transform,\n"
+                        "value range, metadata) and the file's metadata, and says whether volstyle can load it.",
+                        {},
+                        "  volstyle info smoke.vdb\n"};
+}  // namespace
+
+const CommandSpec& infoCommand() { return kInfo; }
+
 int runInfo(const std::vector<std::string>& argv) {
-    Arguments args = parseArguments(argv, {}, {"help"});
-    if (args.has("help") || args.positional.size() != 1) {
-        if (!args.has("help")) throw InvalidArgument("usage: volstyle info FILE.vdb");
-        std::cout << "usage: volstyle info FILE.vdb\n";
-        return 0;
-    }
+    Arguments args = parseArguments(argv, kInfo);
+    if (printHelpIfAsked(args, kInfo)) return 0;
+    if (args.positional.size() != 1) throw InvalidArgument("expected one FILE.vdb (volstyle info --help)");
     const std::string path = args.positional[0];
     auto grids = core::inspectVdb(path);
     std::cout << path << ": " << grids.size() << " grid(s)\n";
+    for (const auto& [key, value] : core::vdbFileMetadata(path)) std::cout << "  file metadata " << key << " = " << value << "\n";
     for (const auto& g : grids) {
         Int3 dims{g.activeMax.x - g.activeMin.x + 1, g.activeMax.y - g.activeMin.y + 1, g.activeMax.z - g.activeMin.z + 1};
         if (g.activeVoxels == 0) dims = {0, 0, 0};
@@ -42,6 +50,9 @@ int runInfo(const std::vector<std::string>& argv) {
         else
             std::cout << fmt::format("    values [{:g} {:g} {:g}] .. [{:g} {:g} {:g}]\n", g.minValue.x, g.minValue.y,
                                      g.minValue.z, g.maxValue.x, g.maxValue.y, g.maxValue.z);
+        for (const auto& [key, value] : g.metadata)
+            if (key.rfind("file_", 0) != 0 && key != "name" && key != "class")  // OpenVDB's own statistics
+                std::cout << "    metadata " << key << " = " << value << "\n";
     }
     try {
         core::Volume v = core::loadVdb(path);
@@ -50,6 +61,7 @@ int runInfo(const std::vector<std::string>& argv) {
                                  v.hasEmission() ? ", emission" : ", no emission");
     } catch (const InvalidArgument& e) {
         std::cout << "does not load: " << e.what() << "\n";
+        return 1;
     }
     return 0;
 }

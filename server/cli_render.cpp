@@ -6,11 +6,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "core/base/errors.h"
 #include "core/gpu/gpu_device.h"
 #include "core/image/image_io.h"
+#include "core/render/exr_layers.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/renderer.h"
 #include "protocol/render_json.h"
@@ -22,29 +24,43 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const char* kUsage =
-    "usage: volstyle render --scene builtin:NAME[:RES]|FILE.vdb [--camera CAM.json]\n"
-    "                       [--lighting L.json] [--exposure STOPS] [--step VOXELS] [--no-skip]\n"
-    "                       [--hw-filter] [--exact-traversal]\n"
-    "                       -o OUT.png|OUT.exr\n";
+const CommandSpec kRender{
+    "render",
+    "render a volume to PNG or EXR",
+    "--scene builtin:NAME[:RES]|FILE.vdb [options] -o OUT.png|OUT.exr",
+    "Renders one single-scattering image of a volume. PNG is sRGB with --exposure applied; EXR is\n"
+    "linear, premultiplied RGBA without the background, plus layers for the background and the AOVs\n"
+    "(docs/FORMATS.md). Without --camera the camera frames the volume's bounding box.",
+    {
+        {"scene", "SRC", "builtin:NAME[:RES] (cloud, plume, sphere, cube; RES 8-256, default 128) or a .vdb file (required)"},
+        {"camera", "CAM.json", "camera (eye, target, up, fov_y_deg, width, height); default: frames the volume, 480x480"},
+        {"lighting", "L.json", "sun(s), background and phase function; default: one warm sun and a blue sky"},
+        {"exposure", "STOPS", "PNG brightness in stops (EXR stays linear); default 0"},
+        {"step", "VOXELS", "march step in voxels; default 0.5"},
+        {"no-skip", "", "march through empty space too (a check; same image, slower)"},
+        {"hw-filter", "", "sample with the texture unit (faster on GPUs, 8-bit weights)"},
+        {"exact-traversal", "", "one segment per voxel crossed instead of equal steps"},
+        {"output", "OUT", ".png or .exr; the folder must exist (required)"},
+    },
+    "  volstyle render --scene builtin:cloud:64 -o cloud.png\n"
+    "  volstyle render --scene builtin:plume:48 --exposure 1 -o plume.exr\n"};
 
 }  // namespace
 
+const CommandSpec& renderCommand() { return kRender; }
+
 int runRender(const std::vector<std::string>& argv) {
-    Arguments args = parseArguments(argv, {"scene", "camera", "lighting", "exposure", "step", "output"},
-                                    {"no-skip", "hw-filter", "exact-traversal", "help"});
-    if (args.has("help")) {
-        std::cout << kUsage;
-        return 0;
-    }
-    if (!args.has("scene")) throw InvalidArgument("--scene is required\n" + std::string(kUsage));
+    Arguments args = parseArguments(argv, kRender);
+    if (printHelpIfAsked(args, kRender)) return 0;
+    if (!args.has("scene")) throw InvalidArgument("--scene is required (volstyle render --help)");
     if (!args.has("output")) throw InvalidArgument("-o OUT.png|OUT.exr is required");
     const std::string output = args.get("output");
     const std::string ext = fs::path(output).extension().string();
     if (ext != ".png" && ext != ".exr")
         throw InvalidArgument("-o must end in .png or .exr, got '" + output + "'");
+    requireParentFolder(output);  // before the work, not after it
 
-    core::Camera camera = core::defaultCamera();
+    std::optional<core::Camera> camera;
     if (args.has("camera")) camera = fromFile(args.get("camera"), [](const nlohmann::json& j) { return protocol::cameraFromJson(j); });
     core::Lighting lighting = core::defaultLighting();
     if (args.has("lighting")) {
@@ -60,18 +76,23 @@ int runRender(const std::vector<std::string>& argv) {
     const double exposure = args.number("exposure", 0);
 
     core::Volume volume = loadScene(args.get("scene"));
+    if (!camera) camera = core::framingCamera(volume.worldBounds());
     auto device = core::GpuDevice::create();
     core::GpuVolume gpuVolume(volume);
     core::Renderer renderer(*device);
     core::RenderStats stats;
-    core::Image image = renderer.render(gpuVolume, camera, lighting, settings, &stats);
-    spdlog::info("rendered {}x{} in {:.1f} ms on {} (light volumes {:.1f} ms)", camera.width, camera.height,
+    if (ext == ".exr") {
+        // Compositing-ready: premultiplied medium without the background, plus its layers.
+        const core::RenderLayers layers = renderer.renderLayers(gpuVolume, *camera, lighting, settings, &stats);
+        core::saveExrLayers(output, core::exrLayersOf(layers));
+    } else {
+        core::Image image = renderer.render(gpuVolume, *camera, lighting, settings, &stats);
+        core::SaveOptions save;
+        save.exposure = exposure;
+        core::saveImage(output, image, save);
+    }
+    spdlog::info("rendered {}x{} in {:.1f} ms on {} (light volumes {:.1f} ms)", camera->width, camera->height,
                  stats.totalMs, device->capabilities().renderer, stats.lightMs);
-
-    if (fs::path(output).has_parent_path()) fs::create_directories(fs::path(output).parent_path());
-    core::SaveOptions save;
-    save.exposure = ext == ".png" ? exposure : 0;  // EXR stays linear, unscaled
-    core::saveImage(output, image, save);
     return 0;
 }
 

@@ -6,6 +6,8 @@
 #include <signal.h>
 #include <spdlog/spdlog.h>
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -17,23 +19,56 @@
 
 namespace volstyle::server {
 
+namespace {
+
+const CommandSpec kServe{
+    "serve",
+    "the HTTP/JSON server and the painting page",
+    "[options]",
+    "Runs the HTTP/JSON server (docs/API.md) and serves the painting page at its root. Every change\n"
+    "is written to --data-dir before it is answered; a restart restores every session.",
+    {
+        {"host", "ADDR", "address to listen on; default 127.0.0.1 (any other needs --token)"},
+        {"port", "N", "port; default 8080 (0: any free port, printed at start)"},
+        {"token", "T", "require 'Authorization: Bearer T' on /api (also $VOLSTYLE_TOKEN); default none"},
+        {"data-dir", "DIR", "where sessions are kept; default ./volstyle-data"},
+        {"web-dir", "DIR", "the page's folder; default the installed share/volstyle/web, else the source tree's web/"},
+        {"render-budget", "S", "seconds one render may hold the GL thread (422 over_budget past it; 0: no limit); default 60"},
+        {"max-sessions", "N", "sessions at once; default 64"},
+        {"max-upload-mib", "N", "largest VDB or image upload, MiB; default 512"},
+        {"max-image-side", "N", "largest target or render side, pixels; default 4096"},
+        {"max-voxels", "N", "largest volume, voxels; default 16777216 (256^3)"},
+        {"max-json-kib", "N", "largest JSON body, KiB; default 1024"},
+    },
+    "  volstyle serve --port 8080\n"};
+
+/// A whole number in [lo, hi] for `--flag`, or InvalidArgument naming the range.
+double wholeNumber(const Arguments& args, const std::string& flag, double fallback, double lo, double hi) {
+    const double v = args.number(flag, fallback);
+    if (v < lo || v > hi || v != std::floor(v))
+        throw InvalidArgument("--" + flag + " must be a whole number in [" + fmt::format("{:g}", lo) + ", " + fmt::format("{:g}", hi) + "]");
+    return v;
+}
+
+}  // namespace
+
+const CommandSpec& serveCommand() { return kServe; }
+
 int runServe(const std::vector<std::string>& argv) {
-    Arguments args = parseArguments(argv, {"host", "port", "token", "web-dir", "data-dir", "render-budget"}, {"help"});
-    if (args.has("help")) {
-        std::cout << "usage: volstyle serve [--host 127.0.0.1] [--port 8080] [--data-dir volstyle-data] [--token T]\n"
-                     "                      [--web-dir web] [--render-budget 60]\n"
-                     "  --render-budget S  seconds one render may hold the GL thread (422 over_budget past it; 0: no limit)\n";
-        return 0;
-    }
+    Arguments args = parseArguments(argv, kServe);
+    if (printHelpIfAsked(args, kServe)) return 0;
     ServerOptions opt;
     opt.host = args.get("host", opt.host);
-    const double port = args.number("port", opt.port);
-    if (port < 0 || port > 65535 || port != std::floor(port)) throw InvalidArgument("--port must be in [0, 65535]");
-    opt.port = int(port);
+    opt.port = int(wholeNumber(args, "port", opt.port, 0, 65535));
     const char* envToken = std::getenv("VOLSTYLE_TOKEN");
     opt.token = args.get("token", envToken ? envToken : "");
-    opt.webDir = args.get("web-dir", opt.webDir);
+    opt.webDir = args.has("web-dir") ? args.get("web-dir") : defaultWebDir();
     opt.dataDir = args.get("data-dir", opt.dataDir);
+    opt.maxSessions = size_t(wholeNumber(args, "max-sessions", double(opt.maxSessions), 1, 1e6));
+    opt.maxUploadBytes = size_t(wholeNumber(args, "max-upload-mib", double(opt.maxUploadBytes >> 20), 1, 1 << 20)) << 20;
+    opt.maxImageSide = int(wholeNumber(args, "max-image-side", opt.maxImageSide, 16, 65536));
+    opt.volumeLimits.maxVoxels = int64_t(wholeNumber(args, "max-voxels", double(opt.volumeLimits.maxVoxels), 1, 1e10));
+    opt.maxJsonBytes = size_t(wholeNumber(args, "max-json-kib", double(opt.maxJsonBytes >> 10), 1, 1 << 20)) << 10;
     // This process's own image, even if the file on disk is replaced while it runs (a rebuild or
     // an upgrade: the soak saw uploads fail while the binary was relinked). posix_spawn execs in
     // the child, whose /proc/self/exe is still this binary.
@@ -62,7 +97,9 @@ int runServe(const std::vector<std::string>& argv) {
         spdlog::info("signal {}: stopping", sig);
         server.stop();
     });
-    std::cout << "volstyle: serving http://" << opt.host << ":" << bound << "/" << std::endl;
+    std::cout << "volstyle: serving http://" << opt.host << ":" << bound << "/ (volstyle " << versionString() << ", page from "
+              << (opt.webDir.empty() ? std::string("nowhere: no web folder found; pass --web-dir") : opt.webDir) << ", data in "
+              << (opt.dataDir.empty() ? std::string("memory") : opt.dataDir) << ")" << std::endl;
     server.listen();
     // listen() also returns if the listener fails; wake the waiter in that case.
     pthread_kill(waiter.native_handle(), SIGTERM);

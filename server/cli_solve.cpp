@@ -24,14 +24,32 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const char* kUsage =
-    "usage: volstyle solve --scene builtin:NAME[:RES]|IN.vdb --views VIEWS.json -o OUT.vdb\n"
-    "                      [--unknowns emission|albedo|emission,albedo|extinction] [--iterations N]\n"
-    "                      [--regularization laplacian=0.002,l2=0,toward_one=0,albedo.toward_one=0.01]\n"
-    "                      [--basis trilinear|box]\n"
-    "                      [--step VOXELS] [--traversal march|exact] [--tolerance T] [--hull extinction|none]\n"
-    "                      [--resolution X,Y,Z]\n"
-    "                      [--medium-radiance R,G,B] [--options OPTS.json] [--quiet]\n";
+const CommandSpec kSolve{
+    "solve",
+    "restyle a volume from painted views",
+    "--scene builtin:NAME[:RES]|IN.vdb --views VIEWS.json [options] -o OUT.vdb",
+    "Restyles a volume from painted views: finds the emission, albedo or extinction whose\n"
+    "single-scattering renders match the targets (bounded least squares, SPEC section 2), reports\n"
+    "per view how much of the difference the chosen unknowns cannot reach, and writes the result\n"
+    "into the input's grids (docs/FORMATS.md: names, classes and metadata are kept).",
+    {
+        {"scene", "SRC", "builtin:NAME[:RES] or a .vdb file (required)"},
+        {"views", "VIEWS.json", "{\"views\": [{\"camera\", \"target\": IMAGE, \"weights\"?}], \"lighting\"?} (required)"},
+        {"unknowns", "LIST", "emission, albedo, emission,albedo or extinction; default emission"},
+        {"iterations", "N", "most CGLS iterations; default 30"},
+        {"tolerance", "T", "stop when an iteration lowers the objective by less than T, relatively; default 1e-4"},
+        {"regularization", "TERMS", "laplacian=W,l2=W,toward_one=W (per unknown: albedo.toward_one=W); default laplacian=0.002"},
+        {"basis", "B", "trilinear or box; default trilinear"},
+        {"step", "VOXELS", "march step in voxels; default 0.5"},
+        {"traversal", "T", "march (equal steps) or exact (voxel cells); default march"},
+        {"hull", "H", "extinction (solve only where the medium is) or none; default extinction"},
+        {"resolution", "X,Y,Z", "the unknown grid's size; default the volume's"},
+        {"medium-radiance", "R,G,B", "L_m, the medium's own radiance: extinction solves need it (try the background's); default none"},
+        {"options", "OPTS.json", "solver options as JSON (the API's solve body); flags override it; default none"},
+        {"quiet", "", "no progress bar"},
+        {"output", "OUT.vdb", "the result; the folder must exist (required)"},
+    },
+    "  volstyle solve --scene builtin:cloud:32 --views views.json --unknowns emission,albedo -o out.vdb\n"};
 
 std::vector<std::string> split(const std::string& s, char sep) {
     std::vector<std::string> out;
@@ -194,19 +212,18 @@ double meanOf(const std::vector<double>& v) {
 
 }  // namespace
 
+const CommandSpec& solveCommand() { return kSolve; }
+
 int runSolve(const std::vector<std::string>& argv) {
-    Arguments args = parseArguments(argv,
-                                    {"scene", "views", "output", "unknowns", "iterations", "regularization", "basis",
-                                     "step", "traversal", "tolerance", "hull", "resolution", "medium-radiance", "options"},
-                                    {"quiet", "help"});
-    if (args.has("help")) {
-        std::cout << kUsage;
-        return 0;
-    }
+    Arguments args = parseArguments(argv, kSolve);
+    if (printHelpIfAsked(args, kSolve)) return 0;
     for (const char* required : {"scene", "views", "output"})
-        if (!args.has(required)) throw InvalidArgument(std::string("--") + (std::string(required) == "output" ? "o OUT.vdb" : required) + " is required\n" + kUsage);
+        if (!args.has(required))
+            throw InvalidArgument(std::string(std::string(required) == "output" ? "-o OUT.vdb" : "--" + std::string(required)) +
+                                  " is required (volstyle solve --help)");
     const std::string output = args.get("output");
     if (fs::path(output).extension() != ".vdb") throw InvalidArgument("-o must end in .vdb, got '" + output + "'");
+    requireParentFolder(output);  // before the work, not after it
     const core::SolveOptions opt = solveOptions(args);
 
     core::Lighting lighting = core::defaultLighting();
@@ -219,7 +236,6 @@ int runSolve(const std::vector<std::string>& argv) {
     core::SolveResult result = solver.run([&](const core::SolveProgress& p) { bar.update(p); });
     bar.finish();
 
-    if (fs::path(output).has_parent_path()) fs::create_directories(fs::path(output).parent_path());
     core::saveVdb(output, result.volume);
     const auto& rep = result.report;
     std::fprintf(stderr, "%s: %d iterations (%s), RMS %.4g -> %.4g, %.2f s (forward %.2f, back-projection %.2f, vectors %.2f); wrote %s\n",

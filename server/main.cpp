@@ -14,15 +14,28 @@
 
 namespace {
 
-const char* kUsage =
-    "volstyle — restyle volumes by painting them\n"
-    "usage: volstyle <command> [options]\n"
-    "  serve    the HTTP/JSON server           (volstyle serve --help)\n"
-    "  render   render a scene to PNG/EXR      (volstyle render --help)\n"
-    "  solve    restyle a volume from painted views (volstyle solve --help)\n"
-    "  info     describe an OpenVDB file       (volstyle info FILE.vdb)\n"
-    "Environment: VOLSTYLE_EGL=device|surfaceless, VOLSTYLE_LOG_LEVEL=debug|info|warn,\n"
-    "             VOLSTYLE_SHADER_DIR=core/shaders (load shaders from disk).\n";
+using volstyle::server::CommandSpec;
+
+const std::vector<const CommandSpec*>& commands() {
+    static const std::vector<const CommandSpec*> all{
+        &volstyle::server::serveCommand(), &volstyle::server::renderCommand(), &volstyle::server::solveCommand(),
+        &volstyle::server::infoCommand(), &volstyle::server::convertCommand()};
+    return all;
+}
+
+std::string usage() {
+    std::string s = std::string("volstyle ") + volstyle::server::versionString() +
+                    " — restyle smoke, clouds and fog by painting what they should look like\n"
+                    "usage: volstyle COMMAND [options]    (volstyle help COMMAND for its options)\n\ncommands:\n";
+    for (const CommandSpec* c : commands()) {
+        s += "  " + c->name + std::string(10 - c->name.size(), ' ') + c->brief + "\n";
+    }
+    s += "  help      this text, or a command's: volstyle help render\n"
+         "\nenvironment: VOLSTYLE_EGL=device|surfaceless, VOLSTYLE_LOG_LEVEL=debug|info|warn,\n"
+         "             VOLSTYLE_TOKEN (serve's --token), VOLSTYLE_WEB_DIR (serve's page folder),\n"
+         "             VOLSTYLE_SHADER_DIR=core/shaders (load shaders from disk)\n";
+    return s;
+}
 
 void setUpLogging() {
     auto logger = spdlog::stderr_color_mt("volstyle");
@@ -35,19 +48,37 @@ void setUpLogging() {
 
 int main(int argc, char** argv) {
     setUpLogging();
-    if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h") {
-        std::cout << kUsage;
-        return argc < 2 ? 2 : 0;
+    if (argc < 2) {
+        std::cerr << usage();
+        return 2;
     }
     const std::string command = argv[1];
+    if (command == "--help" || command == "-h" || (command == "help" && argc == 2)) {
+        std::cout << usage();
+        return 0;
+    }
+    if (command == "--version" || command == "version") {
+        std::cout << "volstyle " << volstyle::server::versionString() << "\n";
+        return 0;
+    }
+    if (command == "help") {
+        for (const CommandSpec* c : commands())
+            if (c->name == argv[2]) {
+                std::cout << volstyle::server::usageText(*c);
+                return 0;
+            }
+        std::cerr << "volstyle help: no command '" << argv[2] << "'\n" << usage();
+        return 2;
+    }
     const std::vector<std::string> args(argv + 2, argv + argc);
     try {
         if (command == "render") return volstyle::server::runRender(args);
         if (command == "info") return volstyle::server::runInfo(args);
+        if (command == "convert") return volstyle::server::runConvert(args);
         if (command == "solve") return volstyle::server::runSolve(args);
         if (command == "serve") return volstyle::server::runServe(args);
         if (command == "read-vdb") return volstyle::server::runReadVdb(args);  // the server's child reader
-        std::cerr << "volstyle: unknown command '" << command << "'\n" << kUsage;
+        std::cerr << "volstyle: unknown command '" << command << "'\n" << usage();
         return 2;
     } catch (const volstyle::InvalidArgument& e) {
         std::cerr << "volstyle " << command << ": " << e.what() << "\n";

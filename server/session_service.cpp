@@ -295,13 +295,14 @@ void SessionService::uploadVdb(Session& s, const std::string& bytes) {
         v = loadUntrustedVdb(tmp.path.string(), m_limits.volumeLimits, m_limits.vdbReader);
     } catch (const Error& e) {
         std::string msg = e.what();
-        const std::string path = tmp.path.string();
-        for (size_t pos; (pos = msg.find(path)) != std::string::npos;) msg.replace(pos, path.size(), "the upload");
+        for (const std::string& path : {"'" + tmp.path.string() + "'", tmp.path.string()})
+            for (size_t pos; (pos = msg.find(path)) != std::string::npos;) msg.replace(pos, path.size(), "the upload");
         throw ApiError(dynamic_cast<const LimitExceeded*>(&e) ? ErrorCode::TooLarge : ErrorCode::UnsupportedMedia, msg);
     }
     std::shared_ptr<core::GpuVolume> stale;
     {
         std::lock_guard lock(s.mutex);
+        s.scene = "upload";  // the session no longer shows its first scene (saved with the version)
         stale = commitVersion(s, std::move(v));
     }
     release(std::move(stale));
@@ -354,7 +355,8 @@ void SessionService::dropPreviews(const Session& s) {
     }
 }
 
-core::Image SessionService::renderOnGl(Session& s, const core::Camera& camera, const core::Lighting& lighting) {
+core::RenderLayers SessionService::renderOnGl(Session& s, const core::Camera& camera, const core::Lighting& lighting,
+                                              bool layers) {
     return m_gl.run([&](core::GpuDevice& device) {
         // The lock covers only finding (or uploading) the GPU copy, not the render: reads of the
         // session (a VDB download, its JSON) never wait for GL work. Locking on the GL thread is
@@ -364,21 +366,26 @@ core::Image SessionService::renderOnGl(Session& s, const core::Camera& camera, c
             std::lock_guard lock(s.mutex);
             gpu = sessionGpu(s);
         }
-        return renderBudgeted(device, *gpu, camera, lighting);  // a commit meanwhile frees it after us
+        return renderBudgeted(device, *gpu, camera, lighting, layers);  // a commit meanwhile frees it after us
     });
 }
 
-core::Image SessionService::renderBudgeted(core::GpuDevice& device, core::GpuVolume& gpu, const core::Camera& camera,
-                                           const core::Lighting& lighting) {
+core::RenderLayers SessionService::renderBudgeted(core::GpuDevice& device, core::GpuVolume& gpu, const core::Camera& camera,
+                                                  const core::Lighting& lighting, bool layers) {
     // Other sessions' renders and a solve's next iteration wait behind this one: bound it.
     const WorkBudget budget(m_limits.renderBudgetSeconds);
-    return renderer(device).render(gpu, camera, lighting, {}, nullptr, budget);
+    if (layers) return renderer(device).renderLayers(gpu, camera, lighting, {}, nullptr, budget);
+    core::RenderLayers out;
+    out.beauty = renderer(device).render(gpu, camera, lighting, {}, nullptr, budget);
+    return out;
 }
 
-core::Image SessionService::render(Session& s, const core::Camera& camera) { return renderOnGl(s, camera, lighting(s)); }
+core::RenderLayers SessionService::render(Session& s, const core::Camera& camera, bool layers) {
+    return renderOnGl(s, camera, lighting(s), layers);
+}
 
-core::Image SessionService::renderView(Session& s, const std::string& viewId) {
-    return render(s, view(s, viewId).camera);
+core::RenderLayers SessionService::renderView(Session& s, const std::string& viewId, bool layers) {
+    return render(s, view(s, viewId).camera, layers);
 }
 
 core::Image SessionService::renderPreview(const std::string& jobId, const std::string& viewId) {
@@ -396,7 +403,7 @@ core::Image SessionService::renderPreview(const std::string& jobId, const std::s
             std::lock_guard lock(s->mutex);
             preview = sessionGpu(*s);
         }
-        return renderBudgeted(device, *preview, camera, light);
+        return renderBudgeted(device, *preview, camera, light, /*layers=*/false).beauty;
     });
 }
 

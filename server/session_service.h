@@ -75,8 +75,9 @@ public:
     std::vector<QuarantineEntry> quarantine() const;
 
     // Renders (on the GL thread).
-    core::Image render(Session& s, const core::Camera& camera);
-    core::Image renderView(Session& s, const std::string& viewId);
+    /// The render (`beauty`), and with `layers` its compositing layers (for EXR answers).
+    core::RenderLayers render(Session& s, const core::Camera& camera, bool layers = false);
+    core::RenderLayers renderView(Session& s, const std::string& viewId, bool layers = false);
     /// A view rendered from a running job's latest iterate; after the job, the session's volume.
     core::Image renderPreview(const std::string& jobId, const std::string& viewId);
 
@@ -98,10 +99,10 @@ private:
     core::Volume olderVersion(Session& s, int n);
     /// Quarantines version `n`'s file and lists it as damaged.
     void recordDamage(Session& s, int n, const std::string& reason);
-    core::Image renderOnGl(Session& s, const core::Camera& camera, const core::Lighting& lighting);
+    core::RenderLayers renderOnGl(Session& s, const core::Camera& camera, const core::Lighting& lighting, bool layers);
     /// On the GL thread: renders `gpu` under the render budget.
-    core::Image renderBudgeted(core::GpuDevice& device, core::GpuVolume& gpu, const core::Camera& camera,
-                               const core::Lighting& lighting);
+    core::RenderLayers renderBudgeted(core::GpuDevice& device, core::GpuVolume& gpu, const core::Camera& camera,
+                                      const core::Lighting& lighting, bool layers);
     /// On the GL thread, with the session's lock held: the session's GPU copy, uploaded if there
     /// is none (not_found once removed). Shared, so a render can drop the lock and keep it alive.
     std::shared_ptr<core::GpuVolume> sessionGpu(Session& s);

@@ -23,7 +23,7 @@ std::string loadShaderSource(const std::string& name) {
     if (const char* dir = std::getenv("VOLSTYLE_SHADER_DIR"); dir && *dir) {
         std::filesystem::path path = std::filesystem::path(dir) / name;
         std::ifstream f(path);
-        if (!f) throw NotFound("loadShaderSource(): no shader '" + path.string() + "' (VOLSTYLE_SHADER_DIR is set)");
+        if (!f) throw NotFound("no shader '" + path.string() + "' (VOLSTYLE_SHADER_DIR is set)");
         std::ostringstream s;
         s << f.rdbuf();
         return s.str();
@@ -33,7 +33,7 @@ std::string loadShaderSource(const std::string& name) {
         if (name == kEmbeddedShaders[i].name) return kEmbeddedShaders[i].text;
         known += (known.empty() ? "" : ", ") + std::string(kEmbeddedShaders[i].name);
     }
-    throw NotFound("loadShaderSource(): no embedded shader '" + name + "'; embedded: " + known);
+    throw NotFound("no embedded shader '" + name + "'; embedded: " + known);
 }
 
 namespace {

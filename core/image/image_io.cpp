@@ -39,7 +39,7 @@ struct TempFile {
         std::vector<char> buf(pattern.begin(), pattern.end());
         buf.push_back('\0');
         int fd = mkstemps(buf.data(), int(ext.size()));
-        if (fd < 0) throw IoError("TempFile: cannot create a temporary file in " + fs::temp_directory_path().string());
+        if (fd < 0) throw IoError("cannot create a temporary file in " + fs::temp_directory_path().string());
         close(fd);
         path = buf.data();
     }
@@ -65,26 +65,26 @@ std::string sniffExtension(const unsigned char* p, size_t n) {
 }  // namespace
 
 LoadedImage loadImage(const std::string& path, int maxSide, const ImageHeaderCheck& checkHeader) {
-    if (!fs::exists(path)) throw IoError("loadImage(): no such file '" + path + "'");
+    if (!fs::exists(path)) throw IoError("no such file '" + path + "'");
     // Alpha is a weight, not coverage: keep colours unassociated (OIIO would premultiply).
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
     auto in = OIIO::ImageInput::open(path, &config);
     if (!in) {
-        throw IoError("loadImage(): cannot read '" + path + "' as an image: " + OIIO::geterror());
+        throw IoError("cannot read '" + path + "' as an image: " + OIIO::geterror());
     }
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.width < 1 || spec.height < 1 || spec.width > maxSide || spec.height > maxSide) {
-        throw LimitExceeded("loadImage(): '" + path + "' is " + std::to_string(spec.width) + "x" +
+        throw LimitExceeded("'" + path + "' is " + std::to_string(spec.width) + "x" +
                               std::to_string(spec.height) + "; each side must be in [1, " +
                               std::to_string(maxSide) + "]");
     }
-    if (spec.depth > 1) throw InvalidArgument("loadImage(): '" + path + "' is a volume image");
+    if (spec.depth > 1) throw InvalidArgument("'" + path + "' is a volume image");
     if (checkHeader) checkHeader(spec.width, spec.height);
     const int nch = spec.nchannels;
     std::vector<float> pixels(size_t(spec.width) * spec.height * nch);
     if (!in->read_image(0, 0, 0, nch, OIIO::TypeDesc::FLOAT, pixels.data())) {
-        throw IoError("loadImage(): '" + path + "' is corrupt or truncated: " + in->geterror());
+        throw IoError("'" + path + "' is corrupt or truncated: " + in->geterror());
     }
     in->close();
 
@@ -110,7 +110,7 @@ LoadedImage loadImage(const std::string& path, int maxSide, const ImageHeaderChe
     }
     size_t bad = out.image.countNonFinite();
     if (bad > 0) {
-        throw InvalidArgument("loadImage(): '" + path + "' contains " + std::to_string(bad) +
+        throw InvalidArgument("'" + path + "' contains " + std::to_string(bad) +
                               " non-finite (NaN or Inf) values; fix or clamp them before uploading");
     }
     return out;
@@ -120,7 +120,7 @@ LoadedImage loadImageFromMemory(const void* data, size_t size, const std::string
                                 int maxSide, const ImageHeaderCheck& checkHeader) {
     std::string ext = sniffExtension(static_cast<const unsigned char*>(data), size);
     if (ext.empty()) {
-        throw InvalidArgument("loadImageFromMemory(): '" + nameHint +
+        throw InvalidArgument("'" + nameHint +
                               "' is not a supported image (PNG, JPEG, TIFF, EXR or HDR)");
     }
     if (ext == ".exr") checkExrStructure(static_cast<const unsigned char*>(data), size, maxSide, nameHint.c_str());
@@ -128,7 +128,7 @@ LoadedImage loadImageFromMemory(const void* data, size_t size, const std::string
     {
         std::ofstream f(tmp.path, std::ios::binary);
         f.write(static_cast<const char*>(data), std::streamsize(size));
-        if (!f) throw IoError("loadImageFromMemory(): cannot write a temporary file");
+        if (!f) throw IoError("cannot write a temporary file");
     }
     try {
         return loadImage(tmp.path, maxSide, checkHeader);
@@ -143,13 +143,13 @@ LoadedImage loadImageFromMemory(const void* data, size_t size, const std::string
 }
 
 void saveImage(const std::string& path, const Image& image, const SaveOptions& options) {
-    if (image.empty()) throw InvalidArgument("saveImage(): the image is empty");
+    if (image.empty()) throw InvalidArgument("the image is empty");
     const std::string ext = lowerExtension(path);
     const bool isFloatFile = ext == ".exr" || ext == ".hdr";
     const bool isKnown = isFloatFile || ext == ".png" || ext == ".jpg" || ext == ".jpeg" ||
                          ext == ".tif" || ext == ".tiff";
     if (!isKnown) {
-        throw InvalidArgument("saveImage(): unsupported extension '" + ext + "' in '" + path +
+        throw InvalidArgument("unsupported extension '" + ext + "' in '" + path +
                               "'; use .png, .jpg, .tif, .exr or .hdr");
     }
     const bool keepAlpha = ext == ".exr" || (options.writeAlpha && ext != ".jpg" && ext != ".jpeg" && ext != ".hdr");
@@ -172,20 +172,58 @@ void saveImage(const std::string& path, const Image& image, const SaveOptions& o
     else if (options.bits == 16 && ext != ".jpg" && ext != ".jpeg") format = OIIO::TypeDesc::UINT16;
 
     auto out = OIIO::ImageOutput::create(path);
-    if (!out) throw IoError("saveImage(): no writer for '" + path + "': " + OIIO::geterror());
+    if (!out) throw IoError("no writer for '" + path + "': " + OIIO::geterror());
     OIIO::ImageSpec spec(image.width, image.height, nch, format);
     if (keepAlpha) spec.alpha_channel = 3;
     spec.attribute("oiio:ColorSpace", isFloatFile ? "linear" : "sRGB");
     if (!isFloatFile) spec.attribute("oiio:UnassociatedAlpha", 1);  // PNG/TIFF alpha is a weight
     if (!out->open(path, spec) ||
         !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close()) {
-        throw IoError("saveImage(): cannot write '" + path + "': " + out->geterror());
+        throw IoError("cannot write '" + path + "': " + out->geterror());
     }
+}
+
+void saveExrLayers(const std::string& path, const std::vector<ExrLayer>& layers, bool halfFloat) {
+    if (layers.empty() || !layers[0].image || layers[0].image->empty()) throw InvalidArgument("an EXR needs a main image");
+    const Image& main = *layers[0].image;
+    std::vector<std::string> names;
+    std::vector<std::pair<const Image*, int>> sources;  // image and channel of each file channel
+    for (const auto& layer : layers) {
+        if (!layer.image || layer.image->width != main.width || layer.image->height != main.height)
+            throw InvalidArgument("EXR layer '" + layer.name + "' is missing or not the main image's size");
+        const char* rgba[] = {"R", "G", "B", "A"};
+        for (int c = 0; c < (layer.name.empty() ? 4 : 3); ++c) {
+            names.push_back(layer.name.empty() ? rgba[c] : layer.name + "." + rgba[c]);
+            sources.emplace_back(layer.image, c);
+        }
+    }
+    const size_t nch = names.size();
+    std::vector<float> pixels(main.pixelCount() * nch);
+    for (size_t i = 0; i < main.pixelCount(); ++i)
+        for (size_t c = 0; c < nch; ++c) pixels[i * nch + c] = sources[c].first->rgba[i * 4 + size_t(sources[c].second)];
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) throw IoError("no EXR writer for '" + path + "': " + OIIO::geterror());
+    OIIO::ImageSpec spec(main.width, main.height, int(nch), halfFloat ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
+    spec.channelnames = names;
+    spec.alpha_channel = layers[0].name.empty() ? 3 : -1;
+    spec.attribute("oiio:ColorSpace", "linear");
+    spec.attribute("compression", "zip");
+    if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close())
+        throw IoError("cannot write '" + path + "': " + out->geterror());
+}
+
+std::string encodeExrLayers(const std::vector<ExrLayer>& layers, bool halfFloat) {
+    TempFile tmp(".exr");
+    saveExrLayers(tmp.path, layers, halfFloat);
+    std::ifstream f(tmp.path, std::ios::binary);
+    std::ostringstream s;
+    s << f.rdbuf();
+    return s.str();
 }
 
 std::string encodeImage(const Image& image, const std::string& format, const SaveOptions& options) {
     if (format != "png" && format != "exr")
-        throw InvalidArgument("encodeImage(): format must be 'png' or 'exr', got '" + format + "'");
+        throw InvalidArgument("format must be 'png' or 'exr', got '" + format + "'");
     TempFile tmp("." + format);
     saveImage(tmp.path, image, options);
     std::ifstream f(tmp.path, std::ios::binary);

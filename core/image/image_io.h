@@ -6,6 +6,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "core/image/image.h"
 
@@ -39,6 +40,18 @@ struct SaveOptions {
 
 /// Saves by extension (.png .jpg .jpeg .tif .tiff .exr .hdr). Throws IoError / InvalidArgument.
 void saveImage(const std::string& path, const Image& image, const SaveOptions& options = {});
+
+/// One part of a layered EXR. The layer named "" is the main image, channels R, G, B, A; the
+/// others are written as NAME.R, NAME.G, NAME.B (the layer.channel names Nuke shows as layers and
+/// Blender's Image node as passes).
+struct ExrLayer {
+    std::string name;
+    const Image* image = nullptr;
+};
+
+/// Writes one EXR holding every layer (the same size), half float unless `halfFloat` is false.
+void saveExrLayers(const std::string& path, const std::vector<ExrLayer>& layers, bool halfFloat = true);
+std::string encodeExrLayers(const std::vector<ExrLayer>& layers, bool halfFloat = true);
 
 /// Encodes to PNG or EXR bytes in memory (for HTTP answers): `format` is "png" or "exr".
 std::string encodeImage(const Image& image, const std::string& format,

@@ -12,7 +12,7 @@ Mat4 Mat4::inverseAffine() const {
     double det = a(0, 0) * c00 + a(0, 1) * c01 + a(0, 2) * c02;
     double scale = std::abs(a(0, 0)) + std::abs(a(1, 1)) + std::abs(a(2, 2));
     if (!(std::abs(det) > 1e-300) || !std::isfinite(det) || std::abs(det) < 1e-12 * scale * scale * scale)
-        throw InvalidArgument("Mat4::inverseAffine(): the transform is singular (determinant " +
+        throw InvalidArgument("the transform is singular (determinant " +
                               std::to_string(det) + ")");
     Mat4 r;
     double inv = 1.0 / det;

@@ -76,6 +76,7 @@ struct Mat4 {
     double operator()(int r, int c) const { return m[r * 4 + c]; }
 
     static Mat4 identity() { return {}; }
+    bool operator==(const Mat4&) const = default;  ///< exact: a transform read back bit for bit
     static Mat4 translate(const Vec3d& t) {
         Mat4 r;
         r(0, 3) = t.x, r(1, 3) = t.y, r(2, 3) = t.z;

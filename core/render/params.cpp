@@ -120,6 +120,17 @@ Camera defaultCamera() {
     return c;
 }
 
+Camera framingCamera(const std::pair<Vec3d, Vec3d>& worldBounds) {
+    Camera c = defaultCamera();
+    const Vec3d centre = (worldBounds.first + worldBounds.second) * 0.5;
+    const double radius = 0.5 * length(worldBounds.second - worldBounds.first);
+    const double halfFov = 0.5 * c.fovYDeg * std::numbers::pi / 180.0;
+    const Vec3d direction = normalize(defaultCamera().eye - defaultCamera().target);
+    c.target = centre;
+    c.eye = centre + direction * (radius / std::sin(halfFov));
+    return c;
+}
+
 void RenderSettings::validate() const {
     std::vector<FieldProblem> out;
     if (!(stepVoxels >= 0.01 && stepVoxels <= 16))

@@ -97,6 +97,9 @@ Lighting defaultLighting();
 
 /// The default view: 480×480 from +z, slightly above the horizon, framing [-1, 1]³.
 Camera defaultCamera();
+/// The default camera's view (from the front, slightly above) moved so that the box's bounding
+/// sphere fills the frame: any volume is in view, whatever its size and place.
+Camera framingCamera(const std::pair<Vec3d, Vec3d>& worldBounds);
 
 struct RenderSettings {
     double stepVoxels = 0.5;        ///< march step, in voxels of the extinction grid

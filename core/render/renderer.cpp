@@ -12,8 +12,8 @@ namespace volstyle::core {
 
 /// The output pixels (grown as needed) and the GPU timer.
 struct Renderer::Buffers {
-    gl::Buffer pixels;
-    size_t pixelBytes = 0;
+    gl::Buffer pixels, layers;
+    size_t pixelBytes = 0, layerBytes = 0;
     gl::GpuTimer timer;
 };
 
@@ -22,6 +22,18 @@ Renderer::~Renderer() = default;
 
 Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& lighting,
                        const RenderSettings& settings, RenderStats* statsOut, const WorkBudget& budget) {
+    return march(volume, camera, lighting, settings, statsOut, budget, nullptr);
+}
+
+RenderLayers Renderer::renderLayers(GpuVolume& volume, const Camera& camera, const Lighting& lighting,
+                                    const RenderSettings& settings, RenderStats* statsOut, const WorkBudget& budget) {
+    RenderLayers layers;
+    layers.beauty = march(volume, camera, lighting, settings, statsOut, budget, &layers);
+    return layers;
+}
+
+Image Renderer::march(GpuVolume& volume, const Camera& camera, const Lighting& lighting, const RenderSettings& settings,
+                      RenderStats* statsOut, const WorkBudget& budget, RenderLayers* layers) {
     VOLSTYLE_CHECK(m_device.isOwnedByThisThread(), ==, true);
     camera.validate();
     lighting.validate();
@@ -38,7 +50,8 @@ Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& 
         .define("VOLSTYLE_HAS_ENVIRONMENT", setup.environment ? 1 : 0)
         .define("VOLSTYLE_SKIP_EMPTY", settings.skipEmptySpace ? 1 : 0)
         .define("VOLSTYLE_HW_FILTER", settings.hardwareFilter ? 1 : 0)
-        .define("VOLSTYLE_EXACT_TRAVERSAL", settings.exactTraversal ? 1 : 0);
+        .define("VOLSTYLE_EXACT_TRAVERSAL", settings.exactTraversal ? 1 : 0)
+        .define("VOLSTYLE_LAYERS", layers ? 1 : 0);
     glUseProgram(m_device.program(builder).id());
     bindMarch(m_device, volume, setup);  // dispatchChunked re-uploads the block per chunk
     if (volume.hasAlbedo()) glBindTextureUnit(layout::kUnitAlbedo, volume.albedoTexture());
@@ -51,6 +64,13 @@ Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& 
         b.pixelBytes = bytes;
     }
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingImageOut, b.pixels.id());
+    if (layers) {
+        if (bytes * layout::kRenderLayers > b.layerBytes) {
+            b.layers = gl::createBuffer(bytes * layout::kRenderLayers, nullptr, GL_DYNAMIC_STORAGE_BIT, "render-layers");
+            b.layerBytes = bytes * layout::kRenderLayers;
+        }
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingLayersOut, b.layers.id());
+    }
 
     // March every pixel, then read the image back.
     b.timer.begin();
@@ -63,10 +83,18 @@ Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& 
     b.timer.end();
     gl::barrierAfterComputeWrites();
     Image image(camera.width, camera.height);
-    glGetNamedBufferSubData(b.pixels.id(), 0, GLsizeiptr(image.rgba.size() * sizeof(float)), image.rgba.data());
+    glGetNamedBufferSubData(b.pixels.id(), 0, GLsizeiptr(bytes), image.rgba.data());
+    if (layers) {
+        Image* planes[layout::kRenderLayers] = {&layers->medium, &layers->emission, &layers->scattering,
+                                                &layers->transmittance, &layers->background};  // render.comp's order
+        for (int k = 0; k < layout::kRenderLayers; ++k) {
+            *planes[k] = Image(camera.width, camera.height);
+            glGetNamedBufferSubData(b.layers.id(), GLintptr(bytes * size_t(k)), GLsizeiptr(bytes), planes[k]->rgba.data());
+        }
+    }
     stats.gpuMs = b.timer.elapsedMs();
     stats.totalMs = msSince(t0);
-    if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("Renderer::render(): out of GPU memory");
+    if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory while rendering");
     if (statsOut) *statsOut = stats;
     return image;
 }

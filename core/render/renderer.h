@@ -15,6 +15,18 @@
 
 namespace volstyle::core {
 
+/// A render split for compositing (issue #10), every image linear RGBA at the camera's size.
+/// `medium` over a plate B gives the render in front of B: medium + (1 − alpha)·B (exact for a
+/// grey transmittance; per channel, use `transmittance`: medium + transmittance·B).
+struct RenderLayers {
+    Image beauty;         ///< the render as render() gives it: medium + transmittance·background
+    Image medium;         ///< the medium's light alone, premultiplied; alpha = 1 − mean transmittance
+    Image emission;       ///< the part of `medium` the medium emits
+    Image scattering;     ///< the part of `medium` scattered from the lights
+    Image transmittance;  ///< RGB transmittance along each ray (alpha 1)
+    Image background;     ///< the background's radiance, unattenuated (alpha 1)
+};
+
 class Renderer {
 public:
     explicit Renderer(GpuDevice& device);
@@ -27,7 +39,15 @@ public:
                  const RenderSettings& settings = {}, RenderStats* stats = nullptr,
                  const WorkBudget& budget = WorkBudget());
 
+    /// The same render, with its compositing layers.
+    RenderLayers renderLayers(GpuVolume& volume, const Camera& camera, const Lighting& lighting,
+                              const RenderSettings& settings = {}, RenderStats* stats = nullptr,
+                              const WorkBudget& budget = WorkBudget());
+
 private:
+    Image march(GpuVolume& volume, const Camera& camera, const Lighting& lighting, const RenderSettings& settings,
+                RenderStats* stats, const WorkBudget& budget, RenderLayers* layers);
+
     struct Buffers;
     GpuDevice& m_device;
     std::unique_ptr<Buffers> m_buffers;

@@ -4,7 +4,9 @@
 //
 // Variant defines: VOLSTYLE_HAS_EMISSION, VOLSTYLE_HAS_ALBEDO (else albedo 1),
 // VOLSTYLE_NUM_LIGHTS (0..kLightSlots; 0 skips in-scattering), VOLSTYLE_HAS_ENVIRONMENT,
-// VOLSTYLE_SKIP_EMPTY, VOLSTYLE_HW_FILTER, VOLSTYLE_EXACT_TRAVERSAL.
+// VOLSTYLE_SKIP_EMPTY, VOLSTYLE_HW_FILTER, VOLSTYLE_EXACT_TRAVERSAL, VOLSTYLE_LAYERS (also write
+// the compositing layers: the medium's light alone, premultiplied, and its emitted and scattered
+// parts, the transmittance and the background, planar in b_Layers).
 #include "common/march.glsl"
 #include "common/lighting.glsl"
 #include "common/camera.glsl"
@@ -14,6 +16,12 @@ layout(local_size_x = kWorkgroup2D, local_size_y = kWorkgroup2D) in;
 layout(std430, binding = kBindingImageOut) writeonly buffer b_Image {
     vec4 pixels[];
 };
+
+#if VOLSTYLE_LAYERS
+layout(std430, binding = kBindingLayersOut) writeonly buffer b_Layers {
+    vec4 layers[];  // layer k of pixel p at k * pixelCount + p
+};
+#endif
 
 #if VOLSTYLE_HAS_EMISSION
 layout(binding = kUnitEmission) uniform sampler3D s_emission;
@@ -34,6 +42,7 @@ void main() {
 
     vec3 radiance = vec3(0.0);
     vec3 transmittance = vec3(1.0);
+    vec3 emitted = vec3(0.0), scattered = vec3(0.0);  // the parts of radiance (VOLSTYLE_LAYERS)
     if (range.x < range.y) {
         RayMarch m = beginMarch(range, o, d);
         float tMid, dt;
@@ -43,9 +52,9 @@ void main() {
             if (max3(sigma) <= 0.0) continue;
 
             // Medium radiance L_m = L_e + ρ L_scat at the segment midpoint (Eq. 2).
-            vec3 Lm = vec3(0.0);
+            vec3 Le = vec3(0.0), Ls = vec3(0.0);
 #if VOLSTYLE_HAS_EMISSION
-            Lm += fetchTrilinear(s_emission, st);
+            Le = fetchTrilinear(s_emission, st);
 #endif
 #if VOLSTYLE_NUM_LIGHTS > 0
 #if VOLSTYLE_HAS_ALBEDO
@@ -53,17 +62,32 @@ void main() {
 #else
             vec3 albedo = vec3(1.0);
 #endif
-            Lm += albedo * inScattering(st, dir);
+            Ls = albedo * inScattering(st, dir);
 #endif
             // Segment of optical depth τ = σ dt: opacity 1 - e^{-τ}, then attenuate.
             vec3 tau = sigma * dt;
-            radiance += transmittance * oneMinusExp(tau) * Lm;
+            vec3 w = transmittance * oneMinusExp(tau);
+            radiance += w * (Le + Ls);
+#if VOLSTYLE_LAYERS
+            emitted += w * Le;
+            scattered += w * Ls;
+#endif
             transmittance *= exp(-tau);
             // Early ray termination: what is left to gather is at most T·L_max (march.z).
             float T = max3(transmittance);
             if ((T < u.march.y && T * u.march.z <= u.march.y * max3(radiance)) || T < 1e-3 * u.march.y) break;
         }
     }
-    radiance += transmittance * backgroundRadiance(dir);
-    pixels[pix.y * u.imageSize.x + pix.x] = vec4(radiance, 1.0 - (transmittance.r + transmittance.g + transmittance.b) / 3.0);
+    vec3 background = backgroundRadiance(dir);
+    float alpha = 1.0 - (transmittance.r + transmittance.g + transmittance.b) / 3.0;
+    int p = pix.y * u.imageSize.x + pix.x;
+    pixels[p] = vec4(radiance + transmittance * background, alpha);
+#if VOLSTYLE_LAYERS
+    int n = u.imageSize.x * u.imageSize.y;
+    layers[p] = vec4(radiance, alpha);  // premultiplied: over a plate B gives radiance + (1 - alpha) B
+    layers[n + p] = vec4(emitted, alpha);
+    layers[2 * n + p] = vec4(scattered, alpha);
+    layers[3 * n + p] = vec4(transmittance, 1.0);
+    layers[4 * n + p] = vec4(background, 1.0);
+#endif
 }

@@ -139,7 +139,7 @@ Mat4 unitBoxWorldFromIndex(Int3 dims) {
 
 Volume makeBuiltinScene(const std::string& name, int resolution) {
     if (resolution < kMinSceneResolution || resolution > kMaxSceneResolution) {
-        throw InvalidArgument("makeBuiltinScene(): resolution must be in [" +
+        throw InvalidArgument("resolution must be in [" +
                               std::to_string(kMinSceneResolution) + ", " +
                               std::to_string(kMaxSceneResolution) + "], got " + std::to_string(resolution));
     }
@@ -149,7 +149,7 @@ Volume makeBuiltinScene(const std::string& name, int resolution) {
     if (name == "cube") return makeCube(resolution);
     std::string known;
     for (const auto& s : builtinScenes()) known += (known.empty() ? "" : ", ") + s.name;
-    throw InvalidArgument("makeBuiltinScene(): unknown scene '" + name + "'; built-in scenes: " + known);
+    throw InvalidArgument("unknown scene '" + name + "'; built-in scenes: " + known);
 }
 
 }  // namespace volstyle::core

@@ -1,4 +1,11 @@
 // OpenVDB read/write. The only translation unit that includes OpenVDB headers.
+//
+// Lossless round trips (issue #10): a volume read from a file keeps the file's grids (VdbSource),
+// and saveVdb writes a grid back untouched when the volume did not change it, patches only the
+// changed voxels into a copy when it did, and writes every grid volstyle does not use as it was.
+// Grids made from scratch (built-in scenes) are written so that reading them gives the same dense
+// volume bit for bit: each grid's background is the value absent voxels have in the volume (albedo
+// 1, everything else 0), and the dense box is recorded when the active voxels do not span it.
 
 #include "core/volume/vdb_io.h"
 
@@ -7,6 +14,10 @@
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/Prune.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -16,9 +27,34 @@
 #include "core/base/errors.h"
 
 namespace volstyle::core {
+
+namespace {
+/// What a grid does in the volume. The file's names for them: kRoleNames (first match wins).
+enum Role { kExtinction, kAlbedo, kEmission, kRefractiveIndex, kRoleCount };
+}  // namespace
+
+struct VdbSource {
+    openvdb::GridCPtrVec grids;  ///< every grid of the file in its order, as read (never modified)
+    openvdb::MetaMap fileMetadata;
+    std::array<openvdb::GridBase::ConstPtr, kRoleCount> roles;  ///< the grids read as each role
+    openvdb::Coord origin;  ///< file index of dense voxel (0,0,0)
+    Int3 dims;
+    Mat4 worldFromIndex;  ///< the volume's transform as read
+};
+
 namespace {
 
 namespace fs = std::filesystem;
+
+/// Metadata recording the dense box on the extinction grid when its active voxels do not span it
+/// (a built-in cloud with empty borders): reading it back gives the same dims, hence the same render.
+constexpr const char* kBoxMinKey = "volstyle_dense_box_min";
+constexpr const char* kBoxMaxKey = "volstyle_dense_box_max";
+/// The exact index-to-world matrix of a volume made in memory: OpenVDB's Transform simplifies
+/// every linear map it is given (recomputing scales by subtraction), which may change the last
+/// bit. Read back in place of the file's transform while that still agrees with it.
+constexpr const char* kMatrixKey = "volstyle_world_from_index";
+
 
 void initOpenVdb() {
     static std::once_flag once;
@@ -40,171 +76,263 @@ openvdb::math::Mat4d toVdb(const Mat4& m) {
     return r;
 }
 
+/// The shared transform of a grid (OpenVDB's Transform::copy() re-simplifies the map: lossy).
+openvdb::math::Transform::Ptr sharedTransform(const openvdb::GridBase& grid) {
+    return openvdb::ConstPtrCast<openvdb::math::Transform>(grid.constTransformPtr());
+}
+
+/// The file index-to-world matrix of `grid`, or the exact one volstyle recorded if it agrees.
+Mat4 recordedOrFileMatrix(const openvdb::GridBase& grid, const Mat4& fromFile) {
+    auto recorded = grid.getMetadata<openvdb::Mat4DMetadata>(kMatrixKey);
+    if (!recorded) return fromFile;
+    const Mat4 exact = fromVdb(recorded->value());
+    double scale = 0;
+    for (double x : fromFile.m) scale = std::max(scale, std::abs(x));
+    for (size_t i = 0; i < 16; ++i)
+        if (std::abs(exact.m[i] - fromFile.m[i]) > 1e-12 * std::max(scale, 1.0)) return fromFile;  // edited elsewhere
+    return exact;
+}
+
+std::string quoted(const std::string& s) { return "'" + s + "'"; }
+
 Mat4 worldFromIndexOf(const openvdb::GridBase& grid, const std::string& path) {
     const openvdb::math::Transform& xf = grid.transform();
     if (!xf.isLinear()) {
-        throw InvalidArgument("loadVdb(): grid '" + grid.getName() + "' in '" + path +
-                              "' has a non-linear (frustum) transform; only linear transforms are supported");
+        throw InvalidArgument("grid " + quoted(grid.getName()) + " in " + quoted(path) +
+                              " has a non-linear (frustum) transform; only linear transforms are supported "
+                              "(resample it to a linear transform, e.g. with Houdini's VDB Resample)");
     }
     return fromVdb(xf.baseMap()->getAffineMap()->getMat4());
 }
 
-std::string gridNames(const openvdb::GridPtrVec& grids) {
+std::string gridNames(const openvdb::GridCPtrVec& grids) {
     std::string s;
     for (const auto& g : grids) s += (s.empty() ? "" : ", ") + g->getName();
     return s.empty() ? "(none)" : s;
 }
 
-openvdb::GridBase::Ptr findGrid(const openvdb::GridPtrVec& grids, const std::string& name) {
+openvdb::GridBase::ConstPtr findGrid(const openvdb::GridCPtrVec& grids, const std::string& name) {
     for (const auto& g : grids)
         if (g->getName() == name) return g;
     return nullptr;
 }
 
+/// The names a role is read from, in order of preference (Houdini and Blender call extinction
+/// `density`), and the name a grid made from scratch gets (grey extinction: `density`).
+std::vector<std::string> roleNames(Role role) {
+    switch (role) {
+        case kExtinction: return {"extinction", "density"};
+        case kAlbedo: return {"albedo"};
+        case kEmission: return {"emission"};
+        default: return {"refractive_index"};
+    }
+}
+
+/// What a voxel the file does not store is worth in the volume: albedo defaults to white, the
+/// refractive index to vacuum, the rest to zero.
+float absentValue(Role role) {
+    return role == kAlbedo ? kDefaultAlbedo : role == kRefractiveIndex ? 1.0f : 0.0f;
+}
+
+/// The dense RGB grid of the volume for a role (the refractive index repeated in R, G and B).
+std::vector<float> denseOfVolume(const Volume& v, Role role) {
+    switch (role) {
+        case kExtinction: return v.extinction();
+        case kAlbedo: return v.albedo();
+        case kEmission: return v.emission();
+        default: {
+            std::vector<float> rgb;
+            if (!v.refractiveIndex()) return rgb;
+            rgb.reserve(v.voxelCount() * 3);
+            for (float n : *v.refractiveIndex()) rgb.insert(rgb.end(), {n, n, n});
+            return rgb;
+        }
+    }
+}
+
 /// Fills a dense RGB grid from a float or Vec3f VDB grid, voxel (i,j,k) of the dense grid being
-/// index `origin + (i,j,k)` of `reference`. Uses direct lookups when the transforms agree, and
-/// trilinear world-space resampling otherwise.
-void densify(const openvdb::GridBase::Ptr& grid, const openvdb::GridBase& reference,
-             const openvdb::Coord& origin, Int3 dims, std::vector<float>& out,
-             const std::string& path) {
-    out.assign(size_t(dims.volume()) * 3, 0.0f);
+/// index `origin + (i,j,k)` of `reference`. Direct lookups when the transforms agree, trilinear
+/// world-space resampling otherwise.
+std::vector<float> densify(const openvdb::GridBase::ConstPtr& grid, const openvdb::GridBase& reference,
+                           const openvdb::Coord& origin, Int3 dims, const std::string& path) {
+    std::vector<float> out(size_t(dims.volume()) * 3, 0.0f);
     const bool sameTransform = grid->transform() == reference.transform();
-    auto forEachVoxel = [&](auto&& valueAt) {
-        size_t n = 0;
-        for (int k = 0; k < dims.z; ++k)
-            for (int j = 0; j < dims.y; ++j)
-                for (int i = 0; i < dims.x; ++i, ++n) {
-                    openvdb::Coord ijk = origin + openvdb::Coord(i, j, k);
-                    openvdb::Vec3s v = valueAt(ijk);
-                    out[3 * n] = v[0], out[3 * n + 1] = v[1], out[3 * n + 2] = v[2];
-                }
-    };
     auto fill = [&](auto typedGrid) {
         using GridT = typename decltype(typedGrid)::element_type;
         auto acc = typedGrid->getConstAccessor();
         openvdb::tools::GridSampler<typename GridT::ConstAccessor, openvdb::tools::BoxSampler> sampler(
             acc, typedGrid->transform());
-        forEachVoxel([&](const openvdb::Coord& ijk) {
-            typename GridT::ValueType v = sameTransform
-                ? acc.getValue(ijk)
-                : sampler.wsSample(reference.transform().indexToWorld(ijk));
-            return openvdb::Vec3s(v);
-        });
+        size_t n = 0;
+        for (int k = 0; k < dims.z; ++k)
+            for (int j = 0; j < dims.y; ++j)
+                for (int i = 0; i < dims.x; ++i, ++n) {
+                    const openvdb::Coord ijk = origin + openvdb::Coord(i, j, k);
+                    openvdb::Vec3s v(sameTransform ? acc.getValue(ijk)
+                                                   : sampler.wsSample(reference.transform().indexToWorld(ijk)));
+                    out[3 * n] = v[0], out[3 * n + 1] = v[1], out[3 * n + 2] = v[2];
+                }
     };
-    if (auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(grid)) {
+    if (auto f = openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid)) {
         fill(f);
-    } else if (auto v = openvdb::gridPtrCast<openvdb::Vec3SGrid>(grid)) {
+    } else if (auto v = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(grid)) {
         fill(v);
     } else {
-        throw InvalidArgument("loadVdb(): grid '" + grid->getName() + "' in '" + path + "' has type '" +
-                              grid->valueType() + "'; expected float or vec3s");
+        throw InvalidArgument("grid " + quoted(grid->getName()) + " in " + quoted(path) + " has type '" +
+                              grid->valueType() + "'; volstyle reads float or vec3s grids");
     }
+    return out;
 }
 
-openvdb::GridPtrVecPtr readAllGrids(const std::string& path) {
+/// The dense grid of a role as read from its file grid (absent refractive index: vacuum).
+std::vector<float> densifyRole(Role role, const openvdb::GridBase::ConstPtr& grid, const openvdb::GridBase& reference,
+                               const openvdb::Coord& origin, Int3 dims, const std::string& path) {
+    std::vector<float> rgb = densify(grid, reference, origin, dims, path);
+    if (role == kRefractiveIndex)
+        for (float& n : rgb) n = n == 0.0f ? 1.0f : n;  // a background of 0 is vacuum
+    return rgb;
+}
+
+struct FileContents {
+    openvdb::GridCPtrVec grids;
+    openvdb::MetaMap metadata;
+};
+
+/// OpenVDB's magic number, the first 4 bytes of every .vdb file (little-endian 0x56444220).
+bool startsLikeVdb(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    char magic[4] = {};
+    in.read(magic, 4);
+    return in.gcount() == 4 && std::memcmp(magic, "\x20\x42\x44\x56", 4) == 0;
+}
+
+FileContents readFile(const std::string& path) {
     initOpenVdb();
-    if (!fs::exists(path)) throw IoError("loadVdb(): no such file '" + path + "'");
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw IoError("no such file " + quoted(path));
+    if (fs::is_directory(path, ec)) throw IoError(quoted(path) + " is a folder, not a VDB file");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError("cannot open " + quoted(path) + " (permission denied?)");
+    if (!startsLikeVdb(path))
+        throw IoError(quoted(path) + " is not an OpenVDB file (it does not start with the VDB magic number)");
     // OpenVDB keeps reading a truncated file with garbage sizes and may allocate gigabytes. A
     // stream that throws on any short read stops it at the first missing byte instead.
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw IoError("loadVdb(): cannot open '" + path + "'");
     in.exceptions(std::ios::failbit | std::ios::badbit);
     try {
         openvdb::io::Stream stream(in, /*delayLoad=*/false);
-        return stream.getGrids();
+        FileContents out;
+        for (const auto& g : *stream.getGrids()) out.grids.push_back(g);
+        if (auto meta = stream.getMetadata()) out.metadata = *meta;
+        return out;
     } catch (const std::ios_base::failure&) {
-        throw IoError("loadVdb(): '" + path + "' is truncated (it ends before its grids do)");
+        throw IoError(quoted(path) + " is truncated (it ends before its grids do)");
     } catch (const openvdb::Exception& e) {
-        throw IoError("loadVdb(): '" + path + "' is not a readable OpenVDB file (corrupt or truncated): " + e.what());
+        throw IoError(quoted(path) + " is not a readable OpenVDB file (corrupt or truncated): " + e.what());
     } catch (const std::bad_alloc&) {
         // Damaged block sizes make OpenVDB ask for more memory than exists (found by fuzzing).
-        throw IoError("loadVdb(): '" + path + "' is damaged: reading it asks for more memory than its grids can need");
+        throw IoError(quoted(path) + " is damaged: reading it asks for more memory than its grids can need");
     } catch (const std::exception& e) {
-        throw IoError("loadVdb(): '" + path + "' could not be read: " + e.what());
+        throw IoError(quoted(path) + " could not be read: " + e.what());
     }
+}
+
+/// The index box the dense volume covers: the extinction grid's active voxels, widened to the box
+/// volstyle recorded when it wrote the file.
+openvdb::CoordBBox denseBox(const openvdb::GridBase& extinction) {
+    openvdb::CoordBBox box = extinction.evalActiveVoxelBoundingBox();
+    auto lo = extinction.getMetadata<openvdb::Vec3IMetadata>(kBoxMinKey);
+    auto hi = extinction.getMetadata<openvdb::Vec3IMetadata>(kBoxMaxKey);
+    if (lo && hi) {
+        const openvdb::Coord a(lo->value()), b(hi->value());
+        if (a.x() <= b.x() && a.y() <= b.y() && a.z() <= b.z()) box.expand(openvdb::CoordBBox(a, b));
+    }
+    return box;
+}
+
+/// Refuses NaN, infinite and out-of-range values naming the file's grid and the file's voxel.
+void checkValues(Role role, const std::vector<float>& rgb, const openvdb::GridBase& grid, const openvdb::Coord& origin,
+                 Int3 dims, const std::string& path) {
+    const float inf = std::numeric_limits<float>::max();
+    const float lo = role == kRefractiveIndex ? 1.0f : 0.0f, hi = role == kAlbedo ? 1.0f : inf;
+    InvalidValues bad = findInvalidValues(rgb, 3, lo, hi);
+    if (bad.count == 0) return;
+    const size_t n = bad.firstVoxel;
+    const openvdb::Coord at = origin + openvdb::Coord(int(n % size_t(dims.x)), int((n / size_t(dims.x)) % size_t(dims.y)),
+                                                      int(n / (size_t(dims.x) * size_t(dims.y))));
+    std::ostringstream s;
+    s << "grid " << quoted(grid.getName()) << " in " << quoted(path) << " has " << bad.count
+      << " voxel(s) with values that are not finite or outside [" << lo << ", " << (hi == inf ? "inf)" : "1]")
+      << "; the first is " << bad.firstValue << " at voxel " << at.x() << "," << at.y() << "," << at.z();
+    throw InvalidArgument(s.str());
 }
 
 }  // namespace
 
 Volume loadVdb(const std::string& path, const VolumeLimits& limits) {
-    auto grids = readAllGrids(path);
-    auto extinction = findGrid(*grids, "extinction");
-    if (!extinction) extinction = findGrid(*grids, "density");
+    FileContents file = readFile(path);
+    auto source = std::make_shared<VdbSource>();
+    source->grids = file.grids;
+    source->fileMetadata = file.metadata;
+    for (int r = 0; r < kRoleCount; ++r)
+        for (const auto& name : roleNames(Role(r)))
+            if (!source->roles[r]) source->roles[r] = findGrid(file.grids, name);
+    const auto& extinction = source->roles[kExtinction];
     if (!extinction) {
-        throw InvalidArgument("loadVdb(): neither an 'extinction' nor a 'density' grid in '" + path +
-                              "'; grids present: " + gridNames(*grids));
+        throw InvalidArgument("neither an 'extinction' nor a 'density' grid in " + quoted(path) +
+                              "; grids present: " + gridNames(file.grids) +
+                              " (rename the grid that holds the medium's density to 'density')");
     }
-    const openvdb::CoordBBox box = extinction->evalActiveVoxelBoundingBox();
-    if (box.empty()) {
-        throw InvalidArgument("loadVdb(): grid '" + extinction->getName() + "' in '" + path +
-                              "' has no active voxels");
-    }
+    const openvdb::CoordBBox box = denseBox(*extinction);
+    if (box.empty())
+        throw InvalidArgument("grid " + quoted(extinction->getName()) + " in " + quoted(path) + " has no active voxels");
     // The box's extent in 64 bits: voxels at ±2e9 overflow OpenVDB's 32-bit Coord::dim().
     int64_t extent[3];
     for (int a = 0; a < 3; ++a) extent[a] = int64_t(box.max()[a]) - int64_t(box.min()[a]) + 1;
     const bool sideOver = extent[0] > limits.maxSide || extent[1] > limits.maxSide || extent[2] > limits.maxSide;
     if (sideOver || extent[0] * extent[1] * extent[2] > limits.maxVoxels) {  // sides ≤ 2³², product fits
         std::ostringstream s;
-        s << "loadVdb(): the active box of '" << extinction->getName() << "' in '" << path << "' is " << extent[0] << "x"
-          << extent[1] << "x" << extent[2] << " voxels, over the limit of " << limits.maxVoxels << " voxels (at most "
-          << limits.maxSide << " on a side)";
+        s << "the active box of " << quoted(extinction->getName()) << " in " << quoted(path) << " is " << extent[0]
+          << "x" << extent[1] << "x" << extent[2] << " voxels, over the limit of " << limits.maxVoxels
+          << " voxels (at most " << limits.maxSide << " on a side)";
         throw LimitExceeded(s.str());
     }
-    const Int3 dims{int(extent[0]), int(extent[1]), int(extent[2])};
+    source->dims = Int3{int(extent[0]), int(extent[1]), int(extent[2])};
+    source->origin = box.min();
 
     // Dense voxel (0,0,0) is the box's minimum corner.
     const openvdb::Coord o = box.min();
-    Mat4 worldFromIndex = worldFromIndexOf(*extinction, path) * Mat4::translate({double(o.x()), double(o.y()), double(o.z())});
-    Volume volume(dims, worldFromIndex);
-    densify(extinction, *extinction, o, dims, volume.extinction(), path);
-    for (const char* name : {"albedo", "emission"}) {
-        if (auto g = findGrid(*grids, name)) {
-            worldFromIndexOf(*g, path);  // rejects frustum transforms
-            densify(g, *extinction, o, dims, std::string(name) == "albedo" ? volume.albedo() : volume.emission(), path);
+    const Int3 dims = source->dims;
+    source->worldFromIndex = recordedOrFileMatrix(*extinction, worldFromIndexOf(*extinction, path)) *
+                             Mat4::translate({double(o.x()), double(o.y()), double(o.z())});
+    Volume volume(dims, source->worldFromIndex);
+    for (int r = 0; r < kRoleCount; ++r) {
+        const auto& grid = source->roles[r];
+        if (!grid) continue;
+        worldFromIndexOf(*grid, path);  // rejects frustum transforms
+        std::vector<float> rgb = densifyRole(Role(r), grid, *extinction, o, dims, path);
+        checkValues(Role(r), rgb, *grid, o, dims, path);
+        switch (Role(r)) {
+            case kExtinction: volume.extinction() = std::move(rgb); break;
+            case kAlbedo: volume.albedo() = std::move(rgb); break;
+            case kEmission: volume.emission() = std::move(rgb); break;
+            default: {
+                std::vector<float> n(volume.voxelCount());
+                for (size_t i = 0; i < n.size(); ++i) n[i] = rgb[3 * i];
+                volume.refractiveIndex() = std::move(n);
+            }
         }
-    }
-    if (auto g = findGrid(*grids, "refractive_index")) {
-        std::vector<float> rgb;
-        densify(g, *extinction, o, dims, rgb, path);
-        std::vector<float> n(volume.voxelCount());
-        for (size_t i = 0; i < n.size(); ++i) n[i] = rgb[3 * i] == 0.0f ? 1.0f : rgb[3 * i];  // inactive: vacuum
-        volume.refractiveIndex() = std::move(n);
     }
     try {
         volume.validate(limits);
     } catch (const LimitExceeded& e) {
-        throw LimitExceeded(std::string(e.what()) + " (in '" + path + "')");
+        throw LimitExceeded(std::string(e.what()) + " (in " + quoted(path) + ")");
     } catch (const InvalidArgument& e) {
-        throw InvalidArgument(std::string(e.what()) + " (in '" + path + "')");
+        throw InvalidArgument(std::string(e.what()) + " (in " + quoted(path) + ")");
     }
+    volume.setVdbSource(std::move(source));
     return volume;
 }
 
 namespace {
-
-template <typename GridT, typename Value>
-typename GridT::Ptr makeGrid(const Volume& v, const std::string& name, const openvdb::math::Transform::Ptr& xf,
-                             Value (*valueAt)(const std::vector<float>&, size_t), const std::vector<float>& data) {
-    auto grid = GridT::create();
-    grid->setName(name);
-    grid->setTransform(xf);
-    auto acc = grid->getAccessor();
-    const Int3 d = v.dims();
-    const auto& ext = v.extinction();
-    size_t n = 0;
-    for (int k = 0; k < d.z; ++k)
-        for (int j = 0; j < d.y; ++j)
-            for (int i = 0; i < d.x; ++i, ++n) {
-                if (ext[3 * n] == 0.0f && ext[3 * n + 1] == 0.0f && ext[3 * n + 2] == 0.0f) continue;
-                acc.setValue(openvdb::Coord(i, j, k), valueAt(data, n));  // an active leaf voxel
-            }
-    // Drop only inactive background; active constant regions stay voxels (no tiles).
-    openvdb::tools::pruneInactive(grid->tree());
-    return grid;
-}
-
-float greyAt(const std::vector<float>& g, size_t n) { return g[3 * n]; }
-openvdb::Vec3s rgbAt(const std::vector<float>& g, size_t n) { return {g[3 * n], g[3 * n + 1], g[3 * n + 2]}; }
 
 bool isGrey(const std::vector<float>& g) {
     for (size_t i = 0; i < g.size(); i += 3)
@@ -212,51 +340,149 @@ bool isGrey(const std::vector<float>& g) {
     return true;
 }
 
+/// Sets every voxel of the dense box whose value in `grid` differs from the volume's: on an empty
+/// grid, the voxels that differ from the background become active leaf voxels (never tiles, which
+/// Blender's Cycles 3.4 renders as empty); on a copy of the file's grid, only changed voxels are
+/// touched and its topology, tiles and values outside the box stay.
+template <typename GridT>
+void writeDense(GridT& grid, const openvdb::Coord& origin, Int3 dims, const std::vector<float>& rgb) {
+    using Value = typename GridT::ValueType;
+    auto acc = grid.getAccessor();
+    size_t n = 0;
+    for (int k = 0; k < dims.z; ++k)
+        for (int j = 0; j < dims.y; ++j)
+            for (int i = 0; i < dims.x; ++i, ++n) {
+                Value v;
+                if constexpr (std::is_same_v<Value, float>) v = rgb[3 * n];
+                else v = Value(rgb[3 * n], rgb[3 * n + 1], rgb[3 * n + 2]);
+                const openvdb::Coord ijk = origin + openvdb::Coord(i, j, k);
+                if (acc.getValue(ijk) != v) acc.setValue(ijk, v);
+            }
+}
+
+/// A grid of `float` (grey data) or Vec3f holding `rgb`. With `like`, the grid continues it: same
+/// name, class and metadata, and (when `patch`) its tree, with only the changed voxels rewritten.
+openvdb::GridBase::Ptr makeRoleGrid(Role role, const std::vector<float>& rgb, bool asFloat,
+                                    const openvdb::GridBase::ConstPtr& like, bool patch, const openvdb::Coord& origin,
+                                    Int3 dims, const openvdb::math::Transform::Ptr& xf) {
+    auto build = [&](auto typed) -> openvdb::GridBase::Ptr {
+        using GridT = typename decltype(typed)::element_type;
+        typename GridT::Ptr grid;
+        if (patch) {
+            grid = openvdb::gridPtrCast<GridT>(like->deepCopyGrid());
+            grid->setTransform(sharedTransform(*like));  // the deep copy's transform lost bits
+        } else {
+            const float b = absentValue(role);
+            grid = GridT::create(typename GridT::ValueType(b));
+            if (like) static_cast<openvdb::MetaMap&>(*grid) = static_cast<const openvdb::MetaMap&>(*like);
+            grid->setTransform(xf);
+        }
+        writeDense(*grid, origin, dims, rgb);
+        if (!patch) openvdb::tools::pruneInactive(grid->tree());  // only inactive background goes
+        return grid;
+    };
+    openvdb::GridBase::Ptr g = asFloat ? build(openvdb::FloatGrid::Ptr()) : build(openvdb::Vec3SGrid::Ptr());
+    if (!like) {
+        const bool colourExtinction = role == kExtinction && !asFloat;
+        g->setName(colourExtinction ? "extinction" : roleNames(role).back());
+        if (role == kExtinction) g->setGridClass(openvdb::GRID_FOG_VOLUME);
+        g->insertMeta("creator", openvdb::StringMetadata("volstyle"));
+    }
+    return g;
+}
+
+/// The grid that stores one role of `volume` in the written file.
+openvdb::GridBase::ConstPtr writeRole(Role role, const Volume& volume, const VdbSource* source, bool sameIndexSpace,
+                                      const openvdb::Coord& origin, const openvdb::math::Transform::Ptr& xf) {
+    const std::vector<float> rgb = denseOfVolume(volume, role);
+    const openvdb::GridBase::ConstPtr like = source ? source->roles[role] : nullptr;
+    if (rgb.empty()) return like;  // not in the volume (never happens for a grid it was read with)
+    const Int3 dims = volume.dims();
+    const bool grey = isGrey(rgb);
+    if (like && sameIndexSpace) {
+        const auto& reference = *source->roles[kExtinction];
+        if (densifyRole(role, like, reference, origin, dims, "") == rgb) return like;  // unchanged: the file's own grid
+        const bool wasFloat = like->isType<openvdb::FloatGrid>();
+        const bool sameType = wasFloat ? grey : true;
+        if (sameType && like->transform() == reference.transform())
+            return makeRoleGrid(role, rgb, wasFloat, like, /*patch=*/true, origin, dims, xf);
+    }
+    // Made from scratch; a float grid of the file stays float while the data stays grey.
+    const bool asFloat = like ? (like->isType<openvdb::FloatGrid>() && grey)
+                              : (role == kRefractiveIndex || (role == kExtinction && grey));
+    return makeRoleGrid(role, rgb, asFloat, like, /*patch=*/false, origin, dims, xf);
+}
+
 }  // namespace
 
 void saveVdb(const std::string& path, const Volume& volume) {
     initOpenVdb();
     volume.validate(VolumeLimits{std::numeric_limits<int64_t>::max(), std::numeric_limits<int>::max()});
-    auto xf = openvdb::math::Transform::createLinearTransform(toVdb(volume.worldFromIndex()));
-    openvdb::GridPtrVec grids;
-    if (isGrey(volume.extinction())) {
-        auto g = makeGrid<openvdb::FloatGrid>(volume, "density", xf, greyAt, volume.extinction());
-        g->setGridClass(openvdb::GRID_FOG_VOLUME);
-        grids.push_back(g);
-    } else {
-        grids.push_back(makeGrid<openvdb::Vec3SGrid>(volume, "extinction", xf, rgbAt, volume.extinction()));
+    const VdbSource* source = volume.vdbSource().get();
+    // The file's index space and transform are reused while the volume still lives in them.
+    const bool sameIndexSpace = source && source->dims == volume.dims() && source->worldFromIndex == volume.worldFromIndex();
+    const openvdb::Coord origin = sameIndexSpace ? source->origin : openvdb::Coord(0, 0, 0);
+    openvdb::math::Transform::Ptr xf =
+        sameIndexSpace ? sharedTransform(*source->roles[kExtinction])
+                       : openvdb::math::Transform::createLinearTransform(toVdb(volume.worldFromIndex()));
+
+    std::array<openvdb::GridBase::ConstPtr, kRoleCount> written;
+    for (int r = 0; r < kRoleCount; ++r) written[r] = writeRole(Role(r), volume, source, sameIndexSpace, origin, xf);
+
+    // Record the dense box when the extinction's active voxels do not span it, and the exact matrix
+    // of a transform made here (and drop records copied from the file that no longer hold).
+    const Int3 d = volume.dims();
+    const openvdb::CoordBBox box(origin, origin + openvdb::Coord(d.x - 1, d.y - 1, d.z - 1));
+    openvdb::MetaMap meta = static_cast<const openvdb::MetaMap&>(*written[kExtinction]);
+    meta.removeMeta(kBoxMinKey);
+    meta.removeMeta(kBoxMaxKey);
+    if (!sameIndexSpace) {  // in the file's index space its record (if any) still holds
+        meta.removeMeta(kMatrixKey);
+        meta.insertMeta(kMatrixKey, openvdb::Mat4DMetadata(toVdb(volume.worldFromIndex())));
     }
-    if (volume.hasAlbedo())
-        grids.push_back(makeGrid<openvdb::Vec3SGrid>(volume, "albedo", xf, rgbAt, volume.albedo()));
-    if (volume.hasEmission())
-        grids.push_back(makeGrid<openvdb::Vec3SGrid>(volume, "emission", xf, rgbAt, volume.emission()));
-    if (volume.refractiveIndex()) {
-        std::vector<float> rgb(volume.voxelCount() * 3);
-        for (size_t i = 0; i < volume.voxelCount(); ++i) rgb[3 * i] = (*volume.refractiveIndex())[i];
-        grids.push_back(makeGrid<openvdb::FloatGrid>(volume, "refractive_index", xf, greyAt, rgb));
+    if (written[kExtinction]->evalActiveVoxelBoundingBox() != box) {
+        meta.insertMeta(kBoxMinKey, openvdb::Vec3IMetadata(box.min().asVec3i()));
+        meta.insertMeta(kBoxMaxKey, openvdb::Vec3IMetadata(box.max().asVec3i()));
     }
-    for (auto& g : grids) g->insertMeta("creator", openvdb::StringMetadata("volstyle"));
+    if (!(meta == static_cast<const openvdb::MetaMap&>(*written[kExtinction])))
+        written[kExtinction] = written[kExtinction]->copyGridReplacingMetadata(meta);  // shares the tree
+
+    // The file's grids in their order, each role replaced by what was written; then new roles.
+    openvdb::GridCPtrVec grids;
+    auto roleOf = [&](const openvdb::GridBase::ConstPtr& g) {
+        for (int r = 0; r < kRoleCount; ++r)
+            if (source && source->roles[r] == g) return r;
+        return -1;
+    };
+    if (source) {
+        for (const auto& g : source->grids) {
+            const int r = roleOf(g);
+            grids.push_back(r < 0 ? g : written[r]);
+        }
+    }
+    for (int r = 0; r < kRoleCount; ++r)
+        if (written[r] && (!source || !source->roles[r])) grids.push_back(written[r]);
 
     // Atomic replace: a crash mid-write never leaves a half-written file under `path`.
     const std::string tmp = path + ".tmp";
     try {
         openvdb::io::File file(tmp);
-        file.write(grids);
+        file.write(grids, source ? source->fileMetadata : openvdb::MetaMap());
         file.close();
     } catch (const std::exception& e) {
         std::error_code ec;
         fs::remove(tmp, ec);
-        throw IoError("saveVdb(): cannot write '" + path + "': " + e.what());
+        throw IoError("cannot write " + quoted(path) + ": " + e.what());
     }
     std::error_code ec;
     fs::rename(tmp, path, ec);
-    if (ec) throw IoError("saveVdb(): cannot move '" + tmp + "' to '" + path + "': " + ec.message());
+    if (ec) throw IoError("cannot move " + quoted(tmp) + " to " + quoted(path) + ": " + ec.message());
 }
 
 std::vector<VdbGridInfo> inspectVdb(const std::string& path) {
-    auto grids = readAllGrids(path);
+    FileContents file = readFile(path);
     std::vector<VdbGridInfo> out;
-    for (const auto& g : *grids) {
+    for (const auto& g : file.grids) {
         VdbGridInfo info;
         info.name = g->getName();
         info.type = g->valueType();
@@ -276,11 +502,104 @@ std::vector<VdbGridInfo> inspectVdb(const std::string& path) {
                 for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], v[c]), hi[c] = std::max(hi[c], v[c]);
             }
         };
-        if (auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(g)) scan(f);
-        else if (auto v = openvdb::gridPtrCast<openvdb::Vec3SGrid>(g)) scan(v);
+        if (auto f = openvdb::gridConstPtrCast<openvdb::FloatGrid>(g)) scan(f);
+        else if (auto v = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(g)) scan(v);
         if (info.activeVoxels == 0 || lo.x > hi.x) lo = hi = Vec3(0.0f);
         info.minValue = lo, info.maxValue = hi;
+        for (auto it = g->beginMeta(); it != g->endMeta(); ++it)
+            info.metadata.emplace_back(it->first, it->second->str());
         out.push_back(info);
+    }
+    return out;
+}
+
+std::vector<std::pair<std::string, std::string>> vdbFileMetadata(const std::string& path) {
+    FileContents file = readFile(path);
+    std::vector<std::pair<std::string, std::string>> out;
+    for (auto it = file.metadata.beginMeta(); it != file.metadata.endMeta(); ++it)
+        out.emplace_back(it->first, it->second->str());
+    return out;
+}
+
+namespace {
+
+/// Metadata a round trip may change: OpenVDB's statistics (recomputed on every write) and the dense
+/// box volstyle records.
+bool isBookkeeping(const std::string& key) {
+    return key.rfind("file_", 0) == 0 || key == kBoxMinKey || key == kBoxMaxKey || key == kMatrixKey;
+}
+
+void compareMetadata(const openvdb::MetaMap& a, const openvdb::MetaMap& b, const std::string& where,
+                     std::vector<std::string>& out) {
+    for (auto it = a.beginMeta(); it != a.endMeta(); ++it) {
+        if (isBookkeeping(it->first)) continue;
+        auto other = b[it->first];
+        if (!other) out.push_back(where + ": metadata '" + it->first + "' is missing");
+        else if (other->typeName() != it->second->typeName() || other->str() != it->second->str())
+            out.push_back(where + ": metadata '" + it->first + "' was " + it->second->str() + ", is " + other->str());
+    }
+}
+
+/// Active voxels and values: every active voxel of `a` active in `b` with the same value, and as
+/// many active voxels (so none were added).
+template <typename GridT>
+void compareValues(const GridT& a, const GridT& b, const std::string& where, std::vector<std::string>& out) {
+    if (a.activeVoxelCount() != b.activeVoxelCount()) {
+        out.push_back(where + ": " + std::to_string(a.activeVoxelCount()) + " active voxels became " +
+                      std::to_string(b.activeVoxelCount()));
+        return;
+    }
+    auto acc = b.getConstAccessor();
+    for (auto it = a.cbeginValueOn(); it; ++it) {
+        openvdb::CoordBBox span;
+        it.getBoundingBox(span);  // a tile spans many voxels
+        for (auto ijk = span.begin(); ijk; ++ijk) {
+            if (!acc.isValueOn(*ijk) || acc.getValue(*ijk) != *it) {
+                std::ostringstream s;
+                s << where << ": voxel " << *ijk << " was " << *it << (acc.isValueOn(*ijk) ? ", is " : ", is inactive ")
+                  << acc.getValue(*ijk);
+                out.push_back(s.str());
+                return;
+            }
+        }
+    }
+    if (a.background() != b.background()) out.push_back(where + ": the background changed");
+}
+
+}  // namespace
+
+std::vector<std::string> vdbDifferences(const std::string& before, const std::string& after, bool values) {
+    const FileContents a = readFile(before), b = readFile(after);
+    std::vector<std::string> out;
+    compareMetadata(a.metadata, b.metadata, "file", out);
+    for (const auto& ga : a.grids) {
+        const std::string where = "grid '" + ga->getName() + "'";
+        auto gb = findGrid(b.grids, ga->getName());
+        if (!gb) {
+            out.push_back(where + " is missing");
+            continue;
+        }
+        if (ga->valueType() != gb->valueType())
+            out.push_back(where + ": type " + ga->valueType() + " became " + gb->valueType());
+        if (ga->getGridClass() != gb->getGridClass())
+            out.push_back(where + ": class " + openvdb::GridBase::gridClassToString(ga->getGridClass()) + " became " +
+                          openvdb::GridBase::gridClassToString(gb->getGridClass()));
+        if (!(ga->transform() == gb->transform())) out.push_back(where + ": the transform changed");
+        if (ga->voxelSize() != gb->voxelSize()) out.push_back(where + ": the voxel size changed");
+        compareMetadata(*ga, *gb, where, out);
+        if (ga->evalActiveVoxelBoundingBox() != gb->evalActiveVoxelBoundingBox()) {
+            std::ostringstream s;
+            s << where << ": the active index box " << ga->evalActiveVoxelBoundingBox() << " became "
+              << gb->evalActiveVoxelBoundingBox();
+            if (values) out.push_back(s.str());
+        }
+        if (!values || ga->valueType() != gb->valueType()) continue;
+        if (auto fa = openvdb::gridConstPtrCast<openvdb::FloatGrid>(ga))
+            compareValues(*fa, *openvdb::gridConstPtrCast<openvdb::FloatGrid>(gb), where, out);
+        else if (auto va = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(ga))
+            compareValues(*va, *openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(gb), where, out);
+        else if (ga->activeVoxelCount() != gb->activeVoxelCount())
+            out.push_back(where + ": the active voxel count changed");
     }
     return out;
 }

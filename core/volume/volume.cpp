@@ -13,7 +13,7 @@ Volume::Volume(Int3 dims, const Mat4& worldFromIndex)
     : m_dims(dims), m_worldFromIndex(worldFromIndex), m_extinction(size_t(dims.volume()) * 3, 0.0f) {
     if (dims.x < 1 || dims.y < 1 || dims.z < 1) {
         std::ostringstream s;
-        s << "Volume(): dimensions must be at least 1x1x1, got " << dims;
+        s << "a volume's dimensions must be at least 1x1x1, got " << dims;
         throw InvalidArgument(s.str());
     }
 }
@@ -53,24 +53,39 @@ std::pair<Vec3, Vec3> Volume::range(const std::vector<float>& rgb) {
     return {lo, hi};
 }
 
-namespace {
-
-void checkGrid(const std::vector<float>& g, size_t expected, const char* name, float lo, float hi) {
-    if (g.size() != expected) {
-        throw InvalidArgument(std::string("Volume::validate(): grid '") + name + "' has " +
-                              std::to_string(g.size()) + " values, expected " + std::to_string(expected));
-    }
-    size_t bad = 0, first = 0;
-    for (size_t i = 0; i < g.size(); ++i) {
-        if (!(g[i] >= lo && g[i] <= hi)) {  // also catches NaN
-            if (bad++ == 0) first = i;
+InvalidValues findInvalidValues(const std::vector<float>& grid, int channels, float lo, float hi) {
+    InvalidValues r;
+    const size_t c = size_t(channels);
+    for (size_t voxel = 0; voxel * c < grid.size(); ++voxel) {
+        for (size_t k = 0; k < c; ++k) {
+            const float v = grid[voxel * c + k];
+            if (!(v >= lo && v <= hi)) {  // also catches NaN
+                if (r.count++ == 0) r.firstVoxel = voxel, r.firstValue = v;
+                break;
+            }
         }
     }
-    if (bad > 0) {
+    return r;
+}
+
+namespace {
+
+void checkGrid(const Volume& v, const std::vector<float>& g, int channels, const char* name, float lo, float hi) {
+    const size_t expected = v.voxelCount() * size_t(channels);
+    if (g.size() != expected) {
+        throw InvalidArgument(std::string("grid '") + name + "' has " + std::to_string(g.size()) +
+                              " values, expected " + std::to_string(expected));
+    }
+    InvalidValues bad = findInvalidValues(g, channels, lo, hi);
+    if (bad.count > 0) {
+        const Int3 d = v.dims();
+        const size_t n = bad.firstVoxel;
         std::ostringstream s;
-        s << "Volume::validate(): grid '" << name << "' has " << bad << " value(s) outside ["
-          << lo << ", " << hi << "] or not finite; the first is " << g[first] << " at voxel "
-          << first / 3;
+        s << "grid '" << name << "' has " << bad.count << " voxel(s) with values outside [" << lo << ", ";
+        if (hi == std::numeric_limits<float>::max()) s << "inf)";
+        else s << hi << "]";
+        s          << " or not finite; the first is " << bad.firstValue << " at voxel (" << n % size_t(d.x) << ", "
+          << (n / size_t(d.x)) % size_t(d.y) << ", " << n / (size_t(d.x) * size_t(d.y)) << ")";
         throw InvalidArgument(s.str());
     }
 }
@@ -80,28 +95,21 @@ void checkGrid(const std::vector<float>& g, size_t expected, const char* name, f
 void Volume::validate(const VolumeLimits& limits) const {
     std::ostringstream s;
     if (m_dims.x < 1 || m_dims.y < 1 || m_dims.z < 1) {
-        s << "Volume::validate(): dimensions " << m_dims << " are empty";
+        s << "the volume's dimensions " << m_dims << " are empty";
         throw InvalidArgument(s.str());
     }
     if (m_dims.volume() > limits.maxVoxels || m_dims.x > limits.maxSide ||
         m_dims.y > limits.maxSide || m_dims.z > limits.maxSide) {
-        s << "Volume::validate(): " << m_dims << " voxels is over the limit of " << limits.maxVoxels
-          << " voxels (at most " << limits.maxSide << " on a side)";
+        s << m_dims << " voxels is over the limit of " << limits.maxVoxels << " voxels (at most "
+          << limits.maxSide << " on a side)";
         throw LimitExceeded(s.str());
     }
     (void)m_worldFromIndex.inverseAffine();  // throws when singular
     const float inf = std::numeric_limits<float>::max();
-    const size_t n = voxelCount() * 3;
-    checkGrid(m_extinction, n, "extinction", 0.0f, inf);
-    if (hasAlbedo()) checkGrid(m_albedo, n, "albedo", 0.0f, 1.0f);
-    if (hasEmission()) checkGrid(m_emission, n, "emission", 0.0f, inf);
-    if (m_refractiveIndex) {
-        if (m_refractiveIndex->size() != voxelCount())
-            throw InvalidArgument("Volume::validate(): grid 'refractive_index' has the wrong size");
-        for (float v : *m_refractiveIndex)
-            if (!(v >= 1.0f && v < inf))
-                throw InvalidArgument("Volume::validate(): grid 'refractive_index' has a value < 1 or not finite");
-    }
+    checkGrid(*this, m_extinction, 3, "extinction", 0.0f, inf);
+    if (hasAlbedo()) checkGrid(*this, m_albedo, 3, "albedo", 0.0f, 1.0f);
+    if (hasEmission()) checkGrid(*this, m_emission, 3, "emission", 0.0f, inf);
+    if (m_refractiveIndex) checkGrid(*this, *m_refractiveIndex, 1, "refractive_index", 1.0f, inf);
 }
 
 }  // namespace volstyle::core

@@ -6,6 +6,7 @@
 /// the voxels' box [-0.5, n-0.5]³ (index space), and zero outside it.
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,6 +20,12 @@ struct VolumeLimits {
     int64_t maxVoxels = int64_t(256) * 256 * 256;
     int maxSide = 1024;
 };
+
+/// What a volume read from a VDB file keeps of that file, so that writing it again loses nothing:
+/// the file's grids as read (names, value types, classes, transforms, metadata, the grids volstyle
+/// does not use), its metadata and the index box the dense grids cover. Opaque outside vdb_io.cpp,
+/// the one translation unit that includes OpenVDB; immutable and shared by every copy of the volume.
+struct VdbSource;
 
 /// Defaults for absent grids: albedo 1 (white, lossless scattering: a cloud), emission 0.
 constexpr float kDefaultAlbedo = 1.0f;
@@ -44,6 +51,11 @@ public:
     const std::vector<float>& emission() const { return m_emission; }
     std::optional<std::vector<float>>& refractiveIndex() { return m_refractiveIndex; }
     const std::optional<std::vector<float>>& refractiveIndex() const { return m_refractiveIndex; }
+
+    /// The file this volume was read from, or null (built-in scenes, volumes made in memory).
+    /// Copies (solve results, versions) share it: saveVdb writes what they changed into it.
+    const std::shared_ptr<const VdbSource>& vdbSource() const { return m_vdbSource; }
+    void setVdbSource(std::shared_ptr<const VdbSource> source) { m_vdbSource = std::move(source); }
 
     bool hasAlbedo() const { return !m_albedo.empty(); }
     bool hasEmission() const { return !m_emission.empty(); }
@@ -83,6 +95,17 @@ private:
     Mat4 m_worldFromIndex;
     std::vector<float> m_extinction, m_albedo, m_emission;
     std::optional<std::vector<float>> m_refractiveIndex;
+    std::shared_ptr<const VdbSource> m_vdbSource;
 };
+
+/// Voxels of a grid with a value outside [lo, hi] or not finite: how many, and the first (flat
+/// voxel index) with its bad value.
+struct InvalidValues {
+    size_t count = 0;  ///< voxels
+    size_t firstVoxel = 0;
+    float firstValue = 0;
+};
+/// `channels` floats per voxel (3 for RGB grids, 1 for refractive index).
+InvalidValues findInvalidValues(const std::vector<float>& grid, int channels, float lo, float hi);
 
 }  // namespace volstyle::core

@@ -5,11 +5,14 @@ Creates a session from a built-in scene, adds a view, uploads a painted target (
 written as a Radiance .hdr, which needs no imaging library), solves for emission while printing the
 progress events, and downloads the solved volume as OpenVDB.
 
-    python3 docs/examples/client.py http://127.0.0.1:8080 [out.vdb] [--token T]
+    python3 docs/examples/client.py [http://127.0.0.1:8080] [out.vdb] [--token T]
+
+The token (a server started with --token) may also come from $VOLSTYLE_TOKEN.
 """
+import argparse
 import json
+import os
 import struct
-import sys
 import urllib.error
 import urllib.request
 
@@ -60,10 +63,14 @@ def radiance_hdr(width, height, rgb):
 
 
 def main():
-    args = [a for a in sys.argv[1:] if not a.startswith("--token")]
-    token = next((a.split("=", 1)[1] for a in sys.argv[1:] if a.startswith("--token=")), None)
-    api = Api(args[0] if args else "http://127.0.0.1:8080", token)
-    out = args[1] if len(args) > 1 else "solved.vdb"
+    parser = argparse.ArgumentParser(description="Solve a painted view through the volstyle API.")
+    parser.add_argument("url", nargs="?", default="http://127.0.0.1:8080", help="the server (default %(default)s)")
+    parser.add_argument("out", nargs="?", default="solved.vdb", help="where to write the result (default %(default)s)")
+    parser.add_argument("--token", default=os.environ.get("VOLSTYLE_TOKEN"),
+                        help="the server's bearer token (default $VOLSTYLE_TOKEN)")
+    args = parser.parse_args()
+    api = Api(args.url, args.token)
+    out = args.out
 
     print("server:", api.request("GET", "/health")["gl_renderer"])
     session = api.request("POST", "/sessions", {"scene": "builtin:sphere", "resolution": 32})

@@ -7,11 +7,13 @@
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <map>
 #include <mutex>
 #include <string>
 
 #include "core/image/image.h"
+#include "core/render/renderer.h"
 #include "protocol/requests.h"
 #include "server/session_service.h"
 
@@ -50,9 +52,18 @@ inline const std::string kSessionPath = kApi + R"(/sessions/([0-9a-f]+))";
 inline const std::string kViewPath = kSessionPath + R"(/views/(v[0-9]+))";
 inline const std::string kJobPath = kApi + R"(/jobs/([0-9a-f]+))";
 
+/// Registers PUT `pattern` for a binary upload (a VDB or an image): `handler(req, res, bytes)`.
+/// The body is read whatever its Content-Type — curl's --data-binary sends
+/// application/x-www-form-urlencoded, which cpp-httplib would parse as a form and refuse over
+/// 8 KiB with an empty 413 — and the readers recognise the bytes by their magic numbers.
+void putUpload(RouteContext& c, const std::string& pattern,
+               std::function<void(const httplib::Request&, httplib::Response&, const std::string&)> handler);
+
 void reply(httplib::Response& res, int status, const nlohmann::json& body);
 /// Encodes `image` (PNG: sRGB with `exposure` stops; EXR: linear) as the answer.
 void replyImage(httplib::Response& res, const core::Image& image, protocol::ImageFormat format, double exposure = 0);
+/// A render as PNG (the beauty, sRGB with `exposure` stops) or layered EXR (docs/FORMATS.md).
+void replyImage(httplib::Response& res, const core::RenderLayers& render, protocol::ImageFormat format, double exposure = 0);
 
 // Each file registers the routes of one resource.
 void addSystemRoutes(RouteContext& c);   ///< health, schema, scenes

@@ -38,7 +38,8 @@ void addSessionRoutes(RouteContext& c) {
     c.http.Post(kSessionPath + "/render", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);
         auto request = protocol::RenderRequest::fromJson(c.body(req), c.limits);
-        replyImage(res, c.service.render(*s, request.camera), request.format, request.exposure);
+        replyImage(res, c.service.render(*s, request.camera, request.format == protocol::ImageFormat::Exr), request.format,
+                   request.exposure);
     });
 }
 

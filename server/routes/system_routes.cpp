@@ -1,6 +1,7 @@
 // GET /health, /schema.json, /scenes, /quarantine.
 #include "core/volume/builtin_scenes.h"
 #include "protocol/validation.h"
+#include "server/cli.h"
 #include "server/routes/route_context.h"
 
 namespace volstyle::server {
@@ -8,7 +9,7 @@ namespace volstyle::server {
 void addSystemRoutes(RouteContext& c) {
     c.http.Get(kApi + "/health", [&c](const httplib::Request&, httplib::Response& res) {
         const auto& caps = c.service.capabilities();
-        reply(res, 200, {{"status", "ok"}, {"version", "0.1.0"}, {"api", protocol::kApiVersion},
+        reply(res, 200, {{"status", "ok"}, {"version", versionString()}, {"api", protocol::kApiVersion},
                          {"gl_renderer", caps.renderer}, {"gl_version", caps.version}});
     });
     c.http.Get(kApi + "/schema.json", [](const httplib::Request&, httplib::Response& res) {

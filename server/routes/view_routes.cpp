@@ -26,9 +26,9 @@ void addViewRoutes(RouteContext& c) {
     });
     for (ViewImage kind : {ViewImage::Target, ViewImage::Weights}) {
         const std::string part = kind == ViewImage::Target ? "/target" : "/weights";
-        c.http.Put(kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res) {
+        putUpload(c, kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
             auto s = c.service.find(req.matches[1]);
-            reply(res, 200, viewJson(c.service.setViewImage(*s, req.matches[2], kind, req.body)));
+            reply(res, 200, viewJson(c.service.setViewImage(*s, req.matches[2], kind, bytes)));
         });
     }
     c.http.Get(kViewPath + "/target.png", [&c](const httplib::Request& req, httplib::Response& res) {
@@ -42,7 +42,7 @@ void addViewRoutes(RouteContext& c) {
         auto s = c.service.find(req.matches[1]);
         auto query = protocol::ViewRenderQuery::fromQuery(req.params);
         const auto format = req.matches[3] == "png" ? protocol::ImageFormat::Png : protocol::ImageFormat::Exr;
-        replyImage(res, c.service.renderView(*s, req.matches[2]), format, query.exposure);
+        replyImage(res, c.service.renderView(*s, req.matches[2], format == protocol::ImageFormat::Exr), format, query.exposure);
     });
 }
 

@@ -6,9 +6,9 @@
 namespace volstyle::server {
 
 void addVolumeRoutes(RouteContext& c) {
-    c.http.Put(kSessionPath + "/volume", [&c](const httplib::Request& req, httplib::Response& res) {
+    putUpload(c, kSessionPath + "/volume", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
         auto s = c.service.find(req.matches[1]);
-        c.service.uploadVdb(*s, req.body);
+        c.service.uploadVdb(*s, bytes);
         reply(res, 200, sessionJson(*s));
     });
     c.http.Get(kSessionPath + R"(/volume\.vdb)", [&c](const httplib::Request& req, httplib::Response& res) {

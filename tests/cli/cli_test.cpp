@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "../unit/test_files.h"
 #include "core/image/image_io.h"
@@ -76,20 +77,57 @@ TEST(Cli, BadInputsAreExit2) {
     struct Case {
         std::string args, expect;
     } cases[] = {
-        {"render --scene " + (dir / "junk.vdb").string() + out, "not a readable OpenVDB"},
+        {"render --scene " + (dir / "junk.vdb").string() + out, "is not an OpenVDB file"},
         {"render --scene builtin:smoke" + out, "unknown scene 'smoke'"},
-        {"render --scene builtin:cube:16 --camera " + (dir / "missing.json").string() + out, "cannot read"},
+        {"render --scene builtin:cube:16 --camera " + (dir / "missing.json").string() + out, "no such file"},
+        {"render --scene builtin:cube:16 -o " + (dir / "absent" / "x.png").string(), "no such folder"},
+        {"render --scene " + (dir / "absent.vdb").string() + out, "no such file"},
         {"render --scene builtin:cube:16 --camera " + (dir / "bad.json").string() + out, "not valid JSON"},
         {"render --scene builtin:cube:16 --step 0" + out, "step"},
         {"render --scene builtin:cube:16 --zoom 2" + out, "unknown option '--zoom'"},
         {"render --scene builtin:cube:16 -o " + (dir / "x.bmp").string(), ".png or .exr"},
-        {"info " + (dir / "junk.vdb").string(), "not a readable OpenVDB"},
+        {"info " + (dir / "junk.vdb").string(), "is not an OpenVDB file"},
         {"frobnicate", "unknown command"},
     };
     for (const auto& c : cases) {
         Result r = run(c.args);
         EXPECT_EQ(r.status, 2) << c.args << "\n" << r.out;
         EXPECT_NE(r.out.find(c.expect), std::string::npos) << c.args << "\n" << r.out;
+        EXPECT_EQ(r.out.find("()"), std::string::npos) << "no function names in messages: " << r.out;
+    }
+    EXPECT_FALSE(fs::exists(dir / "absent")) << "-o into a missing folder must not create it";
+}
+
+TEST(Cli, VersionAndHelpDescribeEveryOptionWithItsDefault) {
+    Result version = run("--version");
+    EXPECT_EQ(version.status, 0);
+    EXPECT_NE(version.out.find("volstyle 0."), std::string::npos) << version.out;
+    Result overview = run("help");
+    EXPECT_EQ(overview.status, 0);
+    for (const char* command : {"serve", "render", "solve", "info", "convert"})
+        EXPECT_NE(overview.out.find(std::string("  ") + command), std::string::npos) << command << "\n" << overview.out;
+    for (const char* command : {"serve", "render", "solve"}) {
+        Result help = run(std::string("help ") + command);
+        EXPECT_EQ(help.status, 0) << command;
+        EXPECT_EQ(help.out, run(std::string(command) + " --help").out) << command;
+        // Every option line says what it does, and every option that takes a value its default
+        // (or that it is required).
+        size_t options = 0;
+        std::istringstream lines(help.out.substr(help.out.find("options:")));
+        for (std::string line; std::getline(lines, line);) {
+            if (line.rfind("  --", 0) != 0 || line.rfind("  --help", 0) == 0) continue;
+            ++options;
+            std::istringstream words(line);
+            std::string flag, second;
+            words >> flag >> second;
+            const bool takesValue = !second.empty() && second.find_first_of("abcdefghijklmnopqrstuvwxyz") == std::string::npos;
+            EXPECT_GT(line.size(), 40u) << command << ": " << line;
+            if (takesValue) {
+                EXPECT_TRUE(line.find("default") != std::string::npos || line.find("required") != std::string::npos)
+                    << command << ": " << line;
+            }
+        }
+        EXPECT_GE(options, 3u) << help.out;
     }
 }
 
@@ -146,5 +184,6 @@ TEST(Cli, SolveBadInputsAreExit2) {
         Result r = run(c.args);
         EXPECT_EQ(r.status, 2) << c.args << "\n" << r.out;
         EXPECT_NE(r.out.find(c.expect), std::string::npos) << c.args << "\n" << r.out;
+        EXPECT_EQ(r.out.find("()"), std::string::npos) << "no function names in messages: " << r.out;
     }
 }

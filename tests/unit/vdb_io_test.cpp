@@ -8,6 +8,7 @@
 #include <set>
 
 #include "core/base/errors.h"
+#include "core/volume/builtin_scenes.h"
 #include "core/volume/vdb_io.h"
 #include "test_files.h"
 
@@ -77,11 +78,163 @@ TEST(VdbIo, SparseWriteKeepsActiveVoxelsAsLeavesNotTiles) {
     EXPECT_EQ(grid->tree().activeTileCount(), 0u) << "active values must be voxels (Blender renders tiles empty)";
     EXPECT_EQ(grid->tree().activeLeafVoxelCount(), 16u * 16 * 16);
 
-    // Loading gives the active box back, with the transform shifted to its corner.
+    // The dense box (32³, wider than the active voxels) is recorded, so loading gives the same
+    // volume back: same dims, same transform, same values.
     Volume back = loadVdb(path);
-    EXPECT_EQ(back.dims(), (Int3{16, 16, 16}));
-    Vec3d corner = back.worldFromIndex().applyPoint({0, 0, 0});
-    EXPECT_NEAR(corner.x, 4.0, 1e-12);  // voxel 8 at 0.5 per voxel
+    EXPECT_EQ(back.dims(), v.dims());
+    EXPECT_EQ(back.worldFromIndex(), v.worldFromIndex());
+    EXPECT_EQ(back.extinction(), v.extinction());
+}
+
+TEST(VdbIo, EveryBuiltinSceneComesBackBitForBit) {
+    auto dir = test::scratchDir();
+    for (const auto& scene : builtinScenes()) {
+        const Volume v = makeBuiltinScene(scene.name, 20);
+        const std::string path = (dir / (scene.name + ".vdb")).string();
+        saveVdb(path, v);
+        const Volume back = loadVdb(path);
+        ASSERT_EQ(back.dims(), v.dims()) << scene.name;
+        EXPECT_EQ(back.worldFromIndex(), v.worldFromIndex()) << scene.name;
+        EXPECT_EQ(back.extinction(), v.extinction()) << scene.name;
+        EXPECT_EQ(back.albedo(), v.albedo()) << scene.name << ": albedo (absent voxels must read as 1, not 0)";
+        EXPECT_EQ(back.emission(), v.emission()) << scene.name;
+        // And again from the file it was read from (a version restored after a restart).
+        saveVdb(path + "2", back);
+        EXPECT_TRUE(vdbDifferences(path, path + "2").empty()) << scene.name;
+    }
+}
+
+namespace {
+
+/// A file as Houdini might write it: float `density` (fog volume) at an index offset with a
+/// voxel size no decimal writes exactly, an active tile, a float albedo, grids volstyle does not
+/// use (`temperature`, `vel`), and grid and file metadata.
+std::string writeForeignFile(const std::filesystem::path& dir) {
+    openvdb::initialize();
+    auto xf = openvdb::math::Transform::createLinearTransform(0.037);
+    xf->postTranslate(openvdb::Vec3d(1.0 / 3.0, -2.5, 0.1));
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setName("density");
+    density->setGridClass(openvdb::GRID_FOG_VOLUME);
+    density->setTransform(xf);
+    auto albedo = openvdb::FloatGrid::create(0.0f);
+    albedo->setName("albedo");
+    albedo->setTransform(xf);
+    auto temperature = openvdb::FloatGrid::create(0.0f);
+    temperature->setName("temperature");
+    temperature->setTransform(xf);
+    auto vel = openvdb::Vec3SGrid::create();
+    vel->setName("vel");
+    vel->setGridClass(openvdb::GRID_STAGGERED);
+    vel->setTransform(xf);
+    std::mt19937 rng(7);
+    for (int k = 10; k < 22; ++k)
+        for (int j = -6; j < 5; ++j)
+            for (int i = -13; i < -2; ++i) {
+                const openvdb::Coord ijk(i, j, k);
+                const float r = float(rng() % 1000) / 1000.0f;
+                if (r < 0.15f) continue;  // holes: inactive voxels inside the box
+                density->tree().setValue(ijk, 2.0f * r);
+                albedo->tree().setValue(ijk, 0.5f + 0.4f * r);
+                temperature->tree().setValue(ijk, 300.0f + r);
+                vel->tree().setValue(ijk, openvdb::Vec3s(r, -r, 0.5f));
+            }
+    density->tree().addTile(1, openvdb::Coord(40, 40, 40), 0.75f, true);  // an 8³ active tile
+    temperature->tree().setValue(openvdb::Coord(200, 0, 0), 1000.0f);   // far outside the density
+    density->insertMeta("houdini_attribute", openvdb::StringMetadata("density"));
+    density->insertMeta("simulation_frame", openvdb::Int32Metadata(42));
+    vel->insertMeta("vector_type", openvdb::StringMetadata("contravariant relative"));
+    openvdb::MetaMap fileMeta;
+    fileMeta.insertMeta("creator", openvdb::StringMetadata("Houdini 19.5"));
+    fileMeta.insertMeta("frame_rate", openvdb::DoubleMetadata(24.0));
+    const std::string path = (dir / "foreign.vdb").string();
+    openvdb::io::File(path).write({density, temperature, albedo, vel}, fileMeta);
+    return path;
+}
+
+std::set<std::string> gridNamesIn(const std::string& path) {
+    std::set<std::string> names;
+    for (const auto& g : inspectVdb(path)) names.insert(g.name);
+    return names;
+}
+
+}  // namespace
+
+TEST(VdbIo, AForeignFileComesBackLosslessly) {
+    auto dir = test::scratchDir();
+    const std::string in = writeForeignFile(dir);
+    const Volume v = loadVdb(in);
+    const std::string out = (dir / "out.vdb").string();
+    saveVdb(out, v);
+    const auto lost = vdbDifferences(in, out);
+    EXPECT_TRUE(lost.empty()) << lost.front();
+    EXPECT_EQ(gridNamesIn(out), (std::set<std::string>{"density", "temperature", "albedo", "vel"}));
+    const Volume back = loadVdb(out);
+    EXPECT_EQ(back.dims(), v.dims());
+    EXPECT_EQ(back.worldFromIndex(), v.worldFromIndex());
+    EXPECT_EQ(back.extinction(), v.extinction());
+    EXPECT_EQ(back.albedo(), v.albedo());
+}
+
+TEST(VdbIo, AChangedGridKeepsItsNameClassTypeIndexSpaceAndMetadata) {
+    auto dir = test::scratchDir();
+    const std::string in = writeForeignFile(dir);
+    Volume v = loadVdb(in);
+    // A grey change (an albedo solve of a grey paint): `albedo` stays a float grid.
+    for (size_t i = 0; i < v.voxelCount(); i += 7)
+        for (int c = 0; c < 3; ++c) v.albedo()[3 * i + c] = 0.25f;
+    const std::string grey = (dir / "grey.vdb").string();
+    saveVdb(grey, v);
+    auto lost = vdbDifferences(in, grey, /*values=*/false);
+    EXPECT_TRUE(lost.empty()) << lost.front();
+    auto backGrey = loadVdb(grey);
+    EXPECT_EQ(backGrey.albedo(), v.albedo());
+    EXPECT_EQ(backGrey.extinction(), v.extinction());
+    // The untouched grids are still bit for bit what they were.
+    for (const auto& line : vdbDifferences(in, grey))
+        EXPECT_NE(line.find("'albedo'"), std::string::npos) << "only albedo may differ: " << line;
+
+    // A colour change makes it Vec3f, under the same name; nothing else changes.
+    v.albedo()[0] = 0.1f;
+    const std::string colour = (dir / "colour.vdb").string();
+    saveVdb(colour, v);
+    lost = vdbDifferences(in, colour, /*values=*/false);
+    ASSERT_EQ(lost.size(), 1u);
+    EXPECT_EQ(lost[0], "grid 'albedo': type float became vec3s");
+    EXPECT_EQ(loadVdb(colour).albedo(), v.albedo());
+}
+
+TEST(VdbIo, ATextFileIsNotAVdbAndABadValueIsLocated) {
+    auto dir = test::scratchDir();
+    test::writeBytes(dir / "notes.vdb", "these are my notes, not a volume\n");
+    try {
+        loadVdb((dir / "notes.vdb").string());
+        FAIL();
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("is not an OpenVDB file"), std::string::npos) << e.what();
+    }
+    try {
+        loadVdb((dir / "absent.vdb").string());
+        FAIL();
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("no such file"), std::string::npos) << e.what();
+    }
+    auto grid = openvdb::FloatGrid::create();
+    grid->setName("density");
+    grid->tree().setValue(openvdb::Coord(-1, 0, 0), 1.0f);
+    grid->tree().setValue(openvdb::Coord(2, 3, 4), std::numeric_limits<float>::quiet_NaN());
+    grid->tree().setValue(openvdb::Coord(3, 3, 4), std::numeric_limits<float>::quiet_NaN());
+    openvdb::io::File((dir / "nan.vdb").string()).write({grid});
+    try {
+        loadVdb((dir / "nan.vdb").string());
+        FAIL();
+    } catch (const InvalidArgument& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("grid 'density'"), std::string::npos) << m;
+        EXPECT_NE(m.find("has 2 voxel(s)"), std::string::npos) << m;
+        EXPECT_NE(m.find("at voxel 2,3,4"), std::string::npos) << m;
+        EXPECT_EQ(m.find("()"), std::string::npos) << "no function names: " << m;
+    }
 }
 
 TEST(VdbIo, MissingExtinctionGridNamesTheGridsPresent) {
@@ -111,7 +264,7 @@ TEST(VdbIo, NanAndNegativeVoxelsAreRejected) {
             loadVdb(path);
             FAIL() << "loaded a grid with " << bad;
         } catch (const InvalidArgument& e) {
-            EXPECT_NE(std::string(e.what()).find("extinction"), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("grid 'density'"), std::string::npos) << e.what();
         }
     }
 }

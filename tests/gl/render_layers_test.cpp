@@ -1,0 +1,84 @@
+// Compositing-ready renders (issue #10): the EXR's main RGBA is the medium alone, premultiplied,
+// so `over` a black plate equals a render with a black background, and the layers add up.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/image/image_io.h"
+#include "core/render/exr_layers.h"
+#include "core/render/gpu_volume.h"
+#include "core/volume/builtin_scenes.h"
+#include "../unit/test_files.h"
+#include "gl_test_env.h"
+
+using namespace volstyle;
+using namespace volstyle::core;
+
+namespace {
+
+Camera smallCamera() {
+    Camera c;
+    c.eye = {0.3, 0.4, 3.2};
+    c.width = c.height = 24;
+    return c;
+}
+
+/// A sun and a bright coloured sky (what the layers must keep out of the medium's light).
+Lighting sky(Vec3d colour) {
+    Lighting l = defaultLighting();
+    l.background.color = colour;
+    return l;
+}
+
+/// Largest |a − b| over RGB (and alpha when `alpha`).
+double maxDifference(const Image& a, const Image& b, bool alpha) {
+    double worst = 0;
+    for (size_t i = 0; i < a.rgba.size(); ++i)
+        if (alpha || i % 4 != 3) worst = std::max(worst, std::abs(double(a.rgba[i]) - double(b.rgba[i])));
+    return worst;
+}
+
+}  // namespace
+
+TEST(RenderLayers, MediumOverABlackPlateIsTheRenderWithABlackBackground) {
+    VOLSTYLE_REQUIRE_GL();
+    Volume v = makeBuiltinScene("plume", 20);  // emission and scattering
+    GpuVolume gpu(v);
+    const RenderLayers layers = test::sharedRenderer().renderLayers(gpu, smallCamera(), sky({0.4, 0.6, 0.9}));
+    const Image black = test::sharedRenderer().render(gpu, smallCamera(), sky({0, 0, 0}));
+    // over a black plate: medium + (1 − alpha)·0 = medium
+    EXPECT_LE(maxDifference(layers.medium, black, true), 1e-4);
+    // The parts add up: medium = emission + scattering; beauty = medium + transmittance·background.
+    double parts = 0, beauty = 0, coverage = 0;
+    for (size_t p = 0; p < layers.medium.pixelCount(); ++p) {
+        for (int c = 0; c < 3; ++c) {
+            const size_t i = 4 * p + size_t(c);
+            parts = std::max(parts, double(std::abs(layers.medium.rgba[i] - layers.emission.rgba[i] - layers.scattering.rgba[i])));
+            beauty = std::max(beauty, double(std::abs(layers.beauty.rgba[i] - layers.medium.rgba[i] -
+                                                       layers.transmittance.rgba[i] * layers.background.rgba[i])));
+        }
+        coverage = std::max(coverage, double(layers.medium.rgba[4 * p + 3]));
+    }
+    EXPECT_LE(parts, 1e-5);
+    EXPECT_LE(beauty, 1e-5);
+    EXPECT_GT(coverage, 0.3) << "the plume is in view";
+    double emitted = 0;
+    for (float x : layers.emission.rgba) emitted = std::max(emitted, double(x));
+    EXPECT_GT(emitted, 0.01) << "the plume emits";
+}
+
+TEST(RenderLayers, TheExrHoldsTheLayersUnderNukesNames) {
+    VOLSTYLE_REQUIRE_GL();
+    Volume v = makeBuiltinScene("plume", 16);
+    GpuVolume gpu(v);
+    const RenderLayers layers = test::sharedRenderer().renderLayers(gpu, smallCamera(), sky({0.4, 0.6, 0.9}));
+    const auto path = test::scratchDir() / "layers.exr";
+    saveExrLayers(path.string(), exrLayersOf(layers), /*halfFloat=*/false);
+    // The main RGBA reads back as the medium; the channel list names every layer.
+    const Image back = loadImage(path.string()).image;
+    EXPECT_LE(maxDifference(back, layers.medium, true), 1e-6);
+    const std::string bytes = test::readBytes(path);
+    for (const char* channel : {"background.R", "emission.G", "scattering.B", "transmittance.R"})
+        EXPECT_NE(bytes.find(std::string(channel) + '\0'), std::string::npos) << channel;
+}
