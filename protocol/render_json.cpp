@@ -1,14 +1,11 @@
 #include "protocol/render_json.h"
 
+#include <cstdio>
+
 namespace volstyle::protocol {
 namespace {
 
 nlohmann::json toJson(const Vec3d& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
-
-/// Adds the value-range problems core reports, as pointers below `path`.
-void addProblems(JsonReader& r, const std::string& path, const std::vector<core::FieldProblem>& problems) {
-    for (const auto& p : problems) r.fail(path + "/" + p.field, p.message);
-}
 
 }  // namespace
 
@@ -26,7 +23,10 @@ core::Camera cameraFromJson(const nlohmann::json& j, const std::string& path) {
         if (j.contains("height")) cam.height = r.integer(j["height"], path + "/height").value_or(cam.height);
         if (j.contains("near")) cam.nearDist = r.number(j["near"], path + "/near").value_or(cam.nearDist);
         if (j.contains("far")) cam.farDist = r.number(j["far"], path + "/far").value_or(cam.farDist);
-        if (r.ok()) addProblems(r, path, cam.check());
+        for (const auto& p : cam.check()) {
+            if (p.field == "target" || p.field == "up") r.check(path, p.field, p.message, {"eye", "target", "up"});  // eye = target, up ∥ view
+            else r.check(path, p.field, p.message);
+        }
     }
     r.throwIfErrors();
     return cam;
@@ -59,16 +59,17 @@ LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& pat
     LightingRequest out;
     core::Lighting& L = out.lighting;
     L.lights.clear();
+    std::vector<std::string> lightPaths;  // where each of L.lights came from, for its problems
     if (r.object(j, path, {"sun", "lights", "background", "phase"})) {
         if (j.contains("sun"))
-            if (auto l = lightFromJson(r, j["sun"], path + "/sun")) L.lights.push_back(*l);
+            if (auto l = lightFromJson(r, j["sun"], path + "/sun")) L.lights.push_back(*l), lightPaths.push_back(path + "/sun");
         if (j.contains("lights")) {
             if (!j["lights"].is_array()) {
                 r.fail(path + "/lights", "must be an array of lights");
             } else {
                 for (size_t i = 0; i < j["lights"].size(); ++i)
                     if (auto l = lightFromJson(r, j["lights"][i], path + "/lights/" + std::to_string(i)))
-                        L.lights.push_back(*l);
+                        L.lights.push_back(*l), lightPaths.push_back(path + "/lights/" + std::to_string(i));
             }
         }
         if (j.contains("background")) {
@@ -96,7 +97,15 @@ LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& pat
             }
             if (ph.contains("g")) L.phase.g = r.number(ph["g"], path + "/phase/g").value_or(0);
         }
-        if (r.ok()) addProblems(r, path, L.check());
+        // Every problem at once: values that parsed are checked even when others did not (those
+        // keep valid defaults), each under the field it came from ("sun" is not "lights/0").
+        for (const auto& problem : L.check()) {
+            size_t light = 0, used = 0;
+            if (std::sscanf(problem.field.c_str(), "lights/%zu%zn", &light, &used) == 1 && light < lightPaths.size())
+                r.check(lightPaths[light], problem.field.substr(size_t(used) + 1), problem.message);
+            else
+                r.check(path, problem.field, problem.message);
+        }
     }
     r.throwIfErrors();
     return out;

@@ -93,8 +93,7 @@ core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::stri
                 for (size_t i = 0; i < j["views"].size(); ++i)
                     if (auto s = r.string(j["views"][i], path + "/views/" + std::to_string(i))) o.views.push_back(*s);
         }
-        if (r.ok())
-            for (const auto& p : o.check()) r.fail(path + "/" + p.field, p.message);
+        for (const auto& p : o.check()) r.check(path, p.field, p.message);
     }
     r.throwIfErrors();
     return o;

@@ -7,12 +7,16 @@
 namespace volstyle::protocol {
 namespace {
 
+/// Every problem, in one line (a CLI user sees only this; the API also sends `details`), up to a
+/// bound that keeps a hostile body's thousand errors out of the logs.
+constexpr size_t kSummarized = 16;
+
 std::string summarize(const std::vector<FieldError>& details) {
     std::string s;
-    for (size_t i = 0; i < details.size() && i < 3; ++i)
+    for (size_t i = 0; i < details.size() && i < kSummarized; ++i)
         s += (i ? "; " : "") + (details[i].path.empty() ? std::string("(document)") : details[i].path) + ": " +
              details[i].message;
-    if (details.size() > 3) s += "; and " + std::to_string(details.size() - 3) + " more";
+    if (details.size() > kSummarized) s += "; and " + std::to_string(details.size() - kSummarized) + " more";
     return s;
 }
 
@@ -99,6 +103,21 @@ std::optional<Vec3d> JsonReader::vec3(const nlohmann::json& j, const std::string
         if (c) v[i] = *c;
     }
     return good ? std::optional<Vec3d>(v) : std::nullopt;
+}
+
+bool JsonReader::failed(const std::string& path) const {
+    for (const auto& e : m_errors)
+        if (e.path == path || e.path.rfind(path + "/", 0) == 0) return true;
+    return false;
+}
+
+void JsonReader::check(const std::string& path, const std::string& field, const std::string& message,
+                       std::initializer_list<const char*> dependsOn) {
+    const std::string at = path + "/" + field;
+    if (failed(at)) return;
+    for (const char* other : dependsOn)
+        if (failed(path + "/" + other)) return;
+    fail(at, message);
 }
 
 void JsonReader::throwIfErrors() const {

@@ -46,6 +46,12 @@ public:
     std::optional<std::string> string(const nlohmann::json& j, const std::string& path);
     std::optional<Vec3d> vec3(const nlohmann::json& j, const std::string& path);
     void fail(const std::string& path, const std::string& message) { m_errors.push_back({path, message}); }
+    /// Records a value check (`path` + "/" + `field`) unless that field, or one it `dependsOn`,
+    /// already failed to read: the check would then be about a default, not the input. So every
+    /// problem of a body is reported at once, and none twice.
+    void check(const std::string& path, const std::string& field, const std::string& message,
+               std::initializer_list<const char*> dependsOn = {});
+    bool failed(const std::string& path) const;  ///< a problem was recorded at `path` or below it
 
     bool ok() const { return m_errors.empty(); }
     /// Throws ValidationError if anything was recorded.

@@ -5,6 +5,8 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <fmt/format.h>
+
 #include <filesystem>
 #include <iostream>
 #include <sstream>
@@ -176,7 +178,7 @@ std::string choice(const Arguments& args, const std::string& flag, const std::ve
 }
 
 /// Options: defaults, then OPTS.json, then flags; validated.
-core::SolveOptions solveOptions(const Arguments& args) {
+core::SolveOptions solveOptions(const Arguments& args, const core::Lighting& lighting) {
     core::SolveOptions opt;
     if (args.has("options"))
         opt = fromFile(args.get("options"), [&](const nlohmann::json& j) { return protocol::solveOptionsFromJson(j, "", opt); });
@@ -199,6 +201,12 @@ core::SolveOptions solveOptions(const Arguments& args) {
     if (args.has("medium-radiance")) {
         auto m = numbers("medium-radiance", args.get("medium-radiance"), 3);
         opt.mediumRadiance = Vec3d(m[0], m[1], m[2]);
+    }
+    if (opt.unknown == core::Unknown::Extinction && !opt.mediumRadiance) {
+        const Vec3d b = lighting.background.color;  // a good start: where the medium is opaque it hides the background
+        throw InvalidArgument(fmt::format("an extinction solve needs --medium-radiance R,G,B, the radiance the medium shows "
+                                          "where it is opaque (TVCG Sec. 4.2.4); e.g. the background's: --medium-radiance {:g},{:g},{:g}",
+                                          b.x, b.y, b.z));
     }
     opt.validate();
     return opt;
@@ -224,10 +232,10 @@ int runSolve(const std::vector<std::string>& argv) {
     const std::string output = args.get("output");
     if (fs::path(output).extension() != ".vdb") throw InvalidArgument("-o must end in .vdb, got '" + output + "'");
     requireParentFolder(output);  // before the work, not after it
-    const core::SolveOptions opt = solveOptions(args);
-
     core::Lighting lighting = core::defaultLighting();
     std::vector<core::SolveView> views = readViews(args.get("views"), lighting);
+    const core::SolveOptions opt = solveOptions(args, lighting);
+
     core::Volume volume = loadScene(args.get("scene"));
 
     auto device = core::GpuDevice::create();

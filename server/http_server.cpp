@@ -146,6 +146,10 @@ void HttpServer::Impl::addMiddleware() {
         if (!res.has_header("X-Request-Id")) beginRequest(res);  // refused before routing began
         const int status = res.status;
         if (status == 404) replyError(res, protocol::ErrorCode::NotFound, "no route " + req.method + " " + req.path);
+        else if (status == 413 && req.get_header_value("Content-Type").rfind("application/x-www-form-urlencoded", 0) == 0)
+            // cpp-httplib parses a form body itself and refuses one over 8 KiB (curl -d's default type).
+            replyError(res, protocol::ErrorCode::TooLarge,
+                       "a body sent as a form (curl -d) is limited to 8 KiB; send JSON with -H 'Content-Type: application/json'");
         else if (status == 413) replyError(res, protocol::ErrorCode::TooLarge, "the request body is over the server's payload limit");
         else if (status == 414 || status == 431) replyError(res, protocol::ErrorCode::TooLarge, "the request's URI or headers are too long");
         else if (status == 416) replyError(res, protocol::ErrorCode::InvalidArgument, "the requested range cannot be served");

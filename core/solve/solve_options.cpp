@@ -40,7 +40,7 @@ std::vector<FieldProblem> SolveOptions::check() const {
         out.push_back({"resolution", "each size must be in [1, 1024]"});
     if (unknown == Unknown::Extinction) {
         if (!mediumRadiance) {
-            out.push_back({"medium_radiance", "is required for an extinction solve (TVCG Sec. 4.2.4)"});
+            out.push_back({"medium_radiance", "is required for an extinction solve: L_m, the radiance the medium shows where it is opaque (TVCG Sec. 4.2.4)"});
         } else if (!(std::isfinite(mediumRadiance->x) && std::isfinite(mediumRadiance->y) &&
                      std::isfinite(mediumRadiance->z) && minComponent(*mediumRadiance) >= 0)) {
             out.push_back({"medium_radiance", "must be finite and >= 0"});

@@ -1,5 +1,7 @@
 // Solve jobs: POST /sessions/{sid}/solve, GET/DELETE /jobs/{jid}, GET …/events (SSE),
 // GET …/preview/{vid}.png.
+#include <fmt/format.h>
+
 #include "server/routes/route_context.h"
 
 namespace volstyle::server {
@@ -39,7 +41,18 @@ void streamEvents(httplib::Response& res, std::shared_ptr<Job> job, StreamLimite
 void addJobRoutes(RouteContext& c) {
     c.http.Post(kSessionPath + "/solve", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);
-        auto request = protocol::SolveRequest::fromJson(c.body(req), c.limits);
+        protocol::SolveRequest request;
+        try {
+            request = protocol::SolveRequest::fromJson(c.body(req), c.limits);
+        } catch (const protocol::ValidationError& e) {
+            // An extinction solve without L_m: suggest the session's background, a good start.
+            const Vec3d b = c.service.lighting(*s).background.color;
+            auto details = e.details();
+            for (auto& d : details)
+                if (d.path == "/medium_radiance" && d.message.rfind("is required", 0) == 0)
+                    d.message += fmt::format("; e.g. the background's, \"medium_radiance\": [{:g}, {:g}, {:g}]", b.x, b.y, b.z);
+            throw protocol::ValidationError(details);
+        }
         reply(res, 202, {{"job", c.service.startSolve(s, request.options)->id}});
     });
     c.http.Get(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {

@@ -176,7 +176,7 @@ TEST(Cli, SolveBadInputsAreExit2) {
         {"solve --scene builtin:cloud:32 --views " + (dir / "views.json").string() + out, "missing.png"},
         {"solve --scene builtin:cloud:32 --views " + example + " --unknowns colour" + out, "--unknowns must be"},
         {"solve --scene builtin:cloud:32 --views " + example + " --options " + (dir / "opts.json").string() + out, "/basis"},
-        {"solve --scene builtin:cloud:32 --views " + example + " --unknowns extinction" + out, "medium_radiance"},
+        {"solve --scene builtin:cloud:32 --views " + example + " --unknowns extinction" + out, "e.g. the background's: --medium-radiance 0.32,0.5,0.82"},
         {"solve --scene builtin:cloud:32 --views " + example + " --regularization smooth=1" + out, "unknown term 'smooth'"},
         {"solve --scene builtin:cloud:32 --views " + example + " -o x.png", "must end in .vdb"},
     };

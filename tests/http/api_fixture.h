@@ -27,7 +27,7 @@ protected:
         opt.port = 0;
         opt.webDir = VOLSTYLE_SOURCE_DIR "/web";
         opt.maxJsonBytes = 4096;
-        opt.maxUploadBytes = 64 * 1024;
+        opt.maxUploadBytes = m_maxUploadBytes;
         opt.maxImageSide = 64;
         opt.dataDir = dataDir;
         opt.vdbReader = VOLSTYLE_BINARY;  // uploads are read in a child, as `serve` does
@@ -72,6 +72,7 @@ protected:
     std::unique_ptr<httplib::Client> m_client;
     std::thread m_thread;
     int m_port = 0;
+    size_t m_maxUploadBytes = 64 * 1024;  ///< small, so the limit is cheap to test
 };
 
 

@@ -134,3 +134,22 @@ TEST(Schema, EmbeddedSchemaParsesAndDefinesEveryBody) {
     for (const char* d : {"error", "health", "scenes", "session", "view", "lighting", "job", "job_accepted", "solve_options"})
         EXPECT_TRUE(schema["definitions"].contains(d)) << d;
 }
+
+TEST(LightingJson, EveryProblemAtOnceUnderTheFieldItCameFrom) {
+    // A bad sun direction (a value check) and a malformed background (a type error) together;
+    // the value check names /sun, not the internal /lights/0.
+    auto errors = errorsOf([] {
+        protocol::lightingFromJson({{"sun", {{"direction", {0, 0, 0}}, {"irradiance", {1, 1, -1}}}},
+                                    {"lights", json::array({{{"direction", {0, 1, 0}}, {"irradiance", {1, 1, 1}}},
+                                                            {{"direction", {0, 0, 0}}, {"irradiance", {1, 1, 1}}}})},
+                                    {"background", {0.3, "x", 1}}});
+    });
+    std::set<std::string> paths;
+    for (const auto& e : errors) paths.insert(e.path);
+    EXPECT_EQ(paths, (std::set<std::string>{"/sun/direction", "/sun/irradiance", "/lights/1/direction", "/background/1"}));
+    // A camera whose eye failed to read is not also told its target equals the default eye.
+    errors = errorsOf([] { protocol::cameraFromJson({{"eye", "here"}, {"target", {0, 0, 3}}, {"fov_y_deg", 200}}); });
+    paths.clear();
+    for (const auto& e : errors) paths.insert(e.path);
+    EXPECT_EQ(paths, (std::set<std::string>{"/eye", "/fov_y_deg"}));
+}
