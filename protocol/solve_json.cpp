@@ -117,12 +117,35 @@ nlohmann::json solveOptionsToJson(const core::SolveOptions& o) {
     return j;
 }
 
+namespace {
+
+std::vector<std::string> unknownNames(core::Unknown u) {
+    if (u == core::Unknown::EmissionAlbedo) return {"emission", "albedo"};
+    return {core::unknownName(u)};
+}
+
+/// {"unreachable_rms": [per view], "alternatives": [[{"unknowns", "unreachable_rms"}, …] per view],
+///  "suggested_unknowns": [...] | null, "advice": "…"}
+nlohmann::json reachToJson(const core::ReachReport& r) {
+    nlohmann::json alternatives = nlohmann::json::array();
+    for (const auto& view : r.alternatives) {
+        nlohmann::json list = nlohmann::json::array();
+        for (const auto& [u, rms] : view) list.push_back({{"unknowns", unknownNames(u)}, {"unreachable_rms", rms}});
+        alternatives.push_back(list);
+    }
+    return {{"unreachable_rms", r.unreachableRms}, {"alternatives", alternatives},
+            {"suggested_unknowns", r.suggestion ? nlohmann::json(unknownNames(*r.suggestion)) : nlohmann::json(nullptr)},
+            {"advice", r.advice}};
+}
+
+}  // namespace
+
 nlohmann::json solveReportToJson(const core::SolveReport& r) {
     return {{"iterations", r.iterations}, {"stop_reason", core::stopReasonName(r.stopReason)}, {"initial_objective", r.initialObjective},
             {"final_objective", r.finalObjective}, {"initial_rms", r.initialRms}, {"final_rms", r.finalRms},
             {"unknowns", r.unknownCount}, {"hull_unknowns", r.hullCount}, {"constraint_pixels", r.constraintPixels},
             {"ignored_pixels", r.ignoredPixels}, {"clamped_pixels", r.clampedPixels}, {"total_ms", r.totalMs},
-            {"forward_ms", r.forwardMs}, {"adjoint_ms", r.adjointMs}, {"vector_ms", r.vectorMs}};
+            {"forward_ms", r.forwardMs}, {"adjoint_ms", r.adjointMs}, {"vector_ms", r.vectorMs}, {"reach", reachToJson(r.reach)}};
 }
 
 nlohmann::json solveProgressToJson(const core::SolveProgress& p) {

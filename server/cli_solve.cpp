@@ -250,6 +250,10 @@ int runSolve(const std::vector<std::string>& argv) {
                  core::unknownName(opt.unknown), rep.iterations, core::stopReasonName(rep.stopReason), meanOf(rep.initialRms),
                  meanOf(rep.finalRms), rep.totalMs / 1000, rep.forwardMs / 1000, rep.adjointMs / 1000, rep.vectorMs / 1000,
                  output.c_str());
+    for (size_t v = 0; v < rep.reach.unreachableRms.size() && v < rep.finalRms.size(); ++v)
+        std::fprintf(stderr, "  view %zu: RMS %.4g, of which %.4g is out of reach of %s\n", v + 1, rep.finalRms[v],
+                     rep.reach.unreachableRms[v], core::unknownName(opt.unknown));
+    if (!rep.reach.advice.empty()) std::fprintf(stderr, "note: %s\n", rep.reach.advice.c_str());
     return 0;
 }
 

@@ -247,7 +247,11 @@ const solve = guard(async () => {
     if (kind === 'done') {
       $('progress').value = 1;
       const r = j.result.report;
-      status(`solved: ${r.iterations} iterations (${r.stop_reason}), version ${j.result.version}`, 'ok');
+      // Say when the paint asks what the chosen unknowns cannot give, and what would give it.
+      const advice = r.reach && r.reach.advice ? ` — ${r.reach.advice}` : '';
+      status(`solved: ${r.iterations} iterations (${r.stop_reason}), version ${j.result.version}${advice}`,
+             advice ? 'warn' : 'ok');
+      if (r.reach && r.reach.suggested_unknowns) $('unknowns').value = r.reach.suggested_unknowns.join(',');
       showSession(await call('GET', `/sessions/${state.sid}`));
       renderViewport(); renderViews();
     } else {

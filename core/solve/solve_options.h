@@ -96,6 +96,15 @@ static_assert(coversInOrder(kStopReasons), "a name for every reason");
 constexpr const char* stopReasonName(StopReason r) { return nameOf(kStopReasons, r); }
 std::ostream& operator<<(std::ostream& out, StopReason r);
 
+/// What the paint asks that the unknowns cannot give (reach.h).
+struct ReachReport {
+    std::vector<double> unreachableRms;  ///< per view, with the chosen unknowns (same units as finalRms)
+    /// Per view, for each unknown set that could be chosen instead (emission, albedo, both).
+    std::vector<std::vector<std::pair<Unknown, double>>> alternatives;
+    std::optional<Unknown> suggestion;  ///< unknowns that reach clearly more of the paint, if any
+    std::string advice;                 ///< one sentence for people (empty: the paint is within reach)
+};
+
 struct SolveReport {
     int iterations = 0;
     StopReason stopReason = StopReason::None;
@@ -107,6 +116,7 @@ struct SolveReport {
     size_t ignoredPixels = 0;   ///< extinction: ratio not positive, or L_bg = L_m (weight 0)
     size_t clampedPixels = 0;   ///< extinction: ratio above 1, clamped to 1
     double totalMs = 0, forwardMs = 0, adjointMs = 0, vectorMs = 0;
+    ReachReport reach;
 };
 
 const char* unknownName(Unknown u);

@@ -2,6 +2,8 @@
 // channels in lockstep, every vector on the GPU. Set-up lives in solver_setup.cpp.
 #include "core/solve/solver.h"
 
+#include "core/solve/reach.h"
+
 #include <spdlog/spdlog.h>
 
 #include <cmath>
@@ -234,6 +236,8 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
         spdlog::warn("solve: nothing to solve ({})", stopReasonName(rep.stopReason));
         return {st.volume, rep};
     }
+    analyzeReach(st.device, st.volume, st.lighting, st.views, st.opt, rep);  // what the bounds leave out of reach
+    if (!rep.reach.advice.empty()) spdlog::info("solve: {}", rep.reach.advice);
     Vec3d gamma;  // ‖s‖², s = Aᵀr restricted to the free variables
     st.restart(gamma);
     Vec3d slope = gamma;  // p·s: the objective's descent rate along p (= γ in plain CGLS)

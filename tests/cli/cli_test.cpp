@@ -156,12 +156,14 @@ TEST(Cli, SolvesTheReadmeExample) {
     float peak = 0;
     for (float e : v.emission()) peak = std::max(peak, e);
     EXPECT_GT(peak, 0.05f) << "the painted glow became emission";
-    // The report line: RMS falls by more than 5x in 12 iterations.
-    auto at = r.out.rfind("RMS ");
+    // The report line: RMS falls by more than 5x in 12 iterations; then what is out of reach.
+    auto at = r.out.find("RMS ", r.out.find("emission: "));
     ASSERT_NE(at, std::string::npos) << r.out;
     double before = 0, after = 0;
     ASSERT_EQ(std::sscanf(r.out.c_str() + at, "RMS %lf -> %lf", &before, &after), 2) << r.out;
     EXPECT_LT(after, before / 5) << r.out;
+    EXPECT_NE(r.out.find("view 1: RMS"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("is out of reach of emission"), std::string::npos) << r.out;
 }
 
 TEST(Cli, SolveBadInputsAreExit2) {

@@ -70,8 +70,9 @@ TEST_F(Api, LightingRoundTripAndValidation) {
     EXPECT_EQ(json::parse(client().Get(("/api/v1/sessions/" + id + "/lighting").c_str())->body)["sun"]["irradiance"], json::array({2.0, 2.0, 2.0}));
     json bad = {{"sun", {{"direction", {0, 1, 0}}, {"irradiance", {-1, 2, 2}}}}, {"phase", {{"type", "rayleigh"}}}};
     json e = expectError(client().Put(("/api/v1/sessions/" + id + "/lighting").c_str(), bad.dump(), "application/json"), 400, "invalid_argument");
-    ASSERT_EQ(e["error"]["details"].size(), 1u);  // the phase type; irradiance is checked once the types are right
+    ASSERT_EQ(e["error"]["details"].size(), 2u);  // every problem at once: the type and the value
     EXPECT_EQ(e["error"]["details"][0]["path"], "/phase/type");
+    EXPECT_EQ(e["error"]["details"][1]["path"], "/sun/irradiance");
 }
 
 TEST_F(Api, EveryErrorClassAnswersTheErrorBody) {
