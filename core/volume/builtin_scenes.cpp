@@ -1,9 +1,8 @@
 #include "core/volume/builtin_scenes.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
+#include <atomic>
+#include <thread>
 #include <cmath>
 #include <functional>
 
@@ -31,6 +30,22 @@ struct VoxelProperties {
 };
 using SceneFunction = std::function<VoxelProperties(const Vec3d& world)>;
 
+/// Runs body(k) for every k in [0, n) on the machine's cores. Plain threads, not TBB: their joins
+/// are the happens-before edges ThreadSanitizer sees (it cannot see inside the uninstrumented TBB
+/// scheduler, and reported every scene read after a parallel_for as a race).
+template <typename Body>
+void forEachSlice(int n, const Body& body) {
+    const int workers = int(std::clamp(std::thread::hardware_concurrency(), 1u, unsigned(std::max(n, 1))));
+    std::atomic<int> next{0};
+    auto work = [&] {
+        for (int k; (k = next.fetch_add(1)) < n;) body(k);
+    };
+    std::vector<std::thread> helpers;
+    for (int w = 1; w < workers; ++w) helpers.emplace_back(work);
+    work();
+    for (auto& t : helpers) t.join();
+}
+
 /// Evaluates `f` at every voxel centre, slices in parallel.
 Volume sample(int resolution, bool hasEmission, const SceneFunction& f) {
     Int3 dims{resolution, resolution, resolution};
@@ -38,18 +53,17 @@ Volume sample(int resolution, bool hasEmission, const SceneFunction& f) {
     auto& ext = v.extinction();
     auto& alb = v.ensureAlbedo();
     std::vector<float>* emi = hasEmission ? &v.ensureEmission() : nullptr;
-    tbb::parallel_for(tbb::blocked_range<int>(0, resolution), [&](const tbb::blocked_range<int>& r) {
-        for (int k = r.begin(); k != r.end(); ++k)
-            for (int j = 0; j < resolution; ++j)
-                for (int i = 0; i < resolution; ++i) {
-                    VoxelProperties p = f(v.worldFromIndex().applyPoint({double(i), double(j), double(k)}));
-                    size_t n = 3 * v.index(i, j, k);
-                    for (int c = 0; c < 3; ++c) {
-                        ext[n + c] = p.extinction[c];
-                        alb[n + c] = p.albedo[c];
-                        if (emi) (*emi)[n + c] = p.emission[c];
-                    }
+    forEachSlice(resolution, [&](int k) {
+        for (int j = 0; j < resolution; ++j)
+            for (int i = 0; i < resolution; ++i) {
+                VoxelProperties p = f(v.worldFromIndex().applyPoint({double(i), double(j), double(k)}));
+                size_t n = 3 * v.index(i, j, k);
+                for (int c = 0; c < 3; ++c) {
+                    ext[n + c] = p.extinction[c];
+                    alb[n + c] = p.albedo[c];
+                    if (emi) (*emi)[n + c] = p.emission[c];
                 }
+            }
     });
     return v;
 }

@@ -39,6 +39,7 @@ protected:
         m_port = m_server->bind();
         m_thread = std::thread([this] { m_server->listen(); });
         m_client = std::make_unique<httplib::Client>("127.0.0.1", m_port);
+        m_client->set_read_timeout(120, 0);  // sanitizer builds take seconds to build a scene
         for (int i = 0; i < 100 && !m_client->Get("/api/v1/health"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     void SetUp() override { start(); }
