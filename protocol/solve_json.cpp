@@ -135,7 +135,7 @@ nlohmann::json reachToJson(const core::ReachReport& r) {
     }
     return {{"unreachable_rms", r.unreachableRms}, {"alternatives", alternatives},
             {"suggested_unknowns", r.suggestion ? nlohmann::json(unknownNames(*r.suggestion)) : nlohmann::json(nullptr)},
-            {"advice", r.advice}};
+            {"advice", r.advice}, {"ms", r.ms}};
 }
 
 }  // namespace

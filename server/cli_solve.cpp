@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <filesystem>
 #include <iostream>
@@ -254,6 +255,7 @@ int runSolve(const std::vector<std::string>& argv) {
         std::fprintf(stderr, "  view %zu: RMS %.4g, of which %.4g is out of reach of %s\n", v + 1, rep.finalRms[v],
                      rep.reach.unreachableRms[v], core::unknownName(opt.unknown));
     if (!rep.reach.advice.empty()) std::fprintf(stderr, "note: %s\n", rep.reach.advice.c_str());
+    spdlog::info("reach analysis: {:.0f} ms", rep.reach.ms);
     return 0;
 }
 

@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 
+#include "core/base/stopwatch.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/renderer.h"
 
@@ -90,6 +91,7 @@ double unreachableRms(const Image& target, const std::vector<double>& weights, c
 
 void analyzeReach(GpuDevice& device, const Volume& volume, const Lighting& lighting, const std::vector<SolveView>& views,
                   const SolveOptions& options, SolveReport& report) {
+    const auto t0 = Clock::now();
     RenderSettings settings;
     settings.stepVoxels = options.stepVoxels;
     settings.exactTraversal = options.exactTraversal;
@@ -122,6 +124,7 @@ void analyzeReach(GpuDevice& device, const Volume& volume, const Lighting& light
     renderAll(&ViewRenders::albedo1);
 
     ReachReport& reach = report.reach;
+    reach.ms = msSince(t0);
     const Unknown candidates[] = {Unknown::Emission, Unknown::Albedo, Unknown::EmissionAlbedo};
     std::map<Unknown, double> meanUnreachable;
     double meanChosen = 0, meanResidual = 0;

@@ -103,6 +103,7 @@ struct ReachReport {
     std::vector<std::vector<std::pair<Unknown, double>>> alternatives;
     std::optional<Unknown> suggestion;  ///< unknowns that reach clearly more of the paint, if any
     std::string advice;                 ///< one sentence for people (empty: the paint is within reach)
+    double ms = 0;                      ///< the analysis' time (its renders)
 };
 
 struct SolveReport {
