@@ -9,7 +9,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <mutex>
 
 namespace volstyle::server {
 namespace {
@@ -108,36 +107,7 @@ void closeSocket(socket_t sock) {
     ::close(sock);
 }
 
-/// cpp-httplib writes the last chunk of every chunked answer (an event stream's end) from a
-/// function-local static string, built on first use. Build it here, once, before any worker thread
-/// exists: ThreadSanitizer cannot see the uninstrumented library's initialisation guard, and
-/// otherwise reports the first two event streams to end at once as a race on that string (a false
-/// report, but one that would hide real ones). One in-memory request, microseconds.
-void initialiseChunkedEncoding() {
-    static std::once_flag once;
-    std::call_once(once, [] {
-        struct Once : httplib::Server {
-            void run() {
-                Get("/", [](const httplib::Request&, httplib::Response& res) {
-                    res.set_chunked_content_provider("text/plain", [](size_t, httplib::DataSink& sink) {
-                        sink.done();
-                        return true;
-                    });
-                });
-                httplib::detail::BufferStream stream;
-                const std::string request = "GET / HTTP/1.1\r\nHost: localhost\r\n\r\n";
-                stream.write(request.data(), request.size());  // read back by process_request
-                bool closed = false;
-                process_request(stream, true, closed, nullptr);
-            }
-        } server;
-        server.run();
-    });
-}
-
 }  // namespace
-
-GuardedHttpServer::GuardedHttpServer(ConnectionLimits limits) : m_limits(limits) { initialiseChunkedEncoding(); }
 
 bool GuardedHttpServer::admit(const std::string& client) {
     std::lock_guard lock(m_mutex);

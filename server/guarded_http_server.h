@@ -33,7 +33,7 @@ struct ConnectionLimits {
 
 class GuardedHttpServer : public httplib::Server {
 public:
-    explicit GuardedHttpServer(ConnectionLimits limits = {});
+    explicit GuardedHttpServer(ConnectionLimits limits = {}) : m_limits(limits) {}
     const ConnectionLimits& connectionLimits() const { return m_limits; }
     /// The JSON body of the 429 sent to a client over its connection limit.
     std::function<std::string(const std::string& client)> refusal;

@@ -2,6 +2,8 @@
 // GET …/preview/{vid}.png.
 #include <fmt/format.h>
 
+#include <mutex>
+
 #include "server/routes/route_context.h"
 
 namespace volstyle::server {
@@ -9,6 +11,21 @@ namespace {
 
 /// How long an event stream waits for news before checking whether its client is still there.
 constexpr auto kEventPoll = std::chrono::milliseconds(500);
+
+/// Ends a chunked answer. cpp-httplib writes the last chunk from a function-local static string
+/// built on the first end; its initialisation guard is inside the uninstrumented library, so
+/// ThreadSanitizer saw two streams ending at once as a race on that string. The first end runs
+/// under std::call_once, whose completion every later end synchronises with (only the first end
+/// can wait, and only for that one write).
+void endChunkedAnswer(httplib::DataSink& sink) {
+    static std::once_flag first;
+    bool ended = false;
+    std::call_once(first, [&] {
+        sink.done();
+        ended = true;
+    });
+    if (!ended) sink.done();
+}
 
 /// Streams a job's events from the first: every one written so far, then each as it comes; the
 /// stream ends after the final event (the job's state flips before that event is queued, so the
@@ -30,7 +47,7 @@ void streamEvents(httplib::Response& res, std::shared_ptr<Job> job, StreamLimite
         }
         if (final) {
             lock.unlock();
-            sink.done();
+            endChunkedAnswer(sink);
         }
         return true;
     }, [&streams, client](bool) { streams.release(client); });
