@@ -59,6 +59,7 @@ TEST(Durability, KillDuringASolveThenRestart) {
     {
         ServerProcess server(dir);
         httplib::Client c("127.0.0.1", server.port);
+        c.set_read_timeout(120, 0);  // sanitizer builds answer in seconds
         auto r = c.Post("/api/v1/sessions", R"({"scene": "builtin:sphere", "resolution": 24})", "application/json");
         ASSERT_EQ(r->status, 201) << r->body;
         sid = json::parse(r->body)["id"];
@@ -83,6 +84,7 @@ TEST(Durability, KillDuringASolveThenRestart) {
     }
     ServerProcess server(dir);
     httplib::Client c("127.0.0.1", server.port);
+    c.set_read_timeout(120, 0);  // sanitizer builds answer in seconds
     auto r = c.Get(("/api/v1/sessions/" + sid).c_str());
     ASSERT_EQ(r->status, 200) << r->body;
     json s = json::parse(r->body);
@@ -124,6 +126,7 @@ TEST(Durability, ADamagedFileQuarantinesOnlyWhatItHolds) {
     {
         ServerProcess server(dir);
         httplib::Client c("127.0.0.1", server.port);
+        c.set_read_timeout(120, 0);  // sanitizer builds answer in seconds
         for (std::string* id : {&sid, &other}) {
             auto r = c.Post("/api/v1/sessions", R"({"scene": "builtin:sphere", "resolution": 16})", "application/json");
             ASSERT_EQ(r->status, 201) << r->body;
@@ -144,6 +147,7 @@ TEST(Durability, ADamagedFileQuarantinesOnlyWhatItHolds) {
         fs::resize_file(dir / "sessions" / other / "session.json", 10);  // the other session is unreadable
         ServerProcess server(dir);
         httplib::Client c("127.0.0.1", server.port);
+        c.set_read_timeout(120, 0);  // sanitizer builds answer in seconds
         const std::string base = "/api/v1/sessions/" + sid;
         auto r = c.Get(base.c_str());
         ASSERT_EQ(r->status, 200) << "the session survives its damaged files: " << r->body;
@@ -169,6 +173,7 @@ TEST(Durability, ADamagedFileQuarantinesOnlyWhatItHolds) {
     {
         ServerProcess server(dir);
         httplib::Client c("127.0.0.1", server.port);
+        c.set_read_timeout(120, 0);  // sanitizer builds answer in seconds
         auto r = c.Get(("/api/v1/sessions/" + sid).c_str());
         ASSERT_EQ(r->status, 200) << r->body;
         json s = json::parse(r->body);
