@@ -30,11 +30,14 @@ int runInfo(const std::vector<std::string>& argv) {
     std::cout << path << ": " << grids.size() << " grid(s)\n";
     for (const auto& [key, value] : core::vdbFileMetadata(path)) std::cout << "  file metadata " << key << " = " << value << "\n";
     for (const auto& g : grids) {
-        Int3 dims{g.activeMax.x - g.activeMin.x + 1, g.activeMax.y - g.activeMin.y + 1, g.activeMax.z - g.activeMin.z + 1};
-        if (g.activeVoxels == 0) dims = {0, 0, 0};
+        // In 64 bits: an empty grid's box is [INT_MAX, INT_MIN] (UBSan caught the overflow), and a
+        // damaged one may span ±2e9. A grid whose every voxel is its background has none active.
+        int64_t dims[3] = {0, 0, 0};
+        if (g.activeVoxels > 0)
+            for (int a = 0; a < 3; ++a) dims[a] = int64_t(g.activeMax[a]) - int64_t(g.activeMin[a]) + 1;
         std::cout << fmt::format("  {:<18} {:<6} {:<10} active voxels {:>10}  bbox [{} {} {}]..[{} {} {}]  dims {}x{}x{}\n",
                                  g.name, g.type, g.gridClass, g.activeVoxels, g.activeMin.x, g.activeMin.y,
-                                 g.activeMin.z, g.activeMax.x, g.activeMax.y, g.activeMax.z, dims.x, dims.y, dims.z);
+                                 g.activeMin.z, g.activeMax.x, g.activeMax.y, g.activeMax.z, dims[0], dims[1], dims[2]);
         std::cout << fmt::format("    voxel size [{:g} {:g} {:g}]", g.voxelSize.x, g.voxelSize.y, g.voxelSize.z);
         if (g.isLinearTransform) {
             const Mat4& m = g.worldFromIndex;
