@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/base/errors.h"
+#include "core/base/stopwatch.h"
 #include "core/gpu/gpu_device.h"
 #include "core/image/image_io.h"
 #include "core/render/exr_layers.h"
@@ -75,11 +76,16 @@ int runRender(const std::vector<std::string>& argv) {
     settings.validate();
     const double exposure = args.number("exposure", 0);
 
+    auto t0 = Clock::now();
     core::Volume volume = loadScene(args.get("scene"));
     if (!camera) camera = core::framingCamera(volume.worldBounds());
+    spdlog::debug("scene {} loaded in {:.1f} ms", args.get("scene"), msSince(t0));
+    t0 = Clock::now();
     auto device = core::GpuDevice::create();
     core::GpuVolume gpuVolume(volume);
     core::Renderer renderer(*device);
+    spdlog::debug("GL device created and volume uploaded in {:.1f} ms", msSince(t0));
+    t0 = Clock::now();
     core::RenderStats stats;
     if (ext == ".exr") {
         // Compositing-ready: premultiplied medium without the background, plus its layers.
@@ -91,8 +97,9 @@ int runRender(const std::vector<std::string>& argv) {
         save.exposure = exposure;
         core::saveImage(output, image, save);
     }
-    spdlog::info("rendered {}x{} in {:.1f} ms on {} (light volumes {:.1f} ms)", camera->width, camera->height,
-                 stats.totalMs, device->capabilities().renderer, stats.lightMs);
+    spdlog::info("rendered {}x{} in {:.1f} ms on {} (light volumes {:.1f} ms, occupancy {:.1f} ms); written in {:.1f} ms",
+                 camera->width, camera->height, stats.totalMs, device->capabilities().renderer, stats.lightMs,
+                 stats.occupancyMs, msSince(t0) - stats.totalMs);
     return 0;
 }
 

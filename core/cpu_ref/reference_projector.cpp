@@ -14,7 +14,7 @@ ReferenceProjector::ReferenceProjector(const Volume& volume, const Lighting& lig
     m_lighting.lights.erase(std::remove_if(m_lighting.lights.begin(), m_lighting.lights.end(),
                                            [](const DirectionalLight& l) { return maxComponent(l.irradiance) <= 0; }),
                             m_lighting.lights.end());
-    for (const auto& l : m_lighting.lights) m_lightDepth.push_back(lightDepthVolume<double>(volume, l.direction, spec.stepVoxels));
+    for (const auto& l : m_lighting.lights) m_lightDepth.push_back(lightDepthGrid<double>(volume, l.direction, spec.stepVoxels));
     for (const auto& c : cameras) m_pixelCount += size_t(c.width) * c.height;
 }
 
@@ -77,7 +77,7 @@ void ReferenceProjector::march(size_t view, int px, int py, Visit&& visit) const
         if (m_spec.unknown != Unknown::Emission) {
             V scat(0.0);
             for (size_t l = 0; l < m_lighting.lights.size(); ++l) {
-                V depth = trilinear<double>(m_lightDepth[l], n, p);
+                V depth = m_lightDepth[l].at(p);
                 double cosTheta = dot(toS<double>(normalize(m_lighting.lights[l].direction)), -dir);
                 scat += toS<double>(m_lighting.lights[l].irradiance) * V(std::exp(-depth.x), std::exp(-depth.y), std::exp(-depth.z)) *
                         phase<double>(m_lighting.phase, cosTheta);

@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "core/cpu_ref/reference_renderer.h"
 #include "core/render/params.h"
 #include "core/solve/solve_types.h"
 #include "core/volume/volume.h"
@@ -36,7 +37,7 @@ private:
     Lighting m_lighting;
     std::vector<Camera> m_cameras;
     ProjectionSpec m_spec;
-    std::vector<std::vector<double>> m_lightDepth;
+    std::vector<LightDepthGrid<double>> m_lightDepth;
     size_t m_pixelCount = 0;
 };
 

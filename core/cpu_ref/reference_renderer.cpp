@@ -33,42 +33,98 @@ V3<S> environment(const Image& env, const V3<S>& dir) {
 }  // namespace
 
 template <typename S>
-std::vector<S> lightDepthVolume(const Volume& volume, const Vec3d& lightDirection, double stepVoxels) {
+V3<S> opticalDepthToLight(const Volume& volume, const V3<S>& p, const Vec3d& lightDirection, double stepVoxels) {
     const Int3 n = volume.dims();
-    const Mat4 indexFromWorld = volume.worldFromIndex().inverseAffine();
-    const V3<S> d = applyLinear(indexFromWorld, toS<S>(normalize(lightDirection)));
-    std::vector<S> depth(volume.voxelCount() * 3, S(0));
-    for (int k = 0; k < n.z; ++k)
-        for (int j = 0; j < n.y; ++j)
-            for (int i = 0; i < n.x; ++i) {
-                V3<S> o{S(i), S(j), S(k)};
-                S tExit = intersectBox(o, d, n).second;
-                if (tExit <= 0) continue;
-                Segments<S> seg(S(0), tExit, d, S(stepVoxels));
-                V3<S> tau(S(0));
-                for (int s = 0; s < seg.count; ++s) {
-                    tau += trilinear<S>(volume.extinction(), n, o + d * seg.mid(s)) * seg.dt;
-                    if (minComponent(tau) > S(64)) break;  // as light_depth.comp
-                }
-                size_t idx = 3 * volume.index(i, j, k);
-                depth[idx] = tau.x, depth[idx + 1] = tau.y, depth[idx + 2] = tau.z;
-            }
-    return depth;
+    const V3<S> d = applyLinear(volume.worldFromIndex().inverseAffine(), toS<S>(normalize(lightDirection)));
+    V3<S> tau(S(0));
+    auto [tEnter, tExit] = intersectBox(p, d, n);
+    tEnter = std::max(tEnter, S(0));
+    if (tExit <= tEnter) return tau;
+    Segments<S> seg(tEnter, tExit, d, S(stepVoxels));
+    for (int s = 0; s < seg.count; ++s) tau += trilinear<S>(volume.extinction(), n, p + d * seg.mid(s)) * seg.dt;
+    return tau;
 }
 
 template <typename S>
-Image renderReference(const Volume& volume, const Camera& camera, const Lighting& lighting, double stepVoxels) {
+LightDepthGrid<S> lightDepthGrid(const Volume& volume, const Vec3d& lightDirection, double stepVoxels) {
+    const Int3 n = volume.dims();
+    LightDepthGrid<S> g;
+    g.grid = makeLightGrid(n, volume.worldFromIndex().inverseAffine(), normalize(lightDirection));
+    const Int3 m = g.grid.dims;
+    g.depth.assign(size_t(m.volume()) * 3, S(0));
+    const V3<S> d = applyLinear(g.grid.indexFromGrid, V3<S>(0, 0, 1));
+    const S stepsPerNode = length(d) / S(stepVoxels);
+    const S worldPerNode = length(applyLinear(volume.worldFromIndex(), d));  // σ is per world unit
+    for (int b = 0; b < m.y; ++b)
+        for (int a = 0; a < m.x; ++a) {
+            const V3<S> o = toS<S>(g.grid.indexFromGrid.applyPoint({double(a), double(b), 0.0}));
+            const auto [tIn, tOut] = intersectBox(o, d, n);
+            V3<S> tau(S(0));
+            for (int c = 1; c < m.z; ++c) {
+                const S t0 = std::max(S(c - 1), tIn), t1 = std::min(S(c), tOut);
+                if (t1 > t0 && minComponent(tau) <= S(64)) {  // as light_depth.comp
+                    const int count = std::max(1, int(std::ceil((t1 - t0) * stepsPerNode)));
+                    const S dt = (t1 - t0) / S(count);
+                    for (int i = 0; i < count; ++i)
+                        tau += trilinear<S>(volume.extinction(), n, o + d * (t0 + (S(i) + S(0.5)) * dt)) * (dt * worldPerNode);
+                }
+                const size_t idx = 3 * ((size_t(c) * m.y + size_t(b)) * m.x + size_t(a));
+                g.depth[idx] = tau.x, g.depth[idx + 1] = tau.y, g.depth[idx + 2] = tau.z;
+            }
+        }
+    return g;
+}
+
+template <typename S>
+V3<S> LightDepthGrid<S>::at(const V3<S>& p) const {
+    const V3<S> q(S(grid.gridFromIndex(0, 0)) * p.x + S(grid.gridFromIndex(0, 1)) * p.y + S(grid.gridFromIndex(0, 2)) * p.z + S(grid.gridFromIndex(0, 3)),
+                  S(grid.gridFromIndex(1, 0)) * p.x + S(grid.gridFromIndex(1, 1)) * p.y + S(grid.gridFromIndex(1, 2)) * p.z + S(grid.gridFromIndex(1, 3)),
+                  S(grid.gridFromIndex(2, 0)) * p.x + S(grid.gridFromIndex(2, 1)) * p.y + S(grid.gridFromIndex(2, 2)) * p.z + S(grid.gridFromIndex(2, 3)));
+    return trilinear<S>(depth, grid.dims, q);
+}
+
+template <typename S>
+LightDepthLookup<S>::LightDepthLookup(const Volume& volume, const Vec3d& lightDirection, double stepVoxels,
+                                      LightDepthMethod method)
+    : m_volume(volume), m_direction(lightDirection), m_step(stepVoxels), m_method(method) {
+    if (method == LightDepthMethod::Grid) m_grid = lightDepthGrid<S>(volume, lightDirection, stepVoxels);
+    if (method == LightDepthMethod::VoxelCentres) {
+        const Int3 n = volume.dims();
+        m_voxelCentres.assign(volume.voxelCount() * 3, S(0));
+        for (int k = 0; k < n.z; ++k)
+            for (int j = 0; j < n.y; ++j)
+                for (int i = 0; i < n.x; ++i) {
+                    const V3<S> tau = opticalDepthToLight<S>(volume, V3<S>(S(i), S(j), S(k)), lightDirection, stepVoxels);
+                    const size_t idx = 3 * volume.index(i, j, k);
+                    m_voxelCentres[idx] = tau.x, m_voxelCentres[idx + 1] = tau.y, m_voxelCentres[idx + 2] = tau.z;
+                }
+    }
+}
+
+template <typename S>
+V3<S> LightDepthLookup<S>::at(const V3<S>& p) const {
+    switch (m_method) {
+        case LightDepthMethod::Grid: return m_grid.at(p);
+        case LightDepthMethod::Exact: return opticalDepthToLight<S>(m_volume, p, m_direction, m_step);
+        case LightDepthMethod::VoxelCentres: return trilinear<S>(m_voxelCentres, m_volume.dims(), p);
+    }
+    return V3<S>(S(0));
+}
+
+template <typename S>
+Image renderReference(const Volume& volume, const Camera& camera, const Lighting& lighting, double stepVoxels,
+                      LightDepthMethod method) {
     camera.validate();
     lighting.validate();
     const Int3 n = volume.dims();
     const Mat4 indexFromWorld = volume.worldFromIndex().inverseAffine();
 
     std::vector<const DirectionalLight*> lights;
-    std::vector<std::vector<S>> depths;
+    std::vector<LightDepthLookup<S>> depths;
     for (const auto& l : lighting.lights) {
         if (maxComponent(l.irradiance) <= 0) continue;
         lights.push_back(&l);
-        depths.push_back(lightDepthVolume<S>(volume, l.direction, stepVoxels));
+        depths.emplace_back(volume, l.direction, stepVoxels, method);
     }
 
     Image image(camera.width, camera.height);
@@ -91,7 +147,7 @@ Image renderReference(const Volume& volume, const Camera& camera, const Lighting
                         V3<S> albedo = volume.hasAlbedo() ? trilinear<S>(volume.albedo(), n, p) : V3<S>(S(1));
                         V3<S> scat(S(0));
                         for (size_t l = 0; l < lights.size(); ++l) {
-                            V3<S> tau = trilinear<S>(depths[l], n, p);
+                            V3<S> tau = depths[l].at(p);
                             S cosTheta = dot(toS<S>(normalize(lights[l]->direction)), -dir);
                             V3<S> Tl(std::exp(-tau.x), std::exp(-tau.y), std::exp(-tau.z));
                             scat += toS<S>(lights[l]->irradiance) * Tl * phase<S>(lighting.phase, cosTheta);
@@ -114,8 +170,12 @@ Image renderReference(const Volume& volume, const Camera& camera, const Lighting
     return image;
 }
 
-template Image renderReference<double>(const Volume&, const Camera&, const Lighting&, double);
-template Image renderReference<float>(const Volume&, const Camera&, const Lighting&, double);
-template std::vector<double> lightDepthVolume<double>(const Volume&, const Vec3d&, double);
+template Image renderReference<double>(const Volume&, const Camera&, const Lighting&, double, LightDepthMethod);
+template Image renderReference<float>(const Volume&, const Camera&, const Lighting&, double, LightDepthMethod);
+template Vec3T<double> opticalDepthToLight<double>(const Volume&, const Vec3T<double>&, const Vec3d&, double);
+template struct LightDepthGrid<double>;
+template LightDepthGrid<double> lightDepthGrid<double>(const Volume&, const Vec3d&, double);
+template class LightDepthLookup<double>;
+template class LightDepthLookup<float>;
 
 }  // namespace volstyle::core::cpu_ref

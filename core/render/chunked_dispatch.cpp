@@ -7,7 +7,7 @@
 namespace volstyle::core {
 
 void dispatchChunked(GpuDevice& device, layout::MarchParams params, Int3 cells, DispatchShape shape,
-                     const WorkBudget& budget, const char* pass) {
+                     const WorkBudget& budget, const char* pass, long long chunkInvocations) {
     const bool volume = shape == DispatchShape::Volume;
     const int group = volume ? layout::kWorkgroup3D : layout::kWorkgroup2D;
     const long long sliceCells = volume ? (long long)cells.x * cells.y : cells.x;
@@ -15,7 +15,7 @@ void dispatchChunked(GpuDevice& device, layout::MarchParams params, Int3 cells, 
     // Slabs per chunk: a multiple of the group size, at least one group.
     int slabs = extent;
     if (budget.bounded())
-        slabs = int(std::clamp<long long>(kChunkInvocations / std::max(sliceCells, 1LL) / group * group, group,
+        slabs = int(std::clamp<long long>(chunkInvocations / std::max(sliceCells, 1LL) / group * group, group,
                                           ((extent + group - 1) / group) * group));
     const auto groups = [group](int n) { return GLuint((n + group - 1) / group); };
     for (int first = 0; first < extent; first += slabs) {

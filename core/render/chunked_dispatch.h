@@ -24,7 +24,9 @@ enum class DispatchShape {
 
 /// Runs the bound program over `cells`, uploading `params` (with its dispatchOffset set) before
 /// each chunk; between chunks waits for the GPU and calls budget.check(pass, fraction done).
+/// `chunkInvocations`: cells per chunk, for kernels whose invocations cost more than a march's
+/// (light_depth.comp marches a whole row of nodes per invocation).
 void dispatchChunked(GpuDevice& device, layout::MarchParams params, Int3 cells, DispatchShape shape,
-                     const WorkBudget& budget, const char* pass);
+                     const WorkBudget& budget, const char* pass, long long chunkInvocations = kChunkInvocations);
 
 }  // namespace volstyle::core

@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
+#include "core/base/errors.h"
 #include "core/base/stopwatch.h"
 #include "core/render/chunked_dispatch.h"
 #include "core/render/gl_convert.h"
@@ -39,42 +42,64 @@ void updateOccupancy(GpuDevice& device, GpuVolume& volume, RenderStats& stats) {
 
 std::string lightDepthKey(const GpuVolume& volume, const Vec3d& direction, const RenderSettings& march) {
     const Mat4& m = volume.worldFromIndex();
-    std::string key = fmt::format("light-depth:{}:{}x{}x{}:{},{},{}:{}:{}:", volume.extinctionVersion(), volume.dims().x,
+    std::string key = fmt::format("light-depth:{}:{}x{}x{}:{},{},{}:{}:", volume.extinctionVersion(), volume.dims().x,
                                   volume.dims().y, volume.dims().z, direction.x, direction.y, direction.z,
-                                  march.stepVoxels, march.exactTraversal ? "exact" : "march");
+                                  march.stepVoxels);
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 4; ++c) key += fmt::format("{},", m(r, c));  // shortest round-trip: exact
     return key;
 }
 
-std::shared_ptr<const gl::Texture> lightDepthVolume(GpuDevice& device, const GpuVolume& volume, const DirectionalLight& light,
-                                                    const RenderSettings& march, RenderStats& stats,
-                                                    const WorkBudget& budget) {
+std::shared_ptr<const LightDepthVolume> lightDepthVolume(GpuDevice& device, const GpuVolume& volume,
+                                                         const DirectionalLight& light, const RenderSettings& march,
+                                                         RenderStats& stats, const WorkBudget& budget) {
     const Vec3d dir = normalize(light.direction);
     const std::string key = lightDepthKey(volume, dir, march);
-    if (auto cached = device.cache().find<gl::Texture>(key)) return cached;
+    if (auto cached = device.cache().find<LightDepthVolume>(key)) return cached;
 
     const auto t0 = Clock::now();
-    auto texture = std::make_shared<gl::Texture>(gl::createTexture(GL_TEXTURE_3D, "light-depth"));
-    const Int3 d = volume.dims();
-    glTextureStorage3D(texture->id(), 1, GL_RGBA32F, d.x, d.y, d.z);
+    auto result = std::make_shared<LightDepthVolume>();
+    result->grid = makeLightGrid(volume.dims(), volume.worldFromIndex().inverseAffine(), dir);
+    const Int3 n = result->grid.dims;
+    GLint maxSize = 0;
+    glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &maxSize);
+    if (n.x > maxSize || n.y > maxSize || n.z > maxSize)
+        throw GpuError(fmt::format("a light-depth grid of {}x{}x{} exceeds this GPU's 3D texture limit of {}", n.x, n.y,
+                                   n.z, maxSize));
+    const bool grey = volume.extinctionIsGrey();
+    result->texture = gl::createTexture(GL_TEXTURE_3D, "light-depth");
+    const GLuint id = result->texture.id();
+    glTextureStorage3D(id, 1, grey ? GL_R32F : GL_RGBA32F, n.x, n.y, n.z);
+    if (grey)
+        for (GLenum c : {GL_TEXTURE_SWIZZLE_G, GL_TEXTURE_SWIZZLE_B}) glTextureParameteri(id, c, GL_RED);
+    // Clamp-to-edge linear sampling for the hardware-filter variant (texelFetch ignores it).
+    glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    for (GLenum wrap : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R}) glTextureParameteri(id, wrap, GL_CLAMP_TO_EDGE);
+
+    const float zero[4] = {0, 0, 0, 0};
+    glClearTexImage(id, 0, grey ? GL_RED : GL_RGBA, GL_FLOAT, zero);  // light_depth.comp writes from where rows enter
+
     RenderSettings settings;
     settings.stepVoxels = march.stepVoxels;
     layout::MarchParams p = volumeParams(volume, settings);
     p.lightKernel = {0, 0, 0, 0};
-    p.lightDirection[0] = f4(dir);
-    glUseProgram(device.program(gl::ShaderBuilder("light_depth.comp")
-                                    .define("VOLSTYLE_EXACT_TRAVERSAL", march.exactTraversal ? 1 : 0))
-                     .id());
+    p.lightGridDims[0] = i4(n);
+    p.indexFromLightGrid = toGl(result->grid.indexFromGrid);
+    glUseProgram(device.program(gl::ShaderBuilder("light_depth.comp").define("VOLSTYLE_GREY_DEPTH", grey ? 1 : 0)).id());
     glBindTextureUnit(layout::kUnitExtinction, volume.extinctionTexture());
     glBindTextureUnit(layout::kUnitOccupancy, volume.occupancyTexture());
-    glBindImageTexture(layout::kImageUnitOut, texture->id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-    dispatchChunked(device, p, d, DispatchShape::Volume, budget, "light-depth pass");
+    glBindImageTexture(layout::kImageUnitOut, id, 0, GL_TRUE, 0, GL_WRITE_ONLY, grey ? GL_R32F : GL_RGBA32F);
+    // A row of n.z nodes costs about as much as n.z / 4 per-pixel or per-voxel invocations (two
+    // samples per node, most in empty bricks): chunks of about the same time as other passes'.
+    dispatchChunked(device, p, {n.x, n.y, 1}, DispatchShape::Image, budget, "light-depth pass",
+                    std::max(1LL, kChunkInvocations / std::max(1, n.z / 4)));
     gl::barrierAfterComputeWrites();
     device.finish();  // rare: wait so the timing is this pass's own
+    if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory building a light-depth volume");
     stats.lightMs += msSince(t0);
     stats.lightVolumesRecomputed++;
-    return device.cache().insert<gl::Texture>(key, std::move(texture));
+    return device.cache().insert<LightDepthVolume>(key, std::move(result));
 }
 
 namespace {

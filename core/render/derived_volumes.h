@@ -13,7 +13,9 @@
 #include "core/gl/shader_builder.h"
 #include "core/gpu/gpu_device.h"
 #include "core/render/gpu_volume.h"
-#include "core/render/march_setup.h"
+#include "core/render/light_grid.h"
+#include "core/render/render_stats.h"
+#include "core/shaders/layout.h"
 #include "core/render/params.h"
 
 namespace volstyle::core {
@@ -22,15 +24,21 @@ namespace volstyle::core {
 void updateOccupancy(GpuDevice& device, GpuVolume& volume, RenderStats& stats);
 
 /// The cache key of a light-depth volume: everything light_depth.comp reads — the extinction
-/// (its version), the grid (dims, transform), the light's direction, the step and traversal.
+/// (its version), the grid (dims, transform), the light's direction and the step.
 std::string lightDepthKey(const GpuVolume& volume, const Vec3d& direction, const RenderSettings& march);
 
-/// The optical depth toward `light` from every voxel centre (light_depth.comp), from the cache or
-/// computed now, in chunks checked against `budget` (a pass stopped early caches nothing). Needs
-/// current occupancy.
-std::shared_ptr<const gl::Texture> lightDepthVolume(GpuDevice& device, const GpuVolume& volume, const DirectionalLight& light,
-                                                    const RenderSettings& march, RenderStats& stats,
-                                                    const WorkBudget& budget = WorkBudget());
+/// The optical depth toward a light on the nodes of its light-aligned grid: R32F (swizzled to
+/// grey) for grey extinction, RGBA32F otherwise.
+struct LightDepthVolume {
+    LightGrid grid;
+    gl::Texture texture;
+};
+
+/// The light-depth volume of `light` (light_depth.comp), from the cache or computed now, in
+/// chunks checked against `budget` (a pass stopped early caches nothing). Needs current occupancy.
+std::shared_ptr<const LightDepthVolume> lightDepthVolume(GpuDevice& device, const GpuVolume& volume,
+                                                         const DirectionalLight& light, const RenderSettings& march,
+                                                         RenderStats& stats, const WorkBudget& budget = WorkBudget());
 
 /// An environment map on the GPU, and its largest value (for the early-termination bound).
 struct EnvironmentTexture {

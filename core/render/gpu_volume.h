@@ -29,6 +29,8 @@ public:
     const Mat4& worldFromIndex() const { return m_worldFromIndex; }
     bool hasAlbedo() const;
     bool hasEmission() const;
+    /// Whether every extinction voxel has r = g = b (light depth then needs one channel).
+    bool extinctionIsGrey() const { return m_extinctionIsGrey; }
     /// Largest emission value (any channel), for bounding what a ray can still gather.
     float maxEmission() const { return m_maxEmission; }
     unsigned extinctionTexture() const;
@@ -49,6 +51,7 @@ private:
     Mat4 m_worldFromIndex;
     size_t m_extinctionHash = 0;  // to detect unchanged extinction on re-upload
     float m_maxEmission = 0;
+    bool m_extinctionIsGrey = true;
     uint64_t m_extinctionVersion = 0;
     uint64_t m_occupancyVersion = 0;
 };

@@ -58,6 +58,8 @@ MarchSetup prepareMarch(GpuDevice& device, GpuVolume& volume, const Camera& came
     for (size_t i = 0; i < lights.size(); ++i) {
         p.lightDirection[i] = f4(normalize(lights[i]->direction));
         p.lightIrradiance[i] = f4(lights[i]->irradiance);
+        p.lightGridFromIndex[i] = toGl(setup.lightDepth[i]->grid.gridFromIndex);
+        p.lightGridDims[i] = i4(setup.lightDepth[i]->grid.dims);
     }
     p.march.z = float(radianceBound(volume, lighting, environment.get()));
     return setup;
@@ -69,7 +71,7 @@ void bindMarch(GpuDevice& device, const GpuVolume& volume, const MarchSetup& set
     glBindTextureUnit(layout::kUnitOccupancy, volume.occupancyTexture());
     if (setup.environment) glBindTextureUnit(layout::kUnitEnvironment, setup.environment->id());
     for (size_t i = 0; i < setup.lightDepth.size(); ++i)
-        glBindTextureUnit(GLuint(layout::kUnitLightDepth0 + i), setup.lightDepth[i]->id());
+        glBindTextureUnit(GLuint(layout::kUnitLightDepth0 + i), setup.lightDepth[i]->texture.id());
 }
 
 }  // namespace volstyle::core

@@ -14,6 +14,7 @@
 #include "core/gl/object.h"
 #include "core/gl/shader_builder.h"
 #include "core/gpu/gpu_device.h"
+#include "core/render/derived_volumes.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/params.h"
 #include "core/render/render_stats.h"
@@ -24,7 +25,7 @@ namespace volstyle::core {
 struct MarchSetup {
     layout::MarchParams params;
     /// Light-depth volumes of the lights with non-zero irradiance, in lightDirection[] order.
-    std::vector<std::shared_ptr<const gl::Texture>> lightDepth;
+    std::vector<std::shared_ptr<const LightDepthVolume>> lightDepth;
     std::shared_ptr<const gl::Texture> environment;  ///< null without an environment map
 };
 

@@ -82,7 +82,7 @@ struct MarchParams {
     VS_VEC4 phase;           /* x: 0 isotropic, 1 Henyey-Greenstein; y: g */
     VS_VEC4 lightDirection[kLightSlots];   /* xyz: unit world direction toward the light */
     VS_VEC4 lightIrradiance[kLightSlots];  /* rgb: E_l */
-    VS_IVEC4 lightKernel;    /* light_depth.comp: x: the light it marches toward (index into lightDirection) */
+    VS_IVEC4 lightKernel;    /* light_depth.comp: x: the light whose grid it fills (index into lightGrid*) */
     /* The solver's projector (project.comp) only. */
     VS_IVEC4 unknownDims;    /* xyz: voxels of the solver's unknown grid */
     VS_VEC4 unknownScale;    /* xyz: unknown voxels per extinction voxel (both grids span one box) */
@@ -91,6 +91,10 @@ struct MarchParams {
     VS_VEC4 projectorCutoff; /* x: transmittance below which forward and adjoint rays both stop */
     /* Chunked dispatches (chunked_dispatch.h): the first cell (voxel or pixel) of this chunk. */
     VS_IVEC4 dispatchOffset;
+    /* Light-depth volumes on light-aligned grids (core/render/light_grid.h), one per light slot. */
+    VS_MAT4 lightGridFromIndex[kLightSlots];  /* index-space point -> grid coordinates (nodes at integers) */
+    VS_IVEC4 lightGridDims[kLightSlots];      /* xyz: nodes; z runs away from the light */
+    VS_MAT4 indexFromLightGrid;               /* light_depth.comp: the inverse, for light lightKernel.x */
 };
 
 /* Parameters of the vector kernels (vector_ops.comp). Vectors are arrays of vec4 (rgb used). */

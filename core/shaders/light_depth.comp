@@ -1,44 +1,101 @@
-// Optical depth from every voxel centre toward light u.lightKernel.x, marched with the same
-// segments and skipping as view rays. Recomputed only when extinction or the light changes.
-#include "common/march.glsl"
+// Optical depth toward light u.lightKernel.x on its light-aligned grid (core/render/light_grid.h):
+// one invocation per row of nodes, a ray marched once from the light side, writing at every node
+// the depth accumulated so far, τ(node c) = τ(node c−1) + ∫ σ over the span between them. Each
+// span's part inside the voxels' box is cut into equal segments of at most u.march.x voxels,
+// sampled at their midpoints (exact for a constant medium); outside the box σ = 0. O(N) for N
+// voxels. Recomputed only when the extinction or the light changes. The texture is cleared to 0
+// first: nodes before a row enters the box, and rows that miss it, keep that depth.
+#include "common/volume.glsl"
 
-layout(local_size_x = kWorkgroup3D, local_size_y = kWorkgroup3D, local_size_z = kWorkgroup3D) in;
+#ifndef VOLSTYLE_GREY_DEPTH
+#define VOLSTYLE_GREY_DEPTH 0
+#endif
+
+layout(local_size_x = kWorkgroup2D, local_size_y = kWorkgroup2D) in;
+#if VOLSTYLE_GREY_DEPTH
+// Grey extinction: one channel (its texture swizzles red into green and blue).
+layout(binding = kImageUnitOut, r32f) uniform writeonly image3D img_lightDepth;
+#else
 layout(binding = kImageUnitOut, rgba32f) uniform writeonly image3D img_lightDepth;
+#endif
 
 // Past this optical depth the light is e^-64 ≈ 1.6e-28: nothing left to attenuate.
 const float kOpaqueDepth = 64.0;
 
-void main() {
-    ivec3 voxel = ivec3(gl_GlobalInvocationID) + u.dispatchOffset.xyz;  // chunked_dispatch.h
-    if (any(greaterThanEqual(voxel, u.dims.xyz))) return;
+// The corners of the voxel cell last sampled: a row samples each cell about 1 / u.march.x times
+// in a row, so the 8 fetches are shared by those samples (the same values fetchTrilinear reads).
+struct CellCache {
+    ivec3 i0;
+    vec3 c000, c100, c010, c110, c001, c101, c011, c111;
+};
 
-    // A voxel's depth is read only by samples whose trilinear stencil holds it; the rest of such a
-    // stencil lies within one voxel of it, so if that 3³ neighbourhood has no extinction every
-    // reader has σ = 0 and multiplies the depth by nothing. Skip those voxels (exactly), first by
-    // brick (the brick's apron covers the neighbourhood), then voxel by voxel.
-    vec3 depth = vec3(0.0);
-    bool isRead = texelFetch(s_occupancy, voxel / kBrickSize, 0).r > 0.0;
-    if (isRead) {
-        float neighbourhood = 0.0;
-        ivec3 lo = max(voxel - 1, ivec3(0)), hi = min(voxel + 1, u.dims.xyz - 1);
-        for (int z = lo.z; z <= hi.z; ++z)
-            for (int y = lo.y; y <= hi.y; ++y)
-                for (int x = lo.x; x <= hi.x; ++x)
-                    neighbourhood = max(neighbourhood, max3(texelFetch(s_extinction, ivec3(x, y, z), 0).rgb));
-        isRead = neighbourhood > 0.0;
+vec3 extinctionAt(inout CellCache cache, vec3 p) {
+    Stencil s = stencilAt(p);
+    if (s.i0 != cache.i0) {
+        cache.i0 = s.i0;
+        cache.c000 = texelFetch(s_extinction, ivec3(s.i0.x, s.i0.y, s.i0.z), 0).rgb;
+        cache.c100 = texelFetch(s_extinction, ivec3(s.i1.x, s.i0.y, s.i0.z), 0).rgb;
+        cache.c010 = texelFetch(s_extinction, ivec3(s.i0.x, s.i1.y, s.i0.z), 0).rgb;
+        cache.c110 = texelFetch(s_extinction, ivec3(s.i1.x, s.i1.y, s.i0.z), 0).rgb;
+        cache.c001 = texelFetch(s_extinction, ivec3(s.i0.x, s.i0.y, s.i1.z), 0).rgb;
+        cache.c101 = texelFetch(s_extinction, ivec3(s.i1.x, s.i0.y, s.i1.z), 0).rgb;
+        cache.c011 = texelFetch(s_extinction, ivec3(s.i0.x, s.i1.y, s.i1.z), 0).rgb;
+        cache.c111 = texelFetch(s_extinction, ivec3(s.i1.x, s.i1.y, s.i1.z), 0).rgb;
     }
-    if (isRead) {
-        vec3 o = vec3(voxel);  // march from the voxel centre toward the light
-        vec3 d = mat3(u.indexFromWorld) * u.lightDirection[u.lightKernel.x].xyz;
-        vec2 range = vec2(0.0, intersectVolumeBox(o, d).y);
-        if (range.y > 0.0) {
-            RayMarch m = beginMarch(range, o, d);
-            float tMid, dt;
-            while (nextSegment(m, true, tMid, dt)) {
-                depth += fetchTrilinear(s_extinction, stencilAt(o + tMid * d)) * dt;
-                if (min(depth.r, min(depth.g, depth.b)) > kOpaqueDepth) break;
+    vec3 c00 = mix(cache.c000, cache.c100, s.f.x), c10 = mix(cache.c010, cache.c110, s.f.x);
+    vec3 c01 = mix(cache.c001, cache.c101, s.f.x), c11 = mix(cache.c011, cache.c111, s.f.x);
+    return mix(mix(c00, c10, s.f.y), mix(c01, c11, s.f.y), s.f.z);
+}
+
+// Where the ray o + t·d leaves the occupancy brick holding p if that brick is empty (σ = 0
+// throughout it, apron included); otherwise -1.
+float emptyBrickExit(vec3 p, vec3 o, vec3 invD) {
+    ivec3 brick = clamp(ivec3(floor((p + 0.5) / float(kBrickSize))), ivec3(0), u.brickDims.xyz - 1);
+    if (texelFetch(s_occupancy, brick, 0).r > 0.0) return -1.0;
+    vec3 lo = vec3(brick * kBrickSize) - 0.5, hi = lo + float(kBrickSize);
+    vec3 tFar = max((lo - o) * invD, (hi - o) * invD);
+    return min(tFar.x, min(tFar.y, tFar.z));
+}
+
+void main() {
+    ivec2 row = ivec2(gl_GlobalInvocationID.xy) + u.dispatchOffset.xy;  // chunked_dispatch.h
+    ivec3 n = u.lightGridDims[u.lightKernel.x].xyz;
+    if (row.x >= n.x || row.y >= n.y) return;
+
+    // The row's first node (on the light side) and the index-space step between nodes: the ray is
+    // o + t·d with t in nodes.
+    vec3 o = (u.indexFromLightGrid * vec4(vec2(row), 0.0, 1.0)).xyz;
+    vec3 d = mat3(u.indexFromLightGrid)[2];
+    vec3 invD = 1.0 / mix(d, vec3(1e-30), equal(d, vec3(0.0)));
+    vec2 inside = intersectVolumeBox(o, d);
+    if (inside.x >= inside.y) return;                          // misses the box: depth 0 throughout
+    float stepsPerNode = length(d) / u.march.x;               // segments of at most march.x voxels
+    float worldPerNode = length(inverse(mat3(u.indexFromWorld)) * d);  // σ is per world unit
+
+    CellCache cache;
+    cache.i0 = ivec3(-1);
+    vec3 depth = vec3(0.0);
+    float skipTo = -1.0;  // samples before this t lie in an empty brick
+    for (int c = max(1, int(floor(inside.x)) + 1); c < n.z; ++c) {
+        // The span [c−1, c] within the box; nothing to add after the ray leaves it, or once the
+        // light is gone.
+        float t0 = max(float(c - 1), inside.x), t1 = min(float(c), inside.y);
+        if (t1 > t0 && min(depth.r, min(depth.g, depth.b)) <= kOpaqueDepth && skipTo < t1) {
+            int count = max(1, int(ceil((t1 - t0) * stepsPerNode)));
+            float dt = (t1 - t0) / float(count);
+            float span = dt * worldPerNode;  // world length of one segment
+            for (int i = 0; i < count; ++i) {
+                float t = t0 + (float(i) + 0.5) * dt;
+                if (t < skipTo) continue;
+                vec3 p = o + t * d;
+                float exit = emptyBrickExit(p, o, invD);
+                if (exit > t) {
+                    skipTo = exit;
+                    continue;
+                }
+                depth += extinctionAt(cache, p) * span;
             }
         }
+        imageStore(img_lightDepth, ivec3(row, c), vec4(depth, 0.0));
     }
-    imageStore(img_lightDepth, voxel, vec4(depth, 0.0));
 }

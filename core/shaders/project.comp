@@ -162,7 +162,7 @@ void main() {
 #endif
 #if VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_ALBEDO || VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO
             uint albedoBlock = VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO ? uint(u.unknownLayout.x) : 0u;
-            apply(b, albedoBlock, opacity * inScattering(stencilAt(p), dir), r, sum);
+            apply(b, albedoBlock, opacity * inScattering(p, dir), r, sum);
 #endif
             transmittance *= exp(-tau);
             // Only a transmittance cut-off: forward and adjoint must stop at the same segment.

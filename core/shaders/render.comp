@@ -62,7 +62,7 @@ void main() {
 #else
             vec3 albedo = vec3(1.0);
 #endif
-            Ls = albedo * inScattering(st, dir);
+            Ls = albedo * inScattering(st.p, dir);
 #endif
             // Segment of optical depth τ = σ dt: opacity 1 - e^{-τ}, then attenuate.
             vec3 tau = sigma * dt;

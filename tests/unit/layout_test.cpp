@@ -23,15 +23,19 @@ static_assert(offsetof(MarchParams, lightKernel) == 240 + 32 * volstyle::core::l
 static_assert(offsetof(MarchParams, unknownDims) == 240 + 32 * volstyle::core::layout::kLightSlots + 16);
 static_assert(offsetof(MarchParams, viewPixels) == 240 + 32 * volstyle::core::layout::kLightSlots + 64);
 static_assert(offsetof(MarchParams, dispatchOffset) == 240 + 32 * volstyle::core::layout::kLightSlots + 96);
-static_assert(sizeof(MarchParams) == 240 + 32 * volstyle::core::layout::kLightSlots + 112);
+static_assert(offsetof(MarchParams, lightGridFromIndex) == 240 + 32 * volstyle::core::layout::kLightSlots + 112);
+static_assert(offsetof(MarchParams, lightGridDims) == 240 + 96 * volstyle::core::layout::kLightSlots + 112);
+static_assert(offsetof(MarchParams, indexFromLightGrid) == 240 + 112 * volstyle::core::layout::kLightSlots + 112);
+static_assert(sizeof(MarchParams) == 240 + 112 * volstyle::core::layout::kLightSlots + 176);
 static_assert(sizeof(volstyle::core::layout::VectorParams) == 64);
 
 TEST(Layout, MarchParamsMatchesStd140) {
     // The static_asserts above are the test; this records the size in the test log.
     // 416 bytes before issue #8 named the light index, pixel offset and cut-off (lightKernel,
     // viewPixels, projectorCutoff) instead of hiding them in spare components; 480 since #9 added
-    // dispatchOffset for chunked (budgeted) dispatches.
-    EXPECT_EQ(sizeof(MarchParams), 480u);
+    // dispatchOffset for chunked (budgeted) dispatches; 864 since #10 put light depth on
+    // light-aligned grids (lightGridFromIndex, lightGridDims, indexFromLightGrid).
+    EXPECT_EQ(sizeof(MarchParams), 864u);
 }
 
 TEST(Layout, SolverVocabularyIsSharedWithTheShaders) {

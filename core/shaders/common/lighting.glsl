@@ -20,17 +20,22 @@ float phaseFunction(float cosTheta) {
 }
 
 #if VOLSTYLE_NUM_LIGHTS > 0
-// Optical depth toward each light, stored per voxel centre by light_depth.comp. Interpolating the
-// depth (not the transmittance) is exact for slabs, where the depth is linear.
+// Optical depth toward each light, stored on the nodes of a light-aligned grid by light_depth.comp
+// (core/render/light_grid.h) and interpolated trilinearly between them. Interpolating the depth
+// (not the transmittance) is exact for slabs, where the depth is linear.
 layout(binding = kUnitLightDepth0) uniform sampler3D s_lightDepth[kLightSlots];
 
-// L_scat(x, ω) = Σ_l p(ω_l·(−ω)) E_l T_l(x)   (V_l = 1: no occluders)
-vec3 inScattering(Stencil st, vec3 dir) {
+// τ_l(p): the optical depth from index-space point p toward light l.
+vec3 lightDepthAt(int l, vec3 p) {
+    vec3 g = (u.lightGridFromIndex[l] * vec4(p, 1.0)).xyz;
+    return fetchTrilinear(s_lightDepth[l], stencilOn(g, u.lightGridDims[l].xyz));
+}
+
+// L_scat(x, ω) = Σ_l p(ω_l·(−ω)) E_l T_l(x) at index-space point p   (V_l = 1: no occluders)
+vec3 inScattering(vec3 p, vec3 dir) {
     vec3 sum = vec3(0.0);
-    for (int l = 0; l < VOLSTYLE_NUM_LIGHTS; ++l) {
-        vec3 depth = fetchTrilinear(s_lightDepth[l], st);
-        sum += phaseFunction(dot(u.lightDirection[l].xyz, -dir)) * u.lightIrradiance[l].rgb * exp(-depth);
-    }
+    for (int l = 0; l < VOLSTYLE_NUM_LIGHTS; ++l)
+        sum += phaseFunction(dot(u.lightDirection[l].xyz, -dir)) * u.lightIrradiance[l].rgb * exp(-lightDepthAt(l, p));
     return sum;
 }
 #endif

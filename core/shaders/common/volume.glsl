@@ -10,28 +10,34 @@
 layout(binding = kUnitExtinction) uniform sampler3D s_extinction;
 layout(binding = kUnitOccupancy) uniform sampler3D s_occupancy;
 
-// The 8-voxel trilinear stencil of index-space point p: corners i0..i1, weights from f.
+// The 8-node trilinear stencil of point p on a grid of n nodes (node i at integer i): corners
+// i0..i1, weights from f, clamped to the edge.
 struct Stencil {
     ivec3 i0;
     ivec3 i1;
     vec3 f;
     vec3 p;
+    ivec3 n;
 };
 
-Stencil stencilAt(vec3 p) {
+Stencil stencilOn(vec3 p, ivec3 n) {
     Stencil s;
-    vec3 q = clamp(p, vec3(0.0), vec3(u.dims.xyz - 1));
-    s.i0 = min(ivec3(floor(q)), u.dims.xyz - 1);
-    s.i1 = min(s.i0 + 1, u.dims.xyz - 1);
+    vec3 q = clamp(p, vec3(0.0), vec3(n - 1));
+    s.i0 = min(ivec3(floor(q)), n - 1);
+    s.i1 = min(s.i0 + 1, n - 1);
     s.f = q - vec3(s.i0);
     s.p = p;
+    s.n = n;
     return s;
 }
+
+// The stencil of index-space point p on the property grids.
+Stencil stencilAt(vec3 p) { return stencilOn(p, u.dims.xyz); }
 
 vec3 fetchTrilinear(sampler3D tex, Stencil s) {
 #if VOLSTYLE_HW_FILTER
     // The texture unit's filter (clamp-to-edge sampler): fast, but GPUs quantise its weights.
-    return texture(tex, (s.p + 0.5) / vec3(u.dims.xyz)).rgb;
+    return texture(tex, (s.p + 0.5) / vec3(s.n)).rgb;
 #else
     vec3 c000 = texelFetch(tex, ivec3(s.i0.x, s.i0.y, s.i0.z), 0).rgb;
     vec3 c100 = texelFetch(tex, ivec3(s.i1.x, s.i0.y, s.i0.z), 0).rgb;
