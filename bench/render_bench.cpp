@@ -5,7 +5,9 @@
 //   term_err  — early termination at T < 1e-5 vs marching to the end
 //   step_err  — relative RMS against the 0.25-voxel render of the same volume
 //   hw_ms / hw_err — the texture unit's trilinear filter instead of 8 texel fetches
-// Usage: render_bench [--quick] [--reps N]. Prints a table, then one JSON line per row.
+// Then the light-depth volumes alone (issue #10): build ms per resolution and sun direction
+// (overhead, the default diagonal, grazing), with the grid's nodes and bytes.
+// Usage: render_bench [--quick] [--lights-only] [--reps N]. Prints tables, then one JSON line per row.
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -16,6 +18,7 @@
 
 #include "bench_util.h"
 #include "core/render/gpu_volume.h"
+#include "core/render/light_grid.h"
 #include "core/render/renderer.h"
 #include "core/volume/builtin_scenes.h"
 
@@ -39,13 +42,65 @@ Lighting benchLighting() {
     return l;
 }
 
+struct LightRow {
+    int res;
+    const char* sun;
+    double ms;
+    Int3 nodes;
+    double mib;
+};
+
+/// Light-depth build time alone: a fresh GpuVolume per run (a new extinction version, so nothing
+/// is cached) rendered to one pixel, timing only the light pass (stats.lightMs).
+std::vector<LightRow> benchLightVolumes(GpuDevice& device, Renderer& renderer, const std::vector<int>& resolutions, int reps) {
+    const std::pair<const char*, Vec3d> suns[] = {
+        {"overhead", {0, 1, 0}}, {"diagonal", {-0.55, 0.65, 0.55}}, {"grazing", {0.95, 0.12, -0.3}}};
+    Camera pixel;
+    pixel.eye = {0, 0.15, 3.4};
+    pixel.width = pixel.height = 1;
+    std::vector<LightRow> rows;
+    for (int res : resolutions) {
+        const Volume cloud = makeBuiltinScene("cloud", res);
+        for (const auto& [name, dir] : suns) {
+            Lighting l;
+            l.lights = {{dir, {20, 20, 20}}};
+            std::vector<double> ms;
+            for (int r = 0; r < reps + 1; ++r) {  // the first run compiles
+                GpuVolume volume(cloud);
+                RenderStats stats;
+                renderer.render(volume, pixel, l, {}, &stats);
+                if (r > 0) ms.push_back(stats.lightMs);
+            }
+            const LightGrid g = makeLightGrid(cloud.dims(), cloud.worldFromIndex().inverseAffine(), normalize(dir));
+            rows.push_back({res, name, bench::median(ms), g.dims, double(g.dims.volume()) * 4 / (1 << 20)});  // R32F: grey cloud
+            std::cerr << "l" << std::flush;
+        }
+    }
+    (void)device;
+    return rows;
+}
+
+void printLightVolumes(const std::vector<LightRow>& rows, int reps, const std::string& renderer) {
+    std::printf("light-depth volumes: builtin cloud, one sun, step 0.5 voxel, median of %d builds\n\n", reps);
+    std::printf("| volume | sun | build ms | grid nodes | MiB |\n|---|---|---|---|---|\n");
+    for (const LightRow& r : rows)
+        std::printf("| %d³ | %s | %.1f | %dx%dx%d | %.1f |\n", r.res, r.sun, r.ms, r.nodes.x, r.nodes.y, r.nodes.z, r.mib);
+    std::printf("\n");
+    for (const LightRow& r : rows)
+        std::printf("{\"bench\":\"light_volume\",\"renderer\":\"%s\",\"resolution\":%d,\"sun\":\"%s\",\"build_ms\":%.2f,"
+                    "\"nodes\":%lld,\"mib\":%.2f}\n",
+                    renderer.c_str(), r.res, r.sun, r.ms, (long long)r.nodes.volume(), r.mib);
+    std::printf("\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    bool quick = false;
+    bool quick = false, lightsOnly = false;
     int reps = 3;
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--quick")) quick = true;
+        if (!std::strcmp(argv[i], "--lights-only")) lightsOnly = true;
         if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
     }
     spdlog::set_level(spdlog::level::warn);
@@ -60,8 +115,9 @@ int main(int argc, char** argv) {
 
     const std::vector<int> resolutions = quick ? std::vector<int>{32, 64} : std::vector<int>{32, 64, 128, 256};
     const std::vector<double> steps = quick ? std::vector<double>{0.5, 1} : std::vector<double>{0.25, 0.5, 1, 2};
+    const std::vector<LightRow> lightRows = benchLightVolumes(*device, renderer, resolutions, reps);
     std::vector<Row> rows;
-    for (int res : resolutions) {
+    for (int res : lightsOnly ? std::vector<int>{} : resolutions) {
         GpuVolume volume(makeBuiltinScene("cloud", res));
         Image finest;
         for (double step : steps) {
@@ -107,6 +163,8 @@ int main(int argc, char** argv) {
 
     const auto& caps = device->capabilities();
     std::printf("renderer: %s | %s | EGL %s\n", caps.renderer.c_str(), caps.version.c_str(), caps.platform.c_str());
+    printLightVolumes(lightRows, reps, caps.renderer);
+    if (lightsOnly) return 0;
     std::printf("scene: builtin cloud, 480x480, 1 sun, median of %d runs (wall ms incl. readback)\n\n", reps);
     std::printf("| volume | step (vox) | ms skip | ms no-skip | speed-up | gpu ms | light-vol ms | skip err | term err | step err (RMS) | ms hw-filter | hw err |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");

@@ -87,14 +87,24 @@ Volume makeCloud(int res) {
     };
     PerlinNoise noise(7);
     const double sigmaMax = 40.0;  // per world unit: optical depth ~40 across the core
+    // Exact shortcuts (most of the box is empty; they halve a 128³ build): improved Perlin noise,
+    // and so fbm, stays within ±kNoiseBound, so the lookup q moves at most kShift from p, and
+    // billows and wisps add at most kDetail to the field.
+    constexpr double kNoiseBound = 1.1, kShift = 0.10 * kNoiseBound * 1.7320508075688772, kDetail = 0.16 + 0.05 * kNoiseBound;
+    const VoxelProperties empty{Vec3(0.0f), Vec3(1.0f), Vec3(0.0f)};
     return sample(res, false, [&](const Vec3d& p) {
+        double base = smoothstep(-0.66, -0.56, p.y);  // flat bottom
+        if (base <= 0) return empty;
+        bool nearBlob = false;  // the field is 0 unless q lies inside some blob
+        for (const auto& b : blobs) nearBlob = nearBlob || length(p - b.c) < b.r + kShift;
+        if (!nearBlob) return empty;
         Vec3d q = p + noise.fbm3(p * 2.2, 3) * 0.10;  // large-scale lumpiness
         double field = 0;
         for (const auto& b : blobs) field += blobKernel(length(q - b.c), b.r);
+        if (field + kDetail <= 0.22) return empty;  // below smoothstep's lower edge whatever the detail
         // Billows: 1 - |noise| has rounded crests and sharp creases, like cauliflower tops.
         double billow = 1.0 - 2.0 * std::abs(noise.fbm(q * 5.5 + Vec3d(3.1, 0, 0), 3));
         double wisps = noise.fbm(p * 14.0, 2);
-        double base = smoothstep(-0.66, -0.56, p.y);  // flat bottom
         double density = smoothstep(0.22, 0.5, field + 0.16 * billow + 0.05 * wisps) * base;
         return VoxelProperties{Vec3(float(sigmaMax * density)), Vec3(1.0f), Vec3(0.0f)};
     });

@@ -312,6 +312,8 @@ std::vector<float> solveAlbedo(httplib::Client& c, const std::string& base, cons
     EXPECT_EQ(events.back(), "done");
     json report = json::parse(c.Get(("/api/v1/jobs/" + job).c_str())->body)["result"]["report"];
     EXPECT_GE(report["iterations"].get<int>(), 20) << report;
+    std::cout << "[ measured ] albedo solve: " << report["iterations"] << " iterations, stopped by " << report["stop_reason"]
+              << ", objective " << report["final_objective"] << "\n";
     auto vdb = c.Get((base + "/volume.vdb").c_str());
     const std::string path = testing::TempDir() + "/solved-" + job + ".vdb";
     std::ofstream(path, std::ios::binary) << vdb->body;
@@ -354,7 +356,11 @@ TEST_F(Api, PreviewsAndOtherSessionsDuringASolveChangeNothing) {
     std::cout << "[ measured ] albedo difference with " << otherRenders << " renders of another session and " << previews
               << " previews during the solve: " << diff << "\n";
     EXPECT_GT(otherRenders + previews, 2) << "the solve should have been disturbed";
-    EXPECT_LE(diff, 1e-5);
+    // Wᵀ sums with float atomics, whose order varies from run to run: the two solves' objectives
+    // agree to ~1e-12, but a voxel reaching its albedo bound one iteration apart in bounded CGLS
+    // moves the result by up to 1.41e-5 (measured: about half the runs since issue #10's light
+    // grids, ≤ 9e-7 the rest). Freed or replaced light-depth volumes (the bug) change far more.
+    EXPECT_LE(diff, 1e-4);
 }
 
 TEST_F(Api, DeletingASessionDuringASolveCancelsItsJob) {
