@@ -23,28 +23,19 @@ layout(binding = kImageUnitOut, rgba32f) uniform writeonly image3D img_lightDept
 const float kOpaqueDepth = 64.0;
 
 // The corners of the voxel cell last sampled: a row samples each cell about 1 / u.march.x times
-// in a row, so the 8 fetches are shared by those samples (the same values fetchTrilinear reads).
+// in a row, so the 8 fetches are shared by those samples (the values fetchTrilinear reads).
 struct CellCache {
     ivec3 i0;
-    vec3 c000, c100, c010, c110, c001, c101, c011, c111;
+    Corners corners;
 };
 
 vec3 extinctionAt(inout CellCache cache, vec3 p) {
     Stencil s = stencilAt(p);
     if (s.i0 != cache.i0) {
         cache.i0 = s.i0;
-        cache.c000 = texelFetch(s_extinction, ivec3(s.i0.x, s.i0.y, s.i0.z), 0).rgb;
-        cache.c100 = texelFetch(s_extinction, ivec3(s.i1.x, s.i0.y, s.i0.z), 0).rgb;
-        cache.c010 = texelFetch(s_extinction, ivec3(s.i0.x, s.i1.y, s.i0.z), 0).rgb;
-        cache.c110 = texelFetch(s_extinction, ivec3(s.i1.x, s.i1.y, s.i0.z), 0).rgb;
-        cache.c001 = texelFetch(s_extinction, ivec3(s.i0.x, s.i0.y, s.i1.z), 0).rgb;
-        cache.c101 = texelFetch(s_extinction, ivec3(s.i1.x, s.i0.y, s.i1.z), 0).rgb;
-        cache.c011 = texelFetch(s_extinction, ivec3(s.i0.x, s.i1.y, s.i1.z), 0).rgb;
-        cache.c111 = texelFetch(s_extinction, ivec3(s.i1.x, s.i1.y, s.i1.z), 0).rgb;
+        cache.corners = fetchCorners(s_extinction, s);
     }
-    vec3 c00 = mix(cache.c000, cache.c100, s.f.x), c10 = mix(cache.c010, cache.c110, s.f.x);
-    vec3 c01 = mix(cache.c001, cache.c101, s.f.x), c11 = mix(cache.c011, cache.c111, s.f.x);
-    return mix(mix(c00, c10, s.f.y), mix(c01, c11, s.f.y), s.f.z);
+    return interpolateCorners(cache.corners, s.f);
 }
 
 // Where the ray o + t·d leaves the occupancy brick holding p if that brick is empty (σ = 0

@@ -1,4 +1,5 @@
-// OpenVDB read/write. The only translation unit that includes OpenVDB headers.
+// OpenVDB read/write. With vdb_inspect.cpp (info, convert's checks) the only translation units
+// that include OpenVDB headers (through vdb_file.h).
 //
 // Lossless round trips (issue #10): a volume read from a file keeps the file's grids (VdbSource),
 // and saveVdb writes a grid back untouched when the volume did not change it, patches only the
@@ -25,6 +26,66 @@
 #include <sstream>
 
 #include "core/base/errors.h"
+#include "core/volume/vdb_file.h"
+
+// Reading whole files (vdb_file.h), shared with vdb_inspect.cpp.
+namespace volstyle::core::vdb_file {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// OpenVDB's magic number, the first 4 bytes of every .vdb file (little-endian 0x56444220).
+bool startsLikeVdb(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    char magic[4] = {};
+    in.read(magic, 4);
+    return in.gcount() == 4 && std::memcmp(magic, "\x20\x42\x44\x56", 4) == 0;
+}
+
+}  // namespace
+
+void initOpenVdb() {
+    static std::once_flag once;
+    std::call_once(once, [] { openvdb::initialize(); });
+}
+
+openvdb::GridBase::ConstPtr findGrid(const openvdb::GridCPtrVec& grids, const std::string& name) {
+    for (const auto& g : grids)
+        if (g->getName() == name) return g;
+    return nullptr;
+}
+
+FileContents readVdbFile(const std::string& path) {
+    initOpenVdb();
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw IoError("no such file " + quoted(path));
+    if (fs::is_directory(path, ec)) throw IoError(quoted(path) + " is a folder, not a VDB file");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError("cannot open " + quoted(path) + " (permission denied?)");
+    if (!startsLikeVdb(path))
+        throw IoError(quoted(path) + " is not an OpenVDB file (it does not start with the VDB magic number)");
+    // OpenVDB keeps reading a truncated file with garbage sizes and may allocate gigabytes. A
+    // stream that throws on any short read stops it at the first missing byte instead.
+    in.exceptions(std::ios::failbit | std::ios::badbit);
+    try {
+        openvdb::io::Stream stream(in, /*delayLoad=*/false);
+        FileContents out;
+        for (const auto& g : *stream.getGrids()) out.grids.push_back(g);
+        if (auto meta = stream.getMetadata()) out.metadata = *meta;
+        return out;
+    } catch (const std::ios_base::failure&) {
+        throw IoError(quoted(path) + " is truncated (it ends before its grids do)");
+    } catch (const openvdb::Exception& e) {
+        throw IoError(quoted(path) + " is not a readable OpenVDB file (corrupt or truncated): " + e.what());
+    } catch (const std::bad_alloc&) {
+        // Damaged block sizes make OpenVDB ask for more memory than exists (found by fuzzing).
+        throw IoError(quoted(path) + " is damaged: reading it asks for more memory than its grids can need");
+    } catch (const std::exception& e) {
+        throw IoError(quoted(path) + " could not be read: " + e.what());
+    }
+}
+
+}  // namespace volstyle::core::vdb_file
 
 namespace volstyle::core {
 
@@ -44,30 +105,10 @@ struct VdbSource {
 
 namespace {
 
+using namespace vdb_file;
 namespace fs = std::filesystem;
 
-/// Metadata recording the dense box on the extinction grid when its active voxels do not span it
-/// (a built-in cloud with empty borders): reading it back gives the same dims, hence the same render.
-constexpr const char* kBoxMinKey = "volstyle_dense_box_min";
-constexpr const char* kBoxMaxKey = "volstyle_dense_box_max";
-/// The exact index-to-world matrix of a volume made in memory: OpenVDB's Transform simplifies
-/// every linear map it is given (recomputing scales by subtraction), which may change the last
-/// bit. Read back in place of the file's transform while that still agrees with it.
-constexpr const char* kMatrixKey = "volstyle_world_from_index";
 
-
-void initOpenVdb() {
-    static std::once_flag once;
-    std::call_once(once, [] { openvdb::initialize(); });
-}
-
-/// OpenVDB matrices act on row vectors (p' = p·M); ours on column vectors: transpose.
-Mat4 fromVdb(const openvdb::math::Mat4d& m) {
-    Mat4 r;
-    for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) r(i, j) = m(j, i);
-    return r;
-}
 
 openvdb::math::Mat4d toVdb(const Mat4& m) {
     openvdb::math::Mat4d r;
@@ -93,7 +134,6 @@ Mat4 recordedOrFileMatrix(const openvdb::GridBase& grid, const Mat4& fromFile) {
     return exact;
 }
 
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
 
 Mat4 worldFromIndexOf(const openvdb::GridBase& grid, const std::string& path) {
     const openvdb::math::Transform& xf = grid.transform();
@@ -109,12 +149,6 @@ std::string gridNames(const openvdb::GridCPtrVec& grids) {
     std::string s;
     for (const auto& g : grids) s += (s.empty() ? "" : ", ") + g->getName();
     return s.empty() ? "(none)" : s;
-}
-
-openvdb::GridBase::ConstPtr findGrid(const openvdb::GridCPtrVec& grids, const std::string& name) {
-    for (const auto& g : grids)
-        if (g->getName() == name) return g;
-    return nullptr;
 }
 
 /// The names a role is read from, in order of preference (Houdini and Blender call extinction
@@ -192,49 +226,6 @@ std::vector<float> densifyRole(Role role, const openvdb::GridBase::ConstPtr& gri
     return rgb;
 }
 
-struct FileContents {
-    openvdb::GridCPtrVec grids;
-    openvdb::MetaMap metadata;
-};
-
-/// OpenVDB's magic number, the first 4 bytes of every .vdb file (little-endian 0x56444220).
-bool startsLikeVdb(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    char magic[4] = {};
-    in.read(magic, 4);
-    return in.gcount() == 4 && std::memcmp(magic, "\x20\x42\x44\x56", 4) == 0;
-}
-
-FileContents readFile(const std::string& path) {
-    initOpenVdb();
-    std::error_code ec;
-    if (!fs::exists(path, ec)) throw IoError("no such file " + quoted(path));
-    if (fs::is_directory(path, ec)) throw IoError(quoted(path) + " is a folder, not a VDB file");
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw IoError("cannot open " + quoted(path) + " (permission denied?)");
-    if (!startsLikeVdb(path))
-        throw IoError(quoted(path) + " is not an OpenVDB file (it does not start with the VDB magic number)");
-    // OpenVDB keeps reading a truncated file with garbage sizes and may allocate gigabytes. A
-    // stream that throws on any short read stops it at the first missing byte instead.
-    in.exceptions(std::ios::failbit | std::ios::badbit);
-    try {
-        openvdb::io::Stream stream(in, /*delayLoad=*/false);
-        FileContents out;
-        for (const auto& g : *stream.getGrids()) out.grids.push_back(g);
-        if (auto meta = stream.getMetadata()) out.metadata = *meta;
-        return out;
-    } catch (const std::ios_base::failure&) {
-        throw IoError(quoted(path) + " is truncated (it ends before its grids do)");
-    } catch (const openvdb::Exception& e) {
-        throw IoError(quoted(path) + " is not a readable OpenVDB file (corrupt or truncated): " + e.what());
-    } catch (const std::bad_alloc&) {
-        // Damaged block sizes make OpenVDB ask for more memory than exists (found by fuzzing).
-        throw IoError(quoted(path) + " is damaged: reading it asks for more memory than its grids can need");
-    } catch (const std::exception& e) {
-        throw IoError(quoted(path) + " could not be read: " + e.what());
-    }
-}
-
 /// The index box the dense volume covers: the extinction grid's active voxels, widened to the box
 /// volstyle recorded when it wrote the file.
 openvdb::CoordBBox denseBox(const openvdb::GridBase& extinction) {
@@ -268,7 +259,7 @@ void checkValues(Role role, const std::vector<float>& rgb, const openvdb::GridBa
 }  // namespace
 
 Volume loadVdb(const std::string& path, const VolumeLimits& limits) {
-    FileContents file = readFile(path);
+    FileContents file = readVdbFile(path);
     auto source = std::make_shared<VdbSource>();
     source->grids = file.grids;
     source->fileMetadata = file.metadata;
@@ -477,131 +468,6 @@ void saveVdb(const std::string& path, const Volume& volume) {
     std::error_code ec;
     fs::rename(tmp, path, ec);
     if (ec) throw IoError("cannot move " + quoted(tmp) + " to " + quoted(path) + ": " + ec.message());
-}
-
-std::vector<VdbGridInfo> inspectVdb(const std::string& path) {
-    FileContents file = readFile(path);
-    std::vector<VdbGridInfo> out;
-    for (const auto& g : file.grids) {
-        VdbGridInfo info;
-        info.name = g->getName();
-        info.type = g->valueType();
-        info.gridClass = openvdb::GridBase::gridClassToMenuName(g->getGridClass());
-        info.activeVoxels = int64_t(g->activeVoxelCount());
-        openvdb::CoordBBox box = g->evalActiveVoxelBoundingBox();
-        info.activeMin = {box.min().x(), box.min().y(), box.min().z()};
-        info.activeMax = {box.max().x(), box.max().y(), box.max().z()};
-        openvdb::Vec3d vs = g->voxelSize();
-        info.voxelSize = {vs.x(), vs.y(), vs.z()};
-        info.isLinearTransform = g->transform().isLinear();
-        if (info.isLinearTransform) info.worldFromIndex = fromVdb(g->transform().baseMap()->getAffineMap()->getMat4());
-        Vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
-        auto scan = [&](auto typed) {
-            for (auto it = typed->cbeginValueOn(); it; ++it) {
-                openvdb::Vec3s v(*it);
-                for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], v[c]), hi[c] = std::max(hi[c], v[c]);
-            }
-        };
-        if (auto f = openvdb::gridConstPtrCast<openvdb::FloatGrid>(g)) scan(f);
-        else if (auto v = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(g)) scan(v);
-        if (info.activeVoxels == 0 || lo.x > hi.x) lo = hi = Vec3(0.0f);
-        info.minValue = lo, info.maxValue = hi;
-        for (auto it = g->beginMeta(); it != g->endMeta(); ++it)
-            info.metadata.emplace_back(it->first, it->second->str());
-        out.push_back(info);
-    }
-    return out;
-}
-
-std::vector<std::pair<std::string, std::string>> vdbFileMetadata(const std::string& path) {
-    FileContents file = readFile(path);
-    std::vector<std::pair<std::string, std::string>> out;
-    for (auto it = file.metadata.beginMeta(); it != file.metadata.endMeta(); ++it)
-        out.emplace_back(it->first, it->second->str());
-    return out;
-}
-
-namespace {
-
-/// Metadata a round trip may change: OpenVDB's statistics (recomputed on every write) and the dense
-/// box volstyle records.
-bool isBookkeeping(const std::string& key) {
-    return key.rfind("file_", 0) == 0 || key == kBoxMinKey || key == kBoxMaxKey || key == kMatrixKey;
-}
-
-void compareMetadata(const openvdb::MetaMap& a, const openvdb::MetaMap& b, const std::string& where,
-                     std::vector<std::string>& out) {
-    for (auto it = a.beginMeta(); it != a.endMeta(); ++it) {
-        if (isBookkeeping(it->first)) continue;
-        auto other = b[it->first];
-        if (!other) out.push_back(where + ": metadata '" + it->first + "' is missing");
-        else if (other->typeName() != it->second->typeName() || other->str() != it->second->str())
-            out.push_back(where + ": metadata '" + it->first + "' was " + it->second->str() + ", is " + other->str());
-    }
-}
-
-/// Active voxels and values: every active voxel of `a` active in `b` with the same value, and as
-/// many active voxels (so none were added).
-template <typename GridT>
-void compareValues(const GridT& a, const GridT& b, const std::string& where, std::vector<std::string>& out) {
-    if (a.activeVoxelCount() != b.activeVoxelCount()) {
-        out.push_back(where + ": " + std::to_string(a.activeVoxelCount()) + " active voxels became " +
-                      std::to_string(b.activeVoxelCount()));
-        return;
-    }
-    auto acc = b.getConstAccessor();
-    for (auto it = a.cbeginValueOn(); it; ++it) {
-        openvdb::CoordBBox span;
-        it.getBoundingBox(span);  // a tile spans many voxels
-        for (auto ijk = span.begin(); ijk; ++ijk) {
-            if (!acc.isValueOn(*ijk) || acc.getValue(*ijk) != *it) {
-                std::ostringstream s;
-                s << where << ": voxel " << *ijk << " was " << *it << (acc.isValueOn(*ijk) ? ", is " : ", is inactive ")
-                  << acc.getValue(*ijk);
-                out.push_back(s.str());
-                return;
-            }
-        }
-    }
-    if (a.background() != b.background()) out.push_back(where + ": the background changed");
-}
-
-}  // namespace
-
-std::vector<std::string> vdbDifferences(const std::string& before, const std::string& after, bool values) {
-    const FileContents a = readFile(before), b = readFile(after);
-    std::vector<std::string> out;
-    compareMetadata(a.metadata, b.metadata, "file", out);
-    for (const auto& ga : a.grids) {
-        const std::string where = "grid '" + ga->getName() + "'";
-        auto gb = findGrid(b.grids, ga->getName());
-        if (!gb) {
-            out.push_back(where + " is missing");
-            continue;
-        }
-        if (ga->valueType() != gb->valueType())
-            out.push_back(where + ": type " + ga->valueType() + " became " + gb->valueType());
-        if (ga->getGridClass() != gb->getGridClass())
-            out.push_back(where + ": class " + openvdb::GridBase::gridClassToString(ga->getGridClass()) + " became " +
-                          openvdb::GridBase::gridClassToString(gb->getGridClass()));
-        if (!(ga->transform() == gb->transform())) out.push_back(where + ": the transform changed");
-        if (ga->voxelSize() != gb->voxelSize()) out.push_back(where + ": the voxel size changed");
-        compareMetadata(*ga, *gb, where, out);
-        if (ga->evalActiveVoxelBoundingBox() != gb->evalActiveVoxelBoundingBox()) {
-            std::ostringstream s;
-            s << where << ": the active index box " << ga->evalActiveVoxelBoundingBox() << " became "
-              << gb->evalActiveVoxelBoundingBox();
-            if (values) out.push_back(s.str());
-        }
-        if (!values || ga->valueType() != gb->valueType()) continue;
-        if (auto fa = openvdb::gridConstPtrCast<openvdb::FloatGrid>(ga))
-            compareValues(*fa, *openvdb::gridConstPtrCast<openvdb::FloatGrid>(gb), where, out);
-        else if (auto va = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(ga))
-            compareValues(*va, *openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(gb), where, out);
-        else if (ga->activeVoxelCount() != gb->activeVoxelCount())
-            out.push_back(where + ": the active voxel count changed");
-    }
-    return out;
 }
 
 }  // namespace volstyle::core

@@ -34,22 +34,36 @@ Stencil stencilOn(vec3 p, ivec3 n) {
 // The stencil of index-space point p on the property grids.
 Stencil stencilAt(vec3 p) { return stencilOn(p, u.dims.xyz); }
 
+// The 8 values of a stencil's corners.
+struct Corners {
+    vec3 c000, c100, c010, c110, c001, c101, c011, c111;
+};
+
+Corners fetchCorners(sampler3D tex, Stencil s) {
+    Corners c;
+    c.c000 = texelFetch(tex, ivec3(s.i0.x, s.i0.y, s.i0.z), 0).rgb;
+    c.c100 = texelFetch(tex, ivec3(s.i1.x, s.i0.y, s.i0.z), 0).rgb;
+    c.c010 = texelFetch(tex, ivec3(s.i0.x, s.i1.y, s.i0.z), 0).rgb;
+    c.c110 = texelFetch(tex, ivec3(s.i1.x, s.i1.y, s.i0.z), 0).rgb;
+    c.c001 = texelFetch(tex, ivec3(s.i0.x, s.i0.y, s.i1.z), 0).rgb;
+    c.c101 = texelFetch(tex, ivec3(s.i1.x, s.i0.y, s.i1.z), 0).rgb;
+    c.c011 = texelFetch(tex, ivec3(s.i0.x, s.i1.y, s.i1.z), 0).rgb;
+    c.c111 = texelFetch(tex, ivec3(s.i1.x, s.i1.y, s.i1.z), 0).rgb;
+    return c;
+}
+
+vec3 interpolateCorners(Corners c, vec3 f) {
+    vec3 c00 = mix(c.c000, c.c100, f.x), c10 = mix(c.c010, c.c110, f.x);
+    vec3 c01 = mix(c.c001, c.c101, f.x), c11 = mix(c.c011, c.c111, f.x);
+    return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
+}
+
 vec3 fetchTrilinear(sampler3D tex, Stencil s) {
 #if VOLSTYLE_HW_FILTER
     // The texture unit's filter (clamp-to-edge sampler): fast, but GPUs quantise its weights.
     return texture(tex, (s.p + 0.5) / vec3(s.n)).rgb;
 #else
-    vec3 c000 = texelFetch(tex, ivec3(s.i0.x, s.i0.y, s.i0.z), 0).rgb;
-    vec3 c100 = texelFetch(tex, ivec3(s.i1.x, s.i0.y, s.i0.z), 0).rgb;
-    vec3 c010 = texelFetch(tex, ivec3(s.i0.x, s.i1.y, s.i0.z), 0).rgb;
-    vec3 c110 = texelFetch(tex, ivec3(s.i1.x, s.i1.y, s.i0.z), 0).rgb;
-    vec3 c001 = texelFetch(tex, ivec3(s.i0.x, s.i0.y, s.i1.z), 0).rgb;
-    vec3 c101 = texelFetch(tex, ivec3(s.i1.x, s.i0.y, s.i1.z), 0).rgb;
-    vec3 c011 = texelFetch(tex, ivec3(s.i0.x, s.i1.y, s.i1.z), 0).rgb;
-    vec3 c111 = texelFetch(tex, ivec3(s.i1.x, s.i1.y, s.i1.z), 0).rgb;
-    vec3 c00 = mix(c000, c100, s.f.x), c10 = mix(c010, c110, s.f.x);
-    vec3 c01 = mix(c001, c101, s.f.x), c11 = mix(c011, c111, s.f.x);
-    return mix(mix(c00, c10, s.f.y), mix(c01, c11, s.f.y), s.f.z);
+    return interpolateCorners(fetchCorners(tex, s), s.f);
 #endif
 }
 
