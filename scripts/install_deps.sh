@@ -8,6 +8,7 @@ packages=(
   libegl-dev libepoxy-dev libegl-mesa0 libgl1-mesa-dri   # headless GL: EGL + Mesa llvmpipe
   libopenvdb-dev libboost-iostreams-dev libtbb-dev         # OpenVDB (FindOpenVDB needs boost-iostreams)
   libopenimageio-dev                                       # images (found with pkg-config)
+  libassimp-dev                                            # occluder meshes: OBJ, PLY, glTF (pkg-config)
   libspdlog-dev libfmt-dev nlohmann-json3-dev libcpp-httplib-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium                                                 # the browser end-to-end test

@@ -1,0 +1,101 @@
+#include "core/stylize/scene.h"
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "core/base/errors.h"
+
+namespace volstyle::core {
+
+void StylizerScene::validate() const {
+    if (occluders.empty()) throw InvalidArgument("the scene has no occluders");
+    for (const Occluder& o : occluders) {
+        try {
+            o.mesh.validate();
+        } catch (const InvalidArgument& e) {
+            throw InvalidArgument("occluder '" + o.name + "': " + e.what());
+        }
+    }
+    if (!(length(light.direction) > 0)) throw InvalidArgument("/light/direction: must not be zero");
+    if (light.shadowMapSize < 512 || light.shadowMapSize > 4096)
+        throw InvalidArgument("/light/shadow_map_size: must be in [512, 4096]");
+    if (light.type == StylizerLightType::Spot && !(light.coneDeg > 0 && light.coneDeg < 179))
+        throw InvalidArgument("/light/cone_deg: must be in (0, 179)");
+    if (!(medium.extinction >= 0) || !std::isfinite(medium.extinction))
+        throw InvalidArgument("/medium/extinction: must be finite and >= 0");
+    if (!(medium.albedo >= 0 && medium.albedo <= 1)) throw InvalidArgument("/medium/albedo: must be in [0, 1]");
+    camera.validate();
+}
+
+namespace {
+
+/// Uniform in [0, 1) from raw mt19937 outputs (std distributions are not portable).
+struct Random {
+    std::mt19937 rng;
+    explicit Random(uint32_t seed) : rng(seed) {}
+    double operator()() { return double(rng()) / 4294967296.0; }
+};
+
+void addQuad(Mesh& m, Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
+    const Vec3 n = normalize(cross(b - a, d - a));
+    const auto base = uint32_t(m.positions.size());
+    for (const Vec3& p : {a, b, c, d}) m.positions.push_back(p), m.normals.push_back(n);
+    for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) m.indices.push_back(base + i);
+}
+
+/// An n-sided prism from y0 to y1 around (x, z), its radius tapering from r0 to r1.
+void addTrunk(Mesh& m, double x, double z, double y0, double y1, double r0, double r1, int sides) {
+    for (int s = 0; s < sides; ++s) {
+        const double a0 = 2 * std::numbers::pi * s / sides, a1 = 2 * std::numbers::pi * (s + 1) / sides;
+        auto at = [&](double a, double r, double y) { return Vec3(float(x + r * std::cos(a)), float(y), float(z + r * std::sin(a))); };
+        addQuad(m, at(a0, r0, y0), at(a0, r1, y1), at(a1, r1, y1), at(a1, r0, y0));
+    }
+}
+
+/// Leaves: small quads at random orientations inside an ellipsoid (a canopy that lets light
+/// through in patches, the paper's foliage).
+void addCanopy(Mesh& m, Random& rnd, Vec3d centre, Vec3d radii, int leaves, double size) {
+    for (int i = 0; i < leaves; ++i) {
+        Vec3d p;
+        do p = Vec3d(2 * rnd() - 1, 2 * rnd() - 1, 2 * rnd() - 1);
+        while (dot(p, p) > 1);
+        const Vec3d c = centre + p * radii;
+        Vec3d u(2 * rnd() - 1, 2 * rnd() - 1, 2 * rnd() - 1), v(2 * rnd() - 1, 2 * rnd() - 1, 2 * rnd() - 1);
+        if (length(cross(u, v)) < 1e-3) continue;
+        u = normalize(u) * (0.5 * size);
+        v = normalize(cross(cross(u, v), u)) * (0.5 * size);
+        auto f = [](const Vec3d& q) { return Vec3(float(q.x), float(q.y), float(q.z)); };
+        addQuad(m, f(c - u - v), f(c + u - v), f(c + u + v), f(c - u + v));
+    }
+}
+
+}  // namespace
+
+StylizerScene builtinForest() {
+    StylizerScene s;
+    Occluder ground{"ground", {}, Mat4::identity(), {0.18, 0.16, 0.12}};
+    addQuad(ground.mesh, {-30, 0, -30}, {-30, 0, 30}, {30, 0, 30}, {30, 0, -30});
+    Occluder trees{"trees", {}, Mat4::identity(), {0.16, 0.22, 0.10}};
+    Random rnd(2011);
+    for (int gx = -2; gx <= 2; ++gx)
+        for (int gz = -3; gz <= 1; ++gz) {
+            const double x = 3.2 * gx + 1.4 * (rnd() - 0.5), z = 3.2 * gz + 1.4 * (rnd() - 0.5);
+            const double h = 4.5 + 2.0 * rnd();
+            addTrunk(trees.mesh, x, z, 0, h, 0.22, 0.12, 7);
+            addCanopy(trees.mesh, rnd, {x, h + 0.6, z}, {1.9, 1.4, 1.9}, 260, 0.45);
+        }
+    s.occluders = {std::move(ground), std::move(trees)};
+    s.light.direction = {-0.45, 0.55, -0.7};  // a low sun behind the grove
+    s.light.irradiance = {3.2, 2.9, 2.3};
+    s.medium = {0.06, 0.9, {PhaseType::HenyeyGreenstein, 0.5}};
+    s.camera.eye = {1.5, 1.7, 9.5};
+    s.camera.target = {-0.5, 3.2, -2};
+    s.camera.fovYDeg = 55;
+    s.camera.width = 640;
+    s.camera.height = 360;
+    s.camera.farDist = 80;
+    return s;
+}
+
+}  // namespace volstyle::core

@@ -1,0 +1,57 @@
+#pragma once
+/// \file scene.h
+/// The light-shaft stylizer's scene (SPEC §7, the GI paper Sec. 3): occluder meshes with a
+/// transform and a colour each, one light (directional or spot), a homogeneous medium and the
+/// camera. GL-free. The manipulations and the transfer function join it with their passes.
+
+#include <string>
+#include <vector>
+
+#include "core/math/vec.h"
+#include "core/render/params.h"
+#include "core/stylize/mesh.h"
+
+namespace volstyle::core {
+
+struct Occluder {
+    std::string name;
+    Mesh mesh;
+    Mat4 worldFromObject;
+    Vec3d colour{0.4, 0.35, 0.3};  ///< diffuse albedo of its surface
+};
+
+enum class StylizerLightType { Directional, Spot };
+
+struct StylizerLight {
+    StylizerLightType type = StylizerLightType::Directional;
+    Vec3d direction{0.3, 1.0, 0.2};  ///< directional: from the scene toward the light (SPEC §1)
+    Vec3d position{0, 10, 0};        ///< spot: where it stands; it shines along -direction
+    double coneDeg = 30;             ///< spot: full cone angle
+    Vec3d irradiance{3, 2.9, 2.6};   ///< E (directional) or intensity (spot), RGB
+    int shadowMapSize = 2048;        ///< 512–4096
+};
+
+struct HomogeneousMedium {
+    double extinction = 0.05;  ///< σt per world unit
+    double albedo = 0.9;       ///< ρ
+    Phase phase{PhaseType::HenyeyGreenstein, 0.4};
+};
+
+struct StylizerScene {
+    std::vector<Occluder> occluders;
+    StylizerLight light;
+    HomogeneousMedium medium;
+    Camera camera;
+    Vec3d background{0.02, 0.025, 0.035};  ///< radiance behind everything (night sky)
+    double time = 0;
+
+    /// Throws InvalidArgument naming the first problem (no occluders, a bad mesh, a degenerate
+    /// light, a shadow map outside 512–4096, a negative σt, ρ outside [0,1], a bad camera).
+    void validate() const;
+};
+
+/// The built-in scene `forest`: a ground plane and a grove of trees whose canopies are clouds of
+/// leaf quads, under a low sun, seen from inside a hazy wood: light shafts through foliage.
+StylizerScene builtinForest();
+
+}  // namespace volstyle::core
