@@ -62,6 +62,7 @@ const CommandSpec& solveCommand();
 const CommandSpec& serveCommand();
 const CommandSpec& infoCommand();
 const CommandSpec& convertCommand();
+const CommandSpec& stylizeCommand();
 
 /// The version of this build (the project's version in CMakeLists.txt).
 const char* versionString();
@@ -99,5 +100,6 @@ int runSolve(const std::vector<std::string>& args);
 int runServe(const std::vector<std::string>& args);
 int runInfo(const std::vector<std::string>& args);
 int runConvert(const std::vector<std::string>& args);
+int runStylize(const std::vector<std::string>& args);
 
 }  // namespace volstyle::server

@@ -19,7 +19,7 @@ using volstyle::server::CommandSpec;
 const std::vector<const CommandSpec*>& commands() {
     static const std::vector<const CommandSpec*> all{
         &volstyle::server::serveCommand(), &volstyle::server::renderCommand(), &volstyle::server::solveCommand(),
-        &volstyle::server::infoCommand(), &volstyle::server::convertCommand()};
+        &volstyle::server::stylizeCommand(), &volstyle::server::infoCommand(), &volstyle::server::convertCommand()};
     return all;
 }
 
@@ -73,6 +73,7 @@ int main(int argc, char** argv) {
     const std::vector<std::string> args(argv + 2, argv + argc);
     try {
         if (command == "render") return volstyle::server::runRender(args);
+        if (command == "stylize") return volstyle::server::runStylize(args);
         if (command == "info") return volstyle::server::runInfo(args);
         if (command == "convert") return volstyle::server::runConvert(args);
         if (command == "solve") return volstyle::server::runSolve(args);

@@ -16,6 +16,8 @@ void TextureTraits::destroy(GLuint id) { glDeleteTextures(1, &id); }
 void ProgramTraits::destroy(GLuint id) { glDeleteProgram(id); }
 void SamplerTraits::destroy(GLuint id) { glDeleteSamplers(1, &id); }
 void QueryTraits::destroy(GLuint id) { glDeleteQueries(1, &id); }
+void FramebufferTraits::destroy(GLuint id) { glDeleteFramebuffers(1, &id); }
+void VertexArrayTraits::destroy(GLuint id) { glDeleteVertexArrays(1, &id); }
 
 Buffer createBuffer(size_t bytes, const void* data, GLbitfield storageFlags, const std::string& name) {
     GLuint id = 0;
@@ -50,6 +52,20 @@ Query createQuery(GLenum target, const std::string& name) {
     glCreateQueries(target, 1, &id);
     label(GL_QUERY, id, name);
     return Query(id);
+}
+
+Framebuffer createFramebuffer(const std::string& name) {
+    GLuint id = 0;
+    glCreateFramebuffers(1, &id);
+    label(GL_FRAMEBUFFER, id, name);
+    return Framebuffer(id);
+}
+
+VertexArray createVertexArray(const std::string& name) {
+    GLuint id = 0;
+    glCreateVertexArrays(1, &id);
+    label(GL_VERTEX_ARRAY, id, name);
+    return VertexArray(id);
 }
 
 Fence::~Fence() {

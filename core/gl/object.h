@@ -44,12 +44,16 @@ struct TextureTraits { static void destroy(GLuint id); };
 struct ProgramTraits { static void destroy(GLuint id); };
 struct SamplerTraits { static void destroy(GLuint id); };
 struct QueryTraits { static void destroy(GLuint id); };
+struct FramebufferTraits { static void destroy(GLuint id); };
+struct VertexArrayTraits { static void destroy(GLuint id); };
 
 using Buffer = Object<BufferTraits>;
 using Texture = Object<TextureTraits>;
 using Program = Object<ProgramTraits>;
 using Sampler = Object<SamplerTraits>;
 using Query = Object<QueryTraits>;
+using Framebuffer = Object<FramebufferTraits>;
+using VertexArray = Object<VertexArrayTraits>;
 
 /// Creation, each with a debug label (glObjectLabel) that shows in KHR_debug messages.
 Buffer createBuffer(size_t bytes, const void* data, GLbitfield storageFlags, const std::string& label);
@@ -57,6 +61,8 @@ Texture createTexture(GLenum target, const std::string& label);
 Program createProgram(const std::string& label);
 Sampler createSampler(const std::string& label);
 Query createQuery(GLenum target, const std::string& label);
+Framebuffer createFramebuffer(const std::string& label);
+VertexArray createVertexArray(const std::string& label);
 
 /// A fence sync object (not a GLuint name, so it has its own owner).
 class Fence {

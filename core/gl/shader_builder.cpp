@@ -102,36 +102,71 @@ std::string rewriteCompileLog(const std::string& log, const std::vector<std::str
     return out;
 }
 
-Program ShaderBuilder::buildCompute() const {
-    PreprocessedShader src = preprocess();
-    GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
+namespace {
+
+std::string infoLog(GLuint obj, bool isShader) {
+    GLint len = 0;
+    isShader ? glGetShaderiv(obj, GL_INFO_LOG_LENGTH, &len) : glGetProgramiv(obj, GL_INFO_LOG_LENGTH, &len);
+    std::string log(size_t(std::max(len, 1)), '\0');
+    isShader ? glGetShaderInfoLog(obj, len, nullptr, log.data()) : glGetProgramInfoLog(obj, len, nullptr, log.data());
+    return std::string(log.c_str());  // drop the terminating NULs
+}
+
+/// One compiled stage; the caller deletes it once linked. Throws with the rewritten log.
+GLuint compileStage(GLenum stage, const PreprocessedShader& src, const std::string& variant) {
+    GLuint shader = glCreateShader(stage);
     const char* text = src.text.c_str();
     glShaderSource(shader, 1, &text, nullptr);
     glCompileShader(shader);
     GLint ok = 0;
     glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    auto logOf = [](GLuint obj, bool isShader) -> std::string {
-        GLint len = 0;
-        isShader ? glGetShaderiv(obj, GL_INFO_LOG_LENGTH, &len) : glGetProgramiv(obj, GL_INFO_LOG_LENGTH, &len);
-        std::string log(size_t(std::max(len, 1)), '\0');
-        isShader ? glGetShaderInfoLog(obj, len, nullptr, log.data()) : glGetProgramInfoLog(obj, len, nullptr, log.data());
-        return std::string(log.c_str());  // drop the terminating NULs
-    };
     if (!ok) {
-        std::string log = rewriteCompileLog(logOf(shader, true), src.files);
+        std::string log = rewriteCompileLog(infoLog(shader, true), src.files);
         glDeleteShader(shader);
-        throw ShaderCompileError("compiling " + variantKey() + " failed:\n" + log);
+        throw ShaderCompileError("compiling " + variant + " failed:\n" + log);
+    }
+    return shader;
+}
+
+bool endsWith(const std::string& s, const std::string& suffix) {
+    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+}  // namespace
+
+bool ShaderBuilder::isRaster() const { return endsWith(m_main, ".raster"); }
+
+Program ShaderBuilder::build() const {
+    std::vector<std::pair<GLenum, PreprocessedShader>> stages;
+    if (isRaster()) {
+        stages.emplace_back(GL_VERTEX_SHADER, ShaderBuilder(*this).define("VOLSTYLE_VERTEX_STAGE", 1).preprocess());
+        stages.emplace_back(GL_FRAGMENT_SHADER, ShaderBuilder(*this).define("VOLSTYLE_FRAGMENT_STAGE", 1).preprocess());
+    } else {
+        stages.emplace_back(GL_COMPUTE_SHADER, preprocess());
+    }
+    std::vector<GLuint> shaders;
+    try {
+        for (const auto& [stage, src] : stages) shaders.push_back(compileStage(stage, src, variantKey()));
+    } catch (...) {
+        for (GLuint s : shaders) glDeleteShader(s);
+        throw;
     }
     Program program = createProgram(m_main);
-    glAttachShader(program.id(), shader);
+    for (GLuint s : shaders) glAttachShader(program.id(), s);
     glLinkProgram(program.id());
-    glDeleteShader(shader);
+    for (GLuint s : shaders) glDeleteShader(s);
+    GLint ok = 0;
     glGetProgramiv(program.id(), GL_LINK_STATUS, &ok);
     if (!ok) {
         throw ShaderCompileError("linking " + variantKey() + " failed:\n" +
-                                 rewriteCompileLog(logOf(program.id(), false), src.files));
+                                 rewriteCompileLog(infoLog(program.id(), false), stages.front().second.files));
     }
     return program;
+}
+
+Program ShaderBuilder::buildCompute() const {
+    if (isRaster()) throw InternalError("buildCompute() on the raster shader " + m_main);
+    return build();
 }
 
 }  // namespace volstyle::core::gl

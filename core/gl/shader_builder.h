@@ -1,6 +1,8 @@
 #pragma once
 /// \file shader_builder.h
-/// Compute-shader variants from the files under core/shaders/ (STYLE §3.5): resolves
+/// Shader variants from the files under core/shaders/ (STYLE §3.5): compute programs from `.comp`
+/// files, and rasterization programs from `.raster` files, one source compiled as the vertex stage
+/// (VOLSTYLE_VERTEX_STAGE) and as the fragment stage (VOLSTYLE_FRAGMENT_STAGE). Resolves
 /// `#include "file"` (each file once), prepends `#version 450`, extensions and `#define`s, and
 /// marks every file with `#line N <file-index>` so compile logs can be rewritten to `file:line`.
 /// Preprocessing needs no GL context (tested without one); build() compiles on the GL thread.
@@ -51,9 +53,12 @@ public:
     std::string variantKey() const;
     const std::string& mainFile() const { return m_main; }
 
-    /// Compiles and links a compute program. Throws ShaderCompileError whose message holds the
-    /// rewritten log and the variant's defines.
+    /// Compiles and links the program (compute, or vertex + fragment for a `.raster` file).
+    /// Throws ShaderCompileError whose message holds the rewritten log and the variant's defines.
+    Program build() const;
+    /// build() for a compute shader (InternalError for a raster one).
     Program buildCompute() const;
+    bool isRaster() const;
 
 private:
     std::string m_main;

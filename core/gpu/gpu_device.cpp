@@ -49,7 +49,7 @@ const gl::Program& GpuDevice::program(const gl::ShaderBuilder& builder) {
     std::string key = builder.variantKey();
     auto& programs = m_programs->byVariant;
     auto it = programs.find(key);
-    if (it == programs.end()) it = programs.emplace(key, builder.buildCompute()).first;
+    if (it == programs.end()) it = programs.emplace(key, builder.build()).first;
     return it->second;
 }
 

@@ -97,6 +97,30 @@ struct MarchParams {
     VS_MAT4 indexFromLightGrid;               /* light_depth.comp: the inverse, for light lightKernel.x */
 };
 
+/* The light-shaft stylizer (core/stylize/, SPEC §7): its raster passes (occluders.raster) and its
+ * per-pixel pass (stylize.comp). */
+VS_CONSTANT(int, kUnitShadowDepth, 9);     /* the light's shadow map (depth, [0,1]) */
+VS_CONSTANT(int, kUnitGBufferSurface, 10); /* camera G-buffer: xyz normal, w distance from the eye (0: no surface) */
+VS_CONSTANT(int, kUnitGBufferColour, 11);  /* camera G-buffer: rgb surface colour, w object id (1-based) */
+VS_CONSTANT(int, kStylizeLayers, 2);       /* AOV planes of stylize.comp: (scattering rgb, V̄), (distance, hit, 0, 0) */
+
+struct StylizeParams {
+    VS_MAT4 lightFromWorld;   /* world -> the light's clip space, [-1,1]³ over the occluders (orthographic) */
+    VS_MAT4 clipFromWorld;    /* raster passes: world -> clip of the pass's camera (the light's or the view's) */
+    VS_MAT4 worldFromObject;  /* raster passes: the occluder being drawn */
+    VS_VEC4 eye;              /* xyz: camera position */
+    VS_VEC4 camForward;       /* xyz: unit view direction; w: tan(fov_y / 2) */
+    VS_VEC4 camRight;         /* xyz: unit right; w: aspect */
+    VS_VEC4 camUp;            /* xyz: unit up */
+    VS_IVEC4 imageSize;       /* x, y: frame pixels; z: shadow-map side; w: V̄ steps */
+    VS_VEC4 lightDirection;   /* xyz: unit, toward the light */
+    VS_VEC4 irradiance;       /* rgb: E */
+    VS_VEC4 medium;           /* x: σt; y: ρ; z: 0 isotropic, 1 Henyey-Greenstein; w: g */
+    VS_VEC4 background;       /* rgb: radiance behind everything; w: far (distance of a ray that hits nothing) */
+    VS_VEC4 surface;          /* raster passes: rgb colour of the occluder; w: its id (1-based) */
+    VS_VEC4 shadow;           /* x: depth bias (light clip depth units); y: whether a shadow map exists; z: texel size (world) */
+};
+
 /* Parameters of the vector kernels (vector_ops.comp). Vectors are arrays of vec4 (rgb used). */
 struct VectorParams {
     VS_VEC4 alpha;           /* per-channel scalars */

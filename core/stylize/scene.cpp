@@ -9,7 +9,6 @@
 namespace volstyle::core {
 
 void StylizerScene::validate() const {
-    if (occluders.empty()) throw InvalidArgument("the scene has no occluders");
     for (const Occluder& o : occluders) {
         try {
             o.mesh.validate();
@@ -75,7 +74,7 @@ void addCanopy(Mesh& m, Random& rnd, Vec3d centre, Vec3d radii, int leaves, doub
 StylizerScene builtinForest() {
     StylizerScene s;
     Occluder ground{"ground", {}, Mat4::identity(), {0.18, 0.16, 0.12}};
-    addQuad(ground.mesh, {-30, 0, -30}, {-30, 0, 30}, {30, 0, 30}, {30, 0, -30});
+    addQuad(ground.mesh, {-14, 0, -16}, {-14, 0, 14}, {14, 0, 14}, {14, 0, -16});
     Occluder trees{"trees", {}, Mat4::identity(), {0.16, 0.22, 0.10}};
     Random rnd(2011);
     for (int gx = -2; gx <= 2; ++gx)

@@ -45,7 +45,7 @@ struct StylizerScene {
     Vec3d background{0.02, 0.025, 0.035};  ///< radiance behind everything (night sky)
     double time = 0;
 
-    /// Throws InvalidArgument naming the first problem (no occluders, a bad mesh, a degenerate
+    /// Throws InvalidArgument naming the first problem (a bad mesh, a degenerate
     /// light, a shadow map outside 512–4096, a negative σt, ρ outside [0,1], a bad camera).
     void validate() const;
 };

@@ -1,12 +1,8 @@
 // Pinhole camera rays (SPEC §1): through pixel centres, row 0 at the top.
 #include "common/volume.glsl"
+#include "common/pinhole.glsl"
 
-vec3 cameraRay(ivec2 pix) {
-    vec2 ndc = (vec2(pix) + 0.5) / vec2(u.imageSize.xy) * 2.0 - 1.0;
-    float tanHalf = u.camForward.w, aspect = u.camRight.w;
-    return normalize(u.camForward.xyz + u.camRight.xyz * (ndc.x * tanHalf * aspect) -
-                     u.camUp.xyz * (ndc.y * tanHalf));
-}
+vec3 cameraRay(ivec2 pix) { return pinholeRay(pix, u.imageSize.xy, u.camForward, u.camRight, u.camUp.xyz); }
 
 // The view ray of `dir` in index space (o + t d, t in world units) and its span inside the
 // volume box, clipped to [near, far].

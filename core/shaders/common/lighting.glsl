@@ -1,6 +1,7 @@
 // Sun in-scattering, phase functions and the background (SPEC §1).
 #include "common/volume.glsl"
 #include "common/precise_math.glsl"
+#include "common/phase.glsl"
 
 #ifndef VOLSTYLE_NUM_LIGHTS
 #define VOLSTYLE_NUM_LIGHTS 0
@@ -9,15 +10,8 @@
 #define VOLSTYLE_HAS_ENVIRONMENT 0
 #endif
 
-const float kInvFourPi = 0.07957747154594767;
-
-// p(cos) with cos = ω_l·(−ω); Henyey–Greenstein in pbrt's convention (g > 0: forward).
-float phaseFunction(float cosTheta) {
-    if (u.phase.x < 0.5) return kInvFourPi;
-    float g = u.phase.y;
-    float denom = 1.0 + g * g + 2.0 * g * cosTheta;
-    return kInvFourPi * (1.0 - g * g) / (denom * sqrt(max(denom, 1e-12)));
-}
+// p(cos) with cos = ω_l·(−ω), from the block's phase (common/phase.glsl).
+float phaseFunction(float cosTheta) { return phaseValue(u.phase.x, u.phase.y, cosTheta); }
 
 #if VOLSTYLE_NUM_LIGHTS > 0
 // Optical depth toward each light, stored on the nodes of a light-aligned grid by light_depth.comp

@@ -1,0 +1,292 @@
+#include "core/stylize/stylizer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/base/errors.h"
+#include "core/base/stopwatch.h"
+#include "core/gl/object.h"
+#include "core/gl/shader_builder.h"
+#include "core/render/gl_convert.h"
+#include "core/shaders/layout.h"
+
+namespace volstyle::core {
+
+void StylizeSettings::validate() const {
+    if (steps < 1 || steps > 4096) throw InvalidArgument("/steps: must be in [1, 4096]");
+}
+
+namespace {
+
+/// An orthonormal frame with w along `axis`.
+void frameAround(const Vec3d& axis, Vec3d& u, Vec3d& v, Vec3d& w) {
+    w = normalize(axis);
+    const Vec3d helper = std::abs(w.y) < 0.9 ? Vec3d(0, 1, 0) : Vec3d(1, 0, 0);
+    u = normalize(cross(helper, w));
+    v = cross(w, u);
+}
+
+/// World-space bounds of every occluder after its transform.
+std::pair<Vec3d, Vec3d> sceneBounds(const StylizerScene& scene) {
+    Vec3d lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    for (const Occluder& o : scene.occluders) {
+        auto [a, b] = o.mesh.bounds();
+        for (int corner = 0; corner < 8; ++corner) {
+            const Vec3d p = o.worldFromObject.applyPoint(
+                {(corner & 1) ? b.x : a.x, (corner & 2) ? b.y : a.y, (corner & 4) ? b.z : a.z});
+            for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+        }
+    }
+    return {lo, hi};
+}
+
+/// OpenGL's perspective projection of the pinhole camera (pixel centres as camera.glsl's rays).
+Mat4 cameraClipFromWorld(const Camera& cam, double nearDist, double farDist) {
+    const Camera::Frame f = cam.frame();
+    Mat4 view;
+    for (int c = 0; c < 3; ++c) view(0, c) = f.right[c], view(1, c) = f.up[c], view(2, c) = -f.forward[c];
+    view(0, 3) = -dot(f.right, cam.eye), view(1, 3) = -dot(f.up, cam.eye), view(2, 3) = dot(f.forward, cam.eye);
+    const double t = cam.tanHalfFov(), aspect = double(cam.width) / cam.height;
+    Mat4 proj;
+    proj(0, 0) = 1 / (t * aspect);
+    proj(1, 1) = 1 / t;
+    proj(2, 2) = -(farDist + nearDist) / (farDist - nearDist);
+    proj(2, 3) = -2 * farDist * nearDist / (farDist - nearDist);
+    proj(3, 2) = -1;
+    proj(3, 3) = 0;
+    return proj * view;
+}
+
+gl::Texture texture2D(GLenum format, int w, int h, const char* label) {
+    gl::Texture t = gl::createTexture(GL_TEXTURE_2D, label);
+    glTextureStorage2D(t.id(), 1, format, w, h);
+    glTextureParameteri(t.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(t.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    return t;
+}
+
+void checkComplete(const gl::Framebuffer& fb, const char* what) {
+    const GLenum status = glCheckNamedFramebufferStatus(fb.id(), GL_FRAMEBUFFER);
+    if (status != GL_FRAMEBUFFER_COMPLETE)
+        throw GpuError(std::string(what) + " framebuffer is incomplete (status " + std::to_string(status) + ")");
+}
+
+/// An occluder's mesh on the GPU: interleaved position + normal, 32-bit indices.
+struct GpuMesh {
+    gl::Buffer vertices, indices;
+    gl::VertexArray vao;
+    GLsizei indexCount = 0;
+
+    explicit GpuMesh(const Mesh& m) {
+        std::vector<float> interleaved;
+        interleaved.reserve(m.positions.size() * 6);
+        for (size_t i = 0; i < m.positions.size(); ++i)
+            for (const Vec3& v : {m.positions[i], m.normals[i]}) interleaved.insert(interleaved.end(), {v.x, v.y, v.z});
+        vertices = gl::createBuffer(interleaved.size() * sizeof(float), interleaved.data(), 0, "occluder-vertices");
+        indices = gl::createBuffer(m.indices.size() * sizeof(uint32_t), m.indices.data(), 0, "occluder-indices");
+        indexCount = GLsizei(m.indices.size());
+        vao = gl::createVertexArray("occluder");
+        glVertexArrayVertexBuffer(vao.id(), 0, vertices.id(), 0, 6 * sizeof(float));
+        for (GLuint attr : {0u, 1u}) {
+            glEnableVertexArrayAttrib(vao.id(), attr);
+            glVertexArrayAttribFormat(vao.id(), attr, 3, GL_FLOAT, GL_FALSE, attr * 3 * sizeof(float));
+            glVertexArrayAttribBinding(vao.id(), attr, 0);
+        }
+        glVertexArrayElementBuffer(vao.id(), indices.id());
+    }
+};
+
+Image readChannelPlane(const std::vector<float>& plane, int w, int h, int channel, bool broadcast) {
+    Image img(w, h);
+    for (size_t i = 0; i < img.pixelCount(); ++i) {
+        const float* src = &plane[4 * i];
+        for (int c = 0; c < 3; ++c) img.rgba[4 * i + c] = broadcast ? src[channel] : src[c];
+        img.rgba[4 * i + 3] = 1;
+    }
+    return img;
+}
+
+}  // namespace
+
+Mat4 lightClipFromWorld(const Vec3d& towardLight, const Vec3d& lo, const Vec3d& hi) {
+    Vec3d u, v, w;
+    frameAround(towardLight, u, v, w);
+    Vec3d a(std::numeric_limits<double>::max()), b(-std::numeric_limits<double>::max());
+    for (int corner = 0; corner < 8; ++corner) {
+        const Vec3d p((corner & 1) ? hi.x : lo.x, (corner & 2) ? hi.y : lo.y, (corner & 4) ? hi.z : lo.z);
+        const Vec3d q(dot(p, u), dot(p, v), dot(p, w));
+        for (int k = 0; k < 3; ++k) a[k] = std::min(a[k], q[k]), b[k] = std::max(b[k], q[k]);
+    }
+    // A margin so geometry on the bounds is not clipped; depth grows away from the light.
+    for (int k = 0; k < 3; ++k) {
+        const double pad = 1e-3 * std::max(b[k] - a[k], 1e-6) + 1e-6;
+        a[k] -= pad, b[k] += pad;
+    }
+    Mat4 m;
+    for (int c = 0; c < 3; ++c) {
+        m(0, c) = 2 * u[c] / (b.x - a.x);
+        m(1, c) = 2 * v[c] / (b.y - a.y);
+        m(2, c) = -2 * w[c] / (b.z - a.z);
+    }
+    m(0, 3) = -2 * a.x / (b.x - a.x) - 1;
+    m(1, 3) = -2 * a.y / (b.y - a.y) - 1;
+    m(2, 3) = 2 * b.z / (b.z - a.z) - 1;
+    return m;
+}
+
+struct Stylizer::Gpu {
+    gl::Buffer pixels, layers;
+    size_t pixelBytes = 0;
+};
+
+Stylizer::Stylizer(GpuDevice& device) : m_device(device), m_gpu(std::make_unique<Gpu>()) {}
+Stylizer::~Stylizer() = default;
+
+StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings& settings) {
+    VOLSTYLE_CHECK(m_device.isOwnedByThisThread(), ==, true);
+    scene.validate();
+    settings.validate();
+    if (scene.light.type != StylizerLightType::Directional)
+        throw InvalidArgument("/light/type: only 'directional' lights are rendered so far");
+    const auto t0 = Clock::now();
+    StylizedFrame out;
+    const Camera& cam = scene.camera;
+    const int n = scene.light.shadowMapSize;
+
+    std::vector<GpuMesh> meshes;
+    for (const Occluder& o : scene.occluders) meshes.emplace_back(o.mesh);
+    const bool hasOccluders = !meshes.empty();
+    auto [lo, hi] = hasOccluders ? sceneBounds(scene) : std::pair<Vec3d, Vec3d>{Vec3d(-1.0), Vec3d(1.0)};
+
+    layout::StylizeParams p;
+    const Vec3d toLight = normalize(scene.light.direction);
+    const Mat4 lightClip = lightClipFromWorld(toLight, lo, hi);
+    p.lightFromWorld = toGl(lightClip);
+    const Camera::Frame f = cam.frame();
+    p.eye = f4(cam.eye);
+    p.camForward = f4(f.forward, cam.tanHalfFov());
+    p.camRight = f4(f.right, double(cam.width) / double(cam.height));
+    p.camUp = f4(f.up);
+    p.imageSize = {cam.width, cam.height, n, settings.steps};
+    p.lightDirection = f4(toLight);
+    p.irradiance = f4(scene.light.irradiance);
+    p.medium = {float(scene.medium.extinction), float(scene.medium.albedo),
+                scene.medium.phase.type == PhaseType::HenyeyGreenstein ? 1.0f : 0.0f, float(scene.medium.phase.g)};
+    p.background = f4(scene.background, std::min(cam.farDist, 3.0e38));
+    const double texel = std::max(2 / length(Vec3d(lightClip(0, 0), lightClip(0, 1), lightClip(0, 2))),
+                                  2 / length(Vec3d(lightClip(1, 0), lightClip(1, 1), lightClip(1, 2)))) / n;
+    p.shadow = {2e-5f, hasOccluders ? 1.0f : 0.0f, float(texel), 0};
+
+    auto drawOccluders = [&](const gl::ShaderBuilder& builder, const Mat4& clipFromWorld) {
+        glUseProgram(m_device.program(builder).id());
+        p.clipFromWorld = toGl(clipFromWorld);
+        for (size_t i = 0; i < meshes.size(); ++i) {
+            p.worldFromObject = toGl(scene.occluders[i].worldFromObject);
+            p.surface = f4(scene.occluders[i].colour, double(i + 1));
+            m_device.setParams(p);
+            glBindVertexArray(meshes[i].vao.id());
+            glDrawElements(GL_TRIANGLES, meshes[i].indexCount, GL_UNSIGNED_INT, nullptr);
+        }
+        glBindVertexArray(0);
+    };
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDisable(GL_CULL_FACE);  // leaves are single quads seen from both sides
+
+    // 1. The light's shadow map: depth, and object ids for per-object manipulation.
+    auto t = Clock::now();
+    gl::Texture shadowDepth = texture2D(GL_DEPTH_COMPONENT32F, n, n, "shadow-depth");
+    gl::Texture shadowIds = texture2D(GL_R32F, n, n, "shadow-ids");
+    {
+        gl::Framebuffer fb = gl::createFramebuffer("shadow-map");
+        glNamedFramebufferTexture(fb.id(), GL_DEPTH_ATTACHMENT, shadowDepth.id(), 0);
+        glNamedFramebufferTexture(fb.id(), GL_COLOR_ATTACHMENT0, shadowIds.id(), 0);
+        checkComplete(fb, "the shadow map's");
+        const float zero[4] = {0, 0, 0, 0}, one = 1;
+        glClearNamedFramebufferfv(fb.id(), GL_COLOR, 0, zero);
+        glClearNamedFramebufferfv(fb.id(), GL_DEPTH, 0, &one);
+        glBindFramebuffer(GL_FRAMEBUFFER, fb.id());
+        glViewport(0, 0, n, n);
+        if (hasOccluders) drawOccluders(gl::ShaderBuilder("occluders.raster").define("VOLSTYLE_PASS_SHADOW", 1), lightClip);
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    }
+    m_device.finish();
+    out.shadowMs = msSince(t);
+
+    // 2. The camera's G-buffer: normal and distance, colour and id.
+    t = Clock::now();
+    gl::Texture surface = texture2D(GL_RGBA32F, cam.width, cam.height, "gbuffer-surface");
+    gl::Texture colour = texture2D(GL_RGBA32F, cam.width, cam.height, "gbuffer-colour");
+    gl::Texture depth = texture2D(GL_DEPTH_COMPONENT32F, cam.width, cam.height, "gbuffer-depth");
+    {
+        gl::Framebuffer fb = gl::createFramebuffer("gbuffer");
+        glNamedFramebufferTexture(fb.id(), GL_COLOR_ATTACHMENT0, surface.id(), 0);
+        glNamedFramebufferTexture(fb.id(), GL_COLOR_ATTACHMENT1, colour.id(), 0);
+        glNamedFramebufferTexture(fb.id(), GL_DEPTH_ATTACHMENT, depth.id(), 0);
+        const GLenum buffers[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+        glNamedFramebufferDrawBuffers(fb.id(), 2, buffers);
+        checkComplete(fb, "the G-buffer's");
+        const float zero[4] = {0, 0, 0, 0}, one = 1;
+        glClearNamedFramebufferfv(fb.id(), GL_COLOR, 0, zero);
+        glClearNamedFramebufferfv(fb.id(), GL_COLOR, 1, zero);
+        glClearNamedFramebufferfv(fb.id(), GL_DEPTH, 0, &one);
+        glBindFramebuffer(GL_FRAMEBUFFER, fb.id());
+        glViewport(0, 0, cam.width, cam.height);
+        // Clip planes only bound the rasterization; the G-buffer stores true distances.
+        double farthest = 0;
+        for (int corner = 0; corner < 8; ++corner)
+            farthest = std::max(farthest, length(Vec3d((corner & 1) ? hi.x : lo.x, (corner & 2) ? hi.y : lo.y,
+                                                       (corner & 4) ? hi.z : lo.z) - cam.eye));
+        const double farPlane = std::min(cam.farDist, farthest * 1.01 + 1e-3);
+        const double nearPlane = std::max(cam.nearDist, farPlane * 1e-5);
+        if (hasOccluders && farPlane > nearPlane)
+            drawOccluders(gl::ShaderBuilder("occluders.raster"), cameraClipFromWorld(cam, nearPlane, farPlane));
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    }
+    glDisable(GL_DEPTH_TEST);
+    m_device.finish();
+    out.gbufferMs = msSince(t);
+
+    // 3. Per pixel: V̄ and the frame.
+    t = Clock::now();
+    const size_t pixelCount = size_t(cam.width) * cam.height, bytes = pixelCount * 4 * sizeof(float);
+    if (bytes > m_gpu->pixelBytes) {
+        m_gpu->pixels = gl::createBuffer(bytes, nullptr, GL_DYNAMIC_STORAGE_BIT, "stylized-frame");
+        m_gpu->layers = gl::createBuffer(bytes * layout::kStylizeLayers, nullptr, GL_DYNAMIC_STORAGE_BIT, "stylized-aovs");
+        m_gpu->pixelBytes = bytes;
+    }
+    m_device.setParams(p);
+    glUseProgram(m_device.program(gl::ShaderBuilder("stylize.comp")).id());
+    glBindTextureUnit(layout::kUnitShadowDepth, shadowDepth.id());
+    glBindTextureUnit(layout::kUnitGBufferSurface, surface.id());
+    glBindTextureUnit(layout::kUnitGBufferColour, colour.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingImageOut, m_gpu->pixels.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingLayersOut, m_gpu->layers.id());
+    const int g = layout::kWorkgroup2D;
+    glDispatchCompute(GLuint((cam.width + g - 1) / g), GLuint((cam.height + g - 1) / g), 1);
+    gl::barrierAfterComputeWrites();
+    out.frame = Image(cam.width, cam.height);
+    glGetNamedBufferSubData(m_gpu->pixels.id(), 0, GLsizeiptr(bytes), out.frame.rgba.data());
+    std::vector<float> plane(pixelCount * 4);
+    glGetNamedBufferSubData(m_gpu->layers.id(), 0, GLsizeiptr(bytes), plane.data());
+    out.scattering = readChannelPlane(plane, cam.width, cam.height, 0, false);
+    out.averageVisibility = readChannelPlane(plane, cam.width, cam.height, 3, true);
+    glGetNamedBufferSubData(m_gpu->layers.id(), GLintptr(bytes), GLsizeiptr(bytes), plane.data());
+    out.linearDepth = readChannelPlane(plane, cam.width, cam.height, 0, true);
+    std::vector<float> shadow(size_t(n) * n);
+    glGetTextureImage(shadowDepth.id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(shadow.size() * sizeof(float)), shadow.data());
+    out.shadowMap = Image(n, n);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            float* px = out.shadowMap.pixel(x, n - 1 - y);  // row 0 on top, as every image
+            px[0] = px[1] = px[2] = shadow[size_t(y) * n + x];
+            px[3] = 1;
+        }
+    out.shadeMs = msSince(t);
+    out.totalMs = msSince(t0);
+    if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory while stylizing");
+    return out;
+}
+
+}  // namespace volstyle::core

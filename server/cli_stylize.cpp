@@ -1,0 +1,91 @@
+// `volstyle stylize`: one frame of the light-shaft stylizer (SPEC §7) to PNG or EXR, or one of its
+// AOVs. This first version renders the built-in scenes with a directional light and the naive V̄.
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "core/base/errors.h"
+#include "core/gpu/gpu_device.h"
+#include "core/image/image_io.h"
+#include "core/stylize/stylizer.h"
+#include "protocol/render_json.h"
+#include "server/cli.h"
+
+namespace volstyle::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+const CommandSpec kStylize{
+    "stylize",
+    "render light shafts through occluders (the stylizer)",
+    "--scene builtin:NAME [options] -o OUT.png|OUT.exr",
+    "Renders one frame of the light-shaft stylizer: occluder surfaces lit and shadowed by a\n"
+    "directional light, and single scattering in a homogeneous medium with the visibility along\n"
+    "each view ray factored out (the average visibility V̄). --aov writes one of the frame's\n"
+    "arbitrary output variables instead of the frame.",
+    {
+        {"scene", "SRC", "builtin:forest (a grove of trees under a low sun); scene files come next (required)"},
+        {"camera", "CAM.json", "camera (eye, target, up, fov_y_deg, width, height); default: the scene's, 640x360"},
+        {"aov", "NAME", "average_visibility, linear_depth, shadow_map or scattering instead of the frame; default: the frame"},
+        {"method", "NAME", "how V̄ is computed: naive (one shadow-map lookup per step); default naive"},
+        {"steps", "N", "shadow-map lookups per view ray for V̄ (1-4096); default 256"},
+        {"exposure", "STOPS", "PNG brightness in stops (EXR stays linear); default 0"},
+        {"output", "OUT", ".png or .exr; the folder must exist (required)"},
+    },
+    "  volstyle stylize --scene builtin:forest -o forest.png\n"
+    "  volstyle stylize --scene builtin:forest --aov average_visibility -o vbar.png\n"};
+
+core::StylizerScene loadStylizerScene(const std::string& spec) {
+    if (spec == "builtin:forest") return core::builtinForest();
+    throw InvalidArgument("--scene: unknown scene '" + spec + "' (built-in: builtin:forest)");
+}
+
+}  // namespace
+
+const CommandSpec& stylizeCommand() { return kStylize; }
+
+int runStylize(const std::vector<std::string>& argv) {
+    Arguments args = parseArguments(argv, kStylize);
+    if (printHelpIfAsked(args, kStylize)) return 0;
+    if (!args.has("scene")) throw InvalidArgument("--scene is required (volstyle stylize --help)");
+    if (!args.has("output")) throw InvalidArgument("-o OUT.png|OUT.exr is required");
+    const std::string output = args.get("output");
+    const std::string ext = fs::path(output).extension().string();
+    if (ext != ".png" && ext != ".exr") throw InvalidArgument("-o must end in .png or .exr, got '" + output + "'");
+    requireParentFolder(output);
+    const std::string method = args.has("method") ? args.get("method") : "naive";
+    if (method != "naive") throw InvalidArgument("--method: '" + method + "' is not available yet (naive)");
+    const std::string aov = args.has("aov") ? args.get("aov") : "";
+    if (!aov.empty() && aov != "average_visibility" && aov != "linear_depth" && aov != "shadow_map" && aov != "scattering")
+        throw InvalidArgument("--aov: '" + aov + "' is not one of average_visibility, linear_depth, shadow_map, scattering");
+
+    core::StylizerScene scene = loadStylizerScene(args.get("scene"));
+    if (args.has("camera"))
+        scene.camera = fromFile(args.get("camera"), [](const nlohmann::json& j) { return protocol::cameraFromJson(j); });
+    core::StylizeSettings settings;
+    const double steps = args.number("steps", settings.steps);
+    if (steps != std::floor(steps)) throw InvalidArgument("--steps: must be a whole number");
+    settings.steps = int(std::clamp(steps, -1.0, 1e6));
+    settings.validate();
+
+    auto device = core::GpuDevice::create();
+    core::Stylizer stylizer(*device);
+    const core::StylizedFrame f = stylizer.render(scene, settings);
+    const core::Image& image = aov == "average_visibility" ? f.averageVisibility
+                               : aov == "linear_depth"     ? f.linearDepth
+                               : aov == "shadow_map"       ? f.shadowMap
+                               : aov == "scattering"       ? f.scattering
+                                                           : f.frame;
+    core::SaveOptions save;
+    save.exposure = args.number("exposure", 0);
+    core::saveImage(output, image, save);
+    spdlog::info("stylized {}x{} in {:.1f} ms (shadow map {:.1f}, G-buffer {:.1f}, shading {:.1f})", scene.camera.width,
+                 scene.camera.height, f.totalMs, f.shadowMs, f.gbufferMs, f.shadeMs);
+    return 0;
+}
+
+}  // namespace volstyle::server
