@@ -1,5 +1,5 @@
 // `volstyle stylize`: one frame of the light-shaft stylizer (SPEC §7) to PNG or EXR, or one of its
-// AOVs. This first version renders the built-in scenes with a directional light and the naive V̄.
+// AOVs. This first version: a directional light, the naive V̄, no manipulation or transfer function.
 
 #include <spdlog/spdlog.h>
 
@@ -11,7 +11,9 @@
 #include "core/gpu/gpu_device.h"
 #include "core/image/image_io.h"
 #include "core/stylize/stylizer.h"
+#include "core/stylize/mesh_io.h"
 #include "protocol/render_json.h"
+#include "protocol/stylize_json.h"
 #include "server/cli.h"
 
 namespace volstyle::server {
@@ -22,13 +24,13 @@ namespace fs = std::filesystem;
 const CommandSpec kStylize{
     "stylize",
     "render light shafts through occluders (the stylizer)",
-    "--scene builtin:NAME [options] -o OUT.png|OUT.exr",
+    "--scene SCENE.json|builtin:NAME [options] -o OUT.png|OUT.exr",
     "Renders one frame of the light-shaft stylizer: occluder surfaces lit and shadowed by a\n"
     "directional light, and single scattering in a homogeneous medium with the visibility along\n"
     "each view ray factored out (the average visibility V̄). --aov writes one of the frame's\n"
     "arbitrary output variables instead of the frame.",
     {
-        {"scene", "SRC", "builtin:forest (a grove of trees under a low sun); scene files come next (required)"},
+        {"scene", "SRC", "SCENE.json (docs/STYLIZER.md; mesh paths relative to it) or builtin:forest (required)"},
         {"camera", "CAM.json", "camera (eye, target, up, fov_y_deg, width, height); default: the scene's, 640x360"},
         {"aov", "NAME", "average_visibility, linear_depth, shadow_map or scattering instead of the frame; default: the frame"},
         {"method", "NAME", "how V̄ is computed: naive (one shadow-map lookup per step); default naive"},
@@ -37,11 +39,27 @@ const CommandSpec kStylize{
         {"output", "OUT", ".png or .exr; the folder must exist (required)"},
     },
     "  volstyle stylize --scene builtin:forest -o forest.png\n"
-    "  volstyle stylize --scene builtin:forest --aov average_visibility -o vbar.png\n"};
+    "  volstyle stylize --scene builtin:forest --aov average_visibility -o vbar.png\n"
+    "  volstyle stylize --scene docs/examples/stylize/window.json -o window.png\n"};
 
+/// builtin:forest, or a SCENE.json whose mesh paths are relative to it.
 core::StylizerScene loadStylizerScene(const std::string& spec) {
     if (spec == "builtin:forest") return core::builtinForest();
-    throw InvalidArgument("--scene: unknown scene '" + spec + "' (built-in: builtin:forest)");
+    if (spec.rfind("builtin:", 0) == 0) throw InvalidArgument("--scene: unknown scene '" + spec + "' (built-in: builtin:forest)");
+    protocol::StylizerSceneRequest request =
+        fromFile(spec, [](const nlohmann::json& j) { return protocol::stylizerSceneFromJson(j); });
+    const fs::path folder = fs::path(spec).parent_path();
+    for (size_t i = 0; i < request.meshRefs.size(); ++i) {
+        const std::string where = "'" + spec + "': /occluders/" + std::to_string(i) + "/mesh: ";
+        try {
+            request.scene.occluders[i].mesh = core::loadMesh((folder / request.meshRefs[i]).string());
+        } catch (const IoError& e) {
+            throw IoError(where + e.what());
+        } catch (const InvalidArgument& e) {
+            throw InvalidArgument(where + e.what());
+        }
+    }
+    return request.scene;
 }
 
 }  // namespace

@@ -104,9 +104,9 @@ TEST(Cli, VersionAndHelpDescribeEveryOptionWithItsDefault) {
     EXPECT_NE(version.out.find("volstyle 0."), std::string::npos) << version.out;
     Result overview = run("help");
     EXPECT_EQ(overview.status, 0);
-    for (const char* command : {"serve", "render", "solve", "info", "convert"})
+    for (const char* command : {"serve", "render", "solve", "stylize", "info", "convert"})
         EXPECT_NE(overview.out.find(std::string("  ") + command), std::string::npos) << command << "\n" << overview.out;
-    for (const char* command : {"serve", "render", "solve"}) {
+    for (const char* command : {"serve", "render", "solve", "stylize"}) {
         Result help = run(std::string("help ") + command);
         EXPECT_EQ(help.status, 0) << command;
         EXPECT_EQ(help.out, run(std::string(command) + " --help").out) << command;
@@ -187,5 +187,51 @@ TEST(Cli, SolveBadInputsAreExit2) {
         EXPECT_EQ(r.status, 2) << c.args << "\n" << r.out;
         EXPECT_NE(r.out.find(c.expect), std::string::npos) << c.args << "\n" << r.out;
         EXPECT_EQ(r.out.find("()"), std::string::npos) << "no function names in messages: " << r.out;
+    }
+}
+
+TEST(Cli, StylizesASceneFileAndItsAovs) {
+    auto dir = test::scratchDir();
+    const std::string example = std::string(VOLSTYLE_SOURCE_DIR) + "/docs/examples/stylize/window.json";
+    writeText(dir / "cam.json", R"({"eye":[-3.5,1.4,-8.5],"target":[0.2,1.6,-1.5],"width":48,"height":32,"far":30})");
+    const std::string camera = " --camera " + (dir / "cam.json").string();
+    Result r = run("stylize --scene " + example + camera + " --steps 64 -o " + (dir / "frame.exr").string());
+    ASSERT_EQ(r.status, 0) << r.out;
+    r = run("stylize --scene " + example + camera + " --steps 64 --aov average_visibility -o " + (dir / "vbar.exr").string());
+    ASSERT_EQ(r.status, 0) << r.out;
+    const core::Image frame = core::loadImage((dir / "frame.exr").string()).image;
+    const core::Image vbar = core::loadImage((dir / "vbar.exr").string()).image;
+    ASSERT_EQ(vbar.width, 48);
+    float lo = 1, hi = 0;
+    for (size_t i = 0; i < vbar.pixelCount(); ++i) lo = std::min(lo, vbar.rgba[4 * i]), hi = std::max(hi, vbar.rgba[4 * i]);
+    EXPECT_LT(lo, 0.05f) << "rays that stay in the dark room";
+    EXPECT_GT(hi, 0.1f) << "rays through the window's shaft";
+    EXPECT_EQ(frame.width, 48);
+}
+
+TEST(Cli, StylizeBadInputsAreExit2WithTheProblem) {
+    auto dir = test::scratchDir();
+    const std::string out = " -o " + (dir / "x.png").string();
+    writeText(dir / "bad.json", R"({"occluders":[{"mesh":"missing.obj"}],"medium":{"albedo":2},"light":{"type":"spot"},"colour":1})");
+    writeText(dir / "nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    writeText(dir / "nan.json", R"({"occluders":[{"mesh":"nan.obj"}]})");
+    writeText(dir / "missing.json", R"({"occluders":[{"mesh":"missing.obj"}]})");
+    const std::pair<std::string, std::string> cases[] = {
+        {"stylize --scene builtin:nothing" + out, "unknown scene"},
+        {"stylize --scene " + (dir / "bad.json").string() + out, "/medium/albedo"},
+        {"stylize --scene " + (dir / "bad.json").string() + out, "/light/type"},
+        {"stylize --scene " + (dir / "bad.json").string() + out, "/colour"},
+        {"stylize --scene " + (dir / "nan.json").string() + out, "/occluders/0/mesh"},
+        {"stylize --scene " + (dir / "nan.json").string() + out, "non-finite"},
+        {"stylize --scene " + (dir / "missing.json").string() + out, "no such file"},
+        {"stylize --scene builtin:forest --steps 0" + out, "/steps"},
+        {"stylize --scene builtin:forest --aov colour" + out, "--aov"},
+        {"stylize --scene builtin:forest --method accelerated" + out, "--method"},
+    };
+    for (const auto& [args, expected] : cases) {
+        Result r = run(args);
+        EXPECT_EQ(r.status, 2) << args << "\n" << r.out;
+        EXPECT_EQ(lines(r.out), 1u) << args << "\n" << r.out;
+        EXPECT_NE(r.out.find(expected), std::string::npos) << args << "\n" << r.out;
     }
 }

@@ -1,0 +1,131 @@
+#include "protocol/stylize_json.h"
+
+#include "protocol/render_json.h"
+
+namespace volstyle::protocol {
+namespace {
+
+void notYet(JsonReader& r, const nlohmann::json& j, const std::string& path, const char* field, const char* what) {
+    if (j.contains(field)) r.fail(path + "/" + field, std::string(what) + " is not rendered yet (issue #11); remove it");
+}
+
+/// A column-major 4x4 affine matrix (OpenGL's and glTF's order).
+std::optional<Mat4> transformFromJson(JsonReader& r, const nlohmann::json& j, const std::string& path) {
+    if (!j.is_array() || j.size() != 16) {
+        r.fail(path, "must be 16 numbers (a column-major 4x4 matrix)");
+        return std::nullopt;
+    }
+    Mat4 m;
+    bool ok = true;
+    for (int c = 0; c < 4; ++c)
+        for (int row = 0; row < 4; ++row) {
+            auto v = r.number(j[size_t(4 * c + row)], path + "/" + std::to_string(4 * c + row));
+            if (v) m(row, c) = *v;
+            else ok = false;
+        }
+    if (!ok) return std::nullopt;
+    if (!m.isAffine()) {
+        r.fail(path, "must be affine (its last row 0, 0, 0, 1)");
+        return std::nullopt;
+    }
+    try {
+        (void)m.inverseAffine();
+    } catch (const InvalidArgument&) {
+        r.fail(path, "is singular");
+        return std::nullopt;
+    }
+    return m;
+}
+
+void phaseFromJson(JsonReader& r, const nlohmann::json& j, const std::string& path, core::Phase& phase) {
+    if (!r.object(j, path, {"type", "g"})) return;
+    const std::string type = j.contains("type") ? r.string(j["type"], path + "/type").value_or("") : "isotropic";
+    if (type == "isotropic") phase.type = core::PhaseType::Isotropic;
+    else if (type == "henyey_greenstein") phase.type = core::PhaseType::HenyeyGreenstein;
+    else if (!type.empty()) r.fail(path + "/type", "must be 'isotropic' or 'henyey_greenstein', got '" + type + "'");
+    if (j.contains("g")) {
+        if (auto g = r.number(j["g"], path + "/g")) {
+            if (!(*g > -1 && *g < 1)) r.fail(path + "/g", "must be in (-1, 1)");
+            else phase.g = *g;
+        }
+    }
+}
+
+}  // namespace
+
+StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::string& path) {
+    JsonReader r;
+    StylizerSceneRequest out;
+    core::StylizerScene& s = out.scene;
+    if (r.object(j, path, {"occluders", "light", "medium", "camera", "background", "time", "transfer_function", "volume"})) {
+        notYet(r, j, path, "transfer_function", "a transfer function");
+        notYet(r, j, path, "volume", "a heterogeneous medium");
+        if (j.contains("occluders")) {
+            const auto& list = j["occluders"];
+            if (!list.is_array()) r.fail(path + "/occluders", "must be an array of occluders");
+            else
+                for (size_t i = 0; i < list.size(); ++i) {
+                    const std::string op = path + "/occluders/" + std::to_string(i);
+                    if (!r.object(list[i], op, {"name", "mesh", "transform", "colour", "manipulation"})) continue;
+                    notYet(r, list[i], op, "manipulation", "occluder manipulation");
+                    core::Occluder o;
+                    o.name = list[i].contains("name") ? r.string(list[i]["name"], op + "/name").value_or("") : "occluder" + std::to_string(i);
+                    std::string mesh;
+                    if (!list[i].contains("mesh")) r.fail(op + "/mesh", "is required");
+                    else mesh = r.string(list[i]["mesh"], op + "/mesh").value_or("");
+                    if (list[i].contains("transform"))
+                        o.worldFromObject = transformFromJson(r, list[i]["transform"], op + "/transform").value_or(Mat4::identity());
+                    if (list[i].contains("colour")) {
+                        o.colour = r.vec3(list[i]["colour"], op + "/colour").value_or(o.colour);
+                        for (int c = 0; c < 3; ++c)
+                            if (!(o.colour[c] >= 0 && o.colour[c] <= 1)) r.check(op, "colour", "must be in [0, 1]");
+                    }
+                    s.occluders.push_back(std::move(o));
+                    out.meshRefs.push_back(mesh);
+                }
+        }
+        if (j.contains("light")) {
+            const auto& l = j["light"];
+            const std::string lp = path + "/light";
+            if (r.object(l, lp, {"type", "direction", "position", "cone_deg", "irradiance", "shadow_map_size"})) {
+                const std::string type = l.contains("type") ? r.string(l["type"], lp + "/type").value_or("") : "directional";
+                if (type == "spot") r.fail(lp + "/type", "spot lights are not rendered yet (issue #11); use 'directional'");
+                else if (type != "directional" && !type.empty()) r.fail(lp + "/type", "must be 'directional' or 'spot', got '" + type + "'");
+                if (l.contains("direction")) s.light.direction = r.vec3(l["direction"], lp + "/direction").value_or(s.light.direction);
+                if (l.contains("position")) s.light.position = r.vec3(l["position"], lp + "/position").value_or(s.light.position);
+                if (l.contains("cone_deg")) s.light.coneDeg = r.number(l["cone_deg"], lp + "/cone_deg").value_or(s.light.coneDeg);
+                if (l.contains("irradiance")) s.light.irradiance = r.vec3(l["irradiance"], lp + "/irradiance").value_or(s.light.irradiance);
+                if (l.contains("shadow_map_size"))
+                    s.light.shadowMapSize = r.integer(l["shadow_map_size"], lp + "/shadow_map_size").value_or(s.light.shadowMapSize);
+                if (!(length(s.light.direction) > 0)) r.check(lp, "direction", "must not be zero");
+                if (s.light.shadowMapSize < 512 || s.light.shadowMapSize > 4096) r.check(lp, "shadow_map_size", "must be in [512, 4096]");
+                for (int c = 0; c < 3; ++c)
+                    if (!(s.light.irradiance[c] >= 0)) r.check(lp, "irradiance", "must be >= 0");
+            }
+        }
+        if (j.contains("medium")) {
+            const auto& m = j["medium"];
+            const std::string mp = path + "/medium";
+            if (r.object(m, mp, {"extinction", "albedo", "phase"})) {
+                if (m.contains("extinction")) s.medium.extinction = r.number(m["extinction"], mp + "/extinction").value_or(s.medium.extinction);
+                if (m.contains("albedo")) s.medium.albedo = r.number(m["albedo"], mp + "/albedo").value_or(s.medium.albedo);
+                if (m.contains("phase")) phaseFromJson(r, m["phase"], mp + "/phase", s.medium.phase);
+                if (!(s.medium.extinction >= 0)) r.check(mp, "extinction", "must be >= 0");
+                if (!(s.medium.albedo >= 0 && s.medium.albedo <= 1)) r.check(mp, "albedo", "must be in [0, 1]");
+            }
+        }
+        if (j.contains("camera")) {
+            try {
+                s.camera = cameraFromJson(j["camera"], path + "/camera");
+            } catch (const ValidationError& e) {
+                for (const FieldError& f : e.details()) r.fail(f.path, f.message);
+            }
+        }
+        if (j.contains("background")) s.background = r.vec3(j["background"], path + "/background").value_or(s.background);
+        if (j.contains("time")) s.time = r.number(j["time"], path + "/time").value_or(0);
+    }
+    r.throwIfErrors();
+    return out;
+}
+
+}  // namespace volstyle::protocol
