@@ -83,6 +83,15 @@ void requireParentFolder(const std::string& outputPath) {
         throw IoError("no such folder '" + folder.string() + "' for '" + outputPath + "' (create it first)");
 }
 
+std::string imageOutputPath(const Arguments& args) {
+    if (!args.has("output")) throw InvalidArgument("-o OUT.png|OUT.exr is required");
+    const std::string output = args.get("output");
+    const std::string ext = std::filesystem::path(output).extension().string();
+    if (ext != ".png" && ext != ".exr") throw InvalidArgument("-o must end in .png or .exr, got '" + output + "'");
+    requireParentFolder(output);  // before the work, not after it
+    return output;
+}
+
 std::string usageText(const CommandSpec& spec) {
     std::ostringstream s;
     s << "usage: volstyle " << spec.name << " " << spec.synopsis << "\n\n" << spec.summary << "\n";

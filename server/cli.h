@@ -79,6 +79,9 @@ Arguments parseArguments(const std::vector<std::string>& args, const std::vector
 /// make folders silently).
 void requireParentFolder(const std::string& outputPath);
 
+/// The -o of a command writing one image: required, .png or .exr, its folder existing.
+std::string imageOutputPath(const Arguments& args);
+
 /// Reads and parses a JSON file; InvalidArgument names the file.
 nlohmann::json readJsonFile(const std::string& path);
 

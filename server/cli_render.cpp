@@ -54,12 +54,8 @@ int runRender(const std::vector<std::string>& argv) {
     Arguments args = parseArguments(argv, kRender);
     if (printHelpIfAsked(args, kRender)) return 0;
     if (!args.has("scene")) throw InvalidArgument("--scene is required (volstyle render --help)");
-    if (!args.has("output")) throw InvalidArgument("-o OUT.png|OUT.exr is required");
-    const std::string output = args.get("output");
+    const std::string output = imageOutputPath(args);
     const std::string ext = fs::path(output).extension().string();
-    if (ext != ".png" && ext != ".exr")
-        throw InvalidArgument("-o must end in .png or .exr, got '" + output + "'");
-    requireParentFolder(output);  // before the work, not after it
 
     std::optional<core::Camera> camera;
     if (args.has("camera")) camera = fromFile(args.get("camera"), [](const nlohmann::json& j) { return protocol::cameraFromJson(j); });

@@ -70,11 +70,7 @@ int runStylize(const std::vector<std::string>& argv) {
     Arguments args = parseArguments(argv, kStylize);
     if (printHelpIfAsked(args, kStylize)) return 0;
     if (!args.has("scene")) throw InvalidArgument("--scene is required (volstyle stylize --help)");
-    if (!args.has("output")) throw InvalidArgument("-o OUT.png|OUT.exr is required");
-    const std::string output = args.get("output");
-    const std::string ext = fs::path(output).extension().string();
-    if (ext != ".png" && ext != ".exr") throw InvalidArgument("-o must end in .png or .exr, got '" + output + "'");
-    requireParentFolder(output);
+    const std::string output = imageOutputPath(args);
     const std::string method = args.has("method") ? args.get("method") : "naive";
     if (method != "naive") throw InvalidArgument("--method: '" + method + "' is not available yet (naive)");
     const std::string aov = args.has("aov") ? args.get("aov") : "";
