@@ -121,6 +121,16 @@ struct StylizeParams {
     VS_VEC4 shadow;           /* x: depth bias (light clip depth units); y: whether a shadow map exists; z: texel size (world) */
 };
 
+/* Occluder manipulation on the shadow map (shadow_morphology.comp): one pass of running extrema
+ * (van Herk / Gil-Werman) along every row or column of an n×n depth map. */
+VS_CONSTANT(int, kBindingMorphIn, 1);      /* SSBO float[n*n]: the pass's input */
+VS_CONSTANT(int, kBindingMorphOut, 2);     /* SSBO float[n*n]: its output */
+VS_CONSTANT(int, kBindingMorphScratch, 3); /* SSBO float[2 * lines * (n + 2 * halfWidth)]: running extrema */
+struct MorphParams {
+    VS_IVEC4 size;  /* x: n (the map's side); y: half-width w of the 1D window; z: 0 rows, 1 columns; w: line offset dy */
+    VS_IVEC4 op;    /* x: 0 minimum (dilation of occluders), 1 maximum (erosion); y: 1 combine with the output by op, 0 overwrite */
+};
+
 /* Parameters of the vector kernels (vector_ops.comp). Vectors are arrays of vec4 (rgb used). */
 struct VectorParams {
     VS_VEC4 alpha;           /* per-channel scalars */

@@ -1,0 +1,61 @@
+// Hole filling on the shadow map (issue #11): the GPU closing (van Herk / Gil-Werman running
+// extrema) against brute force on random depth maps, for boxes and discs of radius 1–32.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "core/stylize/morphology.h"
+#include "gl_test_env.h"
+
+using namespace volstyle;
+using namespace volstyle::core;
+
+namespace {
+
+/// Random occluders: blobs of depths in [0.2, 0.8] with holes, the rest 1 (nothing).
+std::vector<float> randomMap(int n, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::vector<float> d(size_t(n) * n, 1.0f);
+    for (float& v : d)
+        if (rng() % 100 < 55) v = 0.2f + 0.6f * float(rng() % 1000) / 1000.0f;
+    return d;
+}
+
+}  // namespace
+
+TEST(Morphology, DiscRowsAreTheDisc) {
+    EXPECT_EQ(discHalfWidth(5, 0), 5);
+    EXPECT_EQ(discHalfWidth(5, 3), 4);
+    EXPECT_EQ(discHalfWidth(5, 4), 3);
+    EXPECT_EQ(discHalfWidth(5, 5), 0);
+    EXPECT_EQ(discHalfWidth(1, 1), 0);
+}
+
+TEST(Morphology, GpuClosingEqualsBruteForceForBoxesAndDiscs) {
+    VOLSTYLE_REQUIRE_GL();
+    for (MorphShape shape : {MorphShape::Box, MorphShape::Disc})
+        for (int r : {1, 2, 3, 7, 16, 32}) {
+            const int n = r >= 16 ? 80 : 48;
+            const std::vector<float> map = randomMap(n, uint32_t(7 * r + (shape == MorphShape::Disc)));
+            const std::vector<float> gpu = closingOnGpu(test::device(), map, n, r, shape);
+            const std::vector<float> ref = closingReference(map, n, r, shape);
+            size_t differ = 0;
+            for (size_t i = 0; i < ref.size(); ++i) differ += gpu[i] != ref[i];
+            EXPECT_EQ(differ, 0u) << (shape == MorphShape::Box ? "box" : "disc") << " radius " << r;
+        }
+}
+
+TEST(Morphology, ClosingFillsHolesSmallerThanTheElementAndKeepsTheOutline) {
+    VOLSTYLE_REQUIRE_GL();
+    const int n = 64;
+    std::vector<float> map(size_t(n) * n, 1.0f);
+    for (int y = 16; y < 48; ++y)
+        for (int x = 16; x < 48; ++x) map[size_t(y) * n + x] = 0.5f;  // an occluder
+    for (int y = 30; y < 33; ++y)
+        for (int x = 30; x < 33; ++x) map[size_t(y) * n + x] = 1.0f;  // a 3×3 hole in it
+    const std::vector<float> closed = closingOnGpu(test::device(), map, n, 2, MorphShape::Box);
+    EXPECT_EQ(closed[size_t(31) * n + 31], 0.5f) << "the hole is filled";
+    EXPECT_EQ(closed[size_t(10) * n + 10], 1.0f) << "outside stays empty";
+    EXPECT_EQ(closed[size_t(16) * n + 16], 0.5f) << "the corner stays";
+    EXPECT_EQ(closed[size_t(15) * n + 16], 1.0f) << "and does not grow";
+}
