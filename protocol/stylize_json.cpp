@@ -37,6 +37,24 @@ std::optional<Mat4> transformFromJson(JsonReader& r, const nlohmann::json& j, co
     return m;
 }
 
+/// {"closing": {"radius_px": 4, "shape": "disc"|"box"}}; dilation and holes are not rendered yet.
+core::Manipulation manipulationFromJson(JsonReader& r, const nlohmann::json& j, const std::string& path) {
+    core::Manipulation m;
+    if (!r.object(j, path, {"closing", "dilation", "holes"})) return m;
+    notYet(r, j, path, "dilation", "epipolar dilation");
+    notYet(r, j, path, "holes", "hole creation");
+    if (j.contains("closing") && r.object(j["closing"], path + "/closing", {"radius_px", "shape"})) {
+        const auto& c = j["closing"];
+        if (!c.contains("radius_px")) r.fail(path + "/closing/radius_px", "is required");
+        else m.closingRadius = r.integer(c["radius_px"], path + "/closing/radius_px").value_or(0);
+        if (m.closingRadius < 0 || m.closingRadius > 64) r.check(path + "/closing", "radius_px", "must be in [0, 64]");
+        const std::string shape = c.contains("shape") ? r.string(c["shape"], path + "/closing/shape").value_or("") : "disc";
+        if (shape == "box") m.closingShape = core::MorphShape::Box;
+        else if (shape != "disc" && !shape.empty()) r.fail(path + "/closing/shape", "must be 'disc' or 'box', got '" + shape + "'");
+    }
+    return m;
+}
+
 void phaseFromJson(JsonReader& r, const nlohmann::json& j, const std::string& path, core::Phase& phase) {
     if (!r.object(j, path, {"type", "g"})) return;
     const std::string type = j.contains("type") ? r.string(j["type"], path + "/type").value_or("") : "isotropic";
@@ -67,8 +85,8 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
                 for (size_t i = 0; i < list.size(); ++i) {
                     const std::string op = path + "/occluders/" + std::to_string(i);
                     if (!r.object(list[i], op, {"name", "mesh", "transform", "colour", "manipulation"})) continue;
-                    notYet(r, list[i], op, "manipulation", "occluder manipulation");
                     core::Occluder o;
+                    if (list[i].contains("manipulation")) o.manipulation = manipulationFromJson(r, list[i]["manipulation"], op + "/manipulation");
                     o.name = list[i].contains("name") ? r.string(list[i]["name"], op + "/name").value_or("") : "occluder" + std::to_string(i);
                     std::string mesh;
                     if (!list[i].contains("mesh")) r.fail(op + "/mesh", "is required");

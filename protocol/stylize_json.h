@@ -3,13 +3,14 @@
 /// The light-shaft stylizer's scene as JSON (SPEC §7), shared by the CLI's SCENE.json and (next)
 /// the API's stylizer resource:
 ///   {"occluders": [{"name": "tree", "mesh": "tree.obj", "transform": [16 numbers, column-major],
-///                   "colour": [0.4, 0.35, 0.3]}],
+///                   "colour": [0.4, 0.35, 0.3],
+///                   "manipulation": {"closing": {"radius_px": 4, "shape": "disc"}}}],
 ///    "light": {"type": "directional", "direction": [x,y,z], "irradiance": [r,g,b],
 ///              "shadow_map_size": 2048},
 ///    "medium": {"extinction": 0.05, "albedo": 0.9, "phase": {"type": "henyey_greenstein", "g": 0.4}},
 ///    "camera": {…SPEC §1…}, "background": [r,g,b], "time": 0}
 /// Meshes are references the caller resolves (the CLI: paths relative to the file). Fields of
-/// SPEC §7 that are not rendered yet (manipulation, transfer_function, volume, spot lights) are
+/// SPEC §7 that are not rendered yet (dilation, holes, transfer_function, volume, spot lights) are
 /// refused by name rather than ignored.
 
 #include <nlohmann/json.hpp>

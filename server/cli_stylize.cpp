@@ -1,5 +1,5 @@
 // `volstyle stylize`: one frame of the light-shaft stylizer (SPEC §7) to PNG or EXR, or one of its
-// AOVs. This first version: a directional light, the naive V̄, no manipulation or transfer function.
+// AOVs. This first version: a directional light, the naive V̄, closing, no transfer function.
 
 #include <spdlog/spdlog.h>
 
@@ -32,7 +32,7 @@ const CommandSpec kStylize{
     {
         {"scene", "SRC", "SCENE.json (docs/STYLIZER.md; mesh paths relative to it) or builtin:forest (required)"},
         {"camera", "CAM.json", "camera (eye, target, up, fov_y_deg, width, height); default: the scene's, 640x360"},
-        {"aov", "NAME", "average_visibility, linear_depth, shadow_map or scattering instead of the frame; default: the frame"},
+        {"aov", "NAME", "average_visibility, linear_depth, shadow_map, modified_shadow_map or scattering; default: the frame"},
         {"method", "NAME", "how V̄ is computed: naive (one shadow-map lookup per step); default naive"},
         {"steps", "N", "shadow-map lookups per view ray for V̄ (1-4096); default 256"},
         {"exposure", "STOPS", "PNG brightness in stops (EXR stays linear); default 0"},
@@ -74,8 +74,10 @@ int runStylize(const std::vector<std::string>& argv) {
     const std::string method = args.has("method") ? args.get("method") : "naive";
     if (method != "naive") throw InvalidArgument("--method: '" + method + "' is not available yet (naive)");
     const std::string aov = args.has("aov") ? args.get("aov") : "";
-    if (!aov.empty() && aov != "average_visibility" && aov != "linear_depth" && aov != "shadow_map" && aov != "scattering")
-        throw InvalidArgument("--aov: '" + aov + "' is not one of average_visibility, linear_depth, shadow_map, scattering");
+    if (!aov.empty() && aov != "average_visibility" && aov != "linear_depth" && aov != "shadow_map" &&
+        aov != "modified_shadow_map" && aov != "scattering")
+        throw InvalidArgument("--aov: '" + aov +
+                              "' is not one of average_visibility, linear_depth, shadow_map, modified_shadow_map, scattering");
 
     core::StylizerScene scene = loadStylizerScene(args.get("scene"));
     if (args.has("camera"))
@@ -92,6 +94,7 @@ int runStylize(const std::vector<std::string>& argv) {
     const core::Image& image = aov == "average_visibility" ? f.averageVisibility
                                : aov == "linear_depth"     ? f.linearDepth
                                : aov == "shadow_map"       ? f.shadowMap
+                               : aov == "modified_shadow_map" ? f.modifiedShadowMap
                                : aov == "scattering"       ? f.scattering
                                                            : f.frame;
     core::SaveOptions save;

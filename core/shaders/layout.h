@@ -102,7 +102,8 @@ struct MarchParams {
 VS_CONSTANT(int, kUnitShadowDepth, 9);     /* the light's shadow map (depth, [0,1]) */
 VS_CONSTANT(int, kUnitGBufferSurface, 10); /* camera G-buffer: xyz normal, w distance from the eye (0: no surface) */
 VS_CONSTANT(int, kUnitGBufferColour, 11);  /* camera G-buffer: rgb surface colour, w object id (1-based) */
-VS_CONSTANT(int, kStylizeLayers, 2);       /* AOV planes of stylize.comp: (scattering rgb, V̄), (distance, hit, 0, 0) */
+VS_CONSTANT(int, kStylizeLayers, 2);
+VS_CONSTANT(int, kBindingScatterDepth, 2);  /* SSBO float[n*n]: the manipulated shadow map V̄ reads (row 0 at the bottom) */       /* AOV planes of stylize.comp: (scattering rgb, V̄), (distance, hit, 0, 0) */
 
 struct StylizeParams {
     VS_MAT4 lightFromWorld;   /* world -> the light's clip space, [-1,1]³ over the occluders (orthographic) */

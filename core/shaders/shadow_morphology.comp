@@ -4,7 +4,8 @@
 // column), at a cost per texel that does not depend on w (van Herk 1992, Gil & Werman 1993):
 // with blocks of k = 2w + 1 texels, g is the running extremum from each block's start and h to
 // each block's end, and window [x − w, x + w] is op(h[x − w], g[x + w]). Texels outside the map are
-// the operation's neutral element (they never win). One invocation per line, three sweeps.
+// empty (depth 1, no occluder): the stylizer keeps occluders a closing radius away from the
+// border, so that neither operation sees past it. One invocation per line, three sweeps.
 // Line offset dy (size.w): the window is taken on line y + dy and written to line y (the disc's
 // rows); op.y = 1 folds the result into the output instead of overwriting it.
 #include "layout.h"
@@ -32,7 +33,7 @@ void main() {
     if (line >= n) return;
     bool columns = m.size.z == 1;
     int source = line + m.size.w;  // the line the window is read from
-    float neutral = m.op.x == 0 ? 3.0e38 : -3.0e38;
+    const float neutral = 1.0;  // outside the map: nothing occludes
     int k = 2 * w + 1, len = n + 2 * w;
     int gBase = 2 * line * len, hBase = gBase + len;
     // value(v) for virtual index v ∈ [0, len): texel v − w of the source line, or neutral.

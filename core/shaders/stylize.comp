@@ -21,16 +21,20 @@ layout(std430, binding = kBindingImageOut) writeonly buffer b_Image {
 layout(std430, binding = kBindingLayersOut) writeonly buffer b_Layers {
     vec4 layers[];  // layer k of pixel p at k * pixelCount + p (kStylizeLayers)
 };
+layout(std430, binding = kBindingScatterDepth) readonly buffer b_ScatterDepth {
+    float scatterDepth[];  // the shadow map after the occluders' manipulations, for V̄ only
+};
 
-// V(x): 1 where the light reaches world point x. Outside the map's footprint nothing occludes
-// (every occluder lies inside it); a point nearer the light than the map's near plane is lit.
-float visibility(vec3 x) {
+// V(x): 1 where the light reaches world point x, by the unmodified map (surfaces) or the
+// manipulated one (the scattering). Outside the map's footprint nothing occludes (every occluder
+// lies inside it); a point nearer the light than the map's near plane is lit.
+float visibility(vec3 x, bool manipulated) {
     if (u.shadow.y < 0.5) return 1.0;
     vec3 c = (u.lightFromWorld * vec4(x, 1.0)).xyz;
     if (any(greaterThan(abs(c.xy), vec2(1.0)))) return 1.0;
     int n = u.imageSize.z;
     ivec2 texel = clamp(ivec2(floor((c.xy * 0.5 + 0.5) * float(n))), ivec2(0), ivec2(n - 1));
-    float occluder = texelFetch(s_shadowDepth, texel, 0).r;
+    float occluder = manipulated ? scatterDepth[texel.y * n + texel.x] : texelFetch(s_shadowDepth, texel, 0).r;
     // Depth 1 is nothing there; a point past the far plane is shadowed only by what was drawn.
     return occluder >= 1.0 || c.z * 0.5 + 0.5 <= occluder + u.shadow.x ? 1.0 : 0.0;
 }
@@ -48,7 +52,7 @@ void main() {
     // Average visibility along the ray (Eq. 2's factored-out V̄).
     int steps = max(u.imageSize.w, 1);
     float visible = 0.0;
-    for (int i = 0; i < steps; ++i) visible += visibility(u.eye.xyz + ((float(i) + 0.5) / float(steps)) * s * dir);
+    for (int i = 0; i < steps; ++i) visible += visibility(u.eye.xyz + ((float(i) + 0.5) / float(steps)) * s * dir, true);
     float vBar = visible / float(steps);
 
     // Single scattering with the visibility factored out: ρ p E (1 − e^{−σt s}) V̄.
@@ -64,7 +68,7 @@ void main() {
         if (dot(n, dir) > 0.0) n = -n;  // leaves are seen from both sides
         vec3 x = u.eye.xyz + s * dir;
         // Offset along the normal by 1.5 shadow-map texels (u.shadow.z, world units): no acne.
-        float lit = visibility(x + (1.5 * u.shadow.z + 1e-4 * s) * n) * max(dot(n, light), 0.0);
+        float lit = visibility(x + (1.5 * u.shadow.z + 1e-4 * s) * n, false) * max(dot(n, light), 0.0);
         behind = albedo * (u.irradiance.rgb * lit * (1.0 / 3.14159265358979) + u.background.rgb);
     }
     int p = pix.y * size.x + pix.x;

@@ -27,10 +27,9 @@ std::vector<float> bruteForce(const std::vector<float>& in, int n, int r, MorphS
             float best = takeMin ? 3.0e38f : -3.0e38f;
             for (int dy = -r; dy <= r; ++dy) {
                 const int w = shape == MorphShape::Box ? r : discHalfWidth(r, dy);
-                if (y + dy < 0 || y + dy >= n || (shape == MorphShape::Disc && std::abs(dy) > r)) continue;
                 for (int dx = -w; dx <= w; ++dx) {
-                    if (x + dx < 0 || x + dx >= n) continue;
-                    const float v = in[size_t(y + dy) * n + size_t(x + dx)];
+                    const bool inside = x + dx >= 0 && x + dx < n && y + dy >= 0 && y + dy < n;
+                    const float v = inside ? in[size_t(y + dy) * n + size_t(x + dx)] : 1.0f;  // outside: empty
                     best = takeMin ? std::min(best, v) : std::max(best, v);
                 }
             }
@@ -83,6 +82,11 @@ void closeDepthBuffer(GpuDevice& device, gl::Buffer& depth, int n, int radius, M
     MorphPass pass(device, n, radius);
     pass.apply(depth, a, b, radius, shape, true);   // dilation: occluders grow into the holes
     pass.apply(a, depth, b, radius, shape, false);  // erosion: and shrink back outside them
+}
+
+void foldMinimum(GpuDevice& device, const gl::Buffer& from, const gl::Buffer& into, int n) {
+    MorphPass pass(device, n, 0);
+    pass.run(from, into, 0, false, 0, true, true);  // a one-texel window is the value itself
 }
 
 std::vector<float> closingReference(const std::vector<float>& depth, int n, int radius, MorphShape shape) {

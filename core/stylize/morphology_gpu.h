@@ -11,4 +11,7 @@ namespace volstyle::core {
 
 void closeDepthBuffer(GpuDevice& device, gl::Buffer& depth, int n, int radius, MorphShape shape);
 
+/// into = min(into, from), texel by texel (composites an object's manipulated shadow).
+void foldMinimum(GpuDevice& device, const gl::Buffer& from, const gl::Buffer& into, int n);
+
 }  // namespace volstyle::core

@@ -15,6 +15,8 @@ void StylizerScene::validate() const {
         } catch (const InvalidArgument& e) {
             throw InvalidArgument("occluder '" + o.name + "': " + e.what());
         }
+        if (o.manipulation.closingRadius < 0 || o.manipulation.closingRadius > 64)
+            throw InvalidArgument("occluder '" + o.name + "': closing radius_px must be in [0, 64]");
     }
     if (!(length(light.direction) > 0)) throw InvalidArgument("/light/direction: must not be zero");
     if (light.shadowMapSize < 512 || light.shadowMapSize > 4096)
@@ -73,9 +75,9 @@ void addCanopy(Mesh& m, Random& rnd, Vec3d centre, Vec3d radii, int leaves, doub
 
 StylizerScene builtinForest() {
     StylizerScene s;
-    Occluder ground{"ground", {}, Mat4::identity(), {0.18, 0.16, 0.12}};
+    Occluder ground{"ground", {}, Mat4::identity(), {0.18, 0.16, 0.12}, {}};
     addQuad(ground.mesh, {-14, 0, -16}, {-14, 0, 14}, {14, 0, 14}, {14, 0, -16});
-    Occluder trees{"trees", {}, Mat4::identity(), {0.16, 0.22, 0.10}};
+    Occluder trees{"trees", {}, Mat4::identity(), {0.16, 0.22, 0.10}, {}};
     Random rnd(2011);
     for (int gx = -2; gx <= 2; ++gx)
         for (int gz = -3; gz <= 1; ++gz) {

@@ -13,11 +13,23 @@
 
 namespace volstyle::core {
 
+/// Structuring elements of the shadow-map closing (core/stylize/morphology.h).
+enum class MorphShape { Box, Disc };
+
+/// How an occluder's shadow is edited for the scattering only (the GI paper Sec. 4); its surface
+/// and the surfaces it shadows keep the unmodified map.
+struct Manipulation {
+    int closingRadius = 0;                  ///< texels of the shadow map; 0: no closing
+    MorphShape closingShape = MorphShape::Disc;
+    bool any() const { return closingRadius > 0; }
+};
+
 struct Occluder {
     std::string name;
     Mesh mesh;
     Mat4 worldFromObject;
     Vec3d colour{0.4, 0.35, 0.3};  ///< diffuse albedo of its surface
+    Manipulation manipulation;
 };
 
 enum class StylizerLightType { Directional, Spot };

@@ -10,6 +10,7 @@
 #include "core/gl/shader_builder.h"
 #include "core/render/gl_convert.h"
 #include "core/shaders/layout.h"
+#include "core/stylize/morphology_gpu.h"
 
 namespace volstyle::core {
 
@@ -109,7 +110,7 @@ Image readChannelPlane(const std::vector<float>& plane, int w, int h, int channe
 
 }  // namespace
 
-Mat4 lightClipFromWorld(const Vec3d& towardLight, const Vec3d& lo, const Vec3d& hi) {
+Mat4 lightClipFromWorld(const Vec3d& towardLight, const Vec3d& lo, const Vec3d& hi, int n, int marginTexels) {
     Vec3d u, v, w;
     frameAround(towardLight, u, v, w);
     Vec3d a(std::numeric_limits<double>::max()), b(-std::numeric_limits<double>::max());
@@ -120,7 +121,9 @@ Mat4 lightClipFromWorld(const Vec3d& towardLight, const Vec3d& lo, const Vec3d& 
     }
     // A margin so geometry on the bounds is not clipped; depth grows away from the light.
     for (int k = 0; k < 3; ++k) {
-        const double pad = 1e-3 * std::max(b[k] - a[k], 1e-6) + 1e-6;
+        double pad = 1e-3 * std::max(b[k] - a[k], 1e-6) + 1e-6;
+        if (k < 2 && marginTexels > 0)  // the extent grows to n texels of which 2·margin are empty
+            pad += std::max(b[k] - a[k], 1e-6) * marginTexels / std::max(n - 2 * marginTexels, 1);
         a[k] -= pad, b[k] += pad;
     }
     Mat4 m;
@@ -161,7 +164,9 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
 
     layout::StylizeParams p;
     const Vec3d toLight = normalize(scene.light.direction);
-    const Mat4 lightClip = lightClipFromWorld(toLight, lo, hi);
+    int margin = 0;  // texels kept empty around the occluders: the largest closing radius
+    for (const Occluder& o : scene.occluders) margin = std::max(margin, o.manipulation.closingRadius);
+    const Mat4 lightClip = lightClipFromWorld(toLight, lo, hi, n, margin);
     p.lightFromWorld = toGl(lightClip);
     const Camera::Frame f = cam.frame();
     p.eye = f4(cam.eye);
@@ -178,10 +183,12 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
                                   2 / length(Vec3d(lightClip(1, 0), lightClip(1, 1), lightClip(1, 2)))) / n;
     p.shadow = {2e-5f, hasOccluders ? 1.0f : 0.0f, float(texel), 0};
 
-    auto drawOccluders = [&](const gl::ShaderBuilder& builder, const Mat4& clipFromWorld) {
+    // Draws the occluders `which` accepts (by index) with `builder` from `clipFromWorld`.
+    auto drawOccluders = [&](const gl::ShaderBuilder& builder, const Mat4& clipFromWorld, const auto& which) {
         glUseProgram(m_device.program(builder).id());
         p.clipFromWorld = toGl(clipFromWorld);
         for (size_t i = 0; i < meshes.size(); ++i) {
+            if (!which(i)) continue;
             p.worldFromObject = toGl(scene.occluders[i].worldFromObject);
             p.surface = f4(scene.occluders[i].colour, double(i + 1));
             m_device.setParams(p);
@@ -190,26 +197,57 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
         }
         glBindVertexArray(0);
     };
+    auto all = [](size_t) { return true; };
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glDisable(GL_CULL_FACE);  // leaves are single quads seen from both sides
 
-    // 1. The light's shadow map: depth, and object ids for per-object manipulation.
+    // 1. The light's shadow maps. The unmodified one (depth, and object ids for the per-object
+    //    manipulations) shadows surfaces; the scattering's starts from the objects left alone,
+    //    and each manipulated object is drawn alone, edited and folded in by minimum (Sec. 4).
     auto t = Clock::now();
-    gl::Texture shadowDepth = texture2D(GL_DEPTH_COMPONENT32F, n, n, "shadow-depth");
-    gl::Texture shadowIds = texture2D(GL_R32F, n, n, "shadow-ids");
-    {
+    const gl::ShaderBuilder shadowPass = gl::ShaderBuilder("occluders.raster").define("VOLSTYLE_PASS_SHADOW", 1);
+    auto renderShadow = [&](const gl::Texture& depthTarget, const gl::Texture* ids, const auto& which) {
         gl::Framebuffer fb = gl::createFramebuffer("shadow-map");
-        glNamedFramebufferTexture(fb.id(), GL_DEPTH_ATTACHMENT, shadowDepth.id(), 0);
-        glNamedFramebufferTexture(fb.id(), GL_COLOR_ATTACHMENT0, shadowIds.id(), 0);
+        glNamedFramebufferTexture(fb.id(), GL_DEPTH_ATTACHMENT, depthTarget.id(), 0);
+        if (ids) glNamedFramebufferTexture(fb.id(), GL_COLOR_ATTACHMENT0, ids->id(), 0);
+        else glNamedFramebufferDrawBuffer(fb.id(), GL_NONE);
         checkComplete(fb, "the shadow map's");
         const float zero[4] = {0, 0, 0, 0}, one = 1;
-        glClearNamedFramebufferfv(fb.id(), GL_COLOR, 0, zero);
+        if (ids) glClearNamedFramebufferfv(fb.id(), GL_COLOR, 0, zero);
         glClearNamedFramebufferfv(fb.id(), GL_DEPTH, 0, &one);
         glBindFramebuffer(GL_FRAMEBUFFER, fb.id());
         glViewport(0, 0, n, n);
-        if (hasOccluders) drawOccluders(gl::ShaderBuilder("occluders.raster").define("VOLSTYLE_PASS_SHADOW", 1), lightClip);
+        if (hasOccluders) drawOccluders(shadowPass, lightClip, which);
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    };
+    const size_t mapBytes = sizeof(float) * size_t(n) * n;
+    auto copyToBuffer = [&](const gl::Texture& depthMap, const gl::Buffer& into) {  // on the GPU, no round trip
+        glBindBuffer(GL_PIXEL_PACK_BUFFER, into.id());
+        glGetTextureImage(depthMap.id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(mapBytes), nullptr);
+        glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+    };
+    gl::Texture shadowDepth = texture2D(GL_DEPTH_COMPONENT32F, n, n, "shadow-depth");
+    gl::Texture shadowIds = texture2D(GL_R32F, n, n, "shadow-ids");
+    renderShadow(shadowDepth, &shadowIds, all);
+    gl::Buffer scatterDepth = gl::createBuffer(mapBytes, nullptr, 0, "scatter-shadow-map");
+    bool manipulated = false;
+    for (const Occluder& o : scene.occluders) manipulated = manipulated || o.manipulation.any();
+    if (!manipulated) {
+        copyToBuffer(shadowDepth, scatterDepth);
+    } else {
+        gl::Texture scratchMap = texture2D(GL_DEPTH_COMPONENT32F, n, n, "shadow-depth-part");
+        renderShadow(scratchMap, nullptr, [&](size_t i) { return !scene.occluders[i].manipulation.any(); });
+        copyToBuffer(scratchMap, scatterDepth);
+        gl::Buffer part = gl::createBuffer(mapBytes, nullptr, 0, "scatter-shadow-part");
+        for (size_t i = 0; i < scene.occluders.size(); ++i) {
+            const Manipulation& m = scene.occluders[i].manipulation;
+            if (!m.any()) continue;
+            renderShadow(scratchMap, nullptr, [i](size_t j) { return j == i; });
+            copyToBuffer(scratchMap, part);
+            closeDepthBuffer(m_device, part, n, m.closingRadius, m.closingShape);
+            foldMinimum(m_device, part, scatterDepth, n);
+        }
     }
     m_device.finish();
     out.shadowMs = msSince(t);
@@ -241,7 +279,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
         const double farPlane = std::min(cam.farDist, farthest * 1.01 + 1e-3);
         const double nearPlane = std::max(cam.nearDist, farPlane * 1e-5);
         if (hasOccluders && farPlane > nearPlane)
-            drawOccluders(gl::ShaderBuilder("occluders.raster"), cameraClipFromWorld(cam, nearPlane, farPlane));
+            drawOccluders(gl::ShaderBuilder("occluders.raster"), cameraClipFromWorld(cam, nearPlane, farPlane), all);
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
     }
     glDisable(GL_DEPTH_TEST);
@@ -263,6 +301,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     glBindTextureUnit(layout::kUnitGBufferColour, colour.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingImageOut, m_gpu->pixels.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingLayersOut, m_gpu->layers.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingScatterDepth, scatterDepth.id());
     const int g = layout::kWorkgroup2D;
     glDispatchCompute(GLuint((cam.width + g - 1) / g), GLuint((cam.height + g - 1) / g), 1);
     gl::barrierAfterComputeWrites();
@@ -274,15 +313,21 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     out.averageVisibility = readChannelPlane(plane, cam.width, cam.height, 3, true);
     glGetNamedBufferSubData(m_gpu->layers.id(), GLintptr(bytes), GLsizeiptr(bytes), plane.data());
     out.linearDepth = readChannelPlane(plane, cam.width, cam.height, 0, true);
+    auto mapImage = [n](const std::vector<float>& depthRows) {
+        Image img(n, n);
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                float* px = img.pixel(x, n - 1 - y);  // row 0 on top, as every image
+                px[0] = px[1] = px[2] = depthRows[size_t(y) * n + x];
+                px[3] = 1;
+            }
+        return img;
+    };
     std::vector<float> shadow(size_t(n) * n);
-    glGetTextureImage(shadowDepth.id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(shadow.size() * sizeof(float)), shadow.data());
-    out.shadowMap = Image(n, n);
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-            float* px = out.shadowMap.pixel(x, n - 1 - y);  // row 0 on top, as every image
-            px[0] = px[1] = px[2] = shadow[size_t(y) * n + x];
-            px[3] = 1;
-        }
+    glGetTextureImage(shadowDepth.id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(mapBytes), shadow.data());
+    out.shadowMap = mapImage(shadow);
+    glGetNamedBufferSubData(scatterDepth.id(), 0, GLsizeiptr(mapBytes), shadow.data());
+    out.modifiedShadowMap = mapImage(shadow);
     out.shadeMs = msSince(t);
     out.totalMs = msSince(t0);
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory while stylizing");

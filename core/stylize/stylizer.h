@@ -5,8 +5,8 @@
 /// then per pixel the average visibility V̄ along the view ray (Eq. 2) and the frame
 ///   L = L_surf e^{−σt s} + ρ p E (1 − e^{−σt s}) V̄        (directional light).
 /// This first version: a directional light, the naive V̄ (N shadow-map lookups per ray, the
-/// reference the accelerated methods are measured against), no manipulation or transfer function
-/// yet. GL-free header; GL thread only.
+/// reference the accelerated methods are measured against), closing as the only manipulation,
+/// no transfer function yet. GL-free header; GL thread only.
 
 #include <memory>
 
@@ -28,6 +28,7 @@ struct StylizedFrame {
     Image averageVisibility;  ///< V̄ ∈ [0, 1] in rgb
     Image linearDepth;        ///< s: distance to the first surface (or the camera's far), rgb
     Image shadowMap;          ///< the light's depth in [0, 1] (1: nothing), side shadow_map_size
+    Image modifiedShadowMap;  ///< the same after the occluders' manipulations (what V̄ reads)
     double shadowMs = 0, gbufferMs = 0, shadeMs = 0, totalMs = 0;
 };
 
@@ -48,7 +49,8 @@ private:
 };
 
 /// The orthographic map from world space to the light's clip space [-1,1]³ that covers the
-/// world-space bounds [lo, hi] seen from `towardLight` (near plane on the light's side).
-Mat4 lightClipFromWorld(const Vec3d& towardLight, const Vec3d& lo, const Vec3d& hi);
+/// world-space bounds [lo, hi] seen from `towardLight` (near plane on the light's side), leaving
+/// `marginTexels` of an n-texel map empty around them (closings then never reach the border).
+Mat4 lightClipFromWorld(const Vec3d& towardLight, const Vec3d& lo, const Vec3d& hi, int n = 2048, int marginTexels = 0);
 
 }  // namespace volstyle::core

@@ -14,7 +14,8 @@ using namespace volstyle::core;
 
 namespace {
 
-constexpr double kPlaneY = 1.0, kHalfSide = 4.0, kHoleHalf = 0.6;
+constexpr double kPlaneY = 1.0, kHalfSide = 4.0;
+double kHoleHalf = 0.6;  // the plane's square hole (a test may make it small)
 
 void addQuad(Mesh& m, Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
     const auto base = uint32_t(m.positions.size());
@@ -50,7 +51,7 @@ double insideSquare(const Vec3d& e, const Vec3d& w, double half, double s) {
 
 StylizerScene holeScene() {
     StylizerScene s;
-    s.occluders = {{"plane", planeWithHole(), Mat4::identity(), {0.5, 0.5, 0.5}}};
+    s.occluders = {{"plane", planeWithHole(), Mat4::identity(), {0.5, 0.5, 0.5}, {}}};
     s.light.direction = {0, 1, 0};  // straight down through the hole
     s.light.shadowMapSize = 2048;
     s.medium = {0.1, 0.8, {PhaseType::HenyeyGreenstein, 0.3}};
@@ -65,42 +66,50 @@ StylizerScene holeScene() {
 
 }  // namespace
 
+/// Max |V̄ − exact| over the pixels whose surface distance matches the exact one, with the
+/// closed form's hole of half-side `holeHalf` (0: no shaft).
+double worstVisibilityError(const StylizerScene& scene, const StylizedFrame& f, double holeHalf, int* comparedOut, int* silhouetteOut);
+
 TEST(Stylizer, AverageVisibilityUnderAPlaneWithAHoleIsTheShaftsShare) {
     VOLSTYLE_REQUIRE_GL();
+    kHoleHalf = 0.6;
     const StylizerScene scene = holeScene();
     StylizeSettings settings;
     settings.steps = 1024;
     Stylizer stylizer(test::device());
     const StylizedFrame f = stylizer.render(scene, settings);
-    const Camera& cam = scene.camera;
-    double worst = 0;
     int compared = 0, silhouette = 0;
-    for (int y = 0; y < cam.height; ++y)
-        for (int x = 0; x < cam.width; ++x) {
-            const Vec3d w = cam.rayDirection(x, y), e = cam.eye;
-            // The first surface: the plane, unless the ray goes through the hole or past its edge.
-            double s = cam.farDist;
-            if (w.y > 0) {
-                const double t = (kPlaneY - e.y) / w.y;
-                const Vec3d hit = e + w * t;
-                const bool onPlane = std::max(std::abs(hit.x), std::abs(hit.z)) < kHalfSide &&
-                                     !(std::abs(hit.x) < kHoleHalf && std::abs(hit.z) < kHoleHalf);
-                if (onPlane && t < s) s = t;
-            }
-            if (std::abs(f.linearDepth.pixel(x, y)[0] - s) > 1e-3 * s) {
-                ++silhouette;  // a pixel whose centre ray and raster coverage disagree at an edge
-                continue;
-            }
-            // In shadow: below the plane and under it, outside the hole. Lit: the rest.
-            const double below = w.y > 0 ? std::min(s, (kPlaneY - e.y) / w.y) : s;
-            const double lit = s - insideSquare(e, w, kHalfSide, below) + insideSquare(e, w, kHoleHalf, below);
-            worst = std::max(worst, std::abs(f.averageVisibility.pixel(x, y)[0] - lit / s));
-            ++compared;
-        }
+    const double worst = worstVisibilityError(scene, f, kHoleHalf, &compared, &silhouette);
+    const Camera& cam = scene.camera;
     std::cout << "[ measured ] naive V̄ (1024 steps, 2048² map) vs closed form: max |error| " << worst << " over "
               << compared << " pixels (" << silhouette << " silhouette pixels skipped)\n";
     EXPECT_LE(worst, 1.0 / 255);
     EXPECT_LE(silhouette, cam.width * cam.height / 50);
+}
+
+TEST(Stylizer, ClosingFillsTheHoleForTheScatteringOnly) {
+    VOLSTYLE_REQUIRE_GL();
+    kHoleHalf = 0.02;  // 10 texels of the 2048² map across
+    StylizerScene scene = holeScene();
+    StylizeSettings settings;
+    settings.steps = 1024;
+    Stylizer stylizer(test::device());
+    const StylizedFrame open = stylizer.render(scene, settings);
+    scene.occluders[0].manipulation = {8, MorphShape::Disc};
+    const StylizedFrame closed = stylizer.render(scene, settings);
+    int compared = 0, silhouette = 0;
+    // Closed: V̄ is that of a plane without a hole; open: with it.
+    const double closedError = worstVisibilityError(scene, closed, 0.0, &compared, &silhouette);
+    const double openError = worstVisibilityError(scene, open, 0.02, &compared, &silhouette);
+    std::cout << "[ measured ] closing (disc, 8 texels) of a 10-texel hole: V̄ vs a plane without it, max |error| "
+              << closedError << "; before closing vs with the hole " << openError << "\n";
+    EXPECT_LE(closedError, 1.0 / 255);
+    EXPECT_LE(openError, 1.0 / 255);
+    // The surfaces' map keeps the hole; only the scattering's is closed.
+    const int n = scene.light.shadowMapSize;
+    EXPECT_EQ(closed.shadowMap.pixel(n / 2, n / 2)[0], 1.0f);
+    EXPECT_LT(closed.modifiedShadowMap.pixel(n / 2, n / 2)[0], 1.0f);
+    EXPECT_EQ(open.modifiedShadowMap.pixel(n / 2, n / 2)[0], 1.0f);
 }
 
 TEST(Stylizer, ScatteringWithNothingInTheWayIsTheClosedForm) {
@@ -126,3 +135,36 @@ TEST(Stylizer, ScatteringWithNothingInTheWayIsTheClosedForm) {
     std::cout << "[ measured ] L_scat without occluders vs ρ p E (1 − e^{−σt s}): max relative error " << worst << "\n";
     EXPECT_LE(worst, 1e-3);
 }
+
+double worstVisibilityError(const StylizerScene& scene, const StylizedFrame& f, double holeHalf, int* comparedOut, int* silhouetteOut) {
+    const Camera& cam = scene.camera;
+    double worst = 0;
+    int compared = 0, silhouette = 0;
+    for (int y = 0; y < cam.height; ++y)
+        for (int x = 0; x < cam.width; ++x) {
+            const Vec3d w = cam.rayDirection(x, y), e = cam.eye;
+            // The first surface: the plane, unless the ray goes through the hole or past its edge.
+            double s = cam.farDist;
+            if (w.y > 0) {
+                const double t = (kPlaneY - e.y) / w.y;
+                const Vec3d hit = e + w * t;
+                const bool onPlane = std::max(std::abs(hit.x), std::abs(hit.z)) < kHalfSide &&
+                                     !(std::abs(hit.x) < holeHalf && std::abs(hit.z) < holeHalf);
+                if (onPlane && t < s) s = t;
+            }
+            if (std::abs(f.linearDepth.pixel(x, y)[0] - s) > 1e-3 * s) {
+                ++silhouette;  // a pixel whose centre ray and raster coverage disagree at an edge
+                continue;
+            }
+            // In shadow: below the plane and under it, outside the hole. Lit: the rest.
+            const double below = w.y > 0 ? std::min(s, (kPlaneY - e.y) / w.y) : s;
+            const double lit = s - insideSquare(e, w, kHalfSide, below) + insideSquare(e, w, holeHalf, below);
+            const double err = std::abs(f.averageVisibility.pixel(x, y)[0] - lit / s);
+            worst = std::max(worst, err);
+            ++compared;
+        }
+    *comparedOut = compared;
+    *silhouetteOut = silhouette;
+    return worst;
+}
+
