@@ -52,7 +52,7 @@ struct LightRow {
 
 /// Light-depth build time alone: a fresh GpuVolume per run (a new extinction version, so nothing
 /// is cached) rendered to one pixel, timing only the light pass (stats.lightMs).
-std::vector<LightRow> benchLightVolumes(GpuDevice& device, Renderer& renderer, const std::vector<int>& resolutions, int reps) {
+std::vector<LightRow> benchLightVolumes(Renderer& renderer, const std::vector<int>& resolutions, int reps) {
     const std::pair<const char*, Vec3d> suns[] = {
         {"overhead", {0, 1, 0}}, {"diagonal", {-0.55, 0.65, 0.55}}, {"grazing", {0.95, 0.12, -0.3}}};
     Camera pixel;
@@ -76,7 +76,6 @@ std::vector<LightRow> benchLightVolumes(GpuDevice& device, Renderer& renderer, c
             std::cerr << "l" << std::flush;
         }
     }
-    (void)device;
     return rows;
 }
 
@@ -115,7 +114,7 @@ int main(int argc, char** argv) {
 
     const std::vector<int> resolutions = quick ? std::vector<int>{32, 64} : std::vector<int>{32, 64, 128, 256};
     const std::vector<double> steps = quick ? std::vector<double>{0.5, 1} : std::vector<double>{0.25, 0.5, 1, 2};
-    const std::vector<LightRow> lightRows = benchLightVolumes(*device, renderer, resolutions, reps);
+    const std::vector<LightRow> lightRows = benchLightVolumes(renderer, resolutions, reps);
     std::vector<Row> rows;
     for (int res : lightsOnly ? std::vector<int>{} : resolutions) {
         GpuVolume volume(makeBuiltinScene("cloud", res));

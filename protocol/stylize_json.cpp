@@ -76,7 +76,29 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
     StylizerSceneRequest out;
     core::StylizerScene& s = out.scene;
     if (r.object(j, path, {"occluders", "light", "medium", "camera", "background", "time", "transfer_function", "volume"})) {
-        notYet(r, j, path, "transfer_function", "a transfer function");
+        if (j.contains("transfer_function")) {
+            const auto& t = j["transfer_function"];
+            const std::string tp = path + "/transfer_function";
+            if (r.object(t, tp, {"image", "mode", "depth_range"})) {
+                core::TransferFunction tf;
+                if (!t.contains("image")) r.fail(tp + "/image", "is required");
+                else out.transferImageRef = r.string(t["image"], tp + "/image");
+                const std::string mode = t.contains("mode") ? r.string(t["mode"], tp + "/mode").value_or("") : "multiply";
+                if (mode == "replace") tf.mode = core::TransferFunction::Mode::Replace;
+                else if (mode != "multiply" && !mode.empty()) r.fail(tp + "/mode", "must be 'multiply' or 'replace', got '" + mode + "'");
+                if (t.contains("depth_range")) {
+                    const auto& d = t["depth_range"];
+                    if (!d.is_array() || d.size() != 2) {
+                        r.fail(tp + "/depth_range", "must be [near, far]");
+                    } else {
+                        auto a = r.number(d[0], tp + "/depth_range/0"), b = r.number(d[1], tp + "/depth_range/1");
+                        if (a && b && !(*b > *a)) r.fail(tp + "/depth_range", "far must be larger than near");
+                        if (a && b) tf.depthNear = *a, tf.depthFar = *b;
+                    }
+                }
+                s.transferFunction = tf;
+            }
+        }
         notYet(r, j, path, "volume", "a heterogeneous medium");
         if (j.contains("occluders")) {
             const auto& list = j["occluders"];

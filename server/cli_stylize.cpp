@@ -59,6 +59,14 @@ core::StylizerScene loadStylizerScene(const std::string& spec) {
             throw InvalidArgument(where + e.what());
         }
     }
+    if (request.transferImageRef) {
+        const std::string path = (folder / *request.transferImageRef).string();
+        try {
+            request.scene.transferFunction->image = std::make_shared<core::Image>(core::loadImage(path, 4096).image);
+        } catch (const Error& e) {
+            throw InvalidArgument("'" + spec + "': /transfer_function/image: " + e.what());
+        }
+    }
     return request.scene;
 }
 

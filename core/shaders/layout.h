@@ -103,6 +103,7 @@ VS_CONSTANT(int, kUnitShadowDepth, 9);     /* the light's shadow map (depth, [0,
 VS_CONSTANT(int, kUnitGBufferSurface, 10); /* camera G-buffer: xyz normal, w distance from the eye (0: no surface) */
 VS_CONSTANT(int, kUnitGBufferColour, 11);  /* camera G-buffer: rgb surface colour, w object id (1-based) */
 VS_CONSTANT(int, kStylizeLayers, 2);
+VS_CONSTANT(int, kUnitTransferFunction, 12); /* the stylizer's transfer function F (RGBA, row 0 = d at its far end) */
 VS_CONSTANT(int, kBindingScatterDepth, 2);  /* SSBO float[n*n]: the manipulated shadow map V̄ reads (row 0 at the bottom) */       /* AOV planes of stylize.comp: (scattering rgb, V̄), (distance, hit, 0, 0) */
 
 struct StylizeParams {
@@ -120,6 +121,7 @@ struct StylizeParams {
     VS_VEC4 background;       /* rgb: radiance behind everything; w: far (distance of a ray that hits nothing) */
     VS_VEC4 surface;          /* raster passes: rgb colour of the occluder; w: its id (1-based) */
     VS_VEC4 shadow;           /* x: depth bias (light clip depth units); y: whether a shadow map exists; z: texel size (world) */
+    VS_VEC4 transfer;         /* x: 0 none, 1 multiply, 2 replace; y, z: the depth range mapped to d = 0 and 1 */
 };
 
 /* Occluder manipulation on the shadow map (shadow_morphology.comp): one pass of running extrema

@@ -4,7 +4,8 @@
 // and the frame L = L_surf e^{−σt s} + L_scat with, for a directional light,
 //   L_scat = ρ p(ω_l·(−ω)) E (1 − e^{−σt s}) V̄.
 // Surfaces are lit by the light, shadowed by the (unmodified) shadow map, plus the background
-// as ambient (a white diffuse surface under a uniform sky of radiance B reflects B).
+// as ambient (a white diffuse surface under a uniform sky of radiance B reflects B). A transfer
+// function F(V̄, d) then multiplies or replaces L_scat (SPEC §7).
 #include "common/stylize_params.glsl"
 #include "common/pinhole.glsl"
 #include "common/phase.glsl"
@@ -14,6 +15,7 @@ layout(local_size_x = kWorkgroup2D, local_size_y = kWorkgroup2D) in;
 layout(binding = kUnitShadowDepth) uniform sampler2D s_shadowDepth;
 layout(binding = kUnitGBufferSurface) uniform sampler2D s_surface;
 layout(binding = kUnitGBufferColour) uniform sampler2D s_colour;
+layout(binding = kUnitTransferFunction) uniform sampler2D s_transfer;
 
 layout(std430, binding = kBindingImageOut) writeonly buffer b_Image {
     vec4 pixels[];
@@ -39,6 +41,19 @@ float visibility(vec3 x, bool manipulated) {
     return occluder >= 1.0 || c.z * 0.5 + 0.5 <= occluder + u.shadow.x ? 1.0 : 0.0;
 }
 
+// F(V̄, d): bilinear between texel centres by hand (texture units quantise filter weights on
+// GPUs), clamped; image row 0 is the top, d = 1.
+vec4 transferFunction(float vBar, float d) {
+    ivec2 size = textureSize(s_transfer, 0);
+    vec2 xy = vec2(clamp(vBar, 0.0, 1.0) * float(size.x), (1.0 - clamp(d, 0.0, 1.0)) * float(size.y)) - 0.5;
+    xy = clamp(xy, vec2(0.0), vec2(size - 1));
+    ivec2 i0 = ivec2(floor(xy)), i1 = min(i0 + 1, size - 1);
+    vec2 f = xy - vec2(i0);
+    vec4 top = mix(texelFetch(s_transfer, i0, 0), texelFetch(s_transfer, ivec2(i1.x, i0.y), 0), f.x);
+    vec4 bottom = mix(texelFetch(s_transfer, ivec2(i0.x, i1.y), 0), texelFetch(s_transfer, i1, 0), f.x);
+    return mix(top, bottom, f.y);
+}
+
 void main() {
     ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
     ivec2 size = u.imageSize.xy;
@@ -61,6 +76,13 @@ void main() {
     float opacity = 1.0 - exp(-sigma * s);
     vec3 scattering = u.medium.y * phaseValue(u.medium.z, u.medium.w, dot(light, -dir)) * u.irradiance.rgb * opacity * vBar;
 
+    // The transfer function over (V̄, linear depth): multiply, or replace the scattering.
+    vec3 styled = scattering;
+    if (u.transfer.x > 0.5) {
+        vec4 F = transferFunction(vBar, (s - u.transfer.y) / (u.transfer.z - u.transfer.y));
+        styled = u.transfer.x < 1.5 ? F.rgb * scattering : F.rgb * F.a;
+    }
+
     vec3 behind = u.background.rgb;
     if (hit) {
         vec3 albedo = texelFetch(s_colour, texel, 0).rgb;
@@ -72,7 +94,7 @@ void main() {
         behind = albedo * (u.irradiance.rgb * lit * (1.0 / 3.14159265358979) + u.background.rgb);
     }
     int p = pix.y * size.x + pix.x;
-    pixels[p] = vec4(behind * exp(-sigma * s) + scattering, 1.0);
+    pixels[p] = vec4(behind * exp(-sigma * s) + styled, 1.0);
     int count = size.x * size.y;
     layers[p] = vec4(scattering, vBar);
     layers[count + p] = vec4(s, hit ? 1.0 : 0.0, 0.0, 0.0);

@@ -27,6 +27,16 @@ void StylizerScene::validate() const {
         throw InvalidArgument("/medium/extinction: must be finite and >= 0");
     if (!(medium.albedo >= 0 && medium.albedo <= 1)) throw InvalidArgument("/medium/albedo: must be in [0, 1]");
     camera.validate();
+    if (transferFunction) {
+        const TransferFunction& tf = *transferFunction;
+        if (!tf.image || tf.image->empty()) throw InvalidArgument("/transfer_function/image: the image is empty");
+        if (tf.image->width > 4096 || tf.image->height > 4096)
+            throw InvalidArgument("/transfer_function/image: at most 4096 texels a side");
+        if (!(tf.depthFar > tf.depthNear) || !std::isfinite(tf.depthNear) || !std::isfinite(tf.depthFar))
+            throw InvalidArgument("/transfer_function/depth_range: must be two finite numbers, the second larger");
+        for (float v : tf.image->rgba)
+            if (!std::isfinite(v) || v < 0) throw InvalidArgument("/transfer_function/image: values must be finite and >= 0");
+    }
 }
 
 namespace {

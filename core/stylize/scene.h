@@ -2,10 +2,14 @@
 /// \file scene.h
 /// The light-shaft stylizer's scene (SPEC §7, the GI paper Sec. 3): occluder meshes with a
 /// transform and a colour each, one light (directional or spot), a homogeneous medium and the
-/// camera. GL-free. The manipulations and the transfer function join it with their passes.
+/// camera, the occluders' manipulations and the transfer function. GL-free.
 
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "core/image/image.h"
 
 #include "core/math/vec.h"
 #include "core/render/params.h"
@@ -49,6 +53,16 @@ struct HomogeneousMedium {
     Phase phase{PhaseType::HenyeyGreenstein, 0.4};
 };
 
+/// The transfer function F (SPEC §7): an RGBA image over (V̄ ∈ [0, 1] left to right, linear
+/// depth d = (s − depthRange₀)/(depthRange₁ − depthRange₀) ∈ [0, 1] bottom to top), sampled
+/// bilinearly between texel centres and clamped at the edges.
+struct TransferFunction {
+    enum class Mode { Multiply, Replace };
+    std::shared_ptr<const Image> image;
+    Mode mode = Mode::Multiply;  ///< multiply: F.rgb scales L_scat; replace: F.rgb·F.a is L_scat
+    double depthNear = 0, depthFar = 50;
+};
+
 struct StylizerScene {
     std::vector<Occluder> occluders;
     StylizerLight light;
@@ -56,6 +70,7 @@ struct StylizerScene {
     Camera camera;
     Vec3d background{0.02, 0.025, 0.035};  ///< radiance behind everything (night sky)
     double time = 0;
+    std::optional<TransferFunction> transferFunction;  ///< none: the physical image
 
     /// Throws InvalidArgument naming the first problem (a bad mesh, a degenerate
     /// light, a shadow map outside 512–4096, a negative σt, ρ outside [0,1], a bad camera).

@@ -294,8 +294,15 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
         m_gpu->layers = gl::createBuffer(bytes * layout::kStylizeLayers, nullptr, GL_DYNAMIC_STORAGE_BIT, "stylized-aovs");
         m_gpu->pixelBytes = bytes;
     }
+    gl::Texture transfer = texture2D(GL_RGBA32F, 1, 1, "transfer-function");  // bound even when unused
+    if (const auto& tf = scene.transferFunction) {
+        transfer = texture2D(GL_RGBA32F, tf->image->width, tf->image->height, "transfer-function");
+        glTextureSubImage2D(transfer.id(), 0, 0, 0, tf->image->width, tf->image->height, GL_RGBA, GL_FLOAT, tf->image->rgba.data());
+        p.transfer = {tf->mode == TransferFunction::Mode::Multiply ? 1.0f : 2.0f, float(tf->depthNear), float(tf->depthFar), 0};
+    }
     m_device.setParams(p);
     glUseProgram(m_device.program(gl::ShaderBuilder("stylize.comp")).id());
+    glBindTextureUnit(layout::kUnitTransferFunction, transfer.id());
     glBindTextureUnit(layout::kUnitShadowDepth, shadowDepth.id());
     glBindTextureUnit(layout::kUnitGBufferSurface, surface.id());
     glBindTextureUnit(layout::kUnitGBufferColour, colour.id());

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iostream>
 
@@ -110,6 +111,68 @@ TEST(Stylizer, ClosingFillsTheHoleForTheScatteringOnly) {
     EXPECT_EQ(closed.shadowMap.pixel(n / 2, n / 2)[0], 1.0f);
     EXPECT_LT(closed.modifiedShadowMap.pixel(n / 2, n / 2)[0], 1.0f);
     EXPECT_EQ(open.modifiedShadowMap.pixel(n / 2, n / 2)[0], 1.0f);
+}
+
+/// A transfer function image: `f(column, row)` RGBA for a w×h image.
+template <typename F>
+std::shared_ptr<const Image> transferImage(int w, int h, F f) {
+    auto img = std::make_shared<Image>(w, h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const std::array<float, 4> v = f(x, y);
+            std::copy(v.begin(), v.end(), img->pixel(x, y));
+        }
+    return img;
+}
+
+TEST(Stylizer, TransferFunctionsMultiplyOrReplaceTheScatteringOnly) {
+    VOLSTYLE_REQUIRE_GL();
+    kHoleHalf = 0.6;
+    StylizerScene scene = holeScene();
+    Stylizer stylizer(test::device());
+    const StylizedFrame plain = stylizer.render(scene, {});
+
+    // A white `multiply` TF is the physical image, bit for bit.
+    scene.transferFunction = TransferFunction{transferImage(16, 8, [](int, int) { return std::array<float, 4>{1, 1, 1, 1}; }),
+                                              TransferFunction::Mode::Multiply, 0, 20};
+    const StylizedFrame white = stylizer.render(scene, {});
+    EXPECT_EQ(white.frame.rgba, plain.frame.rgba);
+
+    // Red where V̄ < 0.5 (columns 0–127 of 256), white elsewhere: the low-visibility pixels lose
+    // their green and blue scattering, the rest are untouched (a texel's width from 0.5 blends).
+    scene.transferFunction->image = transferImage(256, 4, [](int x, int) {
+        return x < 128 ? std::array<float, 4>{1, 0, 0, 1} : std::array<float, 4>{1, 1, 1, 1};
+    });
+    const StylizedFrame red = stylizer.render(scene, {});
+    int low = 0, high = 0;
+    for (int y = 0; y < scene.camera.height; ++y)
+        for (int x = 0; x < scene.camera.width; ++x) {
+            const float vBar = plain.averageVisibility.pixel(x, y)[0];
+            const float* a = plain.frame.pixel(x, y);
+            const float* b = red.frame.pixel(x, y);
+            const float* scat = plain.scattering.pixel(x, y);
+            if (vBar < 0.5f - 1.0f / 256) {
+                ++low;
+                EXPECT_EQ(b[0], a[0]) << x << "," << y;
+                EXPECT_NEAR(b[1], a[1] - scat[1], 1e-6f * std::max(1.0f, a[1])) << x << "," << y;
+                EXPECT_NEAR(b[2], a[2] - scat[2], 1e-6f * std::max(1.0f, a[2])) << x << "," << y;
+            } else if (vBar > 0.5f + 1.0f / 256) {
+                ++high;
+                for (int c = 0; c < 3; ++c) EXPECT_EQ(b[c], a[c]) << x << "," << y;
+            }
+        }
+    EXPECT_GT(low, 100);
+    EXPECT_GT(high, 100);
+
+    // `replace`: F.rgb·F.a is the scattering.
+    scene.transferFunction = TransferFunction{transferImage(4, 4, [](int, int) { return std::array<float, 4>{0.2f, 0.3f, 0.4f, 0.5f}; }),
+                                              TransferFunction::Mode::Replace, 0, 20};
+    const StylizedFrame replaced = stylizer.render(scene, {});
+    const float expected[3] = {0.1f, 0.15f, 0.2f};
+    for (size_t i = 0; i < plain.frame.pixelCount(); ++i)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(replaced.frame.rgba[4 * i + c] - plain.frame.rgba[4 * i + c] + plain.scattering.rgba[4 * i + c], expected[c], 1e-5);
+    EXPECT_EQ(replaced.scattering.rgba, plain.scattering.rgba) << "the AOV is the scattering before the TF";
 }
 
 TEST(Stylizer, ScatteringWithNothingInTheWayIsTheClosedForm) {
