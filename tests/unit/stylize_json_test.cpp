@@ -47,7 +47,7 @@ TEST(StylizeJson, EveryProblemAtOnceUnderItsPath) {
         for (const auto& d : e.details()) paths += d.path + " ";
         for (const char* expected : {"/occluders/0/mesh", "/occluders/0/transform", "/occluders/0/colour",
                                      "/occluders/0/manipulation/closing/radius_px", "/occluders/0/manipulation/holes", "/light/shadow_map_size", "/light/direction",
-                                     "/medium/extinction", "/camera/target", "/transfer_function", "/extra"})
+                                     "/medium/extinction", "/camera/target", "/transfer_function/image", "/extra"})
             EXPECT_NE(paths.find(std::string(expected) + " "), std::string::npos) << expected << " in " << paths;
     }
 }
