@@ -139,8 +139,9 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
                     s.light.shadowMapSize = r.integer(l["shadow_map_size"], lp + "/shadow_map_size").value_or(s.light.shadowMapSize);
                 if (!(length(s.light.direction) > 0)) r.check(lp, "direction", "must not be zero");
                 if (s.light.shadowMapSize < 512 || s.light.shadowMapSize > 4096) r.check(lp, "shadow_map_size", "must be in [512, 4096]");
-                for (int c = 0; c < 3; ++c)
-                    if (!(s.light.irradiance[c] >= 0)) r.check(lp, "irradiance", "must be >= 0");
+                bool irradianceOk = true;
+                for (int c = 0; c < 3; ++c) irradianceOk = irradianceOk && s.light.irradiance[c] >= 0 && s.light.irradiance[c] <= 1e6;
+                if (!irradianceOk) r.check(lp, "irradiance", "must be in [0, 1e6]");
             }
         }
         if (j.contains("medium")) {
@@ -150,7 +151,7 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
                 if (m.contains("extinction")) s.medium.extinction = r.number(m["extinction"], mp + "/extinction").value_or(s.medium.extinction);
                 if (m.contains("albedo")) s.medium.albedo = r.number(m["albedo"], mp + "/albedo").value_or(s.medium.albedo);
                 if (m.contains("phase")) phaseFromJson(r, m["phase"], mp + "/phase", s.medium.phase);
-                if (!(s.medium.extinction >= 0)) r.check(mp, "extinction", "must be >= 0");
+                if (!(s.medium.extinction >= 0 && s.medium.extinction <= 1e6)) r.check(mp, "extinction", "must be in [0, 1e6]");
                 if (!(s.medium.albedo >= 0 && s.medium.albedo <= 1)) r.check(mp, "albedo", "must be in [0, 1]");
             }
         }
@@ -161,7 +162,14 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
                 for (const FieldError& f : e.details()) r.fail(f.path, f.message);
             }
         }
-        if (j.contains("background")) s.background = r.vec3(j["background"], path + "/background").value_or(s.background);
+        if (j.contains("background")) {
+            s.background = r.vec3(j["background"], path + "/background").value_or(s.background);
+            for (int c = 0; c < 3; ++c)
+                if (!(s.background[c] >= 0 && s.background[c] <= 1e6)) {
+                    r.check(path, "background", "must be in [0, 1e6]");
+                    break;
+                }
+        }
         if (j.contains("time")) s.time = r.number(j["time"], path + "/time").value_or(0);
     }
     r.throwIfErrors();

@@ -23,8 +23,12 @@ void StylizerScene::validate() const {
         throw InvalidArgument("/light/shadow_map_size: must be in [512, 4096]");
     if (light.type == StylizerLightType::Spot && !(light.coneDeg > 0 && light.coneDeg < 179))
         throw InvalidArgument("/light/cone_deg: must be in (0, 179)");
-    if (!(medium.extinction >= 0) || !std::isfinite(medium.extinction))
-        throw InvalidArgument("/medium/extinction: must be finite and >= 0");
+    // Bounds that keep every product in float range (SPEC §5: nothing may become NaN or Inf).
+    if (!(medium.extinction >= 0 && medium.extinction <= 1e6)) throw InvalidArgument("/medium/extinction: must be in [0, 1e6]");
+    for (int c = 0; c < 3; ++c)
+        if (!(light.irradiance[c] >= 0 && light.irradiance[c] <= 1e6)) throw InvalidArgument("/light/irradiance: must be in [0, 1e6]");
+    for (int c = 0; c < 3; ++c)
+        if (!(background[c] >= 0 && background[c] <= 1e6)) throw InvalidArgument("/background: must be in [0, 1e6]");
     if (!(medium.albedo >= 0 && medium.albedo <= 1)) throw InvalidArgument("/medium/albedo: must be in [0, 1]");
     camera.validate();
     if (transferFunction) {

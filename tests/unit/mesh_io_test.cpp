@@ -100,4 +100,10 @@ TEST(StylizerScene, TheBuiltinForestIsValidAndLetsLightThrough) {
     bad = forest;
     bad.occluders[0].mesh.positions[0].x = std::nanf("");
     EXPECT_THROW(bad.validate(), InvalidArgument);
+    bad = forest;
+    bad.medium.extinction = 1e308;  // would be Inf as a float
+    EXPECT_THROW(bad.validate(), InvalidArgument);
+    bad = forest;
+    bad.light.irradiance = {1e38, 1, 1};
+    EXPECT_THROW(bad.validate(), InvalidArgument);
 }
