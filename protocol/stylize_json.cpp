@@ -48,9 +48,9 @@ core::Manipulation manipulationFromJson(JsonReader& r, const nlohmann::json& j, 
         if (!c.contains("radius_px")) r.fail(path + "/closing/radius_px", "is required");
         else m.closingRadius = r.integer(c["radius_px"], path + "/closing/radius_px").value_or(0);
         if (m.closingRadius < 0 || m.closingRadius > 64) r.check(path + "/closing", "radius_px", "must be in [0, 64]");
-        const std::string shape = c.contains("shape") ? r.string(c["shape"], path + "/closing/shape").value_or("") : "disc";
+        const std::string shape = c.contains("shape") ? r.string(c["shape"], path + "/closing/shape").value_or("disc") : "disc";
         if (shape == "box") m.closingShape = core::MorphShape::Box;
-        else if (shape != "disc" && !shape.empty()) r.fail(path + "/closing/shape", "must be 'disc' or 'box', got '" + shape + "'");
+        else if (shape != "disc") r.fail(path + "/closing/shape", "must be 'disc' or 'box', got '" + shape + "'");
     }
     return m;
 }
@@ -132,8 +132,9 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
                 if (type == "spot") r.fail(lp + "/type", "spot lights are not rendered yet (issue #11); use 'directional'");
                 else if (type != "directional" && !type.empty()) r.fail(lp + "/type", "must be 'directional' or 'spot', got '" + type + "'");
                 if (l.contains("direction")) s.light.direction = r.vec3(l["direction"], lp + "/direction").value_or(s.light.direction);
-                if (l.contains("position")) s.light.position = r.vec3(l["position"], lp + "/position").value_or(s.light.position);
-                if (l.contains("cone_deg")) s.light.coneDeg = r.number(l["cone_deg"], lp + "/cone_deg").value_or(s.light.coneDeg);
+                // Spot lights' fields: spot lights are not rendered yet, and a directional light has no use for them.
+                notYet(r, l, lp, "position", "a light's position (spot lights)");
+                notYet(r, l, lp, "cone_deg", "a light's cone (spot lights)");
                 if (l.contains("irradiance")) s.light.irradiance = r.vec3(l["irradiance"], lp + "/irradiance").value_or(s.light.irradiance);
                 if (l.contains("shadow_map_size"))
                     s.light.shadowMapSize = r.integer(l["shadow_map_size"], lp + "/shadow_map_size").value_or(s.light.shadowMapSize);

@@ -1,5 +1,5 @@
 // `volstyle stylize`: one frame of the light-shaft stylizer (SPEC §7) to PNG or EXR, or one of its
-// AOVs. This first version: a directional light, the naive V̄, closing, no transfer function.
+// AOVs. This first version: a directional light, the naive V̄, closing and transfer functions.
 
 #include <spdlog/spdlog.h>
 
@@ -31,7 +31,7 @@ const CommandSpec kStylize{
     "arbitrary output variables instead of the frame.",
     {
         {"scene", "SRC", "SCENE.json (docs/STYLIZER.md; mesh paths relative to it) or builtin:forest (required)"},
-        {"camera", "CAM.json", "camera (eye, target, up, fov_y_deg, width, height); default: the scene's, 640x360"},
+        {"camera", "CAM.json", "camera (eye, target, up, fov_y_deg, width, height); default: the scene's (builtin:forest: 640x360; a file without one: 480x480)"},
         {"aov", "NAME", "average_visibility, linear_depth, shadow_map, modified_shadow_map or scattering; default: the frame"},
         {"method", "NAME", "how V̄ is computed: naive (one shadow-map lookup per step); default naive"},
         {"steps", "N", "shadow-map lookups per view ray for V̄ (1-4096); default 256"},

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 
 #include "core/base/errors.h"
 
@@ -18,38 +19,46 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr unsigned kSteps = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices |
-                            aiProcess_GenSmoothNormals | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
+// No aiProcess_PreTransformVertices: it expands every instance of a mesh before anything can be
+// counted (a 32 KB glTF whose nodes reuse each other took 8.6 GB). The node tree is walked here
+// instead: instances are counted first against the limits, then expanded.
+constexpr unsigned kSteps = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_GenSmoothNormals |
+                            aiProcess_SortByPType | aiProcess_ValidateDataStructure;
 
 void configure(Assimp::Importer& importer) {
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
 }
 
-Mesh flatten(const aiScene* scene, const std::string& what, const MeshLimits& limits) {
-    Mesh out;
-    size_t vertices = 0, triangles = 0;
-    for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
-        vertices += scene->mMeshes[m]->mNumVertices;
-        triangles += scene->mMeshes[m]->mNumFaces;
+/// Vertices and triangles of every mesh instance below `node`, stopping once over the limits.
+void countInstances(const aiScene* scene, const aiNode* node, const MeshLimits& limits, size_t& vertices,
+                    size_t& triangles, int depth) {
+    if (depth > 64 || vertices > limits.maxVertices || triangles > limits.maxTriangles) return;
+    for (unsigned i = 0; i < node->mNumMeshes; ++i) {
+        const aiMesh* m = scene->mMeshes[node->mMeshes[i]];
+        if (!(m->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+        vertices += m->mNumVertices;
+        triangles += m->mNumFaces;
     }
-    if (vertices > limits.maxVertices)
-        throw LimitExceeded(what + " has " + std::to_string(vertices) + " vertices, over the limit of " +
-                            std::to_string(limits.maxVertices));
-    if (triangles > limits.maxTriangles)
-        throw LimitExceeded(what + " has " + std::to_string(triangles) + " triangles, over the limit of " +
-                            std::to_string(limits.maxTriangles));
-    out.positions.reserve(vertices);
-    out.normals.reserve(vertices);
-    out.indices.reserve(3 * triangles);
-    for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
-        const aiMesh* mesh = scene->mMeshes[m];
+    for (unsigned c = 0; c < node->mNumChildren; ++c) countInstances(scene, node->mChildren[c], limits, vertices, triangles, depth + 1);
+}
+
+void appendInstances(const aiScene* scene, const aiNode* node, const aiMatrix4x4& parent, Mesh& out, int depth) {
+    if (depth > 64) return;
+    const aiMatrix4x4 xf = parent * node->mTransformation;
+    aiMatrix3x3 normalXf(xf);
+    normalXf.Inverse().Transpose();
+    for (unsigned i = 0; i < node->mNumMeshes; ++i) {
+        const aiMesh* mesh = scene->mMeshes[node->mMeshes[i]];
         if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
         const auto offset = uint32_t(out.positions.size());
         for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
-            const aiVector3D& p = mesh->mVertices[v];
+            const aiVector3D p = xf * mesh->mVertices[v];
             out.positions.emplace_back(p.x, p.y, p.z);
             Vec3 n(0, 1, 0);
-            if (mesh->mNormals) n = Vec3(mesh->mNormals[v].x, mesh->mNormals[v].y, mesh->mNormals[v].z);
+            if (mesh->mNormals) {
+                const aiVector3D q = normalXf * mesh->mNormals[v];
+                n = Vec3(q.x, q.y, q.z);
+            }
             const float len = length(n);
             out.normals.push_back(std::isfinite(len) && len > 0 ? n / len : Vec3(0, 1, 0));  // degenerate: any unit
         }
@@ -59,14 +68,68 @@ Mesh flatten(const aiScene* scene, const std::string& what, const MeshLimits& li
             for (int k = 0; k < 3; ++k) out.indices.push_back(offset + face.mIndices[k]);
         }
     }
+    for (unsigned c = 0; c < node->mNumChildren; ++c) appendInstances(scene, node->mChildren[c], xf, out, depth + 1);
+}
+
+Mesh flatten(const aiScene* scene, const std::string& what, const MeshLimits& limits) {
+    size_t vertices = 0, triangles = 0;
+    countInstances(scene, scene->mRootNode, limits, vertices, triangles, 0);
+    if (vertices > limits.maxVertices)
+        throw LimitExceeded(what + " has over " + std::to_string(limits.maxVertices) + " vertices (instances counted), the limit");
+    if (triangles > limits.maxTriangles)
+        throw LimitExceeded(what + " has over " + std::to_string(limits.maxTriangles) + " triangles (instances counted), the limit");
+    Mesh out;
+    out.positions.reserve(vertices);
+    out.normals.reserve(vertices);
+    out.indices.reserve(3 * triangles);
+    appendInstances(scene, scene->mRootNode, aiMatrix4x4(), out, 0);
     if (out.indices.empty()) throw InvalidArgument(what + " holds no triangles");
     for (size_t i = 0; i < out.positions.size(); ++i) {
         const Vec3& p = out.positions[i];
-        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-            throw InvalidArgument(what + ": vertex " + std::to_string(i) + " has a non-finite position");
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || std::abs(p.x) > 1e18f ||
+            std::abs(p.y) > 1e18f || std::abs(p.z) > 1e18f)
+            throw InvalidArgument(what + ": vertex " + std::to_string(i) + " has a non-finite or out-of-range position (|x| > 1e18)");
     }
     out.validate();
     return out;
+}
+
+/// The formats volstyle documents (assimp reads many more; each is more code a hostile file reaches).
+void requireKnownFormat(const std::string& extension, const std::string& what) {
+    static const char* const kKnown[] = {"obj", "ply", "gltf", "glb"};
+    if (std::find(std::begin(kKnown), std::end(kKnown), extension) == std::end(kKnown))
+        throw InvalidArgument(what + ": mesh format '" + extension + "' is not one of obj, ply, gltf, glb");
+}
+
+/// A PLY header's element counts against the bytes present: assimp allocates what the header
+/// claims before reading (a 200-byte file claiming 10⁸ vertices took 1.3 GB).
+void checkPlyHeader(const std::string& head, size_t fileBytes, const std::string& what, const MeshLimits& limits) {
+    std::istringstream in(head);
+    std::string line;
+    size_t vertices = 0, faces = 0;
+    while (std::getline(in, line) && line.rfind("end_header", 0) != 0) {
+        std::istringstream words(line);
+        std::string keyword, kind;
+        size_t count = 0;
+        if (words >> keyword >> kind >> count && keyword == "element") {
+            if (kind == "vertex") vertices = count;
+            if (kind == "face") faces = count;
+        }
+    }
+    if (vertices > limits.maxVertices || faces > limits.maxTriangles)
+        throw LimitExceeded(what + " declares " + std::to_string(vertices) + " vertices and " + std::to_string(faces) +
+                            " faces, over the limits");
+    // Every vertex needs at least 3 bytes (binary: 3 floats = 12), every face at least 4.
+    if (vertices * 3 + faces * 4 > fileBytes)
+        throw InvalidArgument(what + " is truncated: its header declares " + std::to_string(vertices) + " vertices and " +
+                              std::to_string(faces) + " faces, more than its " + std::to_string(fileBytes) + " bytes hold");
+}
+
+std::string lowerExtension(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return ext;
 }
 
 std::string quoted(const std::string& s) { return "'" + s + "'"; }
@@ -83,6 +146,13 @@ Mesh loadMesh(const std::string& path, const MeshLimits& limits) {
     if (bytes > limits.maxFileBytes)
         throw LimitExceeded(quoted(path) + " is " + std::to_string(bytes) + " bytes, over the limit of " +
                             std::to_string(limits.maxFileBytes));
+    requireKnownFormat(lowerExtension(path), quoted(path));
+    if (lowerExtension(path) == "ply") {
+        std::ifstream in(path, std::ios::binary);
+        std::string head(size_t(std::min<uintmax_t>(bytes, 64 * 1024)), '\0');
+        in.read(head.data(), std::streamsize(head.size()));
+        checkPlyHeader(head, size_t(bytes), quoted(path), limits);
+    }
     Assimp::Importer importer;
     configure(importer);
     const aiScene* scene = importer.ReadFile(path, kSteps);
@@ -98,9 +168,8 @@ Mesh loadMeshFromMemory(const std::string& bytes, const std::string& extension, 
     if (bytes.size() > limits.maxFileBytes)
         throw LimitExceeded(what + " is " + std::to_string(bytes.size()) + " bytes, over the limit of " +
                             std::to_string(limits.maxFileBytes));
-    static const char* const kKnown[] = {"obj", "ply", "gltf", "glb"};
-    if (std::find(std::begin(kKnown), std::end(kKnown), extension) == std::end(kKnown))
-        throw InvalidArgument("mesh format " + quoted(extension) + " is not one of obj, ply, gltf, glb");
+    requireKnownFormat(extension, what);
+    if (extension == "ply") checkPlyHeader(bytes.substr(0, 64 * 1024), bytes.size(), what, limits);
     Assimp::Importer importer;
     configure(importer);
     const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kSteps, extension.c_str());

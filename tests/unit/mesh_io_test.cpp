@@ -89,6 +89,20 @@ TEST(MeshIo, BadFilesSayWhatIsWrong) {
     EXPECT_THROW(loadMeshFromMemory(kObj, "obj", small), LimitExceeded);
 }
 
+TEST(MeshIo, HostileFilesAreRefusedBeforeTheyCostMemory) {
+    // Found by review: a 32 KB glTF whose nodes reuse each other 4 times over 8 levels (assimp's
+    // pre-transform expanded every instance: 8.6 GB), a 177-byte PLY whose header claims 10^8
+    // vertices (1.3 GB allocated from the claim), an STL (a format volstyle does not document).
+    const std::string dir = std::string(VOLSTYLE_SOURCE_DIR) + "/tests/data/meshes/";
+    EXPECT_THROW(loadMesh(dir + "instanced-dag.gltf"), LimitExceeded);
+    EXPECT_THROW(loadMesh(dir + "claims-1e8-vertices.ply"), LimitExceeded);
+    EXPECT_THROW(loadMeshFromMemory(test::readBytes(dir + "claims-1e8-vertices.ply"), "ply"), LimitExceeded);
+    const auto scratch = test::scratchDir();
+    test::writeBytes(scratch / "tri.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n");
+    EXPECT_THROW(loadMesh((scratch / "tri.stl").string()), InvalidArgument);
+    EXPECT_THROW(loadMeshFromMemory("v 1e38 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "obj"), InvalidArgument);  // Inf once transformed
+}
+
 TEST(StylizerScene, TheBuiltinForestIsValidAndLetsLightThrough) {
     const StylizerScene forest = builtinForest();
     EXPECT_NO_THROW(forest.validate());
