@@ -25,12 +25,6 @@ gl::Texture uploadRgb(const std::vector<float>& rgb, Int3 dims, const char* labe
     return tex;
 }
 
-bool isGrey(const std::vector<float>& rgb) {
-    for (size_t i = 0; i + 2 < rgb.size(); i += 3)
-        if (rgb[i] != rgb[i + 1] || rgb[i] != rgb[i + 2]) return false;
-    return true;
-}
-
 }  // namespace
 
 struct GpuVolume::Textures {
@@ -69,7 +63,7 @@ void GpuVolume::upload(const Volume& volume) {
     if (!sameExtinction) {
         t.extinction = uploadRgb(volume.extinction(), d, "extinction");
         m_extinctionHash = hash;
-        m_extinctionIsGrey = isGrey(ext);
+        m_extinctionIsGrey = Volume::isGrey(ext);
         m_extinctionVersion = g_nextVersion++;
         t.occupancy = gl::createTexture(GL_TEXTURE_3D, "occupancy");
         glTextureStorage3D(t.occupancy.id(), 1, GL_R32F, m_brickDims.x, m_brickDims.y, m_brickDims.z);

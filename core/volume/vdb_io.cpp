@@ -325,12 +325,6 @@ Volume loadVdb(const std::string& path, const VolumeLimits& limits) {
 
 namespace {
 
-bool isGrey(const std::vector<float>& g) {
-    for (size_t i = 0; i < g.size(); i += 3)
-        if (g[i] != g[i + 1] || g[i] != g[i + 2]) return false;
-    return true;
-}
-
 /// Sets every voxel of the dense box whose value in `grid` differs from the volume's: on an empty
 /// grid, the voxels that differ from the background become active leaf voxels (never tiles, which
 /// Blender's Cycles 3.4 renders as empty); on a copy of the file's grid, only changed voxels are
@@ -389,7 +383,7 @@ openvdb::GridBase::ConstPtr writeRole(Role role, const Volume& volume, const Vdb
     const openvdb::GridBase::ConstPtr like = source ? source->roles[role] : nullptr;
     if (rgb.empty()) return like;  // not in the volume (never happens for a grid it was read with)
     const Int3 dims = volume.dims();
-    const bool grey = isGrey(rgb);
+    const bool grey = Volume::isGrey(rgb);
     if (like && sameIndexSpace) {
         const auto& reference = *source->roles[kExtinction];
         if (densifyRole(role, like, reference, origin, dims, "") == rgb) return like;  // unchanged: the file's own grid

@@ -45,6 +45,12 @@ Vec3d Volume::voxelSize() const {
             length(m_worldFromIndex.applyVector({0, 0, 1}))};
 }
 
+bool Volume::isGrey(const std::vector<float>& rgb) {
+    for (size_t i = 0; i + 2 < rgb.size(); i += 3)
+        if (rgb[i] != rgb[i + 1] || rgb[i] != rgb[i + 2]) return false;
+    return true;
+}
+
 std::pair<Vec3, Vec3> Volume::range(const std::vector<float>& rgb) {
     Vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
     for (size_t i = 0; i + 2 < rgb.size(); i += 3)

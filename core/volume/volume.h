@@ -80,6 +80,8 @@ public:
 
     /// Smallest and largest value of each channel of a grid (for `volstyle info`).
     static std::pair<Vec3, Vec3> range(const std::vector<float>& rgb);
+    /// Whether every voxel of an RGB grid has r = g = b (written as float; light depth in one channel).
+    static bool isGrey(const std::vector<float>& rgb);
 
 private:
     static void put(std::vector<float>& g, size_t idx, Vec3 v) {
