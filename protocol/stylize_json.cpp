@@ -37,12 +37,22 @@ std::optional<Mat4> transformFromJson(JsonReader& r, const nlohmann::json& j, co
     return m;
 }
 
-/// {"closing": {"radius_px": 4, "shape": "disc"|"box"}}; dilation and holes are not rendered yet.
+/// A number at `path` within [lo, hi], or `fallback` (a failure is recorded).
+double boundedNumber(JsonReader& r, const nlohmann::json& j, const std::string& path, double lo, double hi, double fallback) {
+    auto v = r.number(j, path);
+    if (!v) return fallback;
+    if (!(*v >= lo && *v <= hi)) {
+        r.fail(path, "must be in [" + nlohmann::json(lo).dump() + ", " + nlohmann::json(hi).dump() + "]");
+        return fallback;
+    }
+    return *v;
+}
+
+/// {"closing": {"radius_px": 4, "shape": "disc"|"box"}, "dilation": {"length": 0.3, "erosion_px": 2},
+///  "holes": {"frequency": 0.3, "probability": 0.4, "seed": 1, "speed": 0, "octaves": 5, "persistence": 0.5}}
 core::Manipulation manipulationFromJson(JsonReader& r, const nlohmann::json& j, const std::string& path) {
     core::Manipulation m;
     if (!r.object(j, path, {"closing", "dilation", "holes"})) return m;
-    notYet(r, j, path, "dilation", "epipolar dilation");
-    notYet(r, j, path, "holes", "hole creation");
     if (j.contains("closing") && r.object(j["closing"], path + "/closing", {"radius_px", "shape"})) {
         const auto& c = j["closing"];
         if (!c.contains("radius_px")) r.fail(path + "/closing/radius_px", "is required");
@@ -51,6 +61,37 @@ core::Manipulation manipulationFromJson(JsonReader& r, const nlohmann::json& j, 
         const std::string shape = c.contains("shape") ? r.string(c["shape"], path + "/closing/shape").value_or("disc") : "disc";
         if (shape == "box") m.closingShape = core::MorphShape::Box;
         else if (shape != "disc") r.fail(path + "/closing/shape", "must be 'disc' or 'box', got '" + shape + "'");
+    }
+    const std::string dp = path + "/dilation";
+    if (j.contains("dilation") && r.object(j["dilation"], dp, {"length", "erosion_px"})) {
+        const auto& d = j["dilation"];
+        if (!d.contains("length")) r.fail(dp + "/length", "is required (world units)");
+        else m.dilationLength = boundedNumber(r, d["length"], dp + "/length", 0, 1e6, 0);
+        if (d.contains("erosion_px")) {
+            m.erosionPx = r.integer(d["erosion_px"], dp + "/erosion_px").value_or(0);
+            if (m.erosionPx < 0 || m.erosionPx > 64) r.check(dp, "erosion_px", "must be in [0, 64]"), m.erosionPx = 0;
+        }
+    }
+    const std::string hp = path + "/holes";
+    if (j.contains("holes") && r.object(j["holes"], hp, {"frequency", "probability", "seed", "speed", "octaves", "persistence"})) {
+        const auto& h = j["holes"];
+        if (!h.contains("probability")) r.fail(hp + "/probability", "is required (the share of the shadow that becomes holes)");
+        else m.holeProbability = boundedNumber(r, h["probability"], hp + "/probability", 0, 1, 0);
+        if (h.contains("frequency")) {
+            m.holeFrequency = boundedNumber(r, h["frequency"], hp + "/frequency", 0, 1e6, m.holeFrequency);
+            if (!(m.holeFrequency > 0)) r.fail(hp + "/frequency", "must be > 0"), m.holeFrequency = 0.3;
+        }
+        if (h.contains("seed")) m.holeSeed = uint32_t(boundedNumber(r, h["seed"], hp + "/seed", 0, 4294967295.0, 1));
+        if (h.contains("seed") && !h["seed"].is_number_integer() && !h["seed"].is_number_unsigned()) r.fail(hp + "/seed", "must be an integer");
+        if (h.contains("speed")) m.holeSpeed = boundedNumber(r, h["speed"], hp + "/speed", -1e6, 1e6, 0);
+        if (h.contains("octaves")) {
+            m.holeOctaves = r.integer(h["octaves"], hp + "/octaves").value_or(5);
+            if (m.holeOctaves < 1 || m.holeOctaves > 8) r.check(hp, "octaves", "must be in [1, 8]"), m.holeOctaves = 5;
+        }
+        if (h.contains("persistence")) {
+            m.holePersistence = boundedNumber(r, h["persistence"], hp + "/persistence", 0, 1, 0.5);
+            if (!(m.holePersistence > 0)) r.fail(hp + "/persistence", "must be > 0"), m.holePersistence = 0.5;
+        }
     }
     return m;
 }
@@ -129,12 +170,24 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
             const std::string lp = path + "/light";
             if (r.object(l, lp, {"type", "direction", "position", "cone_deg", "irradiance", "shadow_map_size"})) {
                 const std::string type = l.contains("type") ? r.string(l["type"], lp + "/type").value_or("") : "directional";
-                if (type == "spot") r.fail(lp + "/type", "spot lights are not rendered yet (issue #11); use 'directional'");
+                if (type == "spot") s.light.type = core::StylizerLightType::Spot;
                 else if (type != "directional" && !type.empty()) r.fail(lp + "/type", "must be 'directional' or 'spot', got '" + type + "'");
                 if (l.contains("direction")) s.light.direction = r.vec3(l["direction"], lp + "/direction").value_or(s.light.direction);
-                // Spot lights' fields: spot lights are not rendered yet, and a directional light has no use for them.
-                notYet(r, l, lp, "position", "a light's position (spot lights)");
-                notYet(r, l, lp, "cone_deg", "a light's cone (spot lights)");
+                if (s.light.type == core::StylizerLightType::Spot) {
+                    if (!l.contains("position")) r.fail(lp + "/position", "is required for a spot light");
+                    else s.light.position = r.vec3(l["position"], lp + "/position").value_or(s.light.position);
+                    for (int k = 0; k < 3; ++k)
+                        if (!(std::abs(s.light.position[k]) <= 1e9)) {
+                            r.check(lp, "position", "must be finite (|x| <= 1e9)");
+                            break;
+                        }
+                    if (l.contains("cone_deg")) s.light.coneDeg = boundedNumber(r, l["cone_deg"], lp + "/cone_deg", 0, 150, s.light.coneDeg);
+                    if (!(s.light.coneDeg > 0)) r.check(lp, "cone_deg", "must be in (0, 150]");
+                } else {
+                    // A directional light has no use for them: a typo for "spot" should not pass unseen.
+                    for (const char* field : {"position", "cone_deg"})
+                        if (l.contains(field)) r.fail(lp + "/" + field, "is for spot lights; set \"type\": \"spot\" or remove it");
+                }
                 if (l.contains("irradiance")) s.light.irradiance = r.vec3(l["irradiance"], lp + "/irradiance").value_or(s.light.irradiance);
                 if (l.contains("shadow_map_size"))
                     s.light.shadowMapSize = r.integer(l["shadow_map_size"], lp + "/shadow_map_size").value_or(s.light.shadowMapSize);
@@ -171,7 +224,7 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
                     break;
                 }
         }
-        if (j.contains("time")) s.time = r.number(j["time"], path + "/time").value_or(0);
+        if (j.contains("time")) s.time = boundedNumber(r, j["time"], path + "/time", -1e9, 1e9, 0);
     }
     r.throwIfErrors();
     return out;

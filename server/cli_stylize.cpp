@@ -1,5 +1,6 @@
 // `volstyle stylize`: one frame of the light-shaft stylizer (SPEC §7) to PNG or EXR, or one of its
-// AOVs. This first version: a directional light, the naive V̄, closing and transfer functions.
+// AOVs: a directional or spot light, naive or accelerated V̄, the occluders' manipulations and the
+// transfer function.
 
 #include <spdlog/spdlog.h>
 
@@ -26,20 +27,22 @@ const CommandSpec kStylize{
     "render light shafts through occluders (the stylizer)",
     "--scene SCENE.json|builtin:NAME [options] -o OUT.png|OUT.exr",
     "Renders one frame of the light-shaft stylizer: occluder surfaces lit and shadowed by a\n"
-    "directional light, and single scattering in a homogeneous medium with the visibility along\n"
+    "directional or spot light, and single scattering in a homogeneous medium with the visibility along\n"
     "each view ray factored out (the average visibility V̄). --aov writes one of the frame's\n"
     "arbitrary output variables instead of the frame.",
     {
         {"scene", "SRC", "SCENE.json (docs/STYLIZER.md; mesh paths relative to it) or builtin:forest (required)"},
         {"camera", "CAM.json", "camera (eye, target, up, fov_y_deg, width, height); default: the scene's (builtin:forest: 640x360; a file without one: 480x480)"},
         {"aov", "NAME", "average_visibility, linear_depth, shadow_map, modified_shadow_map or scattering; default: the frame"},
-        {"method", "NAME", "how V̄ is computed: naive (one shadow-map lookup per step); default naive"},
-        {"steps", "N", "shadow-map lookups per view ray for V̄ (1-4096); default 256"},
+        {"method", "NAME", "how V̄ is computed: accelerated (exact, min-max mipmap) or naive (--steps lookups per ray); default accelerated"},
+        {"steps", "N", "shadow-map lookups per view ray for the naive V̄ (1-4096); default 256"},
+        {"time", "T", "scene time for animated holes; default: the scene's (0)"},
         {"exposure", "STOPS", "PNG brightness in stops (EXR stays linear); default 0"},
         {"output", "OUT", ".png or .exr; the folder must exist (required)"},
     },
     "  volstyle stylize --scene builtin:forest -o forest.png\n"
     "  volstyle stylize --scene builtin:forest --aov average_visibility -o vbar.png\n"
+    "  volstyle stylize --scene builtin:forest --method naive --steps 1024 -o reference.exr\n"
     "  volstyle stylize --scene docs/examples/stylize/window.json -o window.png\n"};
 
 /// builtin:forest, or a SCENE.json whose mesh paths are relative to it.
@@ -79,8 +82,9 @@ int runStylize(const std::vector<std::string>& argv) {
     if (printHelpIfAsked(args, kStylize)) return 0;
     if (!args.has("scene")) throw InvalidArgument("--scene is required (volstyle stylize --help)");
     const std::string output = imageOutputPath(args);
-    const std::string method = args.has("method") ? args.get("method") : "naive";
-    if (method != "naive") throw InvalidArgument("--method: '" + method + "' is not available yet (naive)");
+    const std::string method = args.has("method") ? args.get("method") : "accelerated";
+    if (method != "naive" && method != "accelerated")
+        throw InvalidArgument("--method: '" + method + "' is not one of accelerated, naive");
     const std::string aov = args.has("aov") ? args.get("aov") : "";
     if (!aov.empty() && aov != "average_visibility" && aov != "linear_depth" && aov != "shadow_map" &&
         aov != "modified_shadow_map" && aov != "scattering")
@@ -90,7 +94,12 @@ int runStylize(const std::vector<std::string>& argv) {
     core::StylizerScene scene = loadStylizerScene(args.get("scene"));
     if (args.has("camera"))
         scene.camera = fromFile(args.get("camera"), [](const nlohmann::json& j) { return protocol::cameraFromJson(j); });
+    if (args.has("time")) {
+        scene.time = args.number("time", 0);
+        if (!(std::abs(scene.time) <= 1e9)) throw InvalidArgument("--time: must be a finite number (|T| <= 1e9)");
+    }
     core::StylizeSettings settings;
+    settings.method = method == "naive" ? core::VisibilityMethod::Naive : core::VisibilityMethod::Accelerated;
     const double steps = args.number("steps", settings.steps);
     if (steps != std::floor(steps)) throw InvalidArgument("--steps: must be a whole number");
     settings.steps = int(std::clamp(steps, -1.0, 1e6));
@@ -108,8 +117,8 @@ int runStylize(const std::vector<std::string>& argv) {
     core::SaveOptions save;
     save.exposure = args.number("exposure", 0);
     core::saveImage(output, image, save);
-    spdlog::info("stylized {}x{} in {:.1f} ms (shadow map {:.1f}, G-buffer {:.1f}, shading {:.1f})", scene.camera.width,
-                 scene.camera.height, f.totalMs, f.shadowMs, f.gbufferMs, f.shadeMs);
+    spdlog::info("stylized {}x{} in {:.1f} ms (shadow maps and edits {:.1f}, min-max mipmap {:.1f}, G-buffer {:.1f}, shading {:.1f}, read back {:.1f})",
+                 scene.camera.width, scene.camera.height, f.totalMs, f.shadowMs, f.mipmapMs, f.gbufferMs, f.shadeMs, f.readbackMs);
     return 0;
 }
 

@@ -122,6 +122,21 @@ struct StylizeParams {
     VS_VEC4 surface;          /* raster passes: rgb colour of the occluder; w: its id (1-based) */
     VS_VEC4 shadow;           /* x: depth bias (light clip depth units); y: whether a shadow map exists; z: texel size (world) */
     VS_VEC4 transfer;         /* x: 0 none, 1 multiply, 2 replace; y, z: the depth range mapped to d = 0 and 1 */
+    VS_IVEC4 options;         /* x: V̄ method (kVisibility*); y: min-max mipmap levels; z: light (kStylizerLight*); w: spot integral steps */
+    VS_VEC4 spot;             /* xyz: the spot's position; w: cos of half its cone (no light outside) */
+    VS_VEC4 spotCone;         /* x: cos of the inner half-angle (full intensity inside) */
+    VS_IVEC4 mipOffset[4];    /* min-max level k starts at entry mipOffset[k / 4][k % 4] of b_MinMax */
+};
+VS_CONSTANT(int, kVisibilityNaive, 0);   /* N midpoint lookups of the manipulated map per view ray */
+VS_CONSTANT(int, kVisibilityMinMax, 1);  /* exact traversal of its min-max mipmap (stylize.comp) */
+VS_CONSTANT(int, kStylizerLightDirectional, 0);
+VS_CONSTANT(int, kStylizerLightSpot, 1);
+VS_CONSTANT(int, kMaxMinMaxLevels, 16);
+VS_CONSTANT(int, kBindingMinMax, 3);     /* SSBO vec2[]: (min, max) depth of every level of the manipulated map */
+
+/* The min-max mipmap build (shadow_minmax.comp): level k + 1 from level k, 2×2 texels per entry. */
+struct MinMaxParams {
+    VS_IVEC4 level;  /* x: source side; y: destination side; z: source offset; w: destination offset (entries) */
 };
 
 /* Occluder manipulation on the shadow map (shadow_morphology.comp): one pass of running extrema
@@ -132,6 +147,17 @@ VS_CONSTANT(int, kBindingMorphScratch, 3); /* SSBO float[2 * lines * (n + 2 * ha
 struct MorphParams {
     VS_IVEC4 size;  /* x: n (the map's side); y: half-width w of the 1D window; z: 0 rows, 1 columns; w: line offset dy */
     VS_IVEC4 op;    /* x: 0 minimum (dilation of occluders), 1 maximum (erosion); y: 1 combine with the output by op, 0 overwrite */
+};
+
+/* Per-object edits of the scattering's shadow map in place (SPEC §7): the 1D epipolar dilation of
+ * Eq. 3 (shadow_dilate.comp) and Perlin-noise holes of Eq. 4–5 (shadow_holes.comp). */
+VS_CONSTANT(int, kBindingEditIn, 1);   /* SSBO float[n*n] */
+VS_CONSTANT(int, kBindingEditOut, 2);  /* SSBO float[n*n] */
+struct EditParams {
+    VS_IVEC4 size;      /* x: n; y: dilation kernel length (texels); z: noise octaves; w: noise seed */
+    VS_VEC4 epipole;    /* xy: the camera projected into the map (texel coordinates); z: its depth; w: 1 dilate away from it, -1 toward it (camera behind a spot) */
+    VS_VEC4 holeFrame;  /* xy: noise coordinates of texel (0, 0)'s corner; zw: their step per texel in x and y */
+    VS_VEC4 holeNoise;  /* x: threshold h (holes where N < h); y: persistence; zw: the time offset of the first lookup */
 };
 
 /* Parameters of the vector kernels (vector_ops.comp). Vectors are arrays of vec4 (rgb used). */

@@ -27,18 +27,208 @@ layout(std430, binding = kBindingScatterDepth) readonly buffer b_ScatterDepth {
     float scatterDepth[];  // the shadow map after the occluders' manipulations, for V̄ only
 };
 
+layout(std430, binding = kBindingMinMax) readonly buffer b_MinMax {
+    vec2 minMax[];  // (min, max) depth per entry, level k from u.mipOffset (shadow_minmax.comp)
+};
+
+// Depths are the light's clip depth in [0, 1]; 1 is nothing there. A point is lit where it lies
+// no deeper than the occluder (plus the bias); past the far plane only what was drawn shadows.
+bool litAgainst(float z, float occluder) { return occluder >= 1.0 || z <= occluder + u.shadow.x; }
+float depth01(vec4 h) { return h.z / h.w * 0.5 + 0.5; }
+
 // V(x): 1 where the light reaches world point x, by the unmodified map (surfaces) or the
-// manipulated one (the scattering). Outside the map's footprint nothing occludes (every occluder
-// lies inside it); a point nearer the light than the map's near plane is lit.
+// manipulated one (the scattering). The light's clip space is homogeneous (w = 1 for a
+// directional light's orthographic map, perspective for a spot). Outside the map's footprint
+// nothing occludes (every occluder lies inside it; outside a spot's cone there is no light).
 float visibility(vec3 x, bool manipulated) {
     if (u.shadow.y < 0.5) return 1.0;
-    vec3 c = (u.lightFromWorld * vec4(x, 1.0)).xyz;
+    vec4 h = u.lightFromWorld * vec4(x, 1.0);
+    if (h.w <= 0.0) return 1.0;
+    vec3 c = h.xyz / h.w;
     if (any(greaterThan(abs(c.xy), vec2(1.0)))) return 1.0;
     int n = u.imageSize.z;
     ivec2 texel = clamp(ivec2(floor((c.xy * 0.5 + 0.5) * float(n))), ivec2(0), ivec2(n - 1));
     float occluder = manipulated ? scatterDepth[texel.y * n + texel.x] : texelFetch(s_shadowDepth, texel, 0).r;
-    // Depth 1 is nothing there; a point past the far plane is shadowed only by what was drawn.
-    return occluder >= 1.0 || c.z * 0.5 + 0.5 <= occluder + u.shadow.x ? 1.0 : 0.0;
+    return litAgainst(c.z * 0.5 + 0.5, occluder) ? 1.0 : 0.0;
+}
+
+// The naive V̄: `steps` midpoint lookups along t ∈ [0, s] (the reference).
+float averageVisibilityNaive(vec3 e, vec3 dir, float s) {
+    int steps = max(u.imageSize.w, 1);
+    float visible = 0.0;
+    for (int i = 0; i < steps; ++i) visible += visibility(e + ((float(i) + 0.5) / float(steps)) * s * dir, true);
+    return visible / float(steps);
+}
+
+// t where the ray's projective coordinate (a0 + t a1) / (w0 + t w1) equals `target`.
+float crossingT(float a0, float a1, float w0, float w1, float target) {
+    float den = a1 - target * w1;
+    return abs(den) < 1e-30 ? 3.0e38 : (target * w0 - a0) / den;
+}
+
+// Keeps the part of [ta, tb] where f0 + t f1 ≥ 0.
+void clipToHalfSpace(float f0, float f1, inout float ta, inout float tb) {
+    if (abs(f1) < 1e-30) {
+        if (f0 < 0.0) tb = ta;
+    } else if (f1 > 0.0) {
+        ta = max(ta, -f0 / f1);
+    } else {
+        tb = min(tb, -f0 / f1);
+    }
+}
+
+// The accelerated V̄: the exact lit share of the view ray against the (nearest-texel) manipulated
+// map, found by descending its min-max mipmap. Along the ray the light-clip position is
+// h(t) = h0 + t h1, so every texel coordinate and the depth are monotone in t between w > 0, and
+// each crossing is one division. A cell whose minimum lies behind the ray's deepest point over it
+// is wholly lit, one whose maximum lies in front of its shallowest point wholly in shadow; only
+// cells the ray crosses an occluder's depth in are opened, down to single texels, where the lit
+// part of the stretch is solved for in closed form. The cost follows the number of shadow edges
+// along the ray, not its length (Chen et al. 2011 with the 2D mipmap instead of an epipolar
+// rectification; docs/STYLIZER.md says why).
+float averageVisibilityMinMax(vec3 e, vec3 dir, float s) {
+    if (u.shadow.y < 0.5 || s <= 0.0) return 1.0;
+    vec4 h0 = u.lightFromWorld * vec4(e, 1.0), h1 = u.lightFromWorld * vec4(dir, 0.0);
+    float ta = 0.0, tb = s;
+    clipToHalfSpace(h0.w - 1e-7, h1.w, ta, tb);  // in front of a spot (always, for w = 1)
+    clipToHalfSpace(h0.w - h0.x, h1.w - h1.x, ta, tb);  // x ≤ w
+    clipToHalfSpace(h0.w + h0.x, h1.w + h1.x, ta, tb);  // −x ≤ w
+    clipToHalfSpace(h0.w - h0.y, h1.w - h1.y, ta, tb);
+    clipToHalfSpace(h0.w + h0.y, h1.w + h1.y, ta, tb);
+    if (!(tb > ta)) return 1.0;
+    int n = u.imageSize.z;
+    float fn = float(n);
+    // Which way x/w, y/w and z/w move with t (constant: the numerators of their derivatives).
+    float sx = sign(h1.x * h0.w - h0.x * h1.w), sy = sign(h1.y * h0.w - h0.y * h1.w);
+    float sz = sign(h1.z * h0.w - h0.z * h1.w);
+    float lit = s - (tb - ta);  // outside the footprint nothing occludes
+    int top = u.options.y - 1, level = top;
+    float t = ta, tiny = 1e-6 * s;
+    for (int iter = 0; iter < 65536 && t < tb; ++iter) {
+        vec4 h = h0 + t * h1;
+        // The cell the ray is in just after t (nudged a thousandth of a texel along its motion).
+        vec2 texel = (h.xy / h.w * 0.5 + 0.5) * fn + vec2(sx, sy) * 1e-3;
+        int cellSize = 1 << level, side = (n + cellSize - 1) >> level;
+        ivec2 cell = ivec2(floor(texel / float(cellSize)));
+        // Where the ray leaves the cell; a crossing at or before t is the projective line's other
+        // branch (behind a spot, w < 0): that bound is never reached.
+        float tExit = tb;
+        float cx = sx == 0.0 ? tb : crossingT(h0.x, h1.x, h0.w, h1.w, float((cell.x + (sx > 0.0 ? 1 : 0)) * cellSize) * 2.0 / fn - 1.0);
+        float cy = sy == 0.0 ? tb : crossingT(h0.y, h1.y, h0.w, h1.w, float((cell.y + (sy > 0.0 ? 1 : 0)) * cellSize) * 2.0 / fn - 1.0);
+        if (cx > t) tExit = min(tExit, cx);
+        if (cy > t) tExit = min(tExit, cy);
+        tExit = min(max(tExit, t + tiny), tb);
+        bool inside = all(greaterThanEqual(cell, ivec2(0))) && all(lessThan(cell, ivec2(side)));
+        vec2 mm = inside ? minMax[u.mipOffset[level / 4][level % 4] + cell.y * side + cell.x] : vec2(1.0);
+        float zA = depth01(h), zB = depth01(h0 + tExit * h1);
+        float zLo = min(zA, zB), zHi = max(zA, zB);
+        if (mm.x >= 1.0 || zHi <= mm.x + u.shadow.x) {
+            lit += tExit - t;  // in front of everything in the cell (or it is empty)
+        } else if (mm.y < 1.0 && zLo > mm.y + u.shadow.x) {
+            // behind everything in the cell: in shadow
+        } else if (level == 0) {
+            // One texel, one depth D: lit where z(t) ≤ D + bias, on one side of a single crossing.
+            float limit = mm.x + u.shadow.x;
+            float tc = crossingT(h0.z, h1.z, h0.w, h1.w, 2.0 * limit - 1.0);
+            float len = tExit - t;
+            lit += sz > 0.0 ? clamp(tc - t, 0.0, len) : sz < 0.0 ? clamp(tExit - tc, 0.0, len) : (zA <= limit ? len : 0.0);
+        } else {
+            level -= 1;  // undecided: open the cell
+            continue;
+        }
+        // Go up a level only on leaving the parent: a sibling's parent is the one just opened.
+        t = tExit;
+        if (level < top) {
+            vec4 hNext = h0 + t * h1;
+            vec2 next = (hNext.xy / hNext.w * 0.5 + 0.5) * fn + vec2(sx, sy) * 1e-3;
+            if (ivec2(floor(next / float(2 * cellSize))) != (cell >> 1)) level += 1;
+        }
+    }
+    return clamp(lit / s, 0.0, 1.0);
+}
+
+// The same traversal for the directional light's orthographic map, where everything is affine
+// in t (w = 1): texel(t) = a + t b and z(t) = z0 + t dz, so a crossing is one multiply by a
+// reciprocal computed once per ray. Cell and parent follow from integer shifts.
+float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
+    if (u.shadow.y < 0.5 || s <= 0.0) return 1.0;
+    vec4 h0 = u.lightFromWorld * vec4(e, 1.0), h1 = u.lightFromWorld * vec4(dir, 0.0);
+    float ta = 0.0, tb = s;
+    clipToHalfSpace(1.0 - h0.x, -h1.x, ta, tb);
+    clipToHalfSpace(1.0 + h0.x, h1.x, ta, tb);
+    clipToHalfSpace(1.0 - h0.y, -h1.y, ta, tb);
+    clipToHalfSpace(1.0 + h0.y, h1.y, ta, tb);
+    if (!(tb > ta)) return 1.0;
+    int n = u.imageSize.z;
+    float fn = float(n);
+    vec2 a = (h0.xy * 0.5 + 0.5) * fn, b = h1.xy * 0.5 * fn;
+    float z0 = h0.z * 0.5 + 0.5, dz = h1.z * 0.5, bias = u.shadow.x;
+    vec2 sgn = sign(b);
+    vec2 invB = vec2(abs(b.x) > 1e-30 ? 1.0 / b.x : 0.0, abs(b.y) > 1e-30 ? 1.0 / b.y : 0.0);
+    ivec2 ahead = ivec2(greaterThan(sgn, vec2(0.0)));  // which bound of a cell is ahead
+    vec2 nudge = sgn * 1e-3;
+    float lit = s - (tb - ta);
+    int top = u.options.y - 1, level = top;
+    float t = ta, tiny = 1e-6 * s;
+    ivec2 texel = ivec2(floor(a + t * b + nudge));
+    for (int iter = 0; iter < 65536 && t < tb; ++iter) {
+        ivec2 cell = texel >> level;
+        int side = (n + (1 << level) - 1) >> level;
+        vec2 bound = vec2((cell + ahead) << level);
+        float tExit = tb;
+        if (sgn.x != 0.0) tExit = min(tExit, (bound.x - a.x) * invB.x);
+        if (sgn.y != 0.0) tExit = min(tExit, (bound.y - a.y) * invB.y);
+        tExit = min(max(tExit, t + tiny), tb);
+        bool inside = all(greaterThanEqual(cell, ivec2(0))) && all(lessThan(cell, ivec2(side)));
+        vec2 mm = inside ? minMax[u.mipOffset[level >> 2][level & 3] + cell.y * side + cell.x] : vec2(1.0);
+        float zA = z0 + t * dz, zB = z0 + tExit * dz;
+        float zLo = min(zA, zB), zHi = max(zA, zB);
+        if (mm.x >= 1.0 || zHi <= mm.x + bias) {
+            lit += tExit - t;
+        } else if (mm.y < 1.0 && zLo > mm.y + bias) {
+        } else if (level == 0) {
+            float limit = mm.x + bias, len = tExit - t;
+            lit += dz > 0.0 ? clamp((limit - z0) / dz - t, 0.0, len) : dz < 0.0 ? clamp(tExit - (limit - z0) / dz, 0.0, len) : (zA <= limit ? len : 0.0);
+        } else {
+            level -= 1;  // undecided: open the cell
+            continue;
+        }
+        t = tExit;
+        texel = ivec2(floor(a + t * b + nudge));
+        if (level < top && (texel >> (level + 1)) != (cell >> 1)) level += 1;  // left the parent
+    }
+    return clamp(lit / s, 0.0, 1.0);
+}
+
+// The spot's in-scattering integral ∫₀ˢ σt ρ p(θ) e^{−σt t} L_ei(x_t) dt without visibility,
+// L_ei = I·cone/d²·e^{−σt d} (d: distance to the light), by the midpoint rule over u.options.w steps.
+vec3 spotInScattering(vec3 e, vec3 dir, float s) {
+    int k = max(u.options.w, 1);
+    float sigma = u.medium.x, dt = s / float(k);
+    vec3 sum = vec3(0.0);
+    for (int i = 0; i < k; ++i) {
+        float t = (float(i) + 0.5) * dt;
+        vec3 toLight = u.spot.xyz - (e + t * dir);
+        float d = max(length(toLight), 1e-6);
+        vec3 l = toLight / d;
+        float cone = smoothstep(u.spot.w, u.spotCone.x, dot(l, u.lightDirection.xyz));
+        sum += exp(-sigma * (t + d)) * phaseValue(u.medium.z, u.medium.w, dot(l, -dir)) * cone / (d * d);
+    }
+    return sigma * u.medium.y * dt * sum * u.irradiance.rgb;
+}
+
+// What reaches a surface point x from the light, before its shadow and cosine: E for the
+// directional light; I·cone/d²·e^{−σt d} for a spot. `l` returns the unit direction toward it.
+vec3 incidentAt(vec3 x, out vec3 l) {
+    if (u.options.z != kStylizerLightSpot) {
+        l = u.lightDirection.xyz;
+        return u.irradiance.rgb;
+    }
+    vec3 toLight = u.spot.xyz - x;
+    float d = max(length(toLight), 1e-6);
+    l = toLight / d;
+    float cone = smoothstep(u.spot.w, u.spotCone.x, dot(l, u.lightDirection.xyz));
+    return u.irradiance.rgb * cone * exp(-u.medium.x * d) / (d * d);
 }
 
 // F(V̄, d): bilinear between texel centres by hand (texture units quantise filter weights on
@@ -54,6 +244,11 @@ vec4 transferFunction(float vBar, float d) {
     return mix(top, bottom, f.y);
 }
 
+float averageVisibility(vec3 dir, float s) {
+    if (u.options.x != kVisibilityMinMax) return averageVisibilityNaive(u.eye.xyz, dir, s);
+    return u.options.z == kStylizerLightSpot ? averageVisibilityMinMax(u.eye.xyz, dir, s) : averageVisibilityMinMaxOrtho(u.eye.xyz, dir, s);
+}
+
 void main() {
     ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
     ivec2 size = u.imageSize.xy;
@@ -65,16 +260,19 @@ void main() {
     float s = hit ? min(surface.w, u.background.w) : u.background.w;
 
     // Average visibility along the ray (Eq. 2's factored-out V̄).
-    int steps = max(u.imageSize.w, 1);
-    float visible = 0.0;
-    for (int i = 0; i < steps; ++i) visible += visibility(u.eye.xyz + ((float(i) + 0.5) / float(steps)) * s * dir, true);
-    float vBar = visible / float(steps);
+    float vBar = averageVisibility(dir, s);
 
-    // Single scattering with the visibility factored out: ρ p E (1 − e^{−σt s}) V̄.
-    vec3 light = u.lightDirection.xyz;
+    // Single scattering with the visibility factored out: ρ p E (1 − e^{−σt s}) V̄ (directional),
+    // the numerical integral times V̄ (spot).
     float sigma = u.medium.x;
-    float opacity = 1.0 - exp(-sigma * s);
-    vec3 scattering = u.medium.y * phaseValue(u.medium.z, u.medium.w, dot(light, -dir)) * u.irradiance.rgb * opacity * vBar;
+    vec3 scattering;
+    if (u.options.z == kStylizerLightSpot) {
+        scattering = spotInScattering(u.eye.xyz, dir, s) * vBar;
+    } else {
+        vec3 light = u.lightDirection.xyz;
+        float opacity = 1.0 - exp(-sigma * s);
+        scattering = u.medium.y * phaseValue(u.medium.z, u.medium.w, dot(light, -dir)) * u.irradiance.rgb * opacity * vBar;
+    }
 
     // The transfer function over (V̄, linear depth): multiply, or replace the scattering.
     vec3 styled = scattering;
@@ -90,8 +288,12 @@ void main() {
         if (dot(n, dir) > 0.0) n = -n;  // leaves are seen from both sides
         vec3 x = u.eye.xyz + s * dir;
         // Offset along the normal by 1.5 shadow-map texels (u.shadow.z, world units): no acne.
-        float lit = visibility(x + (1.5 * u.shadow.z + 1e-4 * s) * n, false) * max(dot(n, light), 0.0);
-        behind = albedo * (u.irradiance.rgb * lit * (1.0 / 3.14159265358979) + u.background.rgb);
+        vec3 light;
+        vec3 incident = incidentAt(x, light);
+        // A spot's texels grow with the distance from it (u.shadow.z is then per unit distance).
+        float texelSize = u.options.z == kStylizerLightSpot ? u.shadow.z * distance(x, u.spot.xyz) : u.shadow.z;
+        float lit = visibility(x + (1.5 * texelSize + 1e-4 * s) * n, false) * max(dot(n, light), 0.0);
+        behind = albedo * (incident * lit * (1.0 / 3.14159265358979) + u.background.rgb);
     }
     int p = pix.y * size.x + pix.x;
     pixels[p] = vec4(behind * exp(-sigma * s) + styled, 1.0);

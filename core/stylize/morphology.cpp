@@ -84,6 +84,15 @@ void closeDepthBuffer(GpuDevice& device, gl::Buffer& depth, int n, int radius, M
     pass.apply(a, depth, b, radius, shape, false);  // erosion: and shrink back outside them
 }
 
+void erodeBoxBuffer(GpuDevice& device, gl::Buffer& depth, int n, int radius) {
+    if (radius <= 0) return;
+    const size_t bytes = sizeof(float) * size_t(n) * n;
+    gl::Buffer tmp = gl::createBuffer(bytes, nullptr, 0, "morphology-tmp");
+    MorphPass pass(device, n, radius);
+    pass.run(depth, tmp, radius, false, 0, false, false);  // rows, then columns: a box is separable
+    pass.run(tmp, depth, radius, true, 0, false, false);
+}
+
 void foldMinimum(GpuDevice& device, const gl::Buffer& from, const gl::Buffer& into, int n) {
     MorphPass pass(device, n, 0);
     pass.run(from, into, 0, false, 0, true, true);  // a one-texel window is the value itself

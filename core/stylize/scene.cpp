@@ -17,12 +17,26 @@ void StylizerScene::validate() const {
         }
         if (o.manipulation.closingRadius < 0 || o.manipulation.closingRadius > 64)
             throw InvalidArgument("occluder '" + o.name + "': closing radius_px must be in [0, 64]");
+        const Manipulation& m = o.manipulation;
+        if (!(m.dilationLength >= 0 && m.dilationLength <= 1e6))
+            throw InvalidArgument("occluder '" + o.name + "': dilation length must be in [0, 1e6]");
+        if (m.erosionPx < 0 || m.erosionPx > 64) throw InvalidArgument("occluder '" + o.name + "': erosion_px must be in [0, 64]");
+        if (!(m.holeProbability >= 0 && m.holeProbability <= 1))
+            throw InvalidArgument("occluder '" + o.name + "': hole probability must be in [0, 1]");
+        if (!(m.holeFrequency > 0 && m.holeFrequency <= 1e6))
+            throw InvalidArgument("occluder '" + o.name + "': hole frequency must be in (0, 1e6]");
+        if (!(std::abs(m.holeSpeed) <= 1e6)) throw InvalidArgument("occluder '" + o.name + "': hole speed must be in [-1e6, 1e6]");
+        if (m.holeOctaves < 1 || m.holeOctaves > 8 || !(m.holePersistence > 0 && m.holePersistence <= 1))
+            throw InvalidArgument("occluder '" + o.name + "': hole octaves must be in [1, 8] and persistence in (0, 1]");
     }
     if (!(length(light.direction) > 0)) throw InvalidArgument("/light/direction: must not be zero");
     if (light.shadowMapSize < 512 || light.shadowMapSize > 4096)
         throw InvalidArgument("/light/shadow_map_size: must be in [512, 4096]");
-    if (light.type == StylizerLightType::Spot && !(light.coneDeg > 0 && light.coneDeg < 179))
-        throw InvalidArgument("/light/cone_deg: must be in (0, 179)");
+    if (light.type == StylizerLightType::Spot && !(light.coneDeg > 0 && light.coneDeg <= 150))
+        throw InvalidArgument("/light/cone_deg: must be in (0, 150]");
+    for (int k = 0; k < 3; ++k)
+        if (!(std::abs(light.position[k]) <= 1e9)) throw InvalidArgument("/light/position: must be finite (|x| <= 1e9)");
+    if (!(std::abs(time) <= 1e9)) throw InvalidArgument("/time: must be finite (|t| <= 1e9)");
     // Bounds that keep every product in float range (SPEC §5: nothing may become NaN or Inf).
     if (!(medium.extinction >= 0 && medium.extinction <= 1e6)) throw InvalidArgument("/medium/extinction: must be in [0, 1e6]");
     for (int c = 0; c < 3; ++c)

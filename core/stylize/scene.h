@@ -4,6 +4,7 @@
 /// transform and a colour each, one light (directional or spot), a homogeneous medium and the
 /// camera, the occluders' manipulations and the transfer function. GL-free.
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -22,10 +23,20 @@ enum class MorphShape { Box, Disc };
 
 /// How an occluder's shadow is edited for the scattering only (the GI paper Sec. 4); its surface
 /// and the surfaces it shadows keep the unmodified map.
+/// Applied in this order to the object's own shadow map, which is then folded into the
+/// scattering's by minimum: closing, epipolar dilation (+ erosion), holes.
 struct Manipulation {
     int closingRadius = 0;                  ///< texels of the shadow map; 0: no closing
     MorphShape closingShape = MorphShape::Disc;
-    bool any() const { return closingRadius > 0; }
+    double dilationLength = 0;              ///< Eq. 3's kernel, world units across the beams; 0: none
+    int erosionPx = 0;                      ///< box erosion after the dilation, texels
+    double holeFrequency = 0.3;             ///< noise cycles per world unit across the beams
+    double holeProbability = 0;             ///< share of the object's shadow turned into holes; 0: none
+    uint32_t holeSeed = 1;
+    double holeSpeed = 0;                   ///< noise units per unit of scene time
+    int holeOctaves = 5;                    ///< Eq. 5 (the paper's Fig. 5 setting)
+    double holePersistence = 0.5;
+    bool any() const { return closingRadius > 0 || dilationLength > 0 || holeProbability > 0; }
 };
 
 struct Occluder {

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <numbers>
+#include <tuple>
 
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
@@ -16,6 +19,7 @@ namespace volstyle::core {
 
 void StylizeSettings::validate() const {
     if (steps < 1 || steps > 4096) throw InvalidArgument("/steps: must be in [1, 4096]");
+    if (spotSteps < 1 || spotSteps > 4096) throw InvalidArgument("/spot_steps: must be in [1, 4096]");
 }
 
 namespace {
@@ -28,18 +32,70 @@ void frameAround(const Vec3d& axis, Vec3d& u, Vec3d& v, Vec3d& w) {
     v = cross(w, u);
 }
 
-/// World-space bounds of every occluder after its transform.
+/// World-space bounds of an occluder after its transform.
+std::pair<Vec3d, Vec3d> occluderBounds(const Occluder& o) {
+    Vec3d lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    auto [a, b] = o.mesh.bounds();
+    for (int corner = 0; corner < 8; ++corner) {
+        const Vec3d p = o.worldFromObject.applyPoint({(corner & 1) ? b.x : a.x, (corner & 2) ? b.y : a.y, (corner & 4) ? b.z : a.z});
+        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+    }
+    return {lo, hi};
+}
+
+/// World-space bounds of every occluder.
 std::pair<Vec3d, Vec3d> sceneBounds(const StylizerScene& scene) {
     Vec3d lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
     for (const Occluder& o : scene.occluders) {
-        auto [a, b] = o.mesh.bounds();
-        for (int corner = 0; corner < 8; ++corner) {
-            const Vec3d p = o.worldFromObject.applyPoint(
-                {(corner & 1) ? b.x : a.x, (corner & 2) ? b.y : a.y, (corner & 4) ? b.z : a.z});
-            for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
-        }
+        auto [a, b] = occluderBounds(o);
+        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], a[k]), hi[k] = std::max(hi[k], b[k]);
     }
     return {lo, hi};
+}
+
+/// The camera in the map's texel coordinates and depth (Eq. 3's epipole l, z_l).
+Epipole epipoleOf(const Mat4& lightClip, const Vec3d& eye, int n) {
+    double h[4];
+    for (int r = 0; r < 4; ++r) h[r] = lightClip(r, 0) * eye.x + lightClip(r, 1) * eye.y + lightClip(r, 2) * eye.z + lightClip(r, 3);
+    Epipole e;
+    const double w = std::abs(h[3]) < 1e-12 ? 1e-12 : h[3];  // a camera in the spot's plane: the epipole at infinity
+    e.x = (h[0] / w * 0.5 + 0.5) * n;
+    e.y = (h[1] / w * 0.5 + 0.5) * n;
+    e.depth = h[2] / w * 0.5 + 0.5;
+    e.sense = w > 0 ? 1 : -1;
+    return e;
+}
+
+/// Where the map's texels sit in noise coordinates: `frequency` times world units across the
+/// beams (directional: the light-plane position; spot: the cone's tangent plane scaled to the
+/// object's distance `spotScale` = tan(cone/2)·distance).
+HoleMap holeMapOf(const Mat4& lightClip, bool spot, double spotScale, int n, double frequency) {
+    HoleMap h;
+    if (spot) {
+        h.originX = h.originY = -frequency * spotScale;
+        h.stepX = h.stepY = frequency * spotScale * 2 / n;
+        return h;
+    }
+    // Orthographic: ndc_x = |r0| (p·u − a_x)·… so p·u at texel 0's corner is a_x = −(m03 + 1)/|r0|.
+    const double r0 = length(Vec3d(lightClip(0, 0), lightClip(0, 1), lightClip(0, 2)));
+    const double r1 = length(Vec3d(lightClip(1, 0), lightClip(1, 1), lightClip(1, 2)));
+    h.originX = -frequency * (lightClip(0, 3) + 1) / r0;
+    h.originY = -frequency * (lightClip(1, 3) + 1) / r1;
+    h.stepX = frequency * 2 / (r0 * n);
+    h.stepY = frequency * 2 / (r1 * n);
+    return h;
+}
+
+/// OpenGL's perspective projection: tan of half the vertical field, width / height, clip planes.
+Mat4 perspective(double tanHalfY, double aspect, double nearDist, double farDist) {
+    Mat4 proj;
+    proj(0, 0) = 1 / (tanHalfY * aspect);
+    proj(1, 1) = 1 / tanHalfY;
+    proj(2, 2) = -(farDist + nearDist) / (farDist - nearDist);
+    proj(2, 3) = -2 * farDist * nearDist / (farDist - nearDist);
+    proj(3, 2) = -1;
+    proj(3, 3) = 0;
+    return proj;
 }
 
 /// OpenGL's perspective projection of the pinhole camera (pixel centres as camera.glsl's rays).
@@ -48,15 +104,7 @@ Mat4 cameraClipFromWorld(const Camera& cam, double nearDist, double farDist) {
     Mat4 view;
     for (int c = 0; c < 3; ++c) view(0, c) = f.right[c], view(1, c) = f.up[c], view(2, c) = -f.forward[c];
     view(0, 3) = -dot(f.right, cam.eye), view(1, 3) = -dot(f.up, cam.eye), view(2, 3) = dot(f.forward, cam.eye);
-    const double t = cam.tanHalfFov(), aspect = double(cam.width) / cam.height;
-    Mat4 proj;
-    proj(0, 0) = 1 / (t * aspect);
-    proj(1, 1) = 1 / t;
-    proj(2, 2) = -(farDist + nearDist) / (farDist - nearDist);
-    proj(2, 3) = -2 * farDist * nearDist / (farDist - nearDist);
-    proj(3, 2) = -1;
-    proj(3, 3) = 0;
-    return proj * view;
+    return perspective(cam.tanHalfFov(), double(cam.width) / cam.height, nearDist, farDist) * view;
 }
 
 gl::Texture texture2D(GLenum format, int w, int h, const char* label) {
@@ -138,10 +186,69 @@ Mat4 lightClipFromWorld(const Vec3d& towardLight, const Vec3d& lo, const Vec3d& 
     return m;
 }
 
+Mat4 spotClipFromWorld(const Vec3d& position, const Vec3d& towardLight, double coneDeg, const Vec3d& lo, const Vec3d& hi) {
+    Vec3d u, v, w;
+    frameAround(towardLight, u, v, w);  // the spot looks along −w
+    double farthest = 0, nearest = std::numeric_limits<double>::max();
+    for (int corner = 0; corner < 8; ++corner) {
+        const Vec3d p = Vec3d((corner & 1) ? hi.x : lo.x, (corner & 2) ? hi.y : lo.y, (corner & 4) ? hi.z : lo.z) - position;
+        farthest = std::max(farthest, length(p));
+        nearest = std::min(nearest, -dot(p, w));
+    }
+    const double farPlane = std::max(farthest * 1.01, 1e-3);
+    const double nearPlane = std::clamp(nearest * 0.99, farPlane * 1e-4, farPlane * 0.5);
+    Mat4 view;
+    for (int c = 0; c < 3; ++c) view(0, c) = u[c], view(1, c) = v[c], view(2, c) = w[c];
+    view(0, 3) = -dot(u, position), view(1, 3) = -dot(v, position), view(2, 3) = -dot(w, position);
+    return perspective(std::tan(coneDeg * 0.5 * std::numbers::pi / 180), 1, nearPlane, farPlane) * view;
+}
+
 struct Stylizer::Gpu {
     gl::Buffer pixels, layers;
     size_t pixelBytes = 0;
+    std::map<std::tuple<double, int, double, uint32_t>, float> holeThresholds;  // calibrations, reused
+
+    float threshold(const Manipulation& m) {
+        const auto key = std::make_tuple(m.holeProbability, m.holeOctaves, m.holePersistence, m.holeSeed);
+        auto it = holeThresholds.find(key);
+        if (it == holeThresholds.end()) {
+            if (holeThresholds.size() > 256) holeThresholds.clear();
+            it = holeThresholds.emplace(key, holeThreshold(m.holeProbability, m.holeOctaves, m.holePersistence, m.holeSeed)).first;
+        }
+        return it->second;
+    }
 };
+
+namespace {
+
+/// The min-max mipmap of the n×n map in `depth` (shadow_minmax.comp): levels down to 1×1, their
+/// offsets into the buffer in `p.mipOffset`, their count in `p.options.y`.
+gl::Buffer buildMinMaxMipmap(GpuDevice& device, const gl::Buffer& depth, int n, layout::StylizeParams& p) {
+    std::vector<int> sides{n}, offsets{0};
+    while (sides.back() > 1) offsets.push_back(offsets.back() + sides.back() * sides.back()), sides.push_back((sides.back() + 1) / 2);
+    VOLSTYLE_CHECK(int(sides.size()), <=, layout::kMaxMinMaxLevels);
+    const size_t entries = size_t(offsets.back()) + 1;
+    gl::Buffer mip = gl::createBuffer(entries * 2 * sizeof(float), nullptr, 0, "shadow-min-max");
+    glUseProgram(device.program(gl::ShaderBuilder("shadow_minmax.comp")).id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingScatterDepth, depth.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingMinMax, mip.id());
+    for (size_t k = 0; k < sides.size(); ++k) {
+        layout::MinMaxParams m;
+        m.level = {k == 0 ? n : sides[k - 1], sides[k], k == 0 ? -1 : offsets[k - 1], offsets[k]};
+        device.setParams(m);
+        const int g = layout::kWorkgroup2D;
+        glDispatchCompute(GLuint((sides[k] + g - 1) / g), GLuint((sides[k] + g - 1) / g), 1);
+        gl::barrierAfterComputeWrites();
+    }
+    for (size_t k = 0; k < sides.size(); ++k) {
+        layout::Int4& q = p.mipOffset[k / 4];
+        (k % 4 == 0 ? q.x : k % 4 == 1 ? q.y : k % 4 == 2 ? q.z : q.w) = offsets[k];
+    }
+    p.options.y = int(sides.size());
+    return mip;
+}
+
+}  // namespace
 
 Stylizer::Stylizer(GpuDevice& device) : m_device(device), m_gpu(std::make_unique<Gpu>()) {}
 Stylizer::~Stylizer() = default;
@@ -150,8 +257,6 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     VOLSTYLE_CHECK(m_device.isOwnedByThisThread(), ==, true);
     scene.validate();
     settings.validate();
-    if (scene.light.type != StylizerLightType::Directional)
-        throw InvalidArgument("/light/type: only 'directional' lights are rendered so far");
     const auto t0 = Clock::now();
     StylizedFrame out;
     const Camera& cam = scene.camera;
@@ -163,11 +268,19 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     auto [lo, hi] = hasOccluders ? sceneBounds(scene) : std::pair<Vec3d, Vec3d>{Vec3d(-1.0), Vec3d(1.0)};
 
     layout::StylizeParams p;
-    const Vec3d toLight = normalize(scene.light.direction);
+    const StylizerLight& light = scene.light;
+    const bool spot = light.type == StylizerLightType::Spot;
+    const Vec3d toLight = normalize(light.direction);
     int margin = 0;  // texels kept empty around the occluders: the largest closing radius
-    for (const Occluder& o : scene.occluders) margin = std::max(margin, o.manipulation.closingRadius);
-    const Mat4 lightClip = lightClipFromWorld(toLight, lo, hi, n, margin);
+    for (const Occluder& o : scene.occluders) margin = std::max(margin, o.manipulation.closingRadius + o.manipulation.erosionPx);
+    const Mat4 lightClip = spot ? spotClipFromWorld(light.position, toLight, light.coneDeg, lo, hi)
+                                : lightClipFromWorld(toLight, lo, hi, n, margin);
+    const double spotTan = std::tan(light.coneDeg * 0.5 * std::numbers::pi / 180);
     p.lightFromWorld = toGl(lightClip);
+    p.options = {settings.method == VisibilityMethod::Accelerated ? layout::kVisibilityMinMax : layout::kVisibilityNaive, 0,
+                 spot ? layout::kStylizerLightSpot : layout::kStylizerLightDirectional, settings.spotSteps};
+    p.spot = f4(light.position, std::cos(light.coneDeg * 0.5 * std::numbers::pi / 180));
+    p.spotCone = {float(std::cos(light.coneDeg * 0.4 * std::numbers::pi / 180)), 0, 0, 0};  // full light inside 80% of the cone
     const Camera::Frame f = cam.frame();
     p.eye = f4(cam.eye);
     p.camForward = f4(f.forward, cam.tanHalfFov());
@@ -179,8 +292,10 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     p.medium = {float(scene.medium.extinction), float(scene.medium.albedo),
                 scene.medium.phase.type == PhaseType::HenyeyGreenstein ? 1.0f : 0.0f, float(scene.medium.phase.g)};
     p.background = f4(scene.background, std::min(cam.farDist, 3.0e38));
-    const double texel = std::max(2 / length(Vec3d(lightClip(0, 0), lightClip(0, 1), lightClip(0, 2))),
-                                  2 / length(Vec3d(lightClip(1, 0), lightClip(1, 1), lightClip(1, 2)))) / n;
+    // World size of a texel (for a spot: per unit of distance from it).
+    const double texel = spot ? 2 * spotTan / n
+                              : std::max(2 / length(Vec3d(lightClip(0, 0), lightClip(0, 1), lightClip(0, 2))),
+                                         2 / length(Vec3d(lightClip(1, 0), lightClip(1, 1), lightClip(1, 2)))) / n;
     p.shadow = {2e-5f, hasOccluders ? 1.0f : 0.0f, float(texel), 0};
 
     // Draws the occluders `which` accepts (by index) with `builder` from `clipFromWorld`.
@@ -246,11 +361,34 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
             renderShadow(scratchMap, nullptr, [i](size_t j) { return j == i; });
             copyToBuffer(scratchMap, part);
             closeDepthBuffer(m_device, part, n, m.closingRadius, m.closingShape);
+            auto [objectLo, objectHi] = occluderBounds(scene.occluders[i]);
+            // World units per texel where the object is (a spot's texels grow with distance).
+            const double objectTexel = spot ? texel * length((objectLo + objectHi) * 0.5 - light.position) : texel;
+            if (m.dilationLength > 0) {
+                dilateEpipolarBuffer(m_device, part, n, epipoleOf(lightClip, cam.eye, n),
+                                     int(std::min(double(n), std::round(m.dilationLength / objectTexel))));
+                erodeBoxBuffer(m_device, part, n, m.erosionPx);
+            }
+            if (m.holeProbability > 0) {
+                HoleMap h = holeMapOf(lightClip, spot, spotTan * length((objectLo + objectHi) * 0.5 - light.position), n, m.holeFrequency);
+                h.threshold = m_gpu->threshold(m);
+                holeTimeOffset(scene.time, m.holeSpeed, h.offsetX, h.offsetY);
+                h.octaves = m.holeOctaves;
+                h.persistence = m.holePersistence;
+                h.seed = m.holeSeed;
+                cutHolesBuffer(m_device, part, n, h);
+            }
             foldMinimum(m_device, part, scatterDepth, n);
         }
     }
     m_device.finish();
     out.shadowMs = msSince(t);
+    t = Clock::now();
+    gl::Buffer minMax = settings.method == VisibilityMethod::Accelerated
+                            ? buildMinMaxMipmap(m_device, scatterDepth, n, p)
+                            : gl::createBuffer(2 * sizeof(float), nullptr, 0, "shadow-min-max-unused");
+    m_device.finish();
+    out.mipmapMs = msSince(t);
 
     // 2. The camera's G-buffer: normal and distance, colour and id.
     t = Clock::now();
@@ -301,17 +439,21 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
         p.transfer = {tf->mode == TransferFunction::Mode::Multiply ? 1.0f : 2.0f, float(tf->depthNear), float(tf->depthFar), 0};
     }
     m_device.setParams(p);
-    glUseProgram(m_device.program(gl::ShaderBuilder("stylize.comp")).id());
     glBindTextureUnit(layout::kUnitTransferFunction, transfer.id());
     glBindTextureUnit(layout::kUnitShadowDepth, shadowDepth.id());
     glBindTextureUnit(layout::kUnitGBufferSurface, surface.id());
     glBindTextureUnit(layout::kUnitGBufferColour, colour.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingScatterDepth, scatterDepth.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingMinMax, minMax.id());
+    glUseProgram(m_device.program(gl::ShaderBuilder("stylize.comp")).id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingImageOut, m_gpu->pixels.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingLayersOut, m_gpu->layers.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingScatterDepth, scatterDepth.id());
     const int g = layout::kWorkgroup2D;
     glDispatchCompute(GLuint((cam.width + g - 1) / g), GLuint((cam.height + g - 1) / g), 1);
     gl::barrierAfterComputeWrites();
+    m_device.finish();
+    out.shadeMs = msSince(t);
+    t = Clock::now();
     out.frame = Image(cam.width, cam.height);
     glGetNamedBufferSubData(m_gpu->pixels.id(), 0, GLsizeiptr(bytes), out.frame.rgba.data());
     std::vector<float> plane(pixelCount * 4);
@@ -335,7 +477,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     out.shadowMap = mapImage(shadow);
     glGetNamedBufferSubData(scatterDepth.id(), 0, GLsizeiptr(mapBytes), shadow.data());
     out.modifiedShadowMap = mapImage(shadow);
-    out.shadeMs = msSince(t);
+    out.readbackMs = msSince(t);
     out.totalMs = msSince(t0);
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory while stylizing");
     return out;

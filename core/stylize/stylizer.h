@@ -4,9 +4,9 @@
 /// shadow map (depth and object ids) and the camera's G-buffer (normal, distance, colour) with GL,
 /// then per pixel the average visibility V̄ along the view ray (Eq. 2) and the frame
 ///   L = L_surf e^{−σt s} + ρ p E (1 − e^{−σt s}) V̄        (directional light).
-/// This first version: a directional light, the naive V̄ (N shadow-map lookups per ray, the
-/// reference the accelerated methods are measured against), closing as the only manipulation,
-/// no transfer function yet. GL-free header; GL thread only.
+/// for a directional light, with the in-scattering integral taken numerically for a spot; then
+/// the transfer function. Per object, the scattering's map is closed, dilated along epipolar
+/// lines (Eq. 3) and given noise holes (Eq. 4–5). GL-free header; GL thread only.
 
 #include <memory>
 
@@ -16,8 +16,14 @@
 
 namespace volstyle::core {
 
+/// How V̄ is found: N midpoint lookups per view ray (the reference), or the exact traversal of
+/// the manipulated map's min-max mipmap (stylize.comp; docs/STYLIZER.md has the measurements).
+enum class VisibilityMethod { Naive, Accelerated };
+
 struct StylizeSettings {
-    int steps = 256;  ///< shadow-map lookups per view ray for V̄ (naive method), 1–4096
+    VisibilityMethod method = VisibilityMethod::Accelerated;
+    int steps = 256;       ///< shadow-map lookups per view ray for V̄ (naive method), 1–4096
+    int spotSteps = 64;    ///< midpoint samples of a spot light's in-scattering integral, 1–4096
     void validate() const;
 };
 
@@ -29,7 +35,12 @@ struct StylizedFrame {
     Image linearDepth;        ///< s: distance to the first surface (or the camera's far), rgb
     Image shadowMap;          ///< the light's depth in [0, 1] (1: nothing), side shadow_map_size
     Image modifiedShadowMap;  ///< the same after the occluders' manipulations (what V̄ reads)
-    double shadowMs = 0, gbufferMs = 0, shadeMs = 0, totalMs = 0;
+    double shadowMs = 0;   ///< the shadow maps and the manipulations
+    double mipmapMs = 0;   ///< the min-max mipmap (accelerated method)
+    double gbufferMs = 0;
+    double shadeMs = 0;     ///< the per-pixel pass: V̄, scattering, surfaces, transfer function
+    double readbackMs = 0;  ///< the frame, its AOVs and the maps back to the CPU
+    double totalMs = 0;
 };
 
 class Stylizer {
@@ -47,6 +58,10 @@ private:
     GpuDevice& m_device;
     std::unique_ptr<Gpu> m_gpu;
 };
+
+/// The perspective map of a spot light at `position` shining along −towardLight with a full cone
+/// of `coneDeg` (the map's square circumscribes the cone), deep enough for the bounds [lo, hi].
+Mat4 spotClipFromWorld(const Vec3d& position, const Vec3d& towardLight, double coneDeg, const Vec3d& lo, const Vec3d& hi);
 
 /// The orthographic map from world space to the light's clip space [-1,1]³ that covers the
 /// world-space bounds [lo, hi] seen from `towardLight` (near plane on the light's side), leaving

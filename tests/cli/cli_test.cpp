@@ -212,7 +212,7 @@ TEST(Cli, StylizesASceneFileAndItsAovs) {
 TEST(Cli, StylizeBadInputsAreExit2WithTheProblem) {
     auto dir = test::scratchDir();
     const std::string out = " -o " + (dir / "x.png").string();
-    writeText(dir / "bad.json", R"({"occluders":[{"mesh":"missing.obj"}],"medium":{"albedo":2},"light":{"type":"spot"},"colour":1})");
+    writeText(dir / "bad.json", R"({"occluders":[{"mesh":"missing.obj"}],"medium":{"albedo":2},"light":{"type":"sun"},"colour":1})");
     writeText(dir / "nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     writeText(dir / "nan.json", R"({"occluders":[{"mesh":"nan.obj"}]})");
     writeText(dir / "missing.json", R"({"occluders":[{"mesh":"missing.obj"}]})");
@@ -226,7 +226,8 @@ TEST(Cli, StylizeBadInputsAreExit2WithTheProblem) {
         {"stylize --scene " + (dir / "missing.json").string() + out, "no such file"},
         {"stylize --scene builtin:forest --steps 0" + out, "/steps"},
         {"stylize --scene builtin:forest --aov colour" + out, "--aov"},
-        {"stylize --scene builtin:forest --method accelerated" + out, "--method"},
+        {"stylize --scene builtin:forest --method fast" + out, "--method"},
+        {"stylize --scene builtin:forest --time nan" + out, "--time"},
     };
     for (const auto& [args, expected] : cases) {
         Result r = run(args);

@@ -75,17 +75,21 @@ TEST(Stylizer, AverageVisibilityUnderAPlaneWithAHoleIsTheShaftsShare) {
     VOLSTYLE_REQUIRE_GL();
     kHoleHalf = 0.6;
     const StylizerScene scene = holeScene();
-    StylizeSettings settings;
-    settings.steps = 1024;
     Stylizer stylizer(test::device());
-    const StylizedFrame f = stylizer.render(scene, settings);
-    int compared = 0, silhouette = 0;
-    const double worst = worstVisibilityError(scene, f, kHoleHalf, &compared, &silhouette);
-    const Camera& cam = scene.camera;
-    std::cout << "[ measured ] naive V̄ (1024 steps, 2048² map) vs closed form: max |error| " << worst << " over "
-              << compared << " pixels (" << silhouette << " silhouette pixels skipped)\n";
-    EXPECT_LE(worst, 1.0 / 255);
-    EXPECT_LE(silhouette, cam.width * cam.height / 50);
+    for (VisibilityMethod method : {VisibilityMethod::Naive, VisibilityMethod::Accelerated}) {
+        StylizeSettings settings;
+        settings.method = method;
+        settings.steps = 1024;
+        const StylizedFrame f = stylizer.render(scene, settings);
+        int compared = 0, silhouette = 0;
+        const double worst = worstVisibilityError(scene, f, kHoleHalf, &compared, &silhouette);
+        const Camera& cam = scene.camera;
+        std::cout << "[ measured ] " << (method == VisibilityMethod::Naive ? "naive V̄ (1024 steps" : "accelerated V̄ (min-max mipmap")
+                  << ", 2048² map) vs closed form: max |error| " << worst << " over " << compared << " pixels ("
+                  << silhouette << " silhouette pixels skipped)\n";
+        EXPECT_LE(worst, 1.0 / 255);
+        EXPECT_LE(silhouette, cam.width * cam.height / 50);
+    }
 }
 
 TEST(Stylizer, ClosingFillsTheHoleForTheScatteringOnly) {
@@ -197,6 +201,77 @@ TEST(Stylizer, ScatteringWithNothingInTheWayIsTheClosedForm) {
         }
     std::cout << "[ measured ] L_scat without occluders vs ρ p E (1 − e^{−σt s}): max relative error " << worst << "\n";
     EXPECT_LE(worst, 1e-3);
+}
+
+/// The spot above the hole, shining down: the hole scene lit by a cone.
+StylizerScene spotScene() {
+    kHoleHalf = 0.6;
+    StylizerScene scene = holeScene();
+    scene.light.type = StylizerLightType::Spot;
+    scene.light.position = {0.2, 5, -0.3};
+    scene.light.direction = {0, 1, 0};
+    scene.light.coneDeg = 70;
+    scene.light.irradiance = {40, 38, 35};
+    return scene;
+}
+
+TEST(Stylizer, SpotScatteringWithNothingInTheWayIsItsIntegral) {
+    VOLSTYLE_REQUIRE_GL();
+    StylizerScene scene = spotScene();
+    scene.occluders.clear();
+    Stylizer stylizer(test::device());
+    StylizeSettings settings;
+    settings.spotSteps = 512;
+    const StylizedFrame f = stylizer.render(scene, settings);
+    const Camera& cam = scene.camera;
+    const StylizerLight& l = scene.light;
+    const double sigma = scene.medium.extinction, g = scene.medium.phase.g, s = cam.farDist;
+    const double cosOuter = std::cos(l.coneDeg * 0.5 * M_PI / 180), cosInner = std::cos(l.coneDeg * 0.4 * M_PI / 180);
+    double worst = 0, peak = 0;
+    for (int y = 0; y < cam.height; ++y)
+        for (int x = 0; x < cam.width; ++x) {
+            const Vec3d w = cam.rayDirection(x, y);
+            // ∫₀ˢ σt ρ p e^{−σt t} I cone / d² e^{−σt d} dt by a fine midpoint rule in double.
+            double sum = 0;
+            const int k = 20000;
+            for (int i = 0; i < k; ++i) {
+                const double t = (i + 0.5) * s / k;
+                const Vec3d toLight = l.position - (cam.eye + w * t);
+                const double d = length(toLight);
+                const Vec3d dir = toLight / d;
+                const double a = std::clamp((dot(dir, normalize(l.direction)) - cosOuter) / (cosInner - cosOuter), 0.0, 1.0);
+                const double cone = a * a * (3 - 2 * a);
+                const double denom = 1 + g * g + 2 * g * dot(dir, -w);
+                const double p = (1 - g * g) / (4 * M_PI * denom * std::sqrt(denom));
+                sum += std::exp(-sigma * (t + d)) * p * cone / (d * d);
+            }
+            const double expected = sigma * scene.medium.albedo * sum * s / k * l.irradiance[1];
+            peak = std::max(peak, expected);
+            worst = std::max(worst, std::abs(f.scattering.pixel(x, y)[1] - expected));
+        }
+    std::cout << "[ measured ] spot L_scat without occluders (512 steps) vs a 20000-step integral: max |error| " << worst
+              << " (" << worst / peak << " of the brightest pixel)\n";
+    EXPECT_GT(peak, 0.05);
+    EXPECT_LE(worst, 1e-3 * peak);
+}
+
+TEST(Stylizer, SpotAverageVisibilityOfBothMethodsAgrees) {
+    VOLSTYLE_REQUIRE_GL();
+    const StylizerScene scene = spotScene();
+    Stylizer stylizer(test::device());
+    StylizeSettings naive;
+    naive.method = VisibilityMethod::Naive;
+    naive.steps = 4096;
+    const StylizedFrame a = stylizer.render(scene, naive);
+    const StylizedFrame b = stylizer.render(scene, {});
+    double worst = 0, lowest = 1;
+    for (size_t i = 0; i < a.averageVisibility.pixelCount(); ++i) {
+        worst = std::max(worst, double(std::abs(a.averageVisibility.rgba[4 * i] - b.averageVisibility.rgba[4 * i])));
+        lowest = std::min(lowest, double(b.averageVisibility.rgba[4 * i]));
+    }
+    std::cout << "[ measured ] spot light: accelerated V̄ vs naive (4096 steps): max |difference| " << worst << "\n";
+    EXPECT_LT(lowest, 0.5) << "the plane shadows part of the view";
+    EXPECT_LE(worst, 1.0 / 255);
 }
 
 double worstVisibilityError(const StylizerScene& scene, const StylizedFrame& f, double holeHalf, int* comparedOut, int* silhouetteOut) {

@@ -28,6 +28,10 @@ static_assert(offsetof(MarchParams, lightGridDims) == 240 + 96 * volstyle::core:
 static_assert(offsetof(MarchParams, indexFromLightGrid) == 240 + 112 * volstyle::core::layout::kLightSlots + 112);
 static_assert(sizeof(MarchParams) == 240 + 112 * volstyle::core::layout::kLightSlots + 176);
 static_assert(sizeof(volstyle::core::layout::VectorParams) == 64);
+static_assert(offsetof(volstyle::core::layout::StylizeParams, options) == 384);
+static_assert(offsetof(volstyle::core::layout::StylizeParams, mipOffset) == 432);
+static_assert(sizeof(volstyle::core::layout::StylizeParams) == 496);
+static_assert(sizeof(volstyle::core::layout::EditParams) == 64);
 
 TEST(Layout, MarchParamsMatchesStd140) {
     // The static_asserts above are the test; this records the size in the test log.

@@ -6,6 +6,22 @@
 using namespace volstyle;
 using nlohmann::json;
 
+namespace {
+
+/// Expects `j` to be refused with a problem at every one of `expected` (JSON Pointers).
+void expectProblemsAt(const json& j, std::initializer_list<const char*> expected) {
+    try {
+        protocol::stylizerSceneFromJson(j);
+        FAIL() << "expected a ValidationError";
+    } catch (const protocol::ValidationError& e) {
+        std::string paths;
+        for (const auto& d : e.details()) paths += d.path + " ";
+        for (const char* path : expected) EXPECT_NE(paths.find(std::string(path) + " "), std::string::npos) << path << " in " << paths;
+    }
+}
+
+}  // namespace
+
 TEST(StylizeJson, ReadsTheSceneWithAColumnMajorTransform) {
     const json j = json::parse(R"({
       "occluders": [{"name": "tree", "mesh": "tree.obj", "colour": [0.2, 0.3, 0.1],
@@ -39,15 +55,45 @@ TEST(StylizeJson, EveryProblemAtOnceUnderItsPath) {
       "medium": {"extinction": -1},
       "camera": {"eye": [0, 0, 0], "target": [0, 0, 0]},
       "transfer_function": {}, "extra": 1})");
+    expectProblemsAt(j, {"/occluders/0/mesh", "/occluders/0/transform", "/occluders/0/colour",
+                         "/occluders/0/manipulation/closing/radius_px", "/occluders/0/manipulation/holes/probability", "/light/shadow_map_size", "/light/direction",
+                         "/medium/extinction", "/camera/target", "/transfer_function/image", "/extra"});
+}
+
+TEST(StylizeJson, DilationHolesAndSpotLights) {
+    const json j = json::parse(R"({
+      "occluders": [{"mesh": "a.obj", "manipulation": {"dilation": {"length": 0.3, "erosion_px": 2},
+                     "holes": {"frequency": 0.5, "probability": 0.4, "seed": 9, "speed": 0.25, "octaves": 3, "persistence": 0.6}}}],
+      "light": {"type": "spot", "position": [1, 8, 2], "direction": [0, 1, 0], "cone_deg": 40}})");
+    const auto r = protocol::stylizerSceneFromJson(j);
+    const core::Manipulation& m = r.scene.occluders[0].manipulation;
+    EXPECT_EQ(m.dilationLength, 0.3);
+    EXPECT_EQ(m.erosionPx, 2);
+    EXPECT_EQ(m.holeFrequency, 0.5);
+    EXPECT_EQ(m.holeProbability, 0.4);
+    EXPECT_EQ(m.holeSeed, 9u);
+    EXPECT_EQ(m.holeSpeed, 0.25);
+    EXPECT_EQ(m.holeOctaves, 3);
+    EXPECT_EQ(m.holePersistence, 0.6);
+    EXPECT_EQ(r.scene.light.type, core::StylizerLightType::Spot);
+    EXPECT_EQ(r.scene.light.position.y, 8);
+    EXPECT_EQ(r.scene.light.coneDeg, 40);
+}
+
+TEST(StylizeJson, BadEditsAndLightsAreNamed) {
+    const json j = json::parse(R"({
+      "occluders": [{"mesh": "a.obj", "manipulation": {"dilation": {"erosion_px": 99},
+                     "holes": {"probability": 1.5, "frequency": 0, "seed": 0.5, "octaves": 20, "wind": 1}}}],
+      "light": {"type": "spot", "cone_deg": 170}, "time": 1e300})");
+    expectProblemsAt(j, {"/occluders/0/manipulation/dilation/length", "/occluders/0/manipulation/dilation/erosion_px",
+                         "/occluders/0/manipulation/holes/probability", "/occluders/0/manipulation/holes/frequency",
+                         "/occluders/0/manipulation/holes/seed", "/occluders/0/manipulation/holes/octaves",
+                         "/occluders/0/manipulation/holes/wind", "/light/position", "/light/cone_deg", "/time"});
+    // A directional light with a spot's fields is a typo, not a silent default.
     try {
-        protocol::stylizerSceneFromJson(j);
+        protocol::stylizerSceneFromJson(json::parse(R"({"light": {"position": [0, 1, 0]}})"));
         FAIL() << "expected a ValidationError";
     } catch (const protocol::ValidationError& e) {
-        std::string paths;
-        for (const auto& d : e.details()) paths += d.path + " ";
-        for (const char* expected : {"/occluders/0/mesh", "/occluders/0/transform", "/occluders/0/colour",
-                                     "/occluders/0/manipulation/closing/radius_px", "/occluders/0/manipulation/holes", "/light/shadow_map_size", "/light/direction",
-                                     "/medium/extinction", "/camera/target", "/transfer_function/image", "/extra"})
-            EXPECT_NE(paths.find(std::string(expected) + " "), std::string::npos) << expected << " in " << paths;
+        EXPECT_EQ(e.details().at(0).path, "/light/position");
     }
 }

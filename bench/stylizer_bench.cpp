@@ -1,0 +1,166 @@
+// bench/stylizer: the light-shaft stylizer at 1920×1080 on the built-in forest (issue #11), the
+// counterpart of the GI paper's Tables 1–2:
+//   Table 1 — per shadow-map size (512/1024/2048): ms of the shadow maps (+ holes on the
+//             canopies), the min-max mipmap, the G-buffer, the per-pixel pass (V̄, scattering,
+//             surfaces) with and without a transfer function, for the accelerated V̄ and the
+//             naive one (1024 lookups), and the accelerated V̄'s difference from the naive one.
+//   Time against error — the naive V̄ at 64–4096 steps against the accelerated one (exact
+//             against the map) on the 2048² map.
+//   Table 2 — the closing of a 2048² map per kernel radius (box and disc).
+// Usage: stylizer_bench [--quick] [--reps N]. Prints tables, then one JSON line per row.
+#include <spdlog/spdlog.h>
+
+#include <cstring>
+#include <iostream>
+#include <random>
+#include <sstream>
+
+#include "bench_util.h"
+#include "core/base/stopwatch.h"
+#include "core/gpu/gpu_device.h"
+#include "core/stylize/morphology.h"
+#include "core/stylize/stylizer.h"
+
+using namespace volstyle;
+using namespace volstyle::core;
+
+namespace {
+
+struct Times {
+    double shadow = 0, mipmap = 0, gbuffer = 0, shade = 0, total = 0;
+};
+
+/// Medians over `reps` renders (after one to compile the kernels).
+Times timeRenders(Stylizer& stylizer, const StylizerScene& scene, const StylizeSettings& settings, int reps, StylizedFrame* last) {
+    std::vector<double> shadow, mipmap, gbuffer, shade, total;
+    StylizedFrame f = stylizer.render(scene, settings);
+    for (int r = 0; r < reps; ++r) {
+        f = stylizer.render(scene, settings);
+        shadow.push_back(f.shadowMs), mipmap.push_back(f.mipmapMs), gbuffer.push_back(f.gbufferMs);
+        shade.push_back(f.shadeMs), total.push_back(f.totalMs);
+    }
+    if (last) *last = std::move(f);
+    return {bench::median(shadow), bench::median(mipmap), bench::median(gbuffer), bench::median(shade), bench::median(total)};
+}
+
+struct Difference {
+    double max = 0, p999 = 0, mean = 0;
+};
+
+Difference visibilityDifference(const Image& a, const Image& b) {
+    std::vector<double> d;
+    for (size_t i = 0; i < a.pixelCount(); ++i) d.push_back(std::abs(a.rgba[4 * i] - b.rgba[4 * i]));
+    std::sort(d.begin(), d.end());
+    double sum = 0;
+    for (double v : d) sum += v;
+    return {d.back(), d[d.size() * 999 / 1000], sum / double(d.size())};
+}
+
+std::shared_ptr<const Image> warmTransferFunction() {
+    auto img = std::make_shared<Image>(64, 64);
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) {
+            float* p = img->pixel(x, y);
+            p[0] = 1.0f, p[1] = 0.6f + 0.4f * float(x) / 63, p[2] = 0.3f + 0.7f * float(y) / 63, p[3] = 1;
+        }
+    return img;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    bool quick = false;
+    int reps = 2;
+    for (int i = 1; i < argc; ++i) {
+        if (!std::strcmp(argv[i], "--quick")) quick = true;
+        else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::max(1, std::atoi(argv[++i]));
+        else {
+            std::cerr << "usage: stylizer_bench [--quick] [--reps N]\n";
+            return 2;
+        }
+    }
+    spdlog::set_level(spdlog::level::warn);
+    auto device = GpuDevice::create();
+    Stylizer stylizer(*device);
+    StylizerScene scene = builtinForest();
+    scene.camera.width = quick ? 960 : 1920;
+    scene.camera.height = quick ? 540 : 1080;
+    for (Occluder& o : scene.occluders)
+        if (o.name != "ground") o.manipulation.holeProbability = 0.3;
+    std::vector<std::string> json;
+    std::cout << "device: " << device->capabilities().renderer << "\n";
+    std::cout << "Table 1: forest " << scene.camera.width << "x" << scene.camera.height
+              << ", holes on the canopies; ms (median of " << reps << ")\n";
+    std::cout << "  SM    shadow+holes  mipmap  G-buffer  pass(acc)  pass(acc,TF)  pass(naive 1024)  total(acc)  speed-up  V̄ max / p99.9 / mean diff\n";
+    for (int sm : quick ? std::vector<int>{512, 1024} : std::vector<int>{512, 1024, 2048}) {
+        scene.light.shadowMapSize = sm;
+        StylizeSettings acc, naive;
+        naive.method = VisibilityMethod::Naive;
+        naive.steps = 1024;
+        StylizedFrame a, b;
+        const Times ta = timeRenders(stylizer, scene, acc, reps, &a);
+        StylizerScene withTf = scene;
+        withTf.transferFunction = TransferFunction{warmTransferFunction(), TransferFunction::Mode::Multiply, 0, 40};
+        const Times tf = timeRenders(stylizer, withTf, acc, reps, nullptr);
+        const Times tn = timeRenders(stylizer, scene, naive, std::max(1, reps / 2), &b);
+        const Difference d = visibilityDifference(a.averageVisibility, b.averageVisibility);
+        char line[512];
+        std::snprintf(line, sizeof line, "  %-5d %12.1f %7.1f %9.1f %10.1f %13.1f %17.1f %11.1f %8.1fx  %.4f / %.4f / %.5f\n", sm, ta.shadow,
+                      ta.mipmap, ta.gbuffer, ta.shade, tf.shade, tn.shade, ta.total, tn.shade / (ta.mipmap + ta.shade), d.max, d.p999, d.mean);
+        std::cout << line;
+        std::ostringstream js;
+        js << "{\"table\":1,\"sm\":" << sm << ",\"shadow_ms\":" << ta.shadow << ",\"mipmap_ms\":" << ta.mipmap << ",\"gbuffer_ms\":" << ta.gbuffer
+           << ",\"pass_accelerated_ms\":" << ta.shade << ",\"pass_accelerated_tf_ms\":" << tf.shade << ",\"pass_naive1024_ms\":" << tn.shade
+           << ",\"vbar_max_diff\":" << d.max << ",\"vbar_p999_diff\":" << d.p999 << ",\"vbar_mean_diff\":" << d.mean << "}";
+        json.push_back(js.str());
+    }
+
+    scene.light.shadowMapSize = quick ? 1024 : 2048;
+    std::cout << "\nTime against error: naive V̄ vs the accelerated (exact against the " << scene.light.shadowMapSize << "² map)\n";
+    std::cout << "  method          pass ms   V̄ max diff   p99.9     mean\n";
+    StylizedFrame exact;
+    const Times te = timeRenders(stylizer, scene, {}, reps, &exact);
+    std::printf("  accelerated  %10.1f   (reference)\n", te.mipmap + te.shade);
+    for (int steps : quick ? std::vector<int>{64, 256, 1024} : std::vector<int>{64, 256, 1024, 4096}) {
+        StylizeSettings naive;
+        naive.method = VisibilityMethod::Naive;
+        naive.steps = steps;
+        StylizedFrame f;
+        const Times t = timeRenders(stylizer, scene, naive, 1, &f);
+        const Difference d = visibilityDifference(f.averageVisibility, exact.averageVisibility);
+        std::printf("  naive %5d  %10.1f   %.5f     %.5f  %.6f\n", steps, t.shade, d.max, d.p999, d.mean);
+        std::ostringstream js;
+        js << "{\"table\":\"time_error\",\"sm\":" << scene.light.shadowMapSize << ",\"steps\":" << steps << ",\"pass_ms\":" << t.shade
+           << ",\"vbar_max_diff\":" << d.max << ",\"vbar_p999_diff\":" << d.p999 << ",\"vbar_mean_diff\":" << d.mean << "}";
+        json.push_back(js.str());
+    }
+
+    const int n = quick ? 1024 : 2048;
+    std::cout << "\nTable 2: closing a " << n << "² shadow map (dilation + erosion), ms (median of " << reps << ")\n";
+    std::cout << "  radius     box    disc\n";
+    std::mt19937 rng(5);
+    std::vector<float> map(size_t(n) * n);
+    for (float& v : map) v = rng() % 3 == 0 ? 1.0f : 0.3f + 0.5f * float(rng() % 1000) / 1000.0f;
+    auto timeClosing = [&](int radius, MorphShape shape) {
+        std::vector<double> ms;
+        (void)closingOnGpu(*device, map, n, radius, shape);  // compiles, and is the upload + read-back floor at r = 0
+        for (int r = 0; r < reps; ++r) {
+            const auto t0 = Clock::now();
+            (void)closingOnGpu(*device, map, n, radius, shape);
+            ms.push_back(msSince(t0));
+        }
+        return bench::median(ms);
+    };
+    const double floorMs = timeClosing(0, MorphShape::Box);
+    std::printf("  (upload + read-back, subtracted: %.1f ms)\n", floorMs);
+    for (int radius : {1, 2, 4, 8, 16, 32}) {
+        const double box = timeClosing(radius, MorphShape::Box) - floorMs, disc = timeClosing(radius, MorphShape::Disc) - floorMs;
+        std::printf("  %6d %7.1f %7.1f\n", radius, box, disc);
+        std::ostringstream js;
+        js << "{\"table\":2,\"n\":" << n << ",\"radius\":" << radius << ",\"box_ms\":" << box << ",\"disc_ms\":" << disc << "}";
+        json.push_back(js.str());
+    }
+    std::cout << "\n";
+    for (const std::string& j : json) std::cout << j << "\n";
+    return 0;
+}
