@@ -8,8 +8,10 @@
 
 namespace volstyle::protocol {
 
-const char* imageFormatName(ImageFormat f) { return f == ImageFormat::Png ? "png" : "exr"; }
-const char* imageMimeType(ImageFormat f) { return f == ImageFormat::Png ? "image/png" : "image/x-exr"; }
+const char* imageFormatName(ImageFormat f) { return f == ImageFormat::Png ? "png" : f == ImageFormat::Jpeg ? "jpeg" : "exr"; }
+const char* imageMimeType(ImageFormat f) {
+    return f == ImageFormat::Png ? "image/png" : f == ImageFormat::Jpeg ? "image/jpeg" : "image/x-exr";
+}
 
 core::Camera readCamera(JsonReader& r, const nlohmann::json& body, const std::string& path, const RequestLimits& limits) {
     const std::string key = path.substr(path.rfind('/') + 1);

@@ -30,7 +30,7 @@ struct RequestLimits {
 /// Query parameters as the HTTP layer hands them over (name → value, repeats allowed).
 using QueryParams = std::multimap<std::string, std::string>;
 
-enum class ImageFormat { Png, Exr };
+enum class ImageFormat { Png, Exr, Jpeg };  ///< JPEG: 8-bit sRGB like PNG, for live frames
 const char* imageFormatName(ImageFormat f);
 const char* imageMimeType(ImageFormat f);
 

@@ -1,5 +1,7 @@
 #include "protocol/stylize_json.h"
 
+#include <map>
+
 #include "protocol/render_json.h"
 
 namespace volstyle::protocol {
@@ -112,7 +114,7 @@ void phaseFromJson(JsonReader& r, const nlohmann::json& j, const std::string& pa
 
 }  // namespace
 
-StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::string& path) {
+StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::string& path, SceneSource source) {
     JsonReader r;
     StylizerSceneRequest out;
     core::StylizerScene& s = out.scene;
@@ -122,8 +124,14 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
             const std::string tp = path + "/transfer_function";
             if (r.object(t, tp, {"image", "mode", "depth_range"})) {
                 core::TransferFunction tf;
-                if (!t.contains("image")) r.fail(tp + "/image", "is required");
-                else out.transferImageRef = r.string(t["image"], tp + "/image");
+                if (source == SceneSource::Api) {
+                    if (t.contains("image"))
+                        r.fail(tp + "/image", "the API takes no file paths: upload the image with PUT …/stylizer/tf and leave this out");
+                } else if (!t.contains("image")) {
+                    r.fail(tp + "/image", "is required");
+                } else {
+                    out.transferImageRef = r.string(t["image"], tp + "/image");
+                }
                 const std::string mode = t.contains("mode") ? r.string(t["mode"], tp + "/mode").value_or("") : "multiply";
                 if (mode == "replace") tf.mode = core::TransferFunction::Mode::Replace;
                 else if (mode != "multiply" && !mode.empty()) r.fail(tp + "/mode", "must be 'multiply' or 'replace', got '" + mode + "'");
@@ -228,6 +236,106 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
     }
     r.throwIfErrors();
     return out;
+}
+
+namespace {
+
+nlohmann::json vec3Json(const Vec3d& v) { return {v.x, v.y, v.z}; }
+
+nlohmann::json manipulationToJson(const core::Manipulation& m) {
+    nlohmann::json j = nlohmann::json::object();
+    if (m.closingRadius > 0)
+        j["closing"] = {{"radius_px", m.closingRadius}, {"shape", m.closingShape == core::MorphShape::Box ? "box" : "disc"}};
+    if (m.dilationLength > 0) j["dilation"] = {{"length", m.dilationLength}, {"erosion_px", m.erosionPx}};
+    if (m.holeProbability > 0)
+        j["holes"] = {{"frequency", m.holeFrequency}, {"probability", m.holeProbability}, {"seed", m.holeSeed},
+                      {"speed", m.holeSpeed}, {"octaves", m.holeOctaves}, {"persistence", m.holePersistence}};
+    return j;
+}
+
+}  // namespace
+
+nlohmann::json stylizerSceneToJson(const core::StylizerScene& scene, const std::vector<std::string>& meshRefs,
+                                   const std::optional<std::string>& transferImageRef) {
+    nlohmann::json occluders = nlohmann::json::array();
+    for (size_t i = 0; i < scene.occluders.size(); ++i) {
+        const core::Occluder& o = scene.occluders[i];
+        nlohmann::json transform = nlohmann::json::array();
+        for (int c = 0; c < 4; ++c)
+            for (int row = 0; row < 4; ++row) transform.push_back(o.worldFromObject(row, c));
+        occluders.push_back({{"name", o.name}, {"mesh", i < meshRefs.size() ? meshRefs[i] : ""}, {"transform", transform},
+                             {"colour", vec3Json(o.colour)}, {"manipulation", manipulationToJson(o.manipulation)}});
+    }
+    const core::StylizerLight& l = scene.light;
+    nlohmann::json light = {{"type", l.type == core::StylizerLightType::Spot ? "spot" : "directional"},
+                            {"direction", vec3Json(l.direction)}, {"irradiance", vec3Json(l.irradiance)},
+                            {"shadow_map_size", l.shadowMapSize}};
+    if (l.type == core::StylizerLightType::Spot) light["position"] = vec3Json(l.position), light["cone_deg"] = l.coneDeg;
+    const core::Phase& phase = scene.medium.phase;
+    nlohmann::json phaseJson = {{"type", phase.type == core::PhaseType::HenyeyGreenstein ? "henyey_greenstein" : "isotropic"}};
+    if (phase.type == core::PhaseType::HenyeyGreenstein) phaseJson["g"] = phase.g;
+    nlohmann::json j = {{"occluders", occluders},
+                        {"light", light},
+                        {"medium", {{"extinction", scene.medium.extinction}, {"albedo", scene.medium.albedo}, {"phase", phaseJson}}},
+                        {"camera", cameraToJson(scene.camera)},
+                        {"background", vec3Json(scene.background)},
+                        {"time", scene.time}};
+    if (const auto& tf = scene.transferFunction) {
+        j["transfer_function"] = {{"mode", tf->mode == core::TransferFunction::Mode::Replace ? "replace" : "multiply"},
+                                  {"depth_range", {tf->depthNear, tf->depthFar}}};
+        if (transferImageRef) j["transfer_function"]["image"] = *transferImageRef;
+    }
+    return j;
+}
+
+const char* const kStylizerAovNames = "average_visibility, linear_depth, shadow_map, modified_shadow_map, scattering";
+
+std::optional<core::StylizerOutput> stylizerOutputFromName(const std::string& name) {
+    using O = core::StylizerOutput;
+    static const std::map<std::string, O> names = {{"frame", O::Frame},
+                                                   {"average_visibility", O::AverageVisibility},
+                                                   {"linear_depth", O::LinearDepth},
+                                                   {"shadow_map", O::ShadowMap},
+                                                   {"modified_shadow_map", O::ModifiedShadowMap},
+                                                   {"scattering", O::Scattering}};
+    auto it = names.find(name);
+    if (it == names.end()) return std::nullopt;
+    return it->second;
+}
+
+StylizerFrameRequest StylizerFrameRequest::fromJson(const nlohmann::json& j, const RequestLimits& limits) {
+    JsonReader r;
+    StylizerFrameRequest q;
+    if (r.object(j, "", {"camera", "format", "aov", "time", "method", "steps", "exposure"})) {
+        if (j.contains("camera")) q.camera = readCamera(r, j, "/camera", limits);
+        if (j.contains("format")) {
+            auto f = r.string(j["format"], "/format");
+            if (f == "png") q.format = ImageFormat::Png;
+            else if (f == "jpeg" || f == "jpg") q.format = ImageFormat::Jpeg;
+            else if (f == "exr") q.format = ImageFormat::Exr;
+            else if (f) r.fail("/format", "must be 'png', 'jpeg' or 'exr', got '" + *f + "'");
+        }
+        if (j.contains("aov")) {
+            auto name = r.string(j["aov"], "/aov");
+            if (name) {
+                if (auto o = stylizerOutputFromName(*name)) q.output = *o;
+                else r.fail("/aov", "must be one of frame, " + std::string(kStylizerAovNames) + "; got '" + *name + "'");
+            }
+        }
+        if (j.contains("time")) q.time = boundedNumber(r, j["time"], "/time", -1e9, 1e9, 0);
+        if (j.contains("method")) {
+            auto m = r.string(j["method"], "/method");
+            if (m == "naive") q.settings.method = core::VisibilityMethod::Naive;
+            else if (m && *m != "accelerated") r.fail("/method", "must be 'accelerated' or 'naive', got '" + *m + "'");
+        }
+        if (j.contains("steps")) {
+            q.settings.steps = r.integer(j["steps"], "/steps").value_or(q.settings.steps);
+            if (q.settings.steps < 1 || q.settings.steps > 4096) r.check("", "steps", "must be in [1, 4096]");
+        }
+        if (j.contains("exposure")) q.exposure = boundedNumber(r, j["exposure"], "/exposure", -64, 64, 0);
+    }
+    r.throwIfErrors();
+    return q;
 }
 
 }  // namespace volstyle::protocol

@@ -10,9 +10,9 @@
 ///    "medium": {"extinction": 0.05, "albedo": 0.9, "phase": {"type": "henyey_greenstein", "g": 0.4}},
 ///    "transfer_function": {"image": "tf.png", "mode": "multiply"|"replace", "depth_range": [0, 50]},
 ///    "camera": {…SPEC §1…}, "background": [r,g,b], "time": 0}
-/// Meshes are references the caller resolves (the CLI: paths relative to the file). Fields of
-/// SPEC §7 that are not rendered yet (dilation, holes, volume, spot lights) are
-/// refused by name rather than ignored.
+/// Meshes are references the caller resolves (the CLI: paths relative to the file; the API: the
+/// names of uploaded occluder meshes or builtin:forest/NAME). `volume` (a heterogeneous medium)
+/// is not rendered yet and is refused by name rather than ignored.
 
 #include <nlohmann/json.hpp>
 
@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "core/stylize/scene.h"
+#include "protocol/requests.h"
 #include "protocol/validation.h"
 
 namespace volstyle::protocol {
@@ -33,7 +34,37 @@ struct StylizerSceneRequest {
     std::optional<std::string> transferImageRef;
 };
 
+/// Where a scene comes from: a SCENE.json file (the TF image is a path) or the API (no file paths:
+/// `transfer_function` uses the image uploaded to …/stylizer/tf, and `image` is refused).
+enum class SceneSource { File, Api };
+
 /// Throws ValidationError listing every invalid field (paths below `path`).
-StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::string& path = "");
+StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::string& path = "",
+                                           SceneSource source = SceneSource::File);
+
+/// The outputs' names (SPEC §7): "frame", "average_visibility", "linear_depth", "shadow_map",
+/// "modified_shadow_map", "scattering"; nullopt for any other.
+std::optional<core::StylizerOutput> stylizerOutputFromName(const std::string& name);
+/// The AOVs' names, for messages: "average_visibility, linear_depth, …".
+extern const char* const kStylizerAovNames;
+
+/// POST /sessions/{sid}/stylizer/frame: {"camera": {…} (default: the scene's), "format":
+/// "png"|"jpeg"|"exr", "aov": NAME, "time": T (default: the scene's), "method":
+/// "accelerated"|"naive", "steps": N, "exposure": STOPS}, all optional.
+struct StylizerFrameRequest {
+    std::optional<core::Camera> camera;
+    ImageFormat format = ImageFormat::Png;
+    core::StylizerOutput output = core::StylizerOutput::Frame;
+    std::optional<double> time;
+    core::StylizeSettings settings;
+    double exposure = 0;  ///< stops, PNG and JPEG
+    static StylizerFrameRequest fromJson(const nlohmann::json& j, const RequestLimits& limits);
+};
+
+/// The scene as JSON, every field written (defaults included), so that reading it back gives the
+/// same scene: `meshRefs` name each occluder's mesh; `transferImageRef`, when given, is written
+/// as `transfer_function.image`.
+nlohmann::json stylizerSceneToJson(const core::StylizerScene& scene, const std::vector<std::string>& meshRefs,
+                                   const std::optional<std::string>& transferImageRef = std::nullopt);
 
 }  // namespace volstyle::protocol

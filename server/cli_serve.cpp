@@ -37,6 +37,7 @@ const CommandSpec kServe{
         {"max-sessions", "N", "sessions at once; default 64"},
         {"max-upload-mib", "N", "largest VDB or image upload, MiB; default 512"},
         {"max-image-side", "N", "largest target or render side, pixels; default 4096"},
+        {"max-mesh-vertices", "N", "vertices of an occluder mesh, and of a session's meshes together; default 4000000"},
         {"max-voxels", "N", "largest volume, voxels; default 16777216 (256^3)"},
         {"max-json-kib", "N", "largest JSON body, KiB; default 1024"},
     },
@@ -67,6 +68,7 @@ int runServe(const std::vector<std::string>& argv) {
     opt.maxSessions = size_t(wholeNumber(args, "max-sessions", double(opt.maxSessions), 1, 1e6));
     opt.maxUploadBytes = size_t(wholeNumber(args, "max-upload-mib", double(opt.maxUploadBytes >> 20), 1, 1 << 20)) << 20;
     opt.maxImageSide = int(wholeNumber(args, "max-image-side", opt.maxImageSide, 16, 65536));
+    opt.maxMeshVertices = size_t(wholeNumber(args, "max-mesh-vertices", double(opt.maxMeshVertices), 3, 1e8));
     opt.volumeLimits.maxVoxels = int64_t(wholeNumber(args, "max-voxels", double(opt.volumeLimits.maxVoxels), 1, 1e10));
     opt.maxJsonBytes = size_t(wholeNumber(args, "max-json-kib", double(opt.maxJsonBytes >> 10), 1, 1 << 20)) << 10;
     // This process's own image, even if the file on disk is replaced while it runs (a rebuild or

@@ -55,7 +55,7 @@ core::StylizerScene loadStylizerScene(const std::string& spec) {
     for (size_t i = 0; i < request.meshRefs.size(); ++i) {
         const std::string where = "'" + spec + "': /occluders/" + std::to_string(i) + "/mesh: ";
         try {
-            request.scene.occluders[i].mesh = core::loadMesh((folder / request.meshRefs[i]).string());
+            request.scene.occluders[i].mesh = std::make_shared<const core::Mesh>(core::loadMesh((folder / request.meshRefs[i]).string()));
         } catch (const IoError& e) {
             throw IoError(where + e.what());
         } catch (const InvalidArgument& e) {
@@ -81,15 +81,13 @@ int runStylize(const std::vector<std::string>& argv) {
     Arguments args = parseArguments(argv, kStylize);
     if (printHelpIfAsked(args, kStylize)) return 0;
     if (!args.has("scene")) throw InvalidArgument("--scene is required (volstyle stylize --help)");
-    const std::string output = imageOutputPath(args);
+    const std::string outputPath = imageOutputPath(args);
     const std::string method = args.has("method") ? args.get("method") : "accelerated";
     if (method != "naive" && method != "accelerated")
         throw InvalidArgument("--method: '" + method + "' is not one of accelerated, naive");
-    const std::string aov = args.has("aov") ? args.get("aov") : "";
-    if (!aov.empty() && aov != "average_visibility" && aov != "linear_depth" && aov != "shadow_map" &&
-        aov != "modified_shadow_map" && aov != "scattering")
-        throw InvalidArgument("--aov: '" + aov +
-                              "' is not one of average_visibility, linear_depth, shadow_map, modified_shadow_map, scattering");
+    const std::string aov = args.has("aov") ? args.get("aov") : "frame";
+    const auto output = protocol::stylizerOutputFromName(aov);
+    if (!output) throw InvalidArgument("--aov: '" + aov + "' is not one of " + protocol::kStylizerAovNames);
 
     core::StylizerScene scene = loadStylizerScene(args.get("scene"));
     if (args.has("camera"))
@@ -103,20 +101,15 @@ int runStylize(const std::vector<std::string>& argv) {
     const double steps = args.number("steps", settings.steps);
     if (steps != std::floor(steps)) throw InvalidArgument("--steps: must be a whole number");
     settings.steps = int(std::clamp(steps, -1.0, 1e6));
+    settings.readShadowMaps = *output == core::StylizerOutput::ShadowMap || *output == core::StylizerOutput::ModifiedShadowMap;
     settings.validate();
 
     auto device = core::GpuDevice::create();
     core::Stylizer stylizer(*device);
     const core::StylizedFrame f = stylizer.render(scene, settings);
-    const core::Image& image = aov == "average_visibility" ? f.averageVisibility
-                               : aov == "linear_depth"     ? f.linearDepth
-                               : aov == "shadow_map"       ? f.shadowMap
-                               : aov == "modified_shadow_map" ? f.modifiedShadowMap
-                               : aov == "scattering"       ? f.scattering
-                                                           : f.frame;
     core::SaveOptions save;
     save.exposure = args.number("exposure", 0);
-    core::saveImage(output, image, save);
+    core::saveImage(outputPath, f.output(*output), save);
     spdlog::info("stylized {}x{} in {:.1f} ms (shadow maps and edits {:.1f}, min-max mipmap {:.1f}, G-buffer {:.1f}, shading {:.1f}, read back {:.1f})",
                  scene.camera.width, scene.camera.height, f.totalMs, f.shadowMs, f.mipmapMs, f.gbufferMs, f.shadeMs, f.readbackMs);
     return 0;

@@ -39,6 +39,8 @@ ServiceLimits serviceLimits(const ServerOptions& o) {
     l.maxUploadBytes = o.maxUploadBytes;
     l.maxImageSide = o.maxImageSide;
     l.volumeLimits = o.volumeLimits;
+    l.meshLimits.maxVertices = o.maxMeshVertices;
+    l.meshLimits.maxTriangles = 2 * o.maxMeshVertices;
     l.renderBudgetSeconds = o.renderBudgetSeconds;
     l.vdbReader.executable = o.vdbReader;
     l.finishedJobsKept = o.finishedJobsKept;
@@ -90,6 +92,7 @@ HttpServer::HttpServer(ServerOptions options) {
     addVolumeRoutes(m->routes);
     addViewRoutes(m->routes);
     addJobRoutes(m->routes);
+    addStylizerRoutes(m->routes);
     if (!m->opt.webDir.empty()) m->http.set_mount_point("/", m->opt.webDir);  // httplib refuses '..' paths
 }
 

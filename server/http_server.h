@@ -23,6 +23,8 @@ struct ServerOptions {
     size_t maxUploadBytes = size_t(512) << 20;  ///< images and VDBs: 512 MiB
     int maxImageSide = 4096;
     core::VolumeLimits volumeLimits;
+    /// Vertices of one occluder mesh, and of all a session's meshes together (triangles: twice).
+    size_t maxMeshVertices = 4'000'000;
     int httpThreads = 48;            ///< HTTP worker threads (an open event stream holds one)
     int maxEventStreams = 16;        ///< open event streams in all (below httpThreads)
     int maxEventStreamsPerClient = 8;

@@ -10,9 +10,11 @@
 
 #include "core/base/errors.h"
 #include "core/image/image_io.h"
+#include "core/stylize/mesh_io.h"
 #include "core/volume/vdb_io.h"
 #include "protocol/error_body.h"
 #include "protocol/render_json.h"
+#include "protocol/stylize_json.h"
 
 namespace volstyle::server {
 namespace {
@@ -235,8 +237,63 @@ std::shared_ptr<Session> Persistence::loadSession(const fs::path& dir) {
         }
         s->views.push_back(std::move(view));
     }
+    restoreStylizer(*s, dir);
     if (s->damaged.size() != damagedBefore) saveSession(*s);  // the damage (and any fall-back) is recorded
     return s;
+}
+
+void Persistence::saveStylizerScene(const std::string& session, const json& scene) {
+    fs::create_directories(sessionDir(session) / "stylizer");
+    atomicWrite(sessionDir(session) / "stylizer" / "scene.json", protocol::toText(scene, 2));
+}
+
+void Persistence::saveStylizerFile(const std::string& session, const std::string& file, const std::string& bytes) {
+    const fs::path path = sessionDir(session) / file;
+    fs::create_directories(path.parent_path());
+    atomicWrite(path, bytes);
+}
+
+void Persistence::removeStylizerFile(const std::string& session, const std::string& file) {
+    std::error_code ec;
+    fs::remove(sessionDir(session) / file, ec);
+}
+
+void Persistence::restoreStylizer(Session& s, const fs::path& dir) {
+    const auto damage = [&](const std::string& file, const std::string& reason) {
+        quarantineFile(s.id, file, reason);
+        s.damaged.push_back({file, reason});
+    };
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(dir / "stylizer" / "occluders", ec)) {
+        const std::string file = "stylizer/occluders/" + entry.path().filename().string();
+        const std::string format = entry.path().extension().string().substr(entry.path().extension().empty() ? 0 : 1);
+        if (format.rfind("tmp-", 0) == 0) continue;  // an unfinished write (atomicWrite's temporary)
+        try {
+            const std::string bytes = readFile(entry.path());
+            auto mesh = std::make_shared<const core::Mesh>(core::loadMeshFromMemory(bytes, format));
+            s.stylizer.meshes[entry.path().stem().string()] = {format, std::move(mesh), bytes.size()};
+        } catch (const std::exception& e) {
+            damage(file, e.what());
+        }
+    }
+    if (fs::exists(dir / "stylizer" / "tf.image")) {
+        try {
+            const std::string bytes = readFile(dir / "stylizer" / "tf.image");
+            s.stylizer.transferImage =
+                std::make_shared<const core::Image>(core::loadImageFromMemory(bytes.data(), bytes.size(), "the transfer function", 4096).image);
+        } catch (const std::exception& e) {
+            damage("stylizer/tf.image", e.what());
+        }
+    }
+    if (!fs::exists(dir / "stylizer" / "scene.json")) return;  // never edited: builtin:forest
+    try {
+        const auto request = protocol::stylizerSceneFromJson(json::parse(readFile(dir / "stylizer" / "scene.json")), "",
+                                                             protocol::SceneSource::Api);
+        s.stylizer.scene = resolveStylizerScene(s.stylizer, request);
+        s.stylizer.meshRefs = request.meshRefs;
+    } catch (const std::exception& e) {
+        damage("stylizer/scene.json", std::string("the stylizer's scene no longer loads (it is builtin:forest again): ") + e.what());
+    }
 }
 
 void Persistence::restoreVersions(Session& s, const json& j) {

@@ -12,6 +12,7 @@
 #include "core/image/image_io.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/renderer.h"
+#include "core/stylize/stylizer.h"
 #include "core/volume/builtin_scenes.h"
 #include "core/volume/vdb_io.h"
 
@@ -65,6 +66,7 @@ SessionService::~SessionService() {
             j->preview.reset();
         }
         m_renderer.reset();
+        m_stylizer.reset();
     });
 }
 
@@ -129,6 +131,7 @@ void SessionService::remove(const std::string& id) {
         jobs = s->jobs;
         if (m_persist) m_persist->removeSession(s->id);
     }
+    s->stylizerChanged.notify_all();  // its live streams end
     for (const auto& jid : jobs)
         if (auto j = m_jobs.find(jid)) j->cancel = true;
     m_gl.run([this, s](core::GpuDevice&) {

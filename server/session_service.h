@@ -5,6 +5,7 @@
 /// (Persistence) before the method returns; GL work runs on the GL thread (GlWorker); a session's
 /// lock is never held while waiting for the GL thread (a finishing solve needs it).
 
+#include <chrono>
 #include <memory>
 #include <optional>
 #include <semaphore>
@@ -22,6 +23,12 @@
 #include "server/persistence.h"
 #include "server/session_store.h"
 #include "server/vdb_reader.h"
+#include "server/stylizer_state.h"
+
+namespace volstyle::core {
+class Stylizer;
+struct StylizedFrame;
+}  // namespace volstyle::core
 
 namespace volstyle::server {
 
@@ -31,6 +38,10 @@ struct ServiceLimits {
     size_t maxUploadBytes = size_t(512) << 20;
     int maxImageSide = 4096;
     core::VolumeLimits volumeLimits;
+    /// Occluder meshes: each file (also within maxUploadBytes) and its vertices and triangles;
+    /// maxVertices also bounds the vertices of all a session's uploads together.
+    core::MeshLimits meshLimits;
+    size_t maxMeshesPerSession = 16;
     /// Seconds a render or preview may hold the GL thread (over: 422 over_budget); <= 0: unbounded.
     double renderBudgetSeconds = 60;
     VdbReaderOptions vdbReader;  ///< uploads are read in a child process first (vdb_reader.h)
@@ -40,6 +51,25 @@ struct ServiceLimits {
 };
 
 enum class ViewImage { Target, Weights };
+
+/// What a session's stylizer renders (a copy: the meshes are shared, not copied).
+struct StylizerSnapshot {
+    core::StylizerScene scene;
+    std::vector<std::string> meshRefs;
+    uint64_t revision = 0;
+};
+
+struct OccluderMeshInfo {
+    std::string name, format;
+    size_t vertices = 0, triangles = 0, fileBytes = 0;
+    Vec3 boundsLo, boundsHi;  ///< in the mesh's own space
+    bool used = false;              ///< the scene's occluders use it
+};
+
+struct TransferImageInfo {
+    int width = 0, height = 0, channels = 0;
+    bool used = false;  ///< the scene has a transfer_function
+};
 
 class SessionService {
 public:
@@ -80,6 +110,30 @@ public:
     core::RenderLayers renderView(Session& s, const std::string& viewId, bool layers = false);
     /// A view rendered from a running job's latest iterate; after the job, the session's volume.
     core::Image renderPreview(const std::string& jobId, const std::string& viewId);
+
+    // The light-shaft stylizer (session_stylizer.cpp; SPEC §7). Every change moves the
+    // stylizer's revision, is on disk before the method returns, and wakes its live streams.
+    StylizerSnapshot stylizer(Session& s) const;
+    /// Replaces the scene: its meshes and TF resolved against the uploads (ValidationError naming
+    /// the fields), its camera within the image-side limit (413).
+    StylizerSnapshot setStylizerScene(Session& s, const protocol::StylizerSceneRequest& request);
+    std::vector<OccluderMeshInfo> occluderMeshes(Session& s) const;
+    /// Reads and stores a mesh file under `name` (422 unreadable, empty or non-finite; 413 over
+    /// the upload, vertex or per-session limits); the scene re-renders if it uses `name`.
+    OccluderMeshInfo putOccluderMesh(Session& s, const std::string& name, const std::string& bytes);
+    void removeOccluderMesh(Session& s, const std::string& name);  ///< busy (409) while the scene uses it
+    /// Decodes and stores the TF image (RGB or RGBA, ≤ 4096 a side; 422 otherwise).
+    TransferImageInfo setTransferImage(Session& s, const std::string& bytes);
+    core::Image transferImage(Session& s) const;   ///< not_found without one
+    void removeTransferImage(Session& s);          ///< busy (409) while the scene uses it
+    /// A frame (or AOV) of the session's stylizer on the GL thread; over_budget (422) when its
+    /// estimated time is over the render budget.
+    core::StylizedFrame stylize(Session& s, const protocol::StylizerFrameRequest& request);
+    /// The live stream's next frame: waits up to `wait` for a revision newer than `after`, then
+    /// answers the newest revision's frame (rendered once, then kept); nullopt on time-out.
+    std::optional<LiveFrame> nextLiveFrame(Session& s, uint64_t after, std::chrono::milliseconds wait);
+    /// The kept live frame if it shows `revision` (frames are replaced by newer ones).
+    std::optional<LiveFrame> liveFrame(Session& s, uint64_t revision) const;
 
     // Solve jobs.
     std::shared_ptr<Job> startSolve(const std::shared_ptr<Session>& s, const core::SolveOptions& options);
@@ -123,6 +177,12 @@ private:
     void solveAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options, core::GpuDevice& device);
     void finishJob(Job& job);
 
+    /// Writes the stylizer's scene, moves its revision and wakes its streams (the lock held).
+    void stylizerChanged(Session& s);
+    /// On the GL thread: the one stylizer of the service (created on first use).
+    core::Stylizer& stylizerEngine(core::GpuDevice& device);
+    core::StylizedFrame stylizeOnGl(const core::StylizerScene& scene, const core::StylizeSettings& settings);
+
     /// A slot of m_decodeSlots, held while an upload's pixels are decoded.
     struct DecodeSlot {
         explicit DecodeSlot(std::counting_semaphore<>& s) : slots(s) { slots.acquire(); }
@@ -134,6 +194,7 @@ private:
 
     ServiceLimits m_limits;
     std::unique_ptr<core::Renderer> m_renderer;  ///< GL thread only
+    std::unique_ptr<core::Stylizer> m_stylizer;  ///< GL thread only
     SessionStore m_sessions;
     JobStore m_jobs;
     std::mutex m_jobRecords;  ///< orders writing a job's record against forgetting it

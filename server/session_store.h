@@ -3,6 +3,7 @@
 /// Editing sessions held by the server: the volume (and its GPU copy, owned by the GL thread),
 /// the lighting, and bookkeeping. Ids are 128 random bits in hex (unguessable, SPEC §3).
 
+#include <condition_variable>
 #include <map>
 #include <optional>
 #include <memory>
@@ -14,6 +15,7 @@
 #include "core/render/params.h"
 #include "core/volume/volume.h"
 #include "protocol/error_code.h"
+#include "server/stylizer_state.h"
 #include "server/version_history.h"
 
 namespace volstyle::server {
@@ -45,6 +47,8 @@ struct Session {
     std::vector<std::string> jobs;
     core::Lighting lighting;
     std::shared_ptr<core::GpuVolume> gpu;  ///< created and destroyed on the GL thread
+    StylizerState stylizer = defaultStylizer();
+    std::condition_variable stylizerChanged;  ///< notified (with `mutex`) when its revision moves
     /// Set by DELETE: work still queued for the session neither caches GPU copies nor writes it
     /// back to disk (it answers not_found instead).
     bool removed = false;

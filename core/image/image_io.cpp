@@ -222,9 +222,9 @@ std::string encodeExrLayers(const std::vector<ExrLayer>& layers, bool halfFloat)
 }
 
 std::string encodeImage(const Image& image, const std::string& format, const SaveOptions& options) {
-    if (format != "png" && format != "exr")
-        throw InvalidArgument("format must be 'png' or 'exr', got '" + format + "'");
-    TempFile tmp("." + format);
+    if (format != "png" && format != "exr" && format != "jpeg")
+        throw InvalidArgument("format must be 'png', 'jpeg' or 'exr', got '" + format + "'");
+    TempFile tmp(format == "jpeg" ? ".jpg" : "." + format);
     saveImage(tmp.path, image, options);
     std::ifstream f(tmp.path, std::ios::binary);
     std::ostringstream s;

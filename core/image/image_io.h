@@ -53,7 +53,7 @@ struct ExrLayer {
 void saveExrLayers(const std::string& path, const std::vector<ExrLayer>& layers, bool halfFloat = true);
 std::string encodeExrLayers(const std::vector<ExrLayer>& layers, bool halfFloat = true);
 
-/// Encodes to PNG or EXR bytes in memory (for HTTP answers): `format` is "png" or "exr".
+/// Encodes to PNG, JPEG or EXR bytes in memory (for HTTP answers): `format` is "png", "jpeg" or "exr".
 std::string encodeImage(const Image& image, const std::string& format,
                         const SaveOptions& options = {});
 

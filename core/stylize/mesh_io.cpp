@@ -162,6 +162,14 @@ Mesh loadMesh(const std::string& path, const MeshLimits& limits) {
     return flatten(scene, quoted(path), limits);
 }
 
+std::string meshFormatOf(const std::string& bytes) {
+    if (bytes.rfind("glTF", 0) == 0) return "glb";
+    if (bytes.rfind("ply", 0) == 0 && bytes.size() > 3 && (bytes[3] == '\n' || bytes[3] == '\r')) return "ply";
+    const size_t first = bytes.find_first_not_of(" \t\r\n");
+    if (first != std::string::npos && bytes[first] == '{') return "gltf";
+    return "obj";
+}
+
 Mesh loadMeshFromMemory(const std::string& bytes, const std::string& extension, const MeshLimits& limits) {
     const std::string what = "the uploaded mesh";
     if (bytes.empty()) throw InvalidArgument(what + " is empty");

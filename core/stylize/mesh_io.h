@@ -15,6 +15,10 @@ namespace volstyle::core {
 /// knows), InvalidArgument (no triangles, non-finite vertices) or LimitExceeded (over `limits`).
 Mesh loadMesh(const std::string& path, const MeshLimits& limits = {});
 
+/// The format of mesh bytes by their first bytes: "glb" (binary glTF's magic), "ply" (its magic
+/// line), "gltf" (a JSON object), else "obj" (text; assimp then judges it).
+std::string meshFormatOf(const std::string& bytes);
+
 /// The same from bytes in memory (uploads); `extension` ("obj", "ply", "gltf", "glb") tells the
 /// format. A .gltf whose buffers are separate files cannot be read this way (upload a .glb).
 Mesh loadMeshFromMemory(const std::string& bytes, const std::string& extension, const MeshLimits& limits = {});

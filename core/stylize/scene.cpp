@@ -11,7 +11,8 @@ namespace volstyle::core {
 void StylizerScene::validate() const {
     for (const Occluder& o : occluders) {
         try {
-            o.mesh.validate();
+            if (!o.mesh) throw InvalidArgument("has no mesh");
+            o.mesh->validate();
         } catch (const InvalidArgument& e) {
             throw InvalidArgument("occluder '" + o.name + "': " + e.what());
         }
@@ -55,6 +56,11 @@ void StylizerScene::validate() const {
         for (float v : tf.image->rgba)
             if (!std::isfinite(v) || v < 0) throw InvalidArgument("/transfer_function/image: values must be finite and >= 0");
     }
+}
+
+void StylizeSettings::validate() const {
+    if (steps < 1 || steps > 4096) throw InvalidArgument("/steps: must be in [1, 4096]");
+    if (spotSteps < 1 || spotSteps > 4096) throw InvalidArgument("/spot_steps: must be in [1, 4096]");
 }
 
 namespace {
@@ -103,18 +109,18 @@ void addCanopy(Mesh& m, Random& rnd, Vec3d centre, Vec3d radii, int leaves, doub
 
 StylizerScene builtinForest() {
     StylizerScene s;
-    Occluder ground{"ground", {}, Mat4::identity(), {0.18, 0.16, 0.12}, {}};
-    addQuad(ground.mesh, {-14, 0, -16}, {-14, 0, 14}, {14, 0, 14}, {14, 0, -16});
-    Occluder trees{"trees", {}, Mat4::identity(), {0.16, 0.22, 0.10}, {}};
+    Mesh groundMesh, treesMesh;
+    addQuad(groundMesh, {-14, 0, -16}, {-14, 0, 14}, {14, 0, 14}, {14, 0, -16});
     Random rnd(2011);
     for (int gx = -2; gx <= 2; ++gx)
         for (int gz = -3; gz <= 1; ++gz) {
             const double x = 3.2 * gx + 1.4 * (rnd() - 0.5), z = 3.2 * gz + 1.4 * (rnd() - 0.5);
             const double h = 4.5 + 2.0 * rnd();
-            addTrunk(trees.mesh, x, z, 0, h, 0.22, 0.12, 7);
-            addCanopy(trees.mesh, rnd, {x, h + 0.6, z}, {1.9, 1.4, 1.9}, 260, 0.45);
+            addTrunk(treesMesh, x, z, 0, h, 0.22, 0.12, 7);
+            addCanopy(treesMesh, rnd, {x, h + 0.6, z}, {1.9, 1.4, 1.9}, 260, 0.45);
         }
-    s.occluders = {std::move(ground), std::move(trees)};
+    s.occluders = {{"ground", std::make_shared<const Mesh>(std::move(groundMesh)), Mat4::identity(), {0.18, 0.16, 0.12}, {}},
+                   {"trees", std::make_shared<const Mesh>(std::move(treesMesh)), Mat4::identity(), {0.16, 0.22, 0.10}, {}}};
     s.light.direction = {-0.45, 0.55, -0.7};  // a low sun behind the grove
     s.light.irradiance = {3.2, 2.9, 2.3};
     s.medium = {0.06, 0.9, {PhaseType::HenyeyGreenstein, 0.5}};

@@ -41,7 +41,9 @@ struct Manipulation {
 
 struct Occluder {
     std::string name;
-    Mesh mesh;
+    /// Shared and immutable: a scene is copied per frame and per edit (the server keeps uploads
+    /// once), and the stylizer keeps each mesh's GPU copy while the mesh lives.
+    std::shared_ptr<const Mesh> mesh;
     Mat4 worldFromObject;
     Vec3d colour{0.4, 0.35, 0.3};  ///< diffuse albedo of its surface
     Manipulation manipulation;
@@ -87,6 +89,23 @@ struct StylizerScene {
     /// light, a shadow map outside 512–4096, a negative σt, ρ outside [0,1], a bad camera).
     void validate() const;
 };
+
+/// How V̄ is found: N midpoint lookups per view ray (the reference), or the exact traversal of
+/// the manipulated map's min-max mipmap (stylize.comp; docs/STYLIZER.md has the measurements).
+enum class VisibilityMethod { Naive, Accelerated };
+
+struct StylizeSettings {
+    VisibilityMethod method = VisibilityMethod::Accelerated;
+    int steps = 256;       ///< shadow-map lookups per view ray for V̄ (naive method), 1–4096
+    int spotSteps = 64;    ///< midpoint samples of a spot light's in-scattering integral, 1–4096
+    /// Read the shadow maps back (their AOVs); off, StylizedFrame::shadowMap and
+    /// modifiedShadowMap stay empty and a frame saves two n×n read-backs (live previews).
+    bool readShadowMaps = true;
+    void validate() const;
+};
+
+/// What a frame can be saved as (SPEC §7 "Outputs"): the frame or one of its AOVs.
+enum class StylizerOutput { Frame, AverageVisibility, LinearDepth, ShadowMap, ModifiedShadowMap, Scattering };
 
 /// The built-in scene `forest`: a ground plane and a grove of trees whose canopies are clouds of
 /// leaf quads, under a low sun, seen from inside a hazy wood: light shafts through foliage.

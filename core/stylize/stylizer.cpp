@@ -17,11 +17,6 @@
 
 namespace volstyle::core {
 
-void StylizeSettings::validate() const {
-    if (steps < 1 || steps > 4096) throw InvalidArgument("/steps: must be in [1, 4096]");
-    if (spotSteps < 1 || spotSteps > 4096) throw InvalidArgument("/spot_steps: must be in [1, 4096]");
-}
-
 namespace {
 
 /// An orthonormal frame with w along `axis`.
@@ -35,7 +30,7 @@ void frameAround(const Vec3d& axis, Vec3d& u, Vec3d& v, Vec3d& w) {
 /// World-space bounds of an occluder after its transform.
 std::pair<Vec3d, Vec3d> occluderBounds(const Occluder& o) {
     Vec3d lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-    auto [a, b] = o.mesh.bounds();
+    auto [a, b] = o.mesh->bounds();
     for (int corner = 0; corner < 8; ++corner) {
         const Vec3d p = o.worldFromObject.applyPoint({(corner & 1) ? b.x : a.x, (corner & 2) ? b.y : a.y, (corner & 4) ? b.z : a.z});
         for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
@@ -207,6 +202,21 @@ struct Stylizer::Gpu {
     gl::Buffer pixels, layers;
     size_t pixelBytes = 0;
     std::map<std::tuple<double, int, double, uint32_t>, float> holeThresholds;  // calibrations, reused
+    /// GPU copies of the meshes of recent frames, kept while their mesh lives: a live stream
+    /// re-renders the same scene with another camera, time or manipulation, and uploading a
+    /// large mesh every frame would cost more than the frame.
+    struct CachedMesh {
+        std::weak_ptr<const Mesh> mesh;
+        std::shared_ptr<GpuMesh> gpu;
+    };
+    std::map<const Mesh*, CachedMesh> meshes;
+
+    std::shared_ptr<GpuMesh> mesh(const std::shared_ptr<const Mesh>& m) {
+        std::erase_if(meshes, [](const auto& entry) { return entry.second.mesh.expired(); });
+        auto it = meshes.find(m.get());
+        if (it == meshes.end()) it = meshes.emplace(m.get(), CachedMesh{m, std::make_shared<GpuMesh>(*m)}).first;
+        return it->second.gpu;
+    }
 
     float threshold(const Manipulation& m) {
         const auto key = std::make_tuple(m.holeProbability, m.holeOctaves, m.holePersistence, m.holeSeed);
@@ -262,8 +272,8 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     const Camera& cam = scene.camera;
     const int n = scene.light.shadowMapSize;
 
-    std::vector<GpuMesh> meshes;
-    for (const Occluder& o : scene.occluders) meshes.emplace_back(o.mesh);
+    std::vector<std::shared_ptr<GpuMesh>> meshes;
+    for (const Occluder& o : scene.occluders) meshes.push_back(m_gpu->mesh(o.mesh));
     const bool hasOccluders = !meshes.empty();
     auto [lo, hi] = hasOccluders ? sceneBounds(scene) : std::pair<Vec3d, Vec3d>{Vec3d(-1.0), Vec3d(1.0)};
 
@@ -307,8 +317,8 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
             p.worldFromObject = toGl(scene.occluders[i].worldFromObject);
             p.surface = f4(scene.occluders[i].colour, double(i + 1));
             m_device.setParams(p);
-            glBindVertexArray(meshes[i].vao.id());
-            glDrawElements(GL_TRIANGLES, meshes[i].indexCount, GL_UNSIGNED_INT, nullptr);
+            glBindVertexArray(meshes[i]->vao.id());
+            glDrawElements(GL_TRIANGLES, meshes[i]->indexCount, GL_UNSIGNED_INT, nullptr);
         }
         glBindVertexArray(0);
     };
@@ -472,11 +482,13 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
             }
         return img;
     };
-    std::vector<float> shadow(size_t(n) * n);
-    glGetTextureImage(shadowDepth.id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(mapBytes), shadow.data());
-    out.shadowMap = mapImage(shadow);
-    glGetNamedBufferSubData(scatterDepth.id(), 0, GLsizeiptr(mapBytes), shadow.data());
-    out.modifiedShadowMap = mapImage(shadow);
+    if (settings.readShadowMaps) {
+        std::vector<float> shadow(size_t(n) * n);
+        glGetTextureImage(shadowDepth.id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(mapBytes), shadow.data());
+        out.shadowMap = mapImage(shadow);
+        glGetNamedBufferSubData(scatterDepth.id(), 0, GLsizeiptr(mapBytes), shadow.data());
+        out.modifiedShadowMap = mapImage(shadow);
+    }
     out.readbackMs = msSince(t);
     out.totalMs = msSince(t0);
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory while stylizing");

@@ -16,17 +16,6 @@
 
 namespace volstyle::core {
 
-/// How V̄ is found: N midpoint lookups per view ray (the reference), or the exact traversal of
-/// the manipulated map's min-max mipmap (stylize.comp; docs/STYLIZER.md has the measurements).
-enum class VisibilityMethod { Naive, Accelerated };
-
-struct StylizeSettings {
-    VisibilityMethod method = VisibilityMethod::Accelerated;
-    int steps = 256;       ///< shadow-map lookups per view ray for V̄ (naive method), 1–4096
-    int spotSteps = 64;    ///< midpoint samples of a spot light's in-scattering integral, 1–4096
-    void validate() const;
-};
-
 /// A frame and its AOVs (SPEC §7 "Outputs"), all linear.
 struct StylizedFrame {
     Image frame;              ///< RGBA, alpha 1
@@ -41,6 +30,18 @@ struct StylizedFrame {
     double shadeMs = 0;     ///< the per-pixel pass: V̄, scattering, surfaces, transfer function
     double readbackMs = 0;  ///< the frame, its AOVs and the maps back to the CPU
     double totalMs = 0;
+
+    const Image& output(StylizerOutput which) const {
+        switch (which) {
+            case StylizerOutput::AverageVisibility: return averageVisibility;
+            case StylizerOutput::LinearDepth: return linearDepth;
+            case StylizerOutput::ShadowMap: return shadowMap;
+            case StylizerOutput::ModifiedShadowMap: return modifiedShadowMap;
+            case StylizerOutput::Scattering: return scattering;
+            case StylizerOutput::Frame: break;
+        }
+        return frame;
+    }
 };
 
 class Stylizer {

@@ -60,12 +60,12 @@ void reply(httplib::Response& res, int status, const nlohmann::json& body) {
 
 void replyImage(httplib::Response& res, const core::Image& image, protocol::ImageFormat format, double exposure) {
     core::SaveOptions save;
-    save.exposure = format == protocol::ImageFormat::Png ? exposure : 0;  // EXR stays linear
+    save.exposure = format != protocol::ImageFormat::Exr ? exposure : 0;  // EXR stays linear
     res.set_content(core::encodeImage(image, protocol::imageFormatName(format), save), protocol::imageMimeType(format));
 }
 
 void replyImage(httplib::Response& res, const core::RenderLayers& render, protocol::ImageFormat format, double exposure) {
-    if (format == protocol::ImageFormat::Png) return replyImage(res, render.beauty, format, exposure);
+    if (format != protocol::ImageFormat::Exr) return replyImage(res, render.beauty, format, exposure);
     res.set_content(core::encodeExrLayers(core::exrLayersOf(render)), protocol::imageMimeType(format));
 }
 

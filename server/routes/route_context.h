@@ -71,5 +71,6 @@ void addSessionRoutes(RouteContext& c);  ///< sessions, lighting, renders
 void addVolumeRoutes(RouteContext& c);   ///< volume upload, download, revert
 void addViewRoutes(RouteContext& c);     ///< views, targets, weights, view renders
 void addJobRoutes(RouteContext& c);      ///< solve, jobs, events, previews
+void addStylizerRoutes(RouteContext& c); ///< the stylizer's scene, meshes, TF, frames, live stream
 
 }  // namespace volstyle::server

@@ -52,7 +52,7 @@ double insideSquare(const Vec3d& e, const Vec3d& w, double half, double s) {
 
 StylizerScene holeScene() {
     StylizerScene s;
-    s.occluders = {{"plane", planeWithHole(), Mat4::identity(), {0.5, 0.5, 0.5}, {}}};
+    s.occluders = {{"plane", std::make_shared<const Mesh>(planeWithHole()), Mat4::identity(), {0.5, 0.5, 0.5}, {}}};
     s.light.direction = {0, 1, 0};  // straight down through the hole
     s.light.shadowMapSize = 2048;
     s.medium = {0.1, 0.8, {PhaseType::HenyeyGreenstein, 0.3}};

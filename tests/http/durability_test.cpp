@@ -186,3 +186,47 @@ TEST(Durability, ADamagedFileQuarantinesOnlyWhatItHolds) {
     }
     fs::remove_all(dir);
 }
+
+TEST(Durability, TheStylizerSurvivesARestart) {
+    // Issue #11: the stylizer's scene, its uploaded meshes and its TF are on disk before the
+    // answer, and a restart (kill -9) brings back the same scene rendering the same frame.
+    const fs::path dir = fs::temp_directory_path() / "volstyle-durability-stylizer";
+    fs::remove_all(dir);
+    std::string base, sceneBefore, meshesBefore, frameBefore;
+    const std::string frameRequest = R"({"format": "exr", "camera": {"eye": [0, 6, 12], "target": [0, 0, 0], "width": 32, "height": 24}})";
+    {
+        ServerProcess server(dir);
+        httplib::Client c("127.0.0.1", server.port);
+        c.set_read_timeout(120, 0);
+        auto r = c.Post("/api/v1/sessions", R"({"scene": "builtin:sphere", "resolution": 16})", "application/json");
+        ASSERT_EQ(r->status, 201) << r->body;
+        base = "/api/v1/sessions/" + json::parse(r->body)["id"].get<std::string>() + "/stylizer";
+        ASSERT_EQ(c.Put((base + "/occluders/board").c_str(), "v -3 2 -3\nv 3 2 -3\nv 3 2 3\nv -3 2 3\nf 1 2 3\nf 1 3 4\n",
+                        "application/octet-stream")->status, 200);
+        volstyle::core::Image tf(4, 2);
+        for (size_t i = 0; i < tf.pixelCount(); ++i) tf.rgba[4 * i] = 1, tf.rgba[4 * i + 1] = 0.5f, tf.rgba[4 * i + 2] = 0.25f, tf.rgba[4 * i + 3] = 1;
+        ASSERT_EQ(c.Put((base + "/tf").c_str(), volstyle::core::encodeImage(tf, "exr"), "image/x-exr")->status, 200);
+        json scene = json::parse(c.Get(base.c_str())->body);
+        scene["occluders"][1]["mesh"] = "board";
+        scene["occluders"][1]["manipulation"] = {{"closing", {{"radius_px", 2}}}};
+        scene["light"]["shadow_map_size"] = 512;
+        scene["transfer_function"] = {{"mode", "multiply"}, {"depth_range", {0, 30}}};
+        r = c.Put(base.c_str(), scene.dump(), "application/json");
+        ASSERT_EQ(r->status, 200) << r->body;
+        sceneBefore = c.Get(base.c_str())->body;
+        meshesBefore = c.Get((base + "/occluders").c_str())->body;
+        frameBefore = c.Post((base + "/frame").c_str(), frameRequest, "application/json")->body;
+        server.stop(SIGKILL);
+    }
+    ServerProcess server(dir);
+    httplib::Client c("127.0.0.1", server.port);
+    c.set_read_timeout(120, 0);
+    EXPECT_EQ(c.Get(base.c_str())->body, sceneBefore);
+    EXPECT_EQ(c.Get((base + "/occluders").c_str())->body, meshesBefore);
+    EXPECT_EQ(c.Get((base + "/tf.png").c_str())->status, 200);
+    const std::string frameAfter = c.Post((base + "/frame").c_str(), frameRequest, "application/json")->body;
+    auto pixels = [](const std::string& exr) { return volstyle::core::loadImageFromMemory(exr.data(), exr.size(), "frame").image.rgba; };
+    EXPECT_TRUE(pixels(frameAfter) == pixels(frameBefore)) << "the same frame";  // (the files differ in their date)
+    server.stop(SIGTERM);
+    fs::remove_all(dir);
+}

@@ -107,12 +107,14 @@ TEST(StylizerScene, TheBuiltinForestIsValidAndLetsLightThrough) {
     const StylizerScene forest = builtinForest();
     EXPECT_NO_THROW(forest.validate());
     ASSERT_EQ(forest.occluders.size(), 2u);
-    EXPECT_GT(forest.occluders[1].mesh.triangleCount(), 10000u);  // leaves: foliage, not a solid roof
+    EXPECT_GT(forest.occluders[1].mesh->triangleCount(), 10000u);  // leaves: foliage, not a solid roof
     StylizerScene bad = forest;
     bad.light.shadowMapSize = 100;
     EXPECT_THROW(bad.validate(), InvalidArgument);
     bad = forest;
-    bad.occluders[0].mesh.positions[0].x = std::nanf("");
+    Mesh broken = *bad.occluders[0].mesh;
+    broken.positions[0].x = std::nanf("");
+    bad.occluders[0].mesh = std::make_shared<const Mesh>(std::move(broken));
     EXPECT_THROW(bad.validate(), InvalidArgument);
     bad = forest;
     bad.medium.extinction = 1e308;  // would be Inf as a float

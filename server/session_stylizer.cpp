@@ -1,0 +1,234 @@
+// The stylizer of a session (SPEC §7 "API"): its scene, occluder meshes and transfer function,
+// frames on the GL thread, and the live stream's frames.
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "core/base/errors.h"
+#include "core/image/image_io.h"
+#include "core/stylize/mesh_io.h"
+#include "core/stylize/stylizer.h"
+#include "server/session_service.h"
+
+namespace volstyle::server {
+namespace {
+
+using protocol::ApiError;
+using protocol::ErrorCode;
+
+using Clock = std::chrono::steady_clock;
+
+/// Shadow-map lookups per second on llvmpipe's two cores (1920×1080 × 1024 naive steps take
+/// 6.4 s, bench/stylizer), and the lookups an accelerated ray costs (p99 of the min-max
+/// traversal's iterations at SM 2048, with margin): the estimate that keeps a frame within the
+/// render budget before it holds the GL thread.
+constexpr double kLookupsPerSecond = 3.0e8;
+constexpr double kAcceleratedLookupsPerRay = 300;
+
+std::string meshFile(const std::string& name, const std::string& format) { return "stylizer/occluders/" + name + "." + format; }
+const std::string kTransferFile = "stylizer/tf.image";
+
+}  // namespace
+
+StylizerSnapshot SessionService::stylizer(Session& s) const {
+    std::lock_guard lock(s.mutex);
+    return {s.stylizer.scene, s.stylizer.meshRefs, s.stylizer.revision};
+}
+
+void SessionService::stylizerChanged(Session& s) {
+    if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+    if (m_persist) m_persist->saveStylizerScene(s.id, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs));
+    ++s.stylizer.revision;
+    s.stylizerChanged.notify_all();
+}
+
+StylizerSnapshot SessionService::setStylizerScene(Session& s, const protocol::StylizerSceneRequest& request) {
+    for (auto [side, name] : {std::pair{request.scene.camera.width, "width"}, std::pair{request.scene.camera.height, "height"}})
+        if (side > m_limits.maxImageSide) {
+            const std::string message = "images are limited to " + std::to_string(m_limits.maxImageSide) + " pixels a side";
+            throw ApiError(ErrorCode::TooLarge, message, {{std::string("/camera/") + name, message}});
+        }
+    std::lock_guard lock(s.mutex);
+    core::StylizerScene scene = resolveStylizerScene(s.stylizer, request);
+    try {
+        scene.validate();
+    } catch (const InvalidArgument& e) {
+        throw ApiError(ErrorCode::InvalidArgument, e.what());
+    }
+    s.stylizer.scene = std::move(scene);
+    s.stylizer.meshRefs = request.meshRefs;
+    stylizerChanged(s);
+    return {s.stylizer.scene, s.stylizer.meshRefs, s.stylizer.revision};
+}
+
+namespace {
+
+OccluderMeshInfo meshInfo(const std::string& name, const UploadedMesh& m, const StylizerState& state) {
+    auto [lo, hi] = m.mesh->bounds();
+    return {name, m.format, m.mesh->positions.size(), m.mesh->triangleCount(), m.fileBytes, lo, hi, state.uses(name)};
+}
+
+}  // namespace
+
+std::vector<OccluderMeshInfo> SessionService::occluderMeshes(Session& s) const {
+    std::lock_guard lock(s.mutex);
+    std::vector<OccluderMeshInfo> out;
+    for (const auto& [name, m] : s.stylizer.meshes) out.push_back(meshInfo(name, m, s.stylizer));
+    return out;
+}
+
+OccluderMeshInfo SessionService::putOccluderMesh(Session& s, const std::string& name, const std::string& bytes) {
+    if (!isMeshName(name))
+        throw ApiError(ErrorCode::InvalidArgument, "a mesh name is 1-64 characters of A-Z, a-z, 0-9, '_', '.' and '-'; got '" + name + "'");
+    checkUploadSize(bytes, "the mesh");
+    core::MeshLimits limits = m_limits.meshLimits;
+    limits.maxFileBytes = std::min(limits.maxFileBytes, m_limits.maxUploadBytes);
+    {
+        std::lock_guard lock(s.mutex);  // before the parse: a full session refuses at once
+        auto& meshes = s.stylizer.meshes;
+        if (!meshes.contains(name) && meshes.size() >= m_limits.maxMeshesPerSession)
+            throw ApiError(ErrorCode::TooLarge, "a session holds at most " + std::to_string(m_limits.maxMeshesPerSession) +
+                                                    " occluder meshes; delete one first (DELETE …/stylizer/occluders/NAME)");
+        const size_t others = s.stylizer.uploadedVertices() - (meshes.contains(name) ? meshes.at(name).mesh->positions.size() : 0);
+        limits.maxVertices = std::min(limits.maxVertices, m_limits.meshLimits.maxVertices - std::min(others, m_limits.meshLimits.maxVertices));
+    }
+    UploadedMesh uploaded{core::meshFormatOf(bytes), nullptr, bytes.size()};
+    {
+        DecodeSlot slot(m_decodeSlots);
+        try {
+            uploaded.mesh = std::make_shared<const core::Mesh>(core::loadMeshFromMemory(bytes, uploaded.format, limits));
+        } catch (const LimitExceeded& e) {
+            throw ApiError(ErrorCode::TooLarge, std::string(e.what()) +
+                                                    (limits.maxVertices < m_limits.meshLimits.maxVertices
+                                                         ? " (the session's other meshes hold " +
+                                                               std::to_string(m_limits.meshLimits.maxVertices - limits.maxVertices) +
+                                                               " of its " + std::to_string(m_limits.meshLimits.maxVertices) + " vertices)"
+                                                         : std::string()));
+        } catch (const Error& e) {
+            throw ApiError(ErrorCode::UnsupportedMedia, e.what());  // corrupt, empty, not a mesh, non-finite
+        }
+    }
+    std::lock_guard lock(s.mutex);
+    if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+    if (m_persist) {
+        if (auto old = s.stylizer.meshes.find(name); old != s.stylizer.meshes.end() && old->second.format != uploaded.format)
+            m_persist->removeStylizerFile(s.id, meshFile(name, old->second.format));
+        m_persist->saveStylizerFile(s.id, meshFile(name, uploaded.format), bytes);
+    }
+    s.stylizer.meshes[name] = uploaded;
+    if (s.stylizer.uses(name)) {  // the scene shows the new mesh
+        for (size_t i = 0; i < s.stylizer.meshRefs.size(); ++i)
+            if (s.stylizer.meshRefs[i] == name) s.stylizer.scene.occluders[i].mesh = uploaded.mesh;
+        stylizerChanged(s);
+    }
+    return meshInfo(name, uploaded, s.stylizer);
+}
+
+void SessionService::removeOccluderMesh(Session& s, const std::string& name) {
+    std::lock_guard lock(s.mutex);
+    auto it = s.stylizer.meshes.find(name);
+    if (it == s.stylizer.meshes.end()) throw ApiError(ErrorCode::NotFound, "no occluder mesh '" + name + "' in session '" + s.id + "'");
+    if (s.stylizer.uses(name))
+        throw ApiError(ErrorCode::Busy, "the stylizer's scene uses mesh '" + name + "'; PUT a scene without it first");
+    if (m_persist) m_persist->removeStylizerFile(s.id, meshFile(name, it->second.format));
+    s.stylizer.meshes.erase(it);
+}
+
+TransferImageInfo SessionService::setTransferImage(Session& s, const std::string& bytes) {
+    checkUploadSize(bytes, "the transfer function");
+    std::optional<DecodeSlot> slot;
+    core::LoadedImage loaded;
+    try {
+        loaded = core::loadImageFromMemory(bytes.data(), bytes.size(), "the transfer function", 4096,
+                                           [&](int, int) { slot.emplace(m_decodeSlots); });
+    } catch (const Error& e) {
+        throw ApiError(ErrorCode::UnsupportedMedia, e.what());
+    }
+    if (loaded.channels < 3)
+        throw ApiError(ErrorCode::UnsupportedMedia, "a transfer function is an RGB or RGBA image; this one has " +
+                                                        std::to_string(loaded.channels) + " channel" + (loaded.channels == 1 ? "" : "s"));
+    for (float v : loaded.image.rgba)
+        if (v < 0) throw ApiError(ErrorCode::UnsupportedMedia, "the transfer function has negative values; they must be >= 0");
+    auto image = std::make_shared<const core::Image>(std::move(loaded.image));
+    std::lock_guard lock(s.mutex);
+    if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+    if (m_persist) m_persist->saveStylizerFile(s.id, kTransferFile, bytes);
+    s.stylizer.transferImage = image;
+    const bool used = s.stylizer.scene.transferFunction.has_value();
+    if (used) {
+        s.stylizer.scene.transferFunction->image = image;
+        stylizerChanged(s);
+    }
+    return {image->width, image->height, loaded.channels, used};
+}
+
+core::Image SessionService::transferImage(Session& s) const {
+    std::lock_guard lock(s.mutex);
+    if (!s.stylizer.transferImage) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no transfer function uploaded");
+    return *s.stylizer.transferImage;
+}
+
+void SessionService::removeTransferImage(Session& s) {
+    std::lock_guard lock(s.mutex);
+    if (!s.stylizer.transferImage) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no transfer function uploaded");
+    if (s.stylizer.scene.transferFunction)
+        throw ApiError(ErrorCode::Busy, "the stylizer's scene uses the transfer function; PUT a scene without transfer_function first");
+    if (m_persist) m_persist->removeStylizerFile(s.id, kTransferFile);
+    s.stylizer.transferImage.reset();
+}
+
+core::Stylizer& SessionService::stylizerEngine(core::GpuDevice& device) {
+    if (!m_stylizer) m_stylizer = std::make_unique<core::Stylizer>(device);
+    return *m_stylizer;
+}
+
+core::StylizedFrame SessionService::stylizeOnGl(const core::StylizerScene& scene, const core::StylizeSettings& settings) {
+    // Other sessions' frames and a solve's next iteration wait behind this one: estimate it first.
+    const double pixels = double(scene.camera.width) * scene.camera.height;
+    const double perRay = settings.method == core::VisibilityMethod::Naive ? settings.steps : kAcceleratedLookupsPerRay;
+    const double seconds = pixels * perRay / kLookupsPerSecond;
+    if (m_limits.renderBudgetSeconds > 0 && seconds > m_limits.renderBudgetSeconds)
+        throw ApiError(ErrorCode::OverBudget,
+                       fmt::format("this frame would take about {:.0f} s, over the render budget of {:g} s (volstyle serve --render-budget); "
+                                   "use fewer pixels, fewer steps or the accelerated method",
+                                   seconds, m_limits.renderBudgetSeconds));
+    return m_gl.run([&](core::GpuDevice& device) { return stylizerEngine(device).render(scene, settings); });
+}
+
+core::StylizedFrame SessionService::stylize(Session& s, const protocol::StylizerFrameRequest& request) {
+    core::StylizerScene scene = stylizer(s).scene;
+    if (request.camera) scene.camera = *request.camera;
+    if (request.time) scene.time = *request.time;
+    core::StylizeSettings settings = request.settings;
+    settings.readShadowMaps =
+        request.output == core::StylizerOutput::ShadowMap || request.output == core::StylizerOutput::ModifiedShadowMap;
+    return stylizeOnGl(scene, settings);
+}
+
+std::optional<LiveFrame> SessionService::nextLiveFrame(Session& s, uint64_t after, std::chrono::milliseconds wait) {
+    StylizerSnapshot snapshot;
+    {
+        std::unique_lock lock(s.mutex);
+        if (!s.stylizerChanged.wait_for(lock, wait, [&] { return s.removed || s.stylizer.revision > after; })) return std::nullopt;
+        if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+        if (s.stylizer.live.revision == s.stylizer.revision) return s.stylizer.live;  // another stream rendered it
+        snapshot = {s.stylizer.scene, s.stylizer.meshRefs, s.stylizer.revision};
+    }
+    core::StylizeSettings settings;
+    settings.readShadowMaps = false;
+    const auto t0 = Clock::now();
+    const core::StylizedFrame f = stylizeOnGl(snapshot.scene, settings);
+    LiveFrame live{snapshot.revision, core::encodeImage(f.frame, "jpeg"), f.frame.width, f.frame.height,
+                   std::chrono::duration<double, std::milli>(Clock::now() - t0).count()};
+    std::lock_guard lock(s.mutex);
+    if (live.revision > s.stylizer.live.revision) s.stylizer.live = live;
+    return live;
+}
+
+std::optional<LiveFrame> SessionService::liveFrame(Session& s, uint64_t revision) const {
+    std::lock_guard lock(s.mutex);
+    if (s.stylizer.live.revision != revision || revision == 0) return std::nullopt;
+    return s.stylizer.live;
+}
+
+}  // namespace volstyle::server

@@ -1,0 +1,57 @@
+#include "server/stylizer_state.h"
+
+#include <algorithm>
+
+namespace volstyle::server {
+
+bool StylizerState::uses(const std::string& name) const { return std::find(meshRefs.begin(), meshRefs.end(), name) != meshRefs.end(); }
+
+size_t StylizerState::uploadedVertices() const {
+    size_t n = 0;
+    for (const auto& [name, m] : meshes) n += m.mesh->positions.size();
+    return n;
+}
+
+StylizerState defaultStylizer() {
+    static const core::StylizerScene forest = core::builtinForest();
+    StylizerState s;
+    s.scene = forest;
+    for (const core::Occluder& o : forest.occluders) s.meshRefs.push_back(kBuiltinMeshPrefix + o.name);
+    return s;
+}
+
+bool isMeshName(const std::string& name) {
+    if (name.empty() || name.size() > 64 || name == "." || name == "..") return false;
+    return std::all_of(name.begin(), name.end(), [](char c) {
+        return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '.' || c == '-';
+    });
+}
+
+core::StylizerScene resolveStylizerScene(const StylizerState& state, const protocol::StylizerSceneRequest& request) {
+    static const core::StylizerScene forest = defaultStylizer().scene;
+    core::StylizerScene scene = request.scene;
+    std::vector<protocol::FieldError> problems;
+    for (size_t i = 0; i < request.meshRefs.size(); ++i) {
+        const std::string& ref = request.meshRefs[i];
+        const std::string path = "/occluders/" + std::to_string(i) + "/mesh";
+        if (ref.rfind(kBuiltinMeshPrefix, 0) == 0) {
+            const std::string name = ref.substr(kBuiltinMeshPrefix.size());
+            for (const core::Occluder& o : forest.occluders)
+                if (o.name == name) scene.occluders[i].mesh = o.mesh;
+            if (!scene.occluders[i].mesh) problems.push_back({path, "no built-in mesh '" + ref + "' (there are builtin:forest/ground and builtin:forest/trees)"});
+        } else if (auto it = state.meshes.find(ref); it != state.meshes.end()) {
+            scene.occluders[i].mesh = it->second.mesh;
+        } else {
+            problems.push_back({path, "no occluder mesh '" + ref + "' in this session: upload it first (PUT …/stylizer/occluders/" +
+                                          (isMeshName(ref) ? ref : "NAME") + ") or use builtin:forest/trees"});
+        }
+    }
+    if (scene.transferFunction) {
+        if (state.transferImage) scene.transferFunction->image = state.transferImage;
+        else problems.push_back({"/transfer_function", "no transfer-function image uploaded: PUT it to …/stylizer/tf first"});
+    }
+    if (!problems.empty()) throw protocol::ValidationError(problems);
+    return scene;
+}
+
+}  // namespace volstyle::server

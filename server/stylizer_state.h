@@ -1,0 +1,64 @@
+#pragma once
+/// \file stylizer_state.h
+/// A session's light-shaft stylizer (SPEC §7 "API"): the scene with its meshes resolved, the
+/// occluder meshes and the transfer-function image uploaded to it, a revision that counts every
+/// change (the live stream renders each revision once), and the newest live frame. Every session
+/// has one, opened on builtin:forest. Guarded by the session's mutex.
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/image/image.h"
+#include "core/stylize/scene.h"
+#include "protocol/stylize_json.h"
+
+namespace volstyle::server {
+
+/// An occluder mesh uploaded to PUT …/stylizer/occluders/{name}.
+struct UploadedMesh {
+    std::string format;  ///< obj, ply, gltf or glb: the stored file's extension
+    std::shared_ptr<const core::Mesh> mesh;
+    size_t fileBytes = 0;
+};
+
+/// A frame of the live stream, encoded, with the revision it shows.
+struct LiveFrame {
+    uint64_t revision = 0;
+    std::string bytes;  ///< JPEG
+    int width = 0, height = 0;
+    double renderMs = 0;
+};
+
+struct StylizerState {
+    core::StylizerScene scene;          ///< what frames render: meshes and the TF image attached
+    std::vector<std::string> meshRefs;  ///< each occluder's `mesh`, as the client wrote it
+    std::map<std::string, UploadedMesh> meshes;
+    std::shared_ptr<const core::Image> transferImage;  ///< PUT …/stylizer/tf; null: none
+    uint64_t revision = 1;
+    LiveFrame live;  ///< revision 0: none yet
+
+    /// Whether the scene's occluders use the uploaded mesh `name` (it cannot be deleted then).
+    bool uses(const std::string& name) const;
+    /// Vertices of every uploaded mesh together (bounded per session).
+    size_t uploadedVertices() const;
+};
+
+/// Where a mesh reference points: the built-in meshes are builtin:forest/ground and
+/// builtin:forest/trees; any other reference names an uploaded mesh.
+inline const std::string kBuiltinMeshPrefix = "builtin:forest/";
+
+/// The stylizer of a new session: builtin:forest (its meshes built once and shared).
+StylizerState defaultStylizer();
+
+/// Whether `name` may name an uploaded mesh: 1–64 of A–Z a–z 0–9 _ . - (it is a file name on disk).
+bool isMeshName(const std::string& name);
+
+/// The scene `request` describes, its meshes looked up in `state`'s uploads and the built-in ones
+/// and its transfer function given the uploaded image. Throws protocol::ValidationError naming
+/// /occluders/i/mesh (no such mesh) and /transfer_function (no image uploaded).
+core::StylizerScene resolveStylizerScene(const StylizerState& state, const protocol::StylizerSceneRequest& request);
+
+}  // namespace volstyle::server
