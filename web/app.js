@@ -74,6 +74,7 @@ function showSession(s) {
   state.version = s.volume.version;
   $('session-info').textContent = `${s.scene} · ${s.volume.dims.join('×')} · version ${s.volume.version}`;
   $('download-vdb').href = `${api}/sessions/${s.id}/volume.vdb`;
+  document.dispatchEvent(new CustomEvent('volstyle-session', { detail: s.id }));  // the light-shaft mode follows (shafts.js)
 }
 
 const newSession = guard(async () => {

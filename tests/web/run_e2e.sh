@@ -9,5 +9,6 @@ if ! command -v node >/dev/null || [ ! -x /usr/bin/chromium ] || [ ! -d "$module
   exit 77
 fi
 mkdir -p "$root/build/test-artifacts"
+script=${2:-e2e}  # e2e (painting) or e2e_shafts (light shafts)
 exec bash "$root/tests/web/with_server.sh" "$1" \
-  env NODE_PATH="$modules" node "$root/tests/web/e2e.cjs" "@URL@" "$root/build/test-artifacts/e2e.png"
+  env NODE_PATH="$modules" node "$root/tests/web/$script.cjs" "@URL@" "$root/build/test-artifacts/$script.png"
