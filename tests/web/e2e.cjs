@@ -3,17 +3,10 @@
 // target, solves, waits for the progress bar to finish, and checks that the view's rendering moved
 // toward the target. Saves a screenshot. Usage: NODE_PATH=…/node_modules node e2e.cjs URL OUT.png
 'use strict';
-const { chromium } = require('playwright-core');
+const { openBrowser } = require('./browser.cjs');
 
 (async () => {
-const [urlArg, screenshot] = process.argv.slice(2);
-const url = urlArg === '@URL@' ? process.env.VOLSTYLE_URL + '/' : urlArg;
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
-         '--disable-component-update', '--disable-sync'],
-});
-const fail = async (message) => { console.error('FAIL: ' + message); await browser.close(); process.exit(1); };
+const { url, screenshot, browser, fail } = await openBrowser();
 try {
   const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
   page.on('pageerror', (e) => console.error('page error:', e.message));

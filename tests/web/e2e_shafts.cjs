@@ -5,18 +5,11 @@
 // revision), and the TF must redden the frame. Saves a screenshot.
 // Usage: NODE_PATH=…/node_modules node e2e_shafts.cjs URL OUT.png
 'use strict';
-const { chromium } = require('playwright-core');
+const { openBrowser } = require('./browser.cjs');
 
 (async () => {
-const [urlArg, screenshot] = process.argv.slice(2);
-const url = urlArg === '@URL@' ? process.env.VOLSTYLE_URL + '/' : urlArg;
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
-         '--disable-component-update', '--disable-sync'],
-});
+const { url, screenshot, browser, fail } = await openBrowser();
 let passed = 0;
-const fail = async (message) => { console.error('FAIL: ' + message); await browser.close(); process.exit(1); };
 const check = async (ok, message) => { if (!ok) await fail(message); ++passed; };
 try {
   const page = await browser.newPage({ viewport: { width: 1400, height: 820 } });
