@@ -16,6 +16,7 @@
 #include "protocol/render_json.h"
 #include "protocol/stylize_json.h"
 #include "server/cli.h"
+#include "server/stylizer_state.h"
 
 namespace volstyle::server {
 namespace {
@@ -31,7 +32,7 @@ const CommandSpec kStylize{
     "each view ray factored out (the average visibility V̄). --aov writes one of the frame's\n"
     "arbitrary output variables instead of the frame.",
     {
-        {"scene", "SRC", "SCENE.json (docs/STYLIZER.md; mesh paths relative to it) or builtin:forest (required)"},
+        {"scene", "SRC", "SCENE.json (docs/STYLIZER.md; mesh paths relative to it, or builtin:forest/ground|trees) or builtin:forest (required)"},
         {"camera", "CAM.json", "camera (eye, target, up, fov_y_deg, width, height); default: the scene's (builtin:forest: 640x360; a file without one: 480x480)"},
         {"aov", "NAME", "average_visibility, linear_depth, shadow_map, modified_shadow_map or scattering; default: the frame"},
         {"method", "NAME", "how V̄ is computed: accelerated (exact, min-max mipmap) or naive (--steps lookups per ray); default accelerated"},
@@ -54,6 +55,10 @@ core::StylizerScene loadStylizerScene(const std::string& spec) {
     const fs::path folder = fs::path(spec).parent_path();
     for (size_t i = 0; i < request.meshRefs.size(); ++i) {
         const std::string where = "'" + spec + "': /occluders/" + std::to_string(i) + "/mesh: ";
+        if (auto builtin = builtinMesh(request.meshRefs[i])) {  // builtin:forest/NAME, as in the API
+            request.scene.occluders[i].mesh = builtin;
+            continue;
+        }
         try {
             request.scene.occluders[i].mesh = std::make_shared<const core::Mesh>(core::loadMesh((folder / request.meshRefs[i]).string()));
         } catch (const IoError& e) {

@@ -20,6 +20,14 @@ StylizerState defaultStylizer() {
     return s;
 }
 
+std::shared_ptr<const core::Mesh> builtinMesh(const std::string& ref) {
+    static const core::StylizerScene forest = defaultStylizer().scene;
+    if (ref.rfind(kBuiltinMeshPrefix, 0) != 0) return nullptr;
+    for (const core::Occluder& o : forest.occluders)
+        if (kBuiltinMeshPrefix + o.name == ref) return o.mesh;
+    return nullptr;
+}
+
 bool isMeshName(const std::string& name) {
     if (name.empty() || name.size() > 64 || name == "." || name == "..") return false;
     return std::all_of(name.begin(), name.end(), [](char c) {
@@ -28,16 +36,13 @@ bool isMeshName(const std::string& name) {
 }
 
 core::StylizerScene resolveStylizerScene(const StylizerState& state, const protocol::StylizerSceneRequest& request) {
-    static const core::StylizerScene forest = defaultStylizer().scene;
     core::StylizerScene scene = request.scene;
     std::vector<protocol::FieldError> problems;
     for (size_t i = 0; i < request.meshRefs.size(); ++i) {
         const std::string& ref = request.meshRefs[i];
         const std::string path = "/occluders/" + std::to_string(i) + "/mesh";
         if (ref.rfind(kBuiltinMeshPrefix, 0) == 0) {
-            const std::string name = ref.substr(kBuiltinMeshPrefix.size());
-            for (const core::Occluder& o : forest.occluders)
-                if (o.name == name) scene.occluders[i].mesh = o.mesh;
+            scene.occluders[i].mesh = builtinMesh(ref);
             if (!scene.occluders[i].mesh) problems.push_back({path, "no built-in mesh '" + ref + "' (there are builtin:forest/ground and builtin:forest/trees)"});
         } else if (auto it = state.meshes.find(ref); it != state.meshes.end()) {
             scene.occluders[i].mesh = it->second.mesh;

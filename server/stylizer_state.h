@@ -53,6 +53,9 @@ inline const std::string kBuiltinMeshPrefix = "builtin:forest/";
 /// The stylizer of a new session: builtin:forest (its meshes built once and shared).
 StylizerState defaultStylizer();
 
+/// The built-in mesh `ref` names (builtin:forest/ground, builtin:forest/trees); null for any other.
+std::shared_ptr<const core::Mesh> builtinMesh(const std::string& ref);
+
 /// Whether `name` may name an uploaded mesh: 1–64 of A–Z a–z 0–9 _ . - (it is a file name on disk).
 bool isMeshName(const std::string& name);
 

@@ -145,8 +145,8 @@ VS_CONSTANT(int, kBindingMorphIn, 1);      /* SSBO float[n*n]: the pass's input 
 VS_CONSTANT(int, kBindingMorphOut, 2);     /* SSBO float[n*n]: its output */
 VS_CONSTANT(int, kBindingMorphScratch, 3); /* SSBO float[2 * lines * (n + 2 * halfWidth)]: running extrema */
 struct MorphParams {
-    VS_IVEC4 size;  /* x: n (the map's side); y: half-width w of the 1D window; z: 0 rows, 1 columns; w: line offset dy */
-    VS_IVEC4 op;    /* x: 0 minimum (dilation of occluders), 1 maximum (erosion); y: 1 combine with the output by op, 0 overwrite */
+    VS_IVEC4 size;  /* x: n (the map's side); y: half-width w of the 1D window; z: 0 rows, 1 columns, 2 diagonals, 3 anti-diagonals; w: row offset dy */
+    VS_IVEC4 op;    /* x: 0 minimum (dilation of occluders), 1 maximum (erosion); y: 1 combine with the output by op, 0 overwrite; z: first line of this dispatch */
 };
 
 /* Per-object edits of the scattering's shadow map in place (SPEC §7): the 1D epipolar dilation of

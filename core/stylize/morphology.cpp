@@ -17,6 +17,24 @@ int discHalfWidth(int radius, int dy) {
     return w;
 }
 
+Octagon octagonOf(int radius) {
+    const int b = int(std::lround(radius * (1 - 1 / std::sqrt(2.0))));
+    return {radius - 2 * b, b};
+}
+
+int elementHalfWidth(int radius, int dy, MorphShape shape) {
+    if (std::abs(dy) > radius) return -1;
+    if (shape == MorphShape::Box) return radius;
+    if (radius <= kExactDiscRadius) return discHalfWidth(radius, dy);
+    // The octagon: (dx, dy) = s + t (1, 1) + u (1, −1) with |s|∞ ≤ a and |t|, |u| ≤ b.
+    const Octagon o = octagonOf(radius);
+    for (int dx = radius; dx >= 0; --dx)
+        for (int t = -o.b; t <= o.b; ++t)
+            for (int u = -o.b; u <= o.b; ++u)
+                if (std::abs(dx - t - u) <= o.a && std::abs(dy - t + u) <= o.a) return dx;
+    return -1;
+}
+
 namespace {
 
 /// The extremum over the element at every texel (`takeMin`: dilation of occluders).
@@ -26,7 +44,7 @@ std::vector<float> bruteForce(const std::vector<float>& in, int n, int r, MorphS
         for (int x = 0; x < n; ++x) {
             float best = takeMin ? 3.0e38f : -3.0e38f;
             for (int dy = -r; dy <= r; ++dy) {
-                const int w = shape == MorphShape::Box ? r : discHalfWidth(r, dy);
+                const int w = elementHalfWidth(r, dy, shape);
                 for (int dx = -w; dx <= w; ++dx) {
                     const bool inside = x + dx >= 0 && x + dx < n && y + dy >= 0 && y + dy < n;
                     const float v = inside ? in[size_t(y + dy) * n + size_t(x + dx)] : 1.0f;  // outside: empty
@@ -48,26 +66,40 @@ struct MorphPass {
           scratch(gl::createBuffer(sizeof(float) * 2 * size_t(side) * size_t(side + 2 * maxHalfWidth), nullptr, 0,
                                    "morphology-scratch")) {}
 
-    void run(const gl::Buffer& in, const gl::Buffer& out, int halfWidth, bool columns, int dy, bool takeMin, bool fold) {
-        layout::MorphParams p;
-        p.size = {n, halfWidth, columns ? 1 : 0, dy};
-        p.op = {takeMin ? 0 : 1, fold ? 1 : 0, 0, 0};
-        device.setParams(p);
+    enum Lines { Rows = 0, Columns = 1, Diagonals = 2, AntiDiagonals = 3 };
+
+    void run(const gl::Buffer& in, const gl::Buffer& out, int halfWidth, Lines lines, int dy, bool takeMin, bool fold) {
         glUseProgram(device.program(gl::ShaderBuilder("shadow_morphology.comp")).id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingMorphIn, in.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingMorphOut, out.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingMorphScratch, scratch.id());
-        glDispatchCompute(GLuint((n + layout::kWorkgroup1D - 1) / layout::kWorkgroup1D), 1, 1);
-        gl::barrierAfterComputeWrites();
+        // 2n − 1 diagonals, in parts of n lines (the scratch holds n).
+        const int count = lines >= Diagonals ? 2 * n - 1 : n;
+        for (int first = 0; first < count; first += n) {
+            layout::MorphParams p;
+            p.size = {n, halfWidth, int(lines), dy};
+            p.op = {takeMin ? 0 : 1, fold ? 1 : 0, first, 0};
+            device.setParams(p);
+            glDispatchCompute(GLuint((std::min(n, count - first) + layout::kWorkgroup1D - 1) / layout::kWorkgroup1D), 1, 1);
+            gl::barrierAfterComputeWrites();
+        }
     }
 
     /// One dilation (takeMin) or erosion of `in` into `out` with the element.
     void apply(const gl::Buffer& in, const gl::Buffer& out, const gl::Buffer& tmp, int r, MorphShape shape, bool takeMin) {
         if (shape == MorphShape::Box) {
-            run(in, tmp, r, false, 0, takeMin, false);  // rows
-            run(tmp, out, r, true, 0, takeMin, false);  // then columns: a box is separable
+            run(in, tmp, r, Rows, 0, takeMin, false);
+            run(tmp, out, r, Columns, 0, takeMin, false);  // a box is separable
+        } else if (r <= kExactDiscRadius) {
+            for (int dy = -r; dy <= r; ++dy) run(in, out, discHalfWidth(r, dy), Rows, dy, takeMin, dy > -r);
         } else {
-            for (int dy = -r; dy <= r; ++dy) run(in, out, discHalfWidth(r, dy), false, dy, takeMin, dy > -r);
+            // The octagon is the Minkowski sum of four segments: an operation by it is four 1D
+            // passes, each O(1) per texel whatever their length.
+            const Octagon o = octagonOf(r);
+            run(in, tmp, o.a, Rows, 0, takeMin, false);
+            run(tmp, out, o.a, Columns, 0, takeMin, false);
+            run(out, tmp, o.b, Diagonals, 0, takeMin, false);
+            run(tmp, out, o.b, AntiDiagonals, 0, takeMin, false);
         }
     }
 };
@@ -89,13 +121,13 @@ void erodeBoxBuffer(GpuDevice& device, gl::Buffer& depth, int n, int radius) {
     const size_t bytes = sizeof(float) * size_t(n) * n;
     gl::Buffer tmp = gl::createBuffer(bytes, nullptr, 0, "morphology-tmp");
     MorphPass pass(device, n, radius);
-    pass.run(depth, tmp, radius, false, 0, false, false);  // rows, then columns: a box is separable
-    pass.run(tmp, depth, radius, true, 0, false, false);
+    pass.run(depth, tmp, radius, MorphPass::Rows, 0, false, false);  // rows, then columns: a box is separable
+    pass.run(tmp, depth, radius, MorphPass::Columns, 0, false, false);
 }
 
 void foldMinimum(GpuDevice& device, const gl::Buffer& from, const gl::Buffer& into, int n) {
     MorphPass pass(device, n, 0);
-    pass.run(from, into, 0, false, 0, true, true);  // a one-texel window is the value itself
+    pass.run(from, into, 0, MorphPass::Rows, 0, true, true);  // a one-texel window is the value itself
 }
 
 std::vector<float> closingReference(const std::vector<float>& depth, int n, int radius, MorphShape shape) {

@@ -7,9 +7,13 @@
 /// closing of what it draws is exact. GL-free header: the GPU version runs shadow_morphology.comp, the CPU one is
 /// the brute-force reference the tests compare it with.
 ///
-/// Cost on the GPU: a box is separable, one pass along rows and one along columns per operation,
-/// each O(1) per texel whatever r (van Herk / Gil-Werman). A disc is the union of its 2r + 1 rows:
-/// O(r) per texel (each row an O(1) running extremum), against O(r²) for a direct disc.
+/// Cost on the GPU: every pass is a 1D running extremum along rows, columns or diagonals, O(1)
+/// per texel whatever its length (van Herk / Gil-Werman). A box is separable: rows then columns.
+/// A disc of radius r ≤ kExactDiscRadius is exact, the union of its 2r + 1 rows (O(r), small);
+/// from r = 5 on it is the regular octagon of the same radius — the Minkowski sum of a square of
+/// half-side a and diagonal segments of half-length b, a + 2b = r, b = round(r (1 − 1/√2)) —
+/// four passes whatever r (the paper's Table 2 grows with the kernel's area). The octagon's
+/// boundary is within 0.09 r of the disc's (its diagonal corners reach (a + b)√2 ≈ 1.01 r).
 
 #include <vector>
 
@@ -20,6 +24,17 @@ namespace volstyle::core {
 
 /// The half-width of a disc of radius r on row offset dy: the texels (dx, dy) with dx² + dy² ≤ r².
 int discHalfWidth(int radius, int dy);
+
+/// Discs up to this radius are exact; larger ones are octagons (above).
+constexpr int kExactDiscRadius = 4;
+struct Octagon {
+    int a, b;  ///< the square's half-side and the diagonal segments' half-length
+};
+Octagon octagonOf(int radius);
+
+/// The structuring element's half-width on row offset dy (−1 outside it): what the CPU reference
+/// takes the extremum over.
+int elementHalfWidth(int radius, int dy, MorphShape shape);
 
 /// Brute force: for every texel the extremum over the element, clipped to the map.
 std::vector<float> closingReference(const std::vector<float>& depth, int n, int radius, MorphShape shape);

@@ -53,6 +53,18 @@ const Ajv = require('ajv');
   check('error', await json('POST', '/sessions', '{nope', 400), 'malformed JSON');
   check('error', await json('PUT', `/sessions/${sid}/lighting`, { phase: { type: 'rayleigh' } }, 400), 'bad lighting');
   check('error', await json('POST', `/sessions/${sid}/render`, { camera: { eye: [0, 0, 0], target: [0, 0, 0] } }, 400), 'bad camera');
+  // The stylizer (issue #11): its scene round-trips, a mesh and a TF upload, a frame request.
+  const st = `/sessions/${sid}/stylizer`;
+  const scene = await json('GET', st, undefined, 200);
+  check('stylizer_scene', scene, 'GET stylizer');
+  scene.camera.width = 48; scene.camera.height = 27; scene.light.shadow_map_size = 512;
+  check('stylizer_scene', await json('PUT', st, scene, 200), 'PUT stylizer');
+  check('occluder_mesh', await json('PUT', `${st}/occluders/quad`, 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n', 200), 'PUT occluder');
+  check('transfer_image', await json('PUT', `${st}/tf`, png, 200), 'PUT tf');
+  const frameRequest = { format: 'jpeg', aov: 'average_visibility', time: 1, method: 'naive', steps: 64 };
+  check('stylizer_frame_request', frameRequest, 'a frame request');
+  await call('POST', `${st}/frame`, frameRequest, 200);
+  check('error', await json('PUT', `${st}/occluders/quad`, '', 422), 'empty mesh');
   console.log(`${checked - failed} passed, ${failed} failed`);
   process.exit(failed ? 1 : 0);
 })().catch((e) => { console.error('FAIL:', e.message); process.exit(1); });
