@@ -9,7 +9,7 @@
     sid: null, scene: null, forest: null, events: null, shown: false,
     orbit: { azimuth: 0.2, elevation: 0.1, distance: 11 }, target: [-0.5, 3.2, -2],
     light: { azimuth: -2.56, elevation: 0.58 }, playing: null,
-    irradiance: [3.2, 2.9, 2.3], putBusy: false, putPending: false, tfUploaded: false, tfEnabled: false, revision: 0, lastFrameUrl: null,
+    irradiance: [3.2, 2.9, 2.3], putBusy: false, waiters: [], putPending: false, tfUploaded: false, tfEnabled: false, revision: 0, lastFrameUrl: null,
   };
   const base = () => `/sessions/${sh.sid}/stylizer`;
   const sliders = ['extinction', 'albedo', 'phase-g', 'closing-radius', 'dilation-length', 'hole-frequency',
@@ -62,11 +62,19 @@
     return s;
   }
 
-  // One PUT in flight; changes meanwhile are sent together when it answers.
-  async function pushScene() {
-    if (!sh.sid || !sh.scene) return;
-    if (sh.putBusy) { sh.putPending = true; return; }
+  // One PUT in flight; changes meanwhile are sent together when it answers. The promise settles
+  // once a PUT holding this call's state has answered.
+  function pushScene() {
+    if (!sh.sid || !sh.scene) return Promise.resolve();
+    return new Promise((resolve) => {
+      sh.waiters.push(resolve);
+      if (sh.putBusy) sh.putPending = true;
+      else sendScene();
+    });
+  }
+  async function sendScene() {
     sh.putBusy = true;
+    const answered = sh.waiters.splice(0);
     $('shafts-busy').style.display = 'block';
     try {
       await call('PUT', base(), sceneFromControls());
@@ -75,7 +83,8 @@
       $('shafts-busy').style.display = 'none';
     } finally {
       sh.putBusy = false;
-      if (sh.putPending) { sh.putPending = false; pushScene(); }
+      answered.forEach((resolve) => resolve());
+      if (sh.putPending) { sh.putPending = false; sendScene(); }
     }
   }
 
