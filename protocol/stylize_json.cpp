@@ -1,5 +1,7 @@
 #include "protocol/stylize_json.h"
 
+#include <algorithm>
+#include <cmath>
 #include <map>
 
 #include "protocol/render_json.h"
@@ -21,7 +23,9 @@ std::optional<Mat4> transformFromJson(JsonReader& r, const nlohmann::json& j, co
     bool ok = true;
     for (int c = 0; c < 4; ++c)
         for (int row = 0; row < 4; ++row) {
-            auto v = r.number(j[size_t(4 * c + row)], path + "/" + std::to_string(4 * c + row));
+            const std::string at = path + "/" + std::to_string(4 * c + row);
+            auto v = r.number(j[size_t(4 * c + row)], at);
+            if (v && !(std::abs(*v) <= 1e9)) r.fail(at, "must be within ±1e9 (larger scales overflow the renderer's floats)"), v.reset();
             if (v) m(row, c) = *v;
             else ok = false;
         }
@@ -44,7 +48,9 @@ double boundedNumber(JsonReader& r, const nlohmann::json& j, const std::string& 
     auto v = r.number(j, path);
     if (!v) return fallback;
     if (!(*v >= lo && *v <= hi)) {
-        r.fail(path, "must be in [" + nlohmann::json(lo).dump() + ", " + nlohmann::json(hi).dump() + "]");
+        // Whole bounds print as integers ("[0, 150]", not "[0.0, 150.0]").
+        auto text = [](double v) { return v == std::floor(v) && std::abs(v) < 1e15 ? std::to_string(static_cast<long long>(v)) : nlohmann::json(v).dump(); };
+        r.fail(path, "must be in [" + text(lo) + ", " + text(hi) + "]");
         return fallback;
     }
     return *v;
@@ -159,6 +165,10 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
                     core::Occluder o;
                     if (list[i].contains("manipulation")) o.manipulation = manipulationFromJson(r, list[i]["manipulation"], op + "/manipulation");
                     o.name = list[i].contains("name") ? r.string(list[i]["name"], op + "/name").value_or("") : "occluder" + std::to_string(i);
+                    if (list[i].contains("name") && o.name.empty()) r.fail(op + "/name", "must not be empty");
+                    for (size_t k = 0; k < s.occluders.size(); ++k)
+                        if (!o.name.empty() && s.occluders[k].name == o.name)
+                            r.fail(op + "/name", "'" + o.name + "' already names occluder " + std::to_string(k) + "; names are unique");
                     std::string mesh;
                     if (!list[i].contains("mesh")) r.fail(op + "/mesh", "is required");
                     else mesh = r.string(list[i]["mesh"], op + "/mesh").value_or("");
@@ -199,7 +209,9 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
                 if (l.contains("irradiance")) s.light.irradiance = r.vec3(l["irradiance"], lp + "/irradiance").value_or(s.light.irradiance);
                 if (l.contains("shadow_map_size"))
                     s.light.shadowMapSize = r.integer(l["shadow_map_size"], lp + "/shadow_map_size").value_or(s.light.shadowMapSize);
-                if (!(length(s.light.direction) > 0)) r.check(lp, "direction", "must not be zero");
+                const Vec3d& d = s.light.direction;
+                if (!(std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}) <= 1e9)) r.check(lp, "direction", "must be within ±1e9 (only its direction counts)");
+                else if (!(length(d) > 0)) r.check(lp, "direction", "must not be zero");
                 if (s.light.shadowMapSize < 512 || s.light.shadowMapSize > 4096) r.check(lp, "shadow_map_size", "must be in [512, 4096]");
                 bool irradianceOk = true;
                 for (int c = 0; c < 3; ++c) irradianceOk = irradianceOk && s.light.irradiance[c] >= 0 && s.light.irradiance[c] <= 1e6;

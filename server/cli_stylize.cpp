@@ -113,7 +113,9 @@ int runStylize(const std::vector<std::string>& argv) {
     core::Stylizer stylizer(*device);
     const core::StylizedFrame f = stylizer.render(scene, settings);
     core::SaveOptions save;
-    save.exposure = args.number("exposure", 0);
+    save.data = !core::isPicture(*output);  // V̄ and depths: values, not sRGB
+    save.exposure = save.data ? 0 : args.number("exposure", 0);
+    save.halfFloat = false;
     core::saveImage(outputPath, f.output(*output), save);
     spdlog::info("stylized {}x{} in {:.1f} ms (shadow maps and edits {:.1f}, min-max mipmap {:.1f}, G-buffer {:.1f}, shading {:.1f}, read back {:.1f})",
                  scene.camera.width, scene.camera.height, f.totalMs, f.shadowMs, f.mipmapMs, f.gbufferMs, f.shadeMs, f.readbackMs);

@@ -242,9 +242,9 @@ std::shared_ptr<Session> Persistence::loadSession(const fs::path& dir) {
     return s;
 }
 
-void Persistence::saveStylizerScene(const std::string& session, const json& scene) {
+void Persistence::saveStylizerScene(const std::string& session, const json& scene, uint64_t revision) {
     fs::create_directories(sessionDir(session) / "stylizer");
-    atomicWrite(sessionDir(session) / "stylizer" / "scene.json", protocol::toText(scene, 2));
+    atomicWrite(sessionDir(session) / "stylizer" / "scene.json", protocol::toText({{"revision", revision}, {"scene", scene}}, 2));
 }
 
 void Persistence::saveStylizerFile(const std::string& session, const std::string& file, const std::string& bytes) {
@@ -286,13 +286,40 @@ void Persistence::restoreStylizer(Session& s, const fs::path& dir) {
         }
     }
     if (!fs::exists(dir / "stylizer" / "scene.json")) return;  // never edited: builtin:forest
+    protocol::StylizerSceneRequest request;
     try {
-        const auto request = protocol::stylizerSceneFromJson(json::parse(readFile(dir / "stylizer" / "scene.json")), "",
-                                                             protocol::SceneSource::Api);
+        const json j = json::parse(readFile(dir / "stylizer" / "scene.json"));
+        request = protocol::stylizerSceneFromJson(j.at("scene"), "", protocol::SceneSource::Api);
+        s.stylizer.revision = j.at("revision").get<uint64_t>();
+    } catch (const std::exception& e) {
+        damage("stylizer/scene.json", std::string("the stylizer's scene is unreadable (it is builtin:forest again): ") + e.what());
+        return;
+    }
+    // What a damaged upload held is lost, and only that: its occluders, or the TF.
+    std::vector<std::string> lost;
+    for (size_t i = request.meshRefs.size(); i-- > 0;)
+        if (!builtinMesh(request.meshRefs[i]) && !s.stylizer.meshes.contains(request.meshRefs[i])) {
+            lost.push_back("occluder '" + request.scene.occluders[i].name + "' (mesh '" + request.meshRefs[i] + "')");
+            request.meshRefs.erase(request.meshRefs.begin() + std::ptrdiff_t(i));
+            request.scene.occluders.erase(request.scene.occluders.begin() + std::ptrdiff_t(i));
+        }
+    if (request.scene.transferFunction && !s.stylizer.transferImage) {
+        lost.push_back("the transfer function");
+        request.scene.transferFunction.reset();
+    }
+    try {
         s.stylizer.scene = resolveStylizerScene(s.stylizer, request);
         s.stylizer.meshRefs = request.meshRefs;
     } catch (const std::exception& e) {
         damage("stylizer/scene.json", std::string("the stylizer's scene no longer loads (it is builtin:forest again): ") + e.what());
+        return;
+    }
+    if (!lost.empty()) {
+        std::string what;
+        for (const auto& l : lost) what += (what.empty() ? "" : ", ") + l;
+        s.damaged.push_back({"stylizer/scene.json", "its uploads were damaged; the scene lost " + what});
+        spdlog::error("session {}'s stylizer scene lost {}", s.id, what);
+        saveStylizerScene(s.id, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), ++s.stylizer.revision);
     }
 }
 

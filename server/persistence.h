@@ -46,7 +46,7 @@ public:
     void removeSession(const std::string& session);
     /// The stylizer (stylizer/scene.json, stylizer/occluders/NAME.EXT, stylizer/tf.image): the
     /// scene as JSON; uploaded files as they were sent.
-    void saveStylizerScene(const std::string& session, const nlohmann::json& scene);
+    void saveStylizerScene(const std::string& session, const nlohmann::json& scene, uint64_t revision);
     void saveStylizerFile(const std::string& session, const std::string& file, const std::string& bytes);
     void removeStylizerFile(const std::string& session, const std::string& file);
     void saveJob(const Job& job);
@@ -77,8 +77,9 @@ private:
     /// Restores the versions listed in session.json; the current one is read (or the newest
     /// readable one, if it is damaged). Throws if no version is readable.
     void restoreVersions(Session& s, const nlohmann::json& j);
-    /// Restores the stylizer's uploads and scene; a damaged file is quarantined, and a scene that
-    /// no longer resolves falls back to builtin:forest (both recorded as damage).
+    /// Restores the stylizer's uploads, scene and revision; a damaged file is quarantined and only
+    /// what it held is lost: an occluder whose mesh is gone is dropped, a transfer function whose
+    /// image is gone is dropped, an unreadable scene is builtin:forest again (each recorded as damage).
     void restoreStylizer(Session& s, const std::filesystem::path& dir);
     std::filesystem::path m_dir;
 };

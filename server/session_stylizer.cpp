@@ -19,11 +19,9 @@ using protocol::ErrorCode;
 using Clock = std::chrono::steady_clock;
 
 /// Shadow-map lookups per second on llvmpipe's two cores (1920×1080 × 1024 naive steps took
-/// 6.4–20 s on two machines of this kind, bench/stylizer: the slower one), and the lookups an accelerated ray costs (p99 of the min-max
-/// traversal's iterations at SM 2048, with margin): the estimate that keeps a frame within the
-/// render budget before it holds the GL thread.
+/// 6.4–20 s on two machines of this kind, bench/stylizer: the slower one), for the estimate that
+/// keeps a frame within the render budget before it holds the GL thread.
 constexpr double kLookupsPerSecond = 1.0e8;
-constexpr double kAcceleratedLookupsPerRay = 300;
 
 std::string meshFile(const std::string& name, const std::string& format) { return "stylizer/occluders/" + name + "." + format; }
 const std::string kTransferFile = "stylizer/tf.image";
@@ -37,7 +35,7 @@ StylizerSnapshot SessionService::stylizer(Session& s) const {
 
 void SessionService::stylizerChanged(Session& s) {
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
-    if (m_persist) m_persist->saveStylizerScene(s.id, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs));
+    if (m_persist) m_persist->saveStylizerScene(s.id, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), s.stylizer.revision + 1);
     ++s.stylizer.revision;
     s.stylizerChanged.notify_all();
 }
@@ -184,14 +182,13 @@ core::Stylizer& SessionService::stylizerEngine(core::GpuDevice& device) {
 
 core::StylizedFrame SessionService::stylizeOnGl(const core::StylizerScene& scene, const core::StylizeSettings& settings) {
     // Other sessions' frames and a solve's next iteration wait behind this one: estimate it first.
-    const double pixels = double(scene.camera.width) * scene.camera.height;
-    const double perRay = settings.method == core::VisibilityMethod::Naive ? settings.steps : kAcceleratedLookupsPerRay;
-    const double seconds = pixels * perRay / kLookupsPerSecond;
+    const double seconds = core::Stylizer::estimatedLookups(scene, settings) / kLookupsPerSecond;
     if (m_limits.renderBudgetSeconds > 0 && seconds > m_limits.renderBudgetSeconds)
         throw ApiError(ErrorCode::OverBudget,
                        fmt::format("this frame would take about {:.0f} s, over the render budget of {:g} s (volstyle serve --render-budget); "
-                                   "use fewer pixels, fewer steps or the accelerated method",
-                                   seconds, m_limits.renderBudgetSeconds));
+                                   "use fewer pixels, {}a smaller shadow map or shorter dilations",
+                                   seconds, m_limits.renderBudgetSeconds,
+                                   settings.method == core::VisibilityMethod::Naive ? "fewer steps or the accelerated method, " : ""));
     return m_gl.run([&](core::GpuDevice& device) { return stylizerEngine(device).render(scene, settings); });
 }
 

@@ -160,7 +160,7 @@ void saveImage(const std::string& path, const Image& image, const SaveOptions& o
     for (size_t i = 0; i < image.pixelCount(); ++i) {
         for (int c = 0; c < 3; ++c) {
             float v = image.rgba[i * 4 + c] * scale;
-            if (!isFloatFile) v = linearToSrgb(std::clamp(v, 0.0f, 1.0f));
+            if (!isFloatFile) v = options.data ? std::clamp(v, 0.0f, 1.0f) : linearToSrgb(std::clamp(v, 0.0f, 1.0f));
             pixels[i * nch + c] = v;
         }
         if (keepAlpha) pixels[i * nch + 3] = image.rgba[i * 4 + 3];
@@ -175,7 +175,7 @@ void saveImage(const std::string& path, const Image& image, const SaveOptions& o
     if (!out) throw IoError("no writer for '" + path + "': " + OIIO::geterror());
     OIIO::ImageSpec spec(image.width, image.height, nch, format);
     if (keepAlpha) spec.alpha_channel = 3;
-    spec.attribute("oiio:ColorSpace", isFloatFile ? "linear" : "sRGB");
+    spec.attribute("oiio:ColorSpace", isFloatFile || options.data ? "linear" : "sRGB");
     if (!isFloatFile) spec.attribute("oiio:UnassociatedAlpha", 1);  // PNG/TIFF alpha is a weight
     if (!out->open(path, spec) ||
         !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close()) {

@@ -36,6 +36,9 @@ struct SaveOptions {
     bool writeAlpha = false;    ///< PNG/TIFF: keep alpha (EXR always has it)
     bool halfFloat = true;      ///< EXR: half instead of float
     int bits = 8;               ///< PNG/TIFF: 8 or 16
+    /// Data, not a picture (V̄, depths): 8/16-bit files store the values linearly, clamped to
+    /// [0, 1], without the sRGB curve (set exposure to 0 for the values as they are).
+    bool data = false;
 };
 
 /// Saves by extension (.png .jpg .jpeg .tif .tiff .exr .hdr). Throws IoError / InvalidArgument.

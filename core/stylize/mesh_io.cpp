@@ -1,6 +1,8 @@
 // The only translation unit that includes assimp.
 #include "core/stylize/mesh_io.h"
 
+#include <assimp/IOStream.hpp>
+#include <assimp/IOSystem.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -24,6 +26,15 @@ namespace fs = std::filesystem;
 // instead: instances are counted first against the limits, then expanded.
 constexpr unsigned kSteps = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_GenSmoothNormals |
                             aiProcess_SortByPType | aiProcess_ValidateDataStructure;
+
+/// An IO system without files (uploads): opening anything fails.
+class NoFiles : public Assimp::IOSystem {
+public:
+    bool Exists(const char*) const override { return false; }
+    char getOsSeparator() const override { return '/'; }
+    Assimp::IOStream* Open(const char*, const char*) override { return nullptr; }
+    void Close(Assimp::IOStream* stream) override { delete stream; }
+};
 
 void configure(Assimp::Importer& importer) {
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
@@ -180,6 +191,10 @@ Mesh loadMeshFromMemory(const std::string& bytes, const std::string& extension, 
     if (extension == "ply") checkPlyHeader(bytes.substr(0, 64 * 1024), bytes.size(), what, limits);
     Assimp::Importer importer;
     configure(importer);
+    // ReadFileFromMemory serves the bytes and hands every other name (a glTF buffer's or image's
+    // URI) to the importer's IO system: with the default one a glTF upload could read any file
+    // of the server's. This one has none, so only data: URIs (embedded) resolve.
+    importer.SetIOHandler(new NoFiles);
     const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kSteps, extension.c_str());
     if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->HasMeshes())
         throw InvalidArgument(what + " could not be read as " + extension + ": " +

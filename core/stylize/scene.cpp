@@ -16,6 +16,10 @@ void StylizerScene::validate() const {
         } catch (const InvalidArgument& e) {
             throw InvalidArgument("occluder '" + o.name + "': " + e.what());
         }
+        for (int row = 0; row < 4; ++row)
+            for (int c = 0; c < 4; ++c)
+                if (!(std::abs(o.worldFromObject(row, c)) <= 1e9))
+                    throw InvalidArgument("occluder '" + o.name + "': transform entries must be within ±1e9");
         if (o.manipulation.closingRadius < 0 || o.manipulation.closingRadius > 64)
             throw InvalidArgument("occluder '" + o.name + "': closing radius_px must be in [0, 64]");
         const Manipulation& m = o.manipulation;
@@ -30,6 +34,8 @@ void StylizerScene::validate() const {
         if (m.holeOctaves < 1 || m.holeOctaves > 8 || !(m.holePersistence > 0 && m.holePersistence <= 1))
             throw InvalidArgument("occluder '" + o.name + "': hole octaves must be in [1, 8] and persistence in (0, 1]");
     }
+    for (int k = 0; k < 3; ++k)
+        if (!(std::abs(light.direction[k]) <= 1e9)) throw InvalidArgument("/light/direction: must be within ±1e9");
     if (!(length(light.direction) > 0)) throw InvalidArgument("/light/direction: must not be zero");
     if (light.shadowMapSize < 512 || light.shadowMapSize > 4096)
         throw InvalidArgument("/light/shadow_map_size: must be in [512, 4096]");

@@ -106,6 +106,9 @@ struct StylizeSettings {
 
 /// What a frame can be saved as (SPEC §7 "Outputs"): the frame or one of its AOVs.
 enum class StylizerOutput { Frame, AverageVisibility, LinearDepth, ShadowMap, ModifiedShadowMap, Scattering };
+/// The frame and the scattering are pictures (sRGB and exposure in 8-bit files); the other AOVs
+/// are data, stored linearly (core::SaveOptions::data).
+inline bool isPicture(StylizerOutput o) { return o == StylizerOutput::Frame || o == StylizerOutput::Scattering; }
 
 /// The built-in scene `forest`: a ground plane and a grove of trees whose canopies are clouds of
 /// leaf quads, under a low sun, seen from inside a hazy wood: light shafts through foliage.

@@ -231,6 +231,40 @@ struct Stylizer::Gpu {
 
 namespace {
 
+/// The light's shadow map for a scene: its clip transform over the occluders' bounds, and the
+/// world size of a texel (for a spot: per unit of distance from it).
+struct LightMap {
+    Vec3d lo, hi;
+    Mat4 clip;
+    bool spot = false;
+    double spotTan = 0, texel = 0;
+};
+
+LightMap lightMapOf(const StylizerScene& scene) {
+    LightMap m;
+    std::tie(m.lo, m.hi) = scene.occluders.empty() ? std::pair<Vec3d, Vec3d>{Vec3d(-1.0), Vec3d(1.0)} : sceneBounds(scene);
+    const StylizerLight& light = scene.light;
+    const int n = light.shadowMapSize;
+    m.spot = light.type == StylizerLightType::Spot;
+    const Vec3d toLight = normalize(light.direction);
+    int margin = 0;  // texels kept empty around the occluders: the largest closing radius
+    for (const Occluder& o : scene.occluders) margin = std::max(margin, o.manipulation.closingRadius + o.manipulation.erosionPx);
+    m.clip = m.spot ? spotClipFromWorld(light.position, toLight, light.coneDeg, m.lo, m.hi) : lightClipFromWorld(toLight, m.lo, m.hi, n, margin);
+    m.spotTan = std::tan(light.coneDeg * 0.5 * std::numbers::pi / 180);
+    m.texel = m.spot ? 2 * m.spotTan / n
+                     : std::max(2 / length(Vec3d(m.clip(0, 0), m.clip(0, 1), m.clip(0, 2))),
+                                2 / length(Vec3d(m.clip(1, 0), m.clip(1, 1), m.clip(1, 2)))) / n;
+    return m;
+}
+
+/// Eq. 3's kernel for occluder `i`, in texels where the object is (a spot's grow with distance).
+int dilationTexels(const LightMap& map, const StylizerScene& scene, size_t i) {
+    auto [lo, hi] = occluderBounds(scene.occluders[i]);
+    const double objectTexel = map.spot ? map.texel * length((lo + hi) * 0.5 - scene.light.position) : map.texel;
+    const int n = scene.light.shadowMapSize;
+    return int(std::min(double(n), std::round(scene.occluders[i].manipulation.dilationLength / objectTexel)));
+}
+
 /// The min-max mipmap of the n×n map in `depth` (shadow_minmax.comp): levels down to 1×1, their
 /// offsets into the buffer in `p.mipOffset`, their count in `p.options.y`.
 gl::Buffer buildMinMaxMipmap(GpuDevice& device, const gl::Buffer& depth, int n, layout::StylizeParams& p) {
@@ -263,6 +297,24 @@ gl::Buffer buildMinMaxMipmap(GpuDevice& device, const gl::Buffer& depth, int n, 
 Stylizer::Stylizer(GpuDevice& device) : m_device(device), m_gpu(std::make_unique<Gpu>()) {}
 Stylizer::~Stylizer() = default;
 
+double Stylizer::estimatedLookups(const StylizerScene& scene, const StylizeSettings& settings) {
+    const double pixels = double(scene.camera.width) * scene.camera.height;
+    const double texels = double(scene.light.shadowMapSize) * scene.light.shadowMapSize;
+    double lookups = pixels * (settings.method == VisibilityMethod::Naive ? settings.steps : kAcceleratedLookupsPerRay);
+    if (scene.light.type == StylizerLightType::Spot) lookups += pixels * settings.spotSteps;
+    const LightMap map = lightMapOf(scene);
+    for (size_t i = 0; i < scene.occluders.size(); ++i) {
+        const Manipulation& m = scene.occluders[i].manipulation;
+        if (!m.any()) continue;
+        double perTexel = 4;  // drawn alone, copied, folded in
+        if (m.closingRadius > 0) perTexel += m.closingShape == MorphShape::Disc && m.closingRadius <= kExactDiscRadius ? 6.0 * (2 * m.closingRadius + 1) : 16;
+        if (m.dilationLength > 0) perTexel += dilationTexels(map, scene, i) + (m.erosionPx > 0 ? 6 : 0);
+        if (m.holeProbability > 0) perTexel += 8.0 * m.holeOctaves;
+        lookups += texels * perTexel;
+    }
+    return lookups;
+}
+
 StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings& settings) {
     VOLSTYLE_CHECK(m_device.isOwnedByThisThread(), ==, true);
     scene.validate();
@@ -275,17 +327,15 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     std::vector<std::shared_ptr<GpuMesh>> meshes;
     for (const Occluder& o : scene.occluders) meshes.push_back(m_gpu->mesh(o.mesh));
     const bool hasOccluders = !meshes.empty();
-    auto [lo, hi] = hasOccluders ? sceneBounds(scene) : std::pair<Vec3d, Vec3d>{Vec3d(-1.0), Vec3d(1.0)};
+    const LightMap map = lightMapOf(scene);
+    const Vec3d lo = map.lo, hi = map.hi;
 
     layout::StylizeParams p;
     const StylizerLight& light = scene.light;
-    const bool spot = light.type == StylizerLightType::Spot;
+    const bool spot = map.spot;
     const Vec3d toLight = normalize(light.direction);
-    int margin = 0;  // texels kept empty around the occluders: the largest closing radius
-    for (const Occluder& o : scene.occluders) margin = std::max(margin, o.manipulation.closingRadius + o.manipulation.erosionPx);
-    const Mat4 lightClip = spot ? spotClipFromWorld(light.position, toLight, light.coneDeg, lo, hi)
-                                : lightClipFromWorld(toLight, lo, hi, n, margin);
-    const double spotTan = std::tan(light.coneDeg * 0.5 * std::numbers::pi / 180);
+    const Mat4& lightClip = map.clip;
+    const double spotTan = map.spotTan;
     p.lightFromWorld = toGl(lightClip);
     p.options = {settings.method == VisibilityMethod::Accelerated ? layout::kVisibilityMinMax : layout::kVisibilityNaive, 0,
                  spot ? layout::kStylizerLightSpot : layout::kStylizerLightDirectional, settings.spotSteps};
@@ -302,10 +352,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     p.medium = {float(scene.medium.extinction), float(scene.medium.albedo),
                 scene.medium.phase.type == PhaseType::HenyeyGreenstein ? 1.0f : 0.0f, float(scene.medium.phase.g)};
     p.background = f4(scene.background, std::min(cam.farDist, 3.0e38));
-    // World size of a texel (for a spot: per unit of distance from it).
-    const double texel = spot ? 2 * spotTan / n
-                              : std::max(2 / length(Vec3d(lightClip(0, 0), lightClip(0, 1), lightClip(0, 2))),
-                                         2 / length(Vec3d(lightClip(1, 0), lightClip(1, 1), lightClip(1, 2)))) / n;
+    const double texel = map.texel;
     p.shadow = {2e-5f, hasOccluders ? 1.0f : 0.0f, float(texel), 0};
 
     // Draws the occluders `which` accepts (by index) with `builder` from `clipFromWorld`.
@@ -372,11 +419,8 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
             copyToBuffer(scratchMap, part);
             closeDepthBuffer(m_device, part, n, m.closingRadius, m.closingShape);
             auto [objectLo, objectHi] = occluderBounds(scene.occluders[i]);
-            // World units per texel where the object is (a spot's texels grow with distance).
-            const double objectTexel = spot ? texel * length((objectLo + objectHi) * 0.5 - light.position) : texel;
             if (m.dilationLength > 0) {
-                dilateEpipolarBuffer(m_device, part, n, epipoleOf(lightClip, cam.eye, n),
-                                     int(std::min(double(n), std::round(m.dilationLength / objectTexel))));
+                dilateEpipolarBuffer(m_device, part, n, epipoleOf(lightClip, cam.eye, n), dilationTexels(map, scene, i));
                 erodeBoxBuffer(m_device, part, n, m.erosionPx);
             }
             if (m.holeProbability > 0) {

@@ -54,6 +54,13 @@ public:
     /// Renders `scene` (validated first; InvalidArgument names the problem).
     StylizedFrame render(const StylizerScene& scene, const StylizeSettings& settings = {});
 
+    /// About how many shadow-map lookups (or texel operations) a frame costs: the per-pixel pass
+    /// and each manipulated occluder's edits (a dilation costs its kernel per texel). For a
+    /// server's budget check before a frame holds the GL thread; CPU only.
+    static double estimatedLookups(const StylizerScene& scene, const StylizeSettings& settings);
+    /// What an accelerated ray costs in lookups (p99 of the min-max walk's iterations at 2048², with margin).
+    static constexpr double kAcceleratedLookupsPerRay = 300;
+
 private:
     struct Gpu;
     GpuDevice& m_device;

@@ -92,6 +92,8 @@ void addStylizerRoutes(RouteContext& c) {
     });
     c.http.Put(kStylizerPath, [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);
+        if (req.body.find_first_not_of(" \t\r\n") == std::string::npos)  // a mistake, not "the defaults"
+            throw ApiError(ErrorCode::InvalidArgument, "the body is empty; send the scene (GET …/stylizer gives the current one)");
         auto request = protocol::stylizerSceneFromJson(c.body(req), "", protocol::SceneSource::Api);
         replyScene(res, c.service.setStylizerScene(*s, request));
     });
@@ -126,7 +128,12 @@ void addStylizerRoutes(RouteContext& c) {
         const auto request = protocol::StylizerFrameRequest::fromJson(c.body(req), c.limits);
         const core::StylizedFrame f = c.service.stylize(*s, request);
         res.set_header("X-Render-Ms", fmt::format("{:.1f}", f.totalMs));
-        replyImage(res, f.output(request.output), request.format, request.exposure);
+        core::SaveOptions save;
+        save.data = !core::isPicture(request.output);  // V̄ and depths: values, not sRGB
+        save.exposure = save.data || request.format == protocol::ImageFormat::Exr ? 0 : request.exposure;
+        save.halfFloat = false;                         // EXR: float, so bright scattering and far depths stay finite
+        res.set_content(core::encodeImage(f.output(request.output), protocol::imageFormatName(request.format), save),
+                        protocol::imageMimeType(request.format));
     });
     c.http.Get(kStylizerPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
         streamLiveFrames(c, res, c.service.find(req.matches[1]), req.remote_addr);

@@ -192,7 +192,7 @@ TEST(Durability, TheStylizerSurvivesARestart) {
     // answer, and a restart (kill -9) brings back the same scene rendering the same frame.
     const fs::path dir = fs::temp_directory_path() / "volstyle-durability-stylizer";
     fs::remove_all(dir);
-    std::string base, sceneBefore, meshesBefore, frameBefore;
+    std::string base, sceneBefore, meshesBefore, frameBefore, revisionBefore;
     const std::string frameRequest = R"({"format": "exr", "camera": {"eye": [0, 6, 12], "target": [0, 0, 0], "width": 32, "height": 24}})";
     {
         ServerProcess server(dir);
@@ -214,6 +214,7 @@ TEST(Durability, TheStylizerSurvivesARestart) {
         r = c.Put(base.c_str(), scene.dump(), "application/json");
         ASSERT_EQ(r->status, 200) << r->body;
         sceneBefore = c.Get(base.c_str())->body;
+        revisionBefore = c.Get(base.c_str())->get_header_value("ETag");
         meshesBefore = c.Get((base + "/occluders").c_str())->body;
         frameBefore = c.Post((base + "/frame").c_str(), frameRequest, "application/json")->body;
         server.stop(SIGKILL);
@@ -222,11 +223,27 @@ TEST(Durability, TheStylizerSurvivesARestart) {
     httplib::Client c("127.0.0.1", server.port);
     c.set_read_timeout(120, 0);
     EXPECT_EQ(c.Get(base.c_str())->body, sceneBefore);
+    EXPECT_EQ(c.Get(base.c_str())->get_header_value("ETag"), revisionBefore) << "revisions go on, frame URLs are not reused";
     EXPECT_EQ(c.Get((base + "/occluders").c_str())->body, meshesBefore);
     EXPECT_EQ(c.Get((base + "/tf.png").c_str())->status, 200);
     const std::string frameAfter = c.Post((base + "/frame").c_str(), frameRequest, "application/json")->body;
     auto pixels = [](const std::string& exr) { return volstyle::core::loadImageFromMemory(exr.data(), exr.size(), "frame").image.rgba; };
     EXPECT_TRUE(pixels(frameAfter) == pixels(frameBefore)) << "the same frame";  // (the files differ in their date)
     server.stop(SIGTERM);
+
+    // A damaged mesh costs its occluder only: the rest of the scene (and the TF) stays.
+    const std::string sid = base.substr(std::string("/api/v1/sessions/").size(), 32);
+    std::ofstream(dir / "sessions" / sid / "stylizer" / "occluders" / "board.obj", std::ios::binary | std::ios::trunc) << "\x01\x02garbage";
+    ServerProcess again(dir);
+    httplib::Client c2("127.0.0.1", again.port);
+    c2.set_read_timeout(120, 0);
+    const json scene = json::parse(c2.Get(base.c_str())->body);
+    ASSERT_EQ(scene["occluders"].size(), 1u) << scene;
+    EXPECT_EQ(scene["occluders"][0]["mesh"], "builtin:forest/ground");
+    EXPECT_TRUE(scene.contains("transfer_function"));
+    EXPECT_EQ(scene["light"]["shadow_map_size"], 512);
+    const json session = json::parse(c2.Get(("/api/v1/sessions/" + sid).c_str())->body);
+    EXPECT_NE(session.dump().find("stylizer/occluders/board.obj"), std::string::npos) << "the damage is listed";
+    again.stop(SIGTERM);
     fs::remove_all(dir);
 }

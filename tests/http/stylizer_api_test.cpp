@@ -119,7 +119,32 @@ TEST_F(StylizerApi, BadScenesNameTheFieldAndChangeNothing) {
     s.erase("volume");
     s["colour"] = 1;
     expectError(putScene(s), 400, "unknown_field");
+    s.erase("colour");
+    // Review of issue #11: values that passed and rendered wrong, and an empty body that reset it.
+    json bad = s;
+    bad["light"]["direction"] = {1e200, 1e200, 1e200};
+    EXPECT_EQ(expectError(putScene(bad), 400, "invalid_argument")["error"]["details"][0]["path"], "/light/direction");
+    bad = s;
+    bad["occluders"][1]["transform"] = {1e30, 0, 0, 0, 0, 1e30, 0, 0, 0, 0, 1e30, 0, 0, 0, 0, 1};
+    EXPECT_EQ(expectError(putScene(bad), 400, "invalid_argument")["error"]["details"][0]["path"], "/occluders/1/transform/0");
+    bad = s;
+    bad["occluders"][1]["name"] = bad["occluders"][0]["name"];
+    EXPECT_EQ(expectError(putScene(bad), 400, "invalid_argument")["error"]["details"][0]["path"], "/occluders/1/name");
+    expectError(client().Put(base.c_str(), "", "application/json"), 400, "invalid_argument");
     EXPECT_EQ(scene(), before) << "nothing changed";
+}
+
+TEST_F(StylizerApi, AFrameOverTheRenderBudgetIsRefusedBeforeItStarts) {
+    // Review of issue #11: a 4096² map with long dilations took 76-217 s at 64×36 and held the GL
+    // thread for everyone; the estimate now counts the edits.
+    json s = smallForest();
+    s["light"]["shadow_map_size"] = 4096;
+    s["occluders"][1]["manipulation"] = {{"dilation", {{"length", 5}}}};
+    ASSERT_EQ(putScene(s)->status, 200);
+    const auto t0 = std::chrono::steady_clock::now();
+    json e = expectError(client().Post((base + "/frame").c_str(), "{}", "application/json"), 422, "over_budget");
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0) << "refused, not rendered";
+    EXPECT_NE(e["error"]["message"].get<std::string>().find("dilation"), std::string::npos) << e;
 }
 
 TEST_F(StylizerApi, MeshUploadsAreCheckedAndRefusalsChangeNothing) {

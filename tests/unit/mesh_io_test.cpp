@@ -103,6 +103,26 @@ TEST(MeshIo, HostileFilesAreRefusedBeforeTheyCostMemory) {
     EXPECT_THROW(loadMeshFromMemory("v 1e38 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "obj"), InvalidArgument);  // Inf once transformed
 }
 
+TEST(MeshIo, AnUploadedGltfCannotReadTheServersFiles) {
+    // Review of issue #11: a glTF upload whose buffer URI named a file on the server was read
+    // from disk (its bytes came back as the mesh's bounds). From memory only data: URIs resolve;
+    // a file's own glTF may still use the buffers beside it.
+    const auto dir = test::scratchDir();
+    const float triangle[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    test::writeBytes(dir / "secret.bin", std::string(reinterpret_cast<const char*>(triangle), sizeof triangle));
+    auto gltf = [](const std::string& uri) {
+        return R"({"asset":{"version":"2.0"},"buffers":[{"uri":")" + uri + R"(","byteLength":36}],)"
+               R"("bufferViews":[{"buffer":0,"byteLength":36}],"accessors":[{"bufferView":0,"componentType":5126,"count":3,)"
+               R"("type":"VEC3","min":[0,0,0],"max":[1,1,0]}],"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],)"
+               R"("nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}],"scene":0})";
+    };
+    test::writeBytes(dir / "beside.gltf", gltf("secret.bin"));
+    EXPECT_EQ(loadMesh((dir / "beside.gltf").string()).triangleCount(), 1u) << "a file's neighbouring buffer is fine";
+    EXPECT_ANY_THROW(loadMeshFromMemory(gltf((dir / "secret.bin").string()), "gltf")) << "an absolute path";
+    EXPECT_ANY_THROW(loadMeshFromMemory(gltf("secret.bin"), "gltf")) << "a relative one";
+    EXPECT_ANY_THROW(loadMeshFromMemory(gltf("file://" + (dir / "secret.bin").string()), "gltf"));
+}
+
 TEST(StylizerScene, TheBuiltinForestIsValidAndLetsLightThrough) {
     const StylizerScene forest = builtinForest();
     EXPECT_NO_THROW(forest.validate());
