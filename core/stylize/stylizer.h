@@ -67,13 +67,4 @@ private:
     std::unique_ptr<Gpu> m_gpu;
 };
 
-/// The perspective map of a spot light at `position` shining along −towardLight with a full cone
-/// of `coneDeg` (the map's square circumscribes the cone), deep enough for the bounds [lo, hi].
-Mat4 spotClipFromWorld(const Vec3d& position, const Vec3d& towardLight, double coneDeg, const Vec3d& lo, const Vec3d& hi);
-
-/// The orthographic map from world space to the light's clip space [-1,1]³ that covers the
-/// world-space bounds [lo, hi] seen from `towardLight` (near plane on the light's side), leaving
-/// `marginTexels` of an n-texel map empty around them (closings then never reach the border).
-Mat4 lightClipFromWorld(const Vec3d& towardLight, const Vec3d& lo, const Vec3d& hi, int n = 2048, int marginTexels = 0);
-
 }  // namespace volstyle::core
