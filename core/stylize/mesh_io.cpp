@@ -196,9 +196,16 @@ Mesh loadMeshFromMemory(const std::string& bytes, const std::string& extension, 
     // of the server's. This one has none, so only data: URIs (embedded) resolve.
     importer.SetIOHandler(new NoFiles);
     const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kSteps, extension.c_str());
-    if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->HasMeshes())
-        throw InvalidArgument(what + " could not be read as " + extension + ": " +
-                              std::string(scene && !scene->HasMeshes() ? "it holds no meshes" : importer.GetErrorString()));
+    if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->HasMeshes()) {
+        // In assimp's words, without its internals: the name it gives the bytes, and its check
+        // that a scene has meshes (what a file that is no mesh at all fails).
+        std::string reason = scene && !scene->HasMeshes() ? "it holds no meshes" : importer.GetErrorString();
+        if (reason.find("mNumMeshes is 0") != std::string::npos) reason = "it holds no meshes (is it a mesh file?)";
+        const std::string magic = "\"$$$___magic___$$$." + extension + "\"";
+        for (size_t at; (at = reason.find(magic)) != std::string::npos;) reason.replace(at, magic.size(), "the upload");
+        if (reason.find("No suitable reader") != std::string::npos) reason = "it is not a readable " + extension + " file (truncated or damaged?)";
+        throw InvalidArgument(what + " could not be read as " + extension + ": " + reason);
+    }
     return flatten(scene, what, limits);
 }
 
