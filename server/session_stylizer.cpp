@@ -88,7 +88,7 @@ OccluderMeshInfo SessionService::putOccluderMesh(Session& s, const std::string& 
             throw ApiError(ErrorCode::TooLarge, "a session holds at most " + std::to_string(m_limits.maxMeshesPerSession) +
                                                     " occluder meshes; delete one first (DELETE …/stylizer/occluders/NAME)");
         const size_t others = s.stylizer.uploadedVertices() - (meshes.contains(name) ? meshes.at(name).mesh->positions.size() : 0);
-        limits.maxVertices = std::min(limits.maxVertices, m_limits.meshLimits.maxVertices - std::min(others, m_limits.meshLimits.maxVertices));
+        limits.maxVertices -= std::min(others, limits.maxVertices);  // what the session's other meshes leave
     }
     UploadedMesh uploaded{core::meshFormatOf(bytes), nullptr, bytes.size()};
     {
