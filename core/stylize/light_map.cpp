@@ -30,16 +30,6 @@ std::pair<Vec3d, Vec3d> occluderBounds(const Occluder& o) {
     return {lo, hi};
 }
 
-/// World-space bounds of every occluder.
-std::pair<Vec3d, Vec3d> sceneBounds(const StylizerScene& scene) {
-    Vec3d lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-    for (const Occluder& o : scene.occluders) {
-        auto [a, b] = occluderBounds(o);
-        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], a[k]), hi[k] = std::max(hi[k], b[k]);
-    }
-    return {lo, hi};
-}
-
 /// The camera in the map's texel coordinates and depth (Eq. 3's epipole l, z_l).
 Epipole epipoleOf(const Mat4& lightClip, const Vec3d& eye, int n) {
     double h[4];
@@ -141,7 +131,14 @@ Mat4 spotClipFromWorld(const Vec3d& position, const Vec3d& towardLight, double c
 
 LightMap lightMapOf(const StylizerScene& scene) {
     LightMap m;
-    std::tie(m.lo, m.hi) = scene.occluders.empty() ? std::pair<Vec3d, Vec3d>{Vec3d(-1.0), Vec3d(1.0)} : sceneBounds(scene);
+    for (const Occluder& o : scene.occluders) m.objectBounds.push_back(occluderBounds(o));
+    if (m.objectBounds.empty()) {
+        m.lo = Vec3d(-1.0), m.hi = Vec3d(1.0);  // nothing to cover: a unit box
+    } else {
+        std::tie(m.lo, m.hi) = m.objectBounds[0];
+        for (const auto& [a, b] : m.objectBounds)
+            for (int k = 0; k < 3; ++k) m.lo[k] = std::min(m.lo[k], a[k]), m.hi[k] = std::max(m.hi[k], b[k]);
+    }
     const StylizerLight& light = scene.light;
     const int n = light.shadowMapSize;
     m.spot = light.type == StylizerLightType::Spot;
@@ -158,7 +155,7 @@ LightMap lightMapOf(const StylizerScene& scene) {
 
 /// Eq. 3's kernel for occluder `i`, in texels where the object is (a spot's grow with distance).
 int dilationTexels(const LightMap& map, const StylizerScene& scene, size_t i) {
-    auto [lo, hi] = occluderBounds(scene.occluders[i]);
+    const auto& [lo, hi] = map.objectBounds[i];
     const double objectTexel = map.spot ? map.texel * length((lo + hi) * 0.5 - scene.light.position) : map.texel;
     const int n = scene.light.shadowMapSize;
     return int(std::min(double(n), std::round(scene.occluders[i].manipulation.dilationLength / objectTexel)));

@@ -6,6 +6,7 @@
 /// epipole of Eq. 3, the holes' noise frame of Eq. 4, the dilation's kernel in texels).
 
 #include <utility>
+#include <vector>
 
 #include "core/math/vec.h"
 #include "core/render/params.h"
@@ -14,9 +15,8 @@
 
 namespace volstyle::core {
 
-/// World-space bounds of an occluder after its transform, and of all of them.
+/// World-space bounds of an occluder after its transform.
 std::pair<Vec3d, Vec3d> occluderBounds(const Occluder& o);
-std::pair<Vec3d, Vec3d> sceneBounds(const StylizerScene& scene);
 
 /// The perspective map of a spot light at `position` shining along −towardLight with a full cone
 /// of `coneDeg` (the map's square circumscribes the cone), deep enough for the bounds [lo, hi].
@@ -31,6 +31,7 @@ Mat4 lightClipFromWorld(const Vec3d& towardLight, const Vec3d& lo, const Vec3d& 
 /// world size of a texel (for a spot: per unit of distance from it).
 struct LightMap {
     Vec3d lo, hi;
+    std::vector<std::pair<Vec3d, Vec3d>> objectBounds;  ///< each occluder's world bounds (one pass over its vertices)
     Mat4 clip;
     bool spot = false;
     double spotTan = 0, texel = 0;

@@ -257,7 +257,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
             renderShadow(scratchMap, nullptr, [i](size_t j) { return j == i; });
             copyToBuffer(scratchMap, part);
             closeDepthBuffer(m_device, part, n, m.closingRadius, m.closingShape);
-            auto [objectLo, objectHi] = occluderBounds(scene.occluders[i]);
+            const auto& [objectLo, objectHi] = map.objectBounds[i];
             if (m.dilationLength > 0) {
                 dilateEpipolarBuffer(m_device, part, n, epipoleOf(lightClip, cam.eye, n), dilationTexels(map, scene, i));
                 erodeBoxBuffer(m_device, part, n, m.erosionPx);
