@@ -132,9 +132,9 @@ VS_CONSTANT(int, kVisibilityMinMax, 1);  /* exact traversal of its min-max mipma
 VS_CONSTANT(int, kStylizerLightDirectional, 0);
 VS_CONSTANT(int, kStylizerLightSpot, 1);
 VS_CONSTANT(int, kMaxMinMaxLevels, 16);
-VS_CONSTANT(int, kBindingMinMax, 3);     /* SSBO vec2[]: (min, max) depth of every level of the manipulated map */
+VS_CONSTANT(int, kBindingMinMax, 3);     /* SSBO uint[]: the manipulated map, then its min-max levels (common/min_max_entry.glsl) */
 
-/* The min-max mipmap build (shadow_minmax.comp): level k + 1 from level k, 2×2 texels per entry. */
+/* The min-max mipmap build (shadow_minmax.comp): level k + 1 from level k, 2×2 entries per entry. */
 struct MinMaxParams {
     VS_IVEC4 level;  /* x: source side; y: destination side; z: source offset; w: destination offset (entries) */
 };

@@ -9,6 +9,7 @@
 #include "common/stylize_params.glsl"
 #include "common/pinhole.glsl"
 #include "common/phase.glsl"
+#include "common/min_max_entry.glsl"
 
 layout(local_size_x = kWorkgroup2D, local_size_y = kWorkgroup2D) in;
 
@@ -28,7 +29,7 @@ layout(std430, binding = kBindingScatterDepth) readonly buffer b_ScatterDepth {
 };
 
 layout(std430, binding = kBindingMinMax) readonly buffer b_MinMax {
-    vec2 minMax[];  // (min, max) depth per entry, level k from u.mipOffset (shadow_minmax.comp)
+    uint minMax[];  // b_ScatterDepth again, with its min-max levels after it (common/min_max_entry.glsl)
 };
 
 // Depths are the light's clip depth in [0, 1]; 1 is nothing there. A point is lit where it lies
@@ -119,7 +120,7 @@ float averageVisibilityMinMax(vec3 e, vec3 dir, float s) {
         if (cy > t) tExit = min(tExit, cy);
         tExit = min(max(tExit, t + tiny), tb);
         bool inside = all(greaterThanEqual(cell, ivec2(0))) && all(lessThan(cell, ivec2(side)));
-        vec2 mm = inside ? minMax[u.mipOffset[level / 4][level % 4] + cell.y * side + cell.x] : vec2(1.0);
+        vec2 mm = inside ? minMaxOfEntry(minMax[u.mipOffset[level / 4][level % 4] + cell.y * side + cell.x], level == 0) : vec2(1.0);
         float zA = depth01(h), zB = depth01(h0 + tExit * h1);
         float zLo = min(zA, zB), zHi = max(zA, zB);
         if (mm.x >= 1.0 || zHi <= mm.x + u.shadow.x) {
@@ -171,16 +172,18 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
     int top = u.options.y - 1, level = top;
     float t = ta, tiny = 1e-6 * s;
     ivec2 texel = ivec2(floor(a + t * b + nudge));
+    // The current level's side and first entry, kept up to date as the walk opens and climbs.
+    int side = 1, offset = u.mipOffset[top >> 2][top & 3];
     for (int iter = 0; iter < 65536 && t < tb; ++iter) {
         ivec2 cell = texel >> level;
-        int side = (n + (1 << level) - 1) >> level;
         vec2 bound = vec2((cell + ahead) << level);
         float tExit = tb;
         if (sgn.x != 0.0) tExit = min(tExit, (bound.x - a.x) * invB.x);
         if (sgn.y != 0.0) tExit = min(tExit, (bound.y - a.y) * invB.y);
         tExit = min(max(tExit, t + tiny), tb);
-        bool inside = all(greaterThanEqual(cell, ivec2(0))) && all(lessThan(cell, ivec2(side)));
-        vec2 mm = inside ? minMax[u.mipOffset[level >> 2][level & 3] + cell.y * side + cell.x] : vec2(1.0);
+        // The footprint clip keeps the ray on the map; the clamp only catches rounding at its rim.
+        cell = clamp(cell, ivec2(0), ivec2(side - 1));
+        vec2 mm = minMaxOfEntry(minMax[offset + cell.y * side + cell.x], level == 0);
         float zA = z0 + t * dz, zB = z0 + tExit * dz;
         float zLo = min(zA, zB), zHi = max(zA, zB);
         if (mm.x >= 1.0 || zHi <= mm.x + bias) {
@@ -191,11 +194,17 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
             lit += dz > 0.0 ? clamp((limit - z0) / dz - t, 0.0, len) : dz < 0.0 ? clamp(tExit - (limit - z0) / dz, 0.0, len) : (zA <= limit ? len : 0.0);
         } else {
             level -= 1;  // undecided: open the cell
+            side = (n + (1 << level) - 1) >> level;
+            offset -= side * side;
             continue;
         }
         t = tExit;
         texel = ivec2(floor(a + t * b + nudge));
-        if (level < top && (texel >> (level + 1)) != (cell >> 1)) level += 1;  // left the parent
+        if (level < top && (texel >> (level + 1)) != (cell >> 1)) {  // left the parent
+            offset += side * side;
+            level += 1;
+            side = (n + (1 << level) - 1) >> level;
+        }
     }
     return clamp(lit / s, 0.0, 1.0);
 }

@@ -104,20 +104,25 @@ struct Stylizer::Gpu {
 
 namespace {
 
-/// The min-max mipmap of the n×n map in `depth` (shadow_minmax.comp): levels down to 1×1, their
-/// offsets into the buffer in `p.mipOffset`, their count in `p.options.y`.
-gl::Buffer buildMinMaxMipmap(GpuDevice& device, const gl::Buffer& depth, int n, layout::StylizeParams& p) {
+/// The entries of the min-max mipmap of an n×n map after the map itself (levels 1 … down to 1×1).
+size_t minMaxEntriesAfterMap(int n) {
+    size_t entries = 0;
+    for (int side = n; side > 1;) side = (side + 1) / 2, entries += size_t(side) * side;
+    return entries;
+}
+
+/// The min-max mipmap (shadow_minmax.comp) of the n×n map at the start of `depth`, written into the
+/// same buffer after the map (minMaxEntriesAfterMap entries; common/min_max_entry.glsl): level 0
+/// is the map itself. The levels' offsets go to `p.mipOffset`, their count to `p.options.y`.
+void buildMinMaxMipmap(GpuDevice& device, const gl::Buffer& depth, int n, layout::StylizeParams& p) {
     std::vector<int> sides{n}, offsets{0};
     while (sides.back() > 1) offsets.push_back(offsets.back() + sides.back() * sides.back()), sides.push_back((sides.back() + 1) / 2);
     VOLSTYLE_CHECK(int(sides.size()), <=, layout::kMaxMinMaxLevels);
-    const size_t entries = size_t(offsets.back()) + 1;
-    gl::Buffer mip = gl::createBuffer(entries * 2 * sizeof(float), nullptr, 0, "shadow-min-max");
     glUseProgram(device.program(gl::ShaderBuilder("shadow_minmax.comp")).id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingScatterDepth, depth.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingMinMax, mip.id());
-    for (size_t k = 0; k < sides.size(); ++k) {
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingMinMax, depth.id());
+    for (size_t k = 1; k < sides.size(); ++k) {
         layout::MinMaxParams m;
-        m.level = {k == 0 ? n : sides[k - 1], sides[k], k == 0 ? -1 : offsets[k - 1], offsets[k]};
+        m.level = {sides[k - 1], sides[k], offsets[k - 1], offsets[k]};
         device.setParams(m);
         const int g = layout::kWorkgroup2D;
         glDispatchCompute(GLuint((sides[k] + g - 1) / g), GLuint((sides[k] + g - 1) / g), 1);
@@ -128,7 +133,6 @@ gl::Buffer buildMinMaxMipmap(GpuDevice& device, const gl::Buffer& depth, int n, 
         (k % 4 == 0 ? q.x : k % 4 == 1 ? q.y : k % 4 == 2 ? q.z : q.w) = offsets[k];
     }
     p.options.y = int(sides.size());
-    return mip;
 }
 
 }  // namespace
@@ -241,7 +245,9 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     gl::Texture shadowDepth = texture2D(GL_DEPTH_COMPONENT32F, n, n, "shadow-depth");
     gl::Texture shadowIds = texture2D(GL_R32F, n, n, "shadow-ids");
     renderShadow(shadowDepth, &shadowIds, all);
-    gl::Buffer scatterDepth = gl::createBuffer(mapBytes, nullptr, 0, "scatter-shadow-map");
+    // The accelerated V̄'s min-max levels follow the map in its buffer (no copy of level 0).
+    const size_t pyramidBytes = settings.method == VisibilityMethod::Accelerated ? minMaxEntriesAfterMap(n) * sizeof(uint32_t) : 0;
+    gl::Buffer scatterDepth = gl::createBuffer(mapBytes + pyramidBytes, nullptr, 0, "scatter-shadow-map");
     bool manipulated = false;
     for (const Occluder& o : scene.occluders) manipulated = manipulated || o.manipulation.any();
     if (!manipulated) {
@@ -277,9 +283,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     m_device.finish();
     out.shadowMs = msSince(t);
     t = Clock::now();
-    gl::Buffer minMax = settings.method == VisibilityMethod::Accelerated
-                            ? buildMinMaxMipmap(m_device, scatterDepth, n, p)
-                            : gl::createBuffer(2 * sizeof(float), nullptr, 0, "shadow-min-max-unused");
+    if (settings.method == VisibilityMethod::Accelerated) buildMinMaxMipmap(m_device, scatterDepth, n, p);
     m_device.finish();
     out.mipmapMs = msSince(t);
 
@@ -337,7 +341,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     glBindTextureUnit(layout::kUnitGBufferSurface, surface.id());
     glBindTextureUnit(layout::kUnitGBufferColour, colour.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingScatterDepth, scatterDepth.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingMinMax, minMax.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingMinMax, scatterDepth.id());
     glUseProgram(m_device.program(gl::ShaderBuilder("stylize.comp")).id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingImageOut, m_gpu->pixels.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingLayersOut, m_gpu->layers.id());
