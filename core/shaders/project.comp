@@ -69,11 +69,6 @@ struct Basis {
     ivec3 i1;
     vec3 f;
 };
-#if VOLSTYLE_BASIS == VOLSTYLE_BASIS_BOX
-const int kBasisCount = 1;
-#else
-const int kBasisCount = 8;
-#endif
 
 Basis basisAt(vec3 p) {
     Basis b;
@@ -100,28 +95,81 @@ uint cornerIndex(Basis b, int c, out float weight) {
     return uint((corner.z * u.unknownDims.y + corner.y) * u.unknownDims.x + corner.x);
 }
 
-// W: add weight · (Σ basis · a) of block `block`; Wᵀ: scatter weight · r · basis into it.
+// Consecutive samples of a ray mostly fall between the same 8 unknowns (at 0.5 voxels a step,
+// about two per cell): W keeps the 8 values it loaded and Wᵀ sums into 8 registers, and either
+// touches memory only when the stencil moves, for the same sums in the same order per corner.
+// Named fields, not an array: llvmpipe keeps arrays in memory. One per block of unknowns.
+struct CornerCache {
+    Basis b;     // the stencil held (b.i0.x < 0: none)
+    uint block;  // which block of unknowns (emission or albedo of a joint solve)
+    vec3 v0, v1, v2, v3, v4, v5, v6, v7;
+};
+
+CornerCache emptyCache(uint block) {
+    CornerCache c;
+    c.b.i0 = c.b.i1 = ivec3(-1);
+    c.b.f = vec3(0.0);
+    c.block = block;
+    c.v0 = c.v1 = c.v2 = c.v3 = c.v4 = c.v5 = c.v6 = c.v7 = vec3(0.0);
+    return c;
+}
+
+#define VS_FOR_EACH_CORNER(X) X(0, v0) X(1, v1) X(2, v2) X(3, v3) X(4, v4) X(5, v5) X(6, v6) X(7, v7)
+
+// W: add weight · (Σ basis · a) of the cache's block; Wᵀ: scatter weight · r · basis into it.
 #if VOLSTYLE_ADJOINT
-void apply(Basis b, uint block, vec3 weight, vec3 r, inout vec3 unused) {
+void scatterCorner(CornerCache c, int corner, vec3 v) {
+    if (v == vec3(0.0)) return;  // a weight-0 corner (or nothing summed) scatters nothing
+    float unusedWeight;
+    uint i = 4u * (c.block + cornerIndex(c.b, corner, unusedWeight));
+    scatterAdd(i, v.r);
+    scatterAdd(i + 1u, v.g);
+    scatterAdd(i + 2u, v.b);
+}
+void flush(CornerCache c) {
+    if (c.b.i0.x < 0) return;
+#define VS_SCATTER(k, field) scatterCorner(c, k, c.field);
+    VS_FOR_EACH_CORNER(VS_SCATTER)
+#undef VS_SCATTER
+}
+void apply(Basis b, inout CornerCache cache, vec3 weight, vec3 r, inout vec3 unused) {
     vec3 v = weight * r;
-    for (int c = 0; c < kBasisCount; ++c) {
-        float w;
-        uint i = 4u * (block + cornerIndex(b, c, w));
-        if (w == 0.0) continue;
-        scatterAdd(i, v.r * w);
-        scatterAdd(i + 1u, v.g * w);
-        scatterAdd(i + 2u, v.b * w);
+#if VOLSTYLE_BASIS == VOLSTYLE_BASIS_BOX
+    uint i = 4u * (cache.block + uint((b.i0.z * u.unknownDims.y + b.i0.y) * u.unknownDims.x + b.i0.x));
+    scatterAdd(i, v.r);
+    scatterAdd(i + 1u, v.g);
+    scatterAdd(i + 2u, v.b);
+#else
+    if (b.i0 != cache.b.i0) {
+        flush(cache);
+        cache = emptyCache(cache.block);
+        cache.b = b;
     }
+    float w;
+#define VS_SUM(k, field) cornerIndex(b, k, w); cache.field += v * w;
+    VS_FOR_EACH_CORNER(VS_SUM)
+#undef VS_SUM
+#endif
 }
 #else
-void apply(Basis b, uint block, vec3 weight, vec3 unusedResidual, inout vec3 sum) {
-    vec3 a = vec3(0.0);
-    for (int c = 0; c < kBasisCount; ++c) {
-        float w;
-        uint i = block + cornerIndex(b, c, w);
-        a += w * unknown[i].rgb;
+void flush(CornerCache unused) {}
+void apply(Basis b, inout CornerCache cache, vec3 weight, vec3 unusedResidual, inout vec3 sum) {
+#if VOLSTYLE_BASIS == VOLSTYLE_BASIS_BOX
+    sum += weight * unknown[cache.block + uint((b.i0.z * u.unknownDims.y + b.i0.y) * u.unknownDims.x + b.i0.x)].rgb;
+#else
+    float w;
+    if (b.i0 != cache.b.i0) {
+        cache.b = b;
+#define VS_LOAD(k, field) cache.field = unknown[cache.block + cornerIndex(b, k, w)].rgb;
+        VS_FOR_EACH_CORNER(VS_LOAD)
+#undef VS_LOAD
     }
+    vec3 a = vec3(0.0);
+#define VS_GATHER(k, field) cornerIndex(b, k, w); a += w * cache.field;
+    VS_FOR_EACH_CORNER(VS_GATHER)
+#undef VS_GATHER
     sum += weight * a;
+#endif
 }
 #endif
 
@@ -147,9 +195,13 @@ void main() {
 #if VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EXTINCTION
         // Log-space tomography: o_k = Σ σ_i ∫ v_i dt. The current extinction is not involved,
         // so no skipping: every segment of the box counts.
-        while (nextSegment(m, false, tMid, dt)) apply(basisAt(o + tMid * d), 0u, vec3(dt), r, sum);
+        CornerCache cache = emptyCache(0u);
+        while (nextSegment(m, false, tMid, dt)) apply(basisAt(o + tMid * d), cache, vec3(dt), r, sum);
+        flush(cache);
 #else
         vec3 transmittance = vec3(1.0);
+        uint albedoBlock = VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO ? uint(u.unknownLayout.x) : 0u;
+        CornerCache emission = emptyCache(0u), albedo = emptyCache(albedoBlock);
         while (nextSegment(m, true, tMid, dt)) {
             vec3 p = o + tMid * d;
             vec3 sigma = fetchTrilinear(s_extinction, stencilAt(p));
@@ -158,16 +210,17 @@ void main() {
             vec3 opacity = transmittance * oneMinusExp(tau);  // T · (1 − e^{−σΔt})
             Basis b = basisAt(p);
 #if VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION || VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO
-            apply(b, 0u, opacity, r, sum);
+            apply(b, emission, opacity, r, sum);
 #endif
 #if VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_ALBEDO || VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO
-            uint albedoBlock = VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO ? uint(u.unknownLayout.x) : 0u;
-            apply(b, albedoBlock, opacity * inScattering(p, dir), r, sum);
+            apply(b, albedo, opacity * inScattering(p, dir), r, sum);
 #endif
             transmittance *= exp(-tau);
             // Only a transmittance cut-off: forward and adjoint must stop at the same segment.
             if (max3(transmittance) < u.projectorCutoff.x) break;
         }
+        flush(emission);
+        flush(albedo);
 #endif
     }
 #if !VOLSTYLE_ADJOINT
