@@ -3,12 +3,29 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <string>
 #include <vector>
 
 #include "core/image/image.h"
+#include "core/render/params.h"
 
 namespace volstyle::bench {
+
+/// `count` cameras of w×h on an orbit of radius 3 around the unit volume (bench/solver's views).
+inline std::vector<core::Camera> orbitCameras(int count, int w, int h) {
+    std::vector<core::Camera> cams;
+    for (int i = 0; i < count; ++i) {
+        const double a = 0.3 + 2 * std::numbers::pi * i / count;
+        core::Camera c;
+        c.eye = {3.0 * std::sin(a), 0.4 * std::cos(3 * a) + 0.013, 3.0 * std::cos(a)};
+        c.target = {0.011, -0.07, 0.013};
+        c.fovYDeg = 42;
+        c.width = w, c.height = h;
+        cams.push_back(c);
+    }
+    return cams;
+}
 
 inline double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());

@@ -45,20 +45,6 @@ Scene makeScene(int res) {
     return s;
 }
 
-std::vector<Camera> cameras(int count, int w, int h) {
-    std::vector<Camera> cams;
-    for (int i = 0; i < count; ++i) {
-        double a = 0.3 + 2 * std::numbers::pi * i / count;
-        Camera c;
-        c.eye = {3.0 * std::sin(a), 0.4 * std::cos(3 * a) + 0.013, 3.0 * std::cos(a)};
-        c.target = {0.011, -0.07, 0.013};
-        c.fovYDeg = 42;
-        c.width = w, c.height = h;
-        cams.push_back(c);
-    }
-    return cams;
-}
-
 std::vector<SolveView> targets(Renderer& r, const Volume& truth, const std::vector<Camera>& cams, double step) {
     GpuVolume gpu(truth);
     RenderSettings s;
@@ -146,7 +132,7 @@ int main(int argc, char** argv) {
     for (const Config& c : configs) {
         Scene scene = makeScene(c.res);
         const double step = std::sqrt(3.0) * c.res / c.stepsPerDiagonal;
-        auto views = targets(renderer, scene.truth, cameras(c.views, c.w, c.h), step);
+        auto views = targets(renderer, scene.truth, bench::orbitCameras(c.views, c.w, c.h), step);
         SolveOptions opt;
         opt.stepVoxels = step;
         opt.maxIterations = 30;
@@ -180,7 +166,7 @@ int main(int argc, char** argv) {
         s.plain.ensureAlbedo(1.0f);
         Volume truth = s.plain;
         test::stampLetters(truth, truth.albedo(), Vec3(0.2f, 0.35f, 0.6f));
-        auto v = targets(renderer, truth, cameras(6, 32, 32), 0.5);
+        auto v = targets(renderer, truth, bench::orbitCameras(6, 32, 32), 0.5);
         std::printf("| bounds method (albedo, 32³, 6 views) | iterations | s | final RMS / start |\n|---|---|---|---|\n");
         for (BoundsMethod m : {BoundsMethod::Projected, BoundsMethod::CutAtBound}) {
             SolveOptions opt;
@@ -203,8 +189,8 @@ int main(int argc, char** argv) {
     // Part 2: run time against error.
     const int res = quick ? 32 : 64, size = quick ? 120 : 240;
     Scene scene = makeScene(res);
-    auto views = targets(renderer, scene.truth, cameras(2, size, size), 0.25);
-    Camera novel = cameras(1, 200, 200)[0];
+    auto views = targets(renderer, scene.truth, bench::orbitCameras(2, size, size), 0.25);
+    Camera novel = bench::orbitCameras(1, 200, 200)[0];
     novel.eye = {-2.2, 1.2, 2.0};
     auto solveAndRender = [&](double step, BasisType basis, int iterations, double& seconds, bool exact = false) {
         SolveOptions opt;

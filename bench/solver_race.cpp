@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "../tests/common/stamped_cloud.h"
+#include "bench_util.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/renderer.h"
 #include "core/solve/gpu_vector.h"
@@ -29,20 +30,6 @@ using namespace volstyle;
 using namespace volstyle::core;
 
 namespace {
-
-std::vector<Camera> orbit(int count, int w, int h) {
-    std::vector<Camera> cams;
-    for (int i = 0; i < count; ++i) {
-        const double a = 0.3 + 2 * std::numbers::pi * i / count;
-        Camera c;
-        c.eye = {3.0 * std::sin(a), 0.4 * std::cos(3 * a) + 0.013, 3.0 * std::cos(a)};
-        c.target = {0.011, -0.07, 0.013};
-        c.fovYDeg = 42;
-        c.width = w, c.height = h;
-        cams.push_back(c);
-    }
-    return cams;
-}
 
 struct Problem {
     std::string name;
@@ -70,7 +57,7 @@ Race race(GpuDevice& device, Renderer& renderer, const Problem& p, int maxIterat
         GpuVolume gpu(truth);
         RenderSettings s;
         s.stepVoxels = p.step;
-        const auto cams = orbit(p.views, p.w, p.h);
+        const auto cams = bench::orbitCameras(p.views, p.w, p.h);
         for (size_t i = 0; i < cams.size(); ++i)
             views.push_back({"v" + std::to_string(i), cams[i], renderer.render(gpu, cams[i], defaultLighting(), s), std::nullopt});
     }
@@ -114,7 +101,7 @@ OperatorTimes operators(GpuDevice& device, const Problem& p) {
     Volume plain = test::thinCloud(p.res);
     GpuVolume gpu(plain);
     Projector W(device, gpu, defaultLighting(), Unknown::Emission, BasisType::Trilinear, plain.dims(), p.step);
-    for (const Camera& c : orbit(p.views, p.w, p.h)) W.addView(c);
+    for (const Camera& c : bench::orbitCameras(p.views, p.w, p.h)) W.addView(c);
     GpuVector a(W.elementCount(), "race-a"), img(W.pixelCount(), "race-img");
     a.fill(1.0f);
     img.fill(1.0f);
