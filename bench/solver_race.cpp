@@ -2,17 +2,17 @@
 // solver, per problem, with each iteration's split (forward, back-projection, vectors).
 //   (a) a 48³ cloud (the stamped "VS" emission of bench/solver), emission only, 6 views of
 //       96×96, no regularization, step 0.5 voxels.
-// Then each problem's operators alone: one W a and one Wᵀ r (median of 5, after a warm-up), so
-// the iterations' split reads as projections per iteration.
+// Rows per problem: the solver as it is (preconditioned CGLS), without the preconditioner (as
+// before issue #12), and coarse to fine (k iterations at half the unknowns, pixels and samples
+// per axis, then the full problem from there). "Seconds" are the iterations' own (forward,
+// back-projection, vectors), not the set-up.
 // Usage: solver_race [--iterations N]. Prints tables, then one JSON line per problem.
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <functional>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -21,8 +21,6 @@
 #include "bench_util.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/renderer.h"
-#include "core/solve/gpu_vector.h"
-#include "core/solve/projector.h"
 #include "core/solve/solver.h"
 #include "core/volume/builtin_scenes.h"
 
@@ -41,76 +39,86 @@ struct Race {
     std::vector<double> seconds, objective;  // after each iteration ([0]: the start, 0 s)
     double forwardMs = 0, adjointMs = 0, vectorMs = 0;
     int iterations = 0;
-    /// Seconds of solving until the objective is at most `fraction` of the start (−1: never).
-    double timeTo(double fraction) const {
+    /// Seconds of solving until the objective is at most `fraction` of `start` (−1: never).
+    double timeTo(double fraction, double start) const {
         for (size_t i = 0; i < objective.size(); ++i)
-            if (objective[i] <= fraction * objective[0]) return seconds[i];
+            if (objective[i] <= fraction * start) return seconds[i];
         return -1;
     }
 };
 
-Race race(GpuDevice& device, Renderer& renderer, const Problem& p, int maxIterations) {
-    Volume plain = test::thinCloud(p.res), truth = plain;
+struct Setup {
+    Volume plain;                 // where every solve starts
+    std::vector<SolveView> views;  // renders of the stamped truth
+};
+
+Setup setUp(Renderer& renderer, const Problem& p) {
+    Setup s{test::thinCloud(p.res), {}};
+    Volume truth = s.plain;
     test::stampLetters(truth, truth.ensureEmission(), Vec3(2.0f, 1.0f, 0.2f));
-    std::vector<SolveView> views;
-    {
-        GpuVolume gpu(truth);
-        RenderSettings s;
-        s.stepVoxels = p.step;
-        const auto cams = bench::orbitCameras(p.views, p.w, p.h);
-        for (size_t i = 0; i < cams.size(); ++i)
-            views.push_back({"v" + std::to_string(i), cams[i], renderer.render(gpu, cams[i], defaultLighting(), s), std::nullopt});
-    }
+    GpuVolume gpu(truth);
+    RenderSettings rs;
+    rs.stepVoxels = p.step;
+    const auto cams = bench::orbitCameras(p.views, p.w, p.h);
+    for (size_t i = 0; i < cams.size(); ++i)
+        s.views.push_back({"v" + std::to_string(i), cams[i], renderer.render(gpu, cams[i], defaultLighting(), rs), std::nullopt});
+    return s;
+}
+
+SolveOptions raceOptions(double step, int maxIterations) {
     SolveOptions opt;
-    opt.stepVoxels = p.step;
+    opt.stepVoxels = step;
     opt.maxIterations = maxIterations;
     opt.tolerance = 0;  // run the iterations: the race reads the history
     opt.regularization.laplacian = 0;
+    return opt;
+}
+
+/// Solves from `start`; the history's seconds continue from `offset`.
+Race solveRace(GpuDevice& device, const Volume& start, const std::vector<SolveView>& views, const SolveOptions& opt,
+               double offset = 0, Volume* result = nullptr) {
     Race r;
-    r.seconds.push_back(0);
-    const SolveResult out = Solver(device, plain, defaultLighting(), views, opt).run([&](const SolveProgress& pr) {
+    r.seconds.push_back(offset);
+    SolveResult out = Solver(device, start, defaultLighting(), views, opt).run([&](const SolveProgress& pr) {
         r.seconds.push_back((pr.forwardMs + pr.adjointMs + pr.vectorMs) / 1000.0 + r.seconds.back());
         r.forwardMs += pr.forwardMs, r.adjointMs += pr.adjointMs, r.vectorMs += pr.vectorMs;
     });
     r.objective = out.report.objectiveHistory;
     r.iterations = out.report.iterations;
     r.seconds.resize(r.objective.size(), r.seconds.back());
+    if (result) *result = std::move(out.volume);
     return r;
 }
 
-struct OperatorTimes {
-    double forwardMs = 0, adjointMs = 0;
-    size_t pixels = 0, elements = 0;
-};
-
-double medianMs(const std::function<void()>& f, GpuDevice& device) {
-    f();
-    device.finish();
-    std::vector<double> ms;
-    for (int i = 0; i < 5; ++i) {
-        const auto t0 = std::chrono::steady_clock::now();
-        f();
-        device.finish();
-        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+/// Half the pixels along each axis: each target pixel the mean of a 2×2 block (weights too),
+/// the camera the same with half the size, so its pixel centres are the blocks' centres.
+std::vector<SolveView> halfResolution(const std::vector<SolveView>& views) {
+    std::vector<SolveView> out;
+    for (const SolveView& v : views) {
+        SolveView h = v;
+        h.camera.width = v.camera.width / 2, h.camera.height = v.camera.height / 2;
+        h.target = Image(h.camera.width, h.camera.height);
+        for (int y = 0; y < h.camera.height; ++y)
+            for (int x = 0; x < h.camera.width; ++x)
+                for (int c = 0; c < 4; ++c)
+                    h.target.pixel(x, y)[c] = 0.25f * (v.target.pixel(2 * x, 2 * y)[c] + v.target.pixel(2 * x + 1, 2 * y)[c] +
+                                                       v.target.pixel(2 * x, 2 * y + 1)[c] + v.target.pixel(2 * x + 1, 2 * y + 1)[c]);
+        out.push_back(std::move(h));
     }
-    std::sort(ms.begin(), ms.end());
-    return ms[2];
+    return out;
 }
 
-OperatorTimes operators(GpuDevice& device, const Problem& p) {
-    Volume plain = test::thinCloud(p.res);
-    GpuVolume gpu(plain);
-    Projector W(device, gpu, defaultLighting(), Unknown::Emission, BasisType::Trilinear, plain.dims(), p.step);
-    for (const Camera& c : bench::orbitCameras(p.views, p.w, p.h)) W.addView(c);
-    GpuVector a(W.elementCount(), "race-a"), img(W.pixelCount(), "race-img");
-    a.fill(1.0f);
-    img.fill(1.0f);
-    OperatorTimes t;
-    t.pixels = W.pixelCount(), t.elements = W.elementCount();
-    t.forwardMs = medianMs([&] { W.forward(a, img); }, device);
-    img.fill(1.0f);
-    t.adjointMs = medianMs([&] { W.adjoint(img, a); }, device);
-    return t;
+/// Coarse to fine: `coarseIterations` on half the unknowns per axis, half the pixels and twice
+/// the step, then the full problem from that result. The history is the full problem's,
+/// starting at the coarse stage's seconds; [0] is the full problem's start objective.
+Race coarseToFine(GpuDevice& device, const Setup& s, const Problem& p, int coarseIterations, int maxIterations) {
+    SolveOptions coarse = raceOptions(2 * p.step, coarseIterations);
+    coarse.resolution = Int3{p.res / 2, p.res / 2, p.res / 2};
+    Volume warm;
+    const Race c = solveRace(device, s.plain, halfResolution(s.views), coarse, 0, &warm);
+    Race r = solveRace(device, warm, s.views, raceOptions(p.step, maxIterations), c.seconds.back());
+    r.forwardMs += c.forwardMs, r.adjointMs += c.adjointMs, r.vectorMs += c.vectorMs;
+    return r;
 }
 
 std::string seconds(double s) {
@@ -139,20 +147,25 @@ int main(int argc, char** argv) {
     std::printf("| problem | iterations | s to 10%% | s to 1%% | s to 0.1%% | ms/iter forward | back-proj | vectors |\n|---|---|---|---|---|---|---|---|\n");
     std::vector<std::string> json;
     for (const Problem& p : problems) {
-        const Race r = race(*device, renderer, p, maxIterations);
-        const int n = std::max(1, r.iterations);
-        std::printf("| %s | %d | %s | %s | %s | %.0f | %.0f | %.0f |\n", p.name.c_str(), r.iterations, seconds(r.timeTo(0.1)).c_str(),
-                    seconds(r.timeTo(0.01)).c_str(), seconds(r.timeTo(0.001)).c_str(), r.forwardMs / n, r.adjointMs / n, r.vectorMs / n);
-        std::fflush(stdout);
-        std::string j = "{\"bench\":\"solver_race\",\"problem\":\"" + p.name + "\",\"history\":[";
-        for (size_t i = 0; i < r.objective.size(); ++i)
-            j += (i ? "," : "") + std::string("[") + std::to_string(r.seconds[i]) + "," + std::to_string(r.objective[i] / r.objective[0]) + "]";
-        json.push_back(j + "]}");
-    }
-    std::printf("\n| problem | pixels | unknowns | W a ms | Wᵀ r ms |\n|---|---|---|---|---|\n");
-    for (const Problem& p : problems) {
-        const OperatorTimes t = operators(*device, p);
-        std::printf("| %s | %zu | %zu | %.0f | %.0f |\n", p.name.c_str(), t.pixels, t.elements, t.forwardMs, t.adjointMs);
+        const Setup setup = setUp(renderer, p);
+        const Race direct = solveRace(*device, setup.plain, setup.views, raceOptions(p.step, maxIterations));
+        const double start = direct.objective[0];
+        SolveOptions plainCgls = raceOptions(p.step, maxIterations);
+        plainCgls.precondition = false;
+        std::vector<std::pair<std::string, Race>> rows{{p.name, direct},
+                                                       {p.name + ", no preconditioner", solveRace(*device, setup.plain, setup.views, plainCgls)}};
+        for (int k : {3, 6}) rows.push_back({p.name + ", coarse to fine (" + std::to_string(k) + " at half)", coarseToFine(*device, setup, p, k, maxIterations)});
+        for (const auto& [name, r] : rows) {
+            const int n = std::max(1, r.iterations);
+            std::printf("| %s | %d | %s | %s | %s | %.0f | %.0f | %.0f |\n", name.c_str(), r.iterations, seconds(r.timeTo(0.1, start)).c_str(),
+                        seconds(r.timeTo(0.01, start)).c_str(), seconds(r.timeTo(0.001, start)).c_str(), r.forwardMs / n, r.adjointMs / n,
+                        r.vectorMs / n);
+            std::fflush(stdout);
+            std::string j = "{\"bench\":\"solver_race\",\"problem\":\"" + name + "\",\"history\":[";
+            for (size_t i = 0; i < r.objective.size(); ++i)
+                j += (i ? "," : "") + std::string("[") + std::to_string(r.seconds[i]) + "," + std::to_string(r.objective[i] / start) + "]";
+            json.push_back(j + "]}");
+        }
     }
     std::printf("\n");
     for (const auto& j : json) std::printf("%s\n", j.c_str());

@@ -47,6 +47,7 @@ struct SolveOptions {
     std::optional<Vec3d> mediumRadiance;  ///< L_m, required for extinction solves (Sec. 4.2.4)
     std::vector<std::string> views;       ///< which views; empty: all with a target
     bool enforceBounds = true;  ///< albedo in [0,1], emission and extinction ≥ 0 (tests may lift it)
+    bool precondition = true;   ///< CGLS with the column scaling D² = 1/(AᵀA1) (solver_setup.cpp)
 
     std::vector<FieldProblem> check() const;
     void validate() const;  ///< throws InvalidArgument listing check()'s problems

@@ -80,8 +80,14 @@ void Solver::State::restart(Vec3d& gamma) {
     }
     if (!r.empty()) rId.upload(r);
     applyAt();
-    ops.copy(s, p);
-    gamma = ops.dot(s, s);
+    gamma = precondition();
+    ops.copy(z, p);
+}
+
+Vec3d Solver::State::precondition() {
+    ops.copy(s, z);
+    ops.multiply(precond, z);
+    return ops.dot(s, z);
 }
 
 Vec3d Solver::State::objective() {
@@ -181,7 +187,7 @@ Vec3d Solver::State::nextDirection(int iteration, const Vec3d& gamma, Vec3d& slo
         return gammaNew;
     }
     applyAt();
-    gammaNew = ops.dot(s, s);
+    gammaNew = precondition();
     const Vec3d ps = ops.dot(p, s);
     Vec3d beta;
     for (int c = 0; c < 3; ++c) {
@@ -189,7 +195,7 @@ Vec3d Solver::State::nextDirection(int iteration, const Vec3d& gamma, Vec3d& slo
         if (gammaNew[c] + beta[c] * ps[c] < kMinDescentFraction * gammaNew[c]) beta[c] = 0.0;
         slope[c] = gammaNew[c] + beta[c] * ps[c];
     }
-    ops.xpby(s, beta, p);
+    ops.xpby(z, beta, p);  // p = D² s + β p: preconditioned CGLS
     return gammaNew;
 }
 
@@ -238,7 +244,7 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
     }
     analyzeReach(st.device, st.volume, st.lighting, st.views, st.opt, rep);  // what the bounds leave out of reach
     if (!rep.reach.advice.empty()) spdlog::info("solve: {}", rep.reach.advice);
-    Vec3d gamma;  // ‖s‖², s = Aᵀr restricted to the free variables
+    Vec3d gamma;  // s·D²s, s = Aᵀr restricted to the free variables (‖s‖² unpreconditioned)
     st.restart(gamma);
     Vec3d slope = gamma;  // p·s: the objective's descent rate along p (= γ in plain CGLS)
     double f = st.totalObjective();

@@ -47,6 +47,8 @@ struct Solver::State {
     // The unknowns a, the previous iterate, gradient s and direction p; the image rows' data
     // (observations, √weights) and residual/work vectors; the Laplacian rows' residual and work.
     GpuVector a, aPrev, s, p, hull, obs, sqrtW, rImg, qImg, tmpImg, dImg, rLap, qLap, dLap, tmpU, rId;
+    // The preconditioner D² (per unknown and channel) and the preconditioned gradient z = D² s.
+    GpuVector precond, z;
     Bounds bounds;
     std::vector<BlockRegularizer> blocks;
     Vec3d constant{0, 0, 0};  // λ0‖a‖² + λ1‖a−1‖² = λ‖a−t‖² + λ0λ1/λ per element
@@ -67,6 +69,7 @@ struct Solver::State {
     void markHullFromMasks(const std::vector<float>& o, const std::vector<float>& w);
     void initialUnknowns();
     void buildRegularizers();
+    void buildPreconditioner();
     Volume result();
 
     // The operator and residuals (solver.cpp).
@@ -74,6 +77,7 @@ struct Solver::State {
     /// Moves a by step·x with residuals [rImg; rLap; rId] updated by the matching A x = [img; lap].
     void move(const Vec3d& step, const GpuVector& x, const GpuVector& img, const GpuVector& lap);
     void applyAt();  // s from rImg, rLap, rId
+    Vec3d precondition();  // z = D² s; returns s·z (γ of preconditioned CGLS)
     void restart(Vec3d& gamma);
     Vec3d objective();
     double totalObjective();
