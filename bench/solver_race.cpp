@@ -3,9 +3,10 @@
 //   (a) a 48³ cloud (the stamped "VS" emission of bench/solver), emission only, 6 views of
 //       96×96, no regularization, step 0.5 voxels.
 // Rows per problem: the solver as it is (preconditioned CGLS), without the preconditioner (as
-// before issue #12), and coarse to fine (k iterations at half the unknowns, pixels and samples
-// per axis, then the full problem from there). "Seconds" are the iterations' own (forward,
-// back-projection, vectors), not the set-up.
+// before issue #12), and coarse to fine (SolveOptions::coarseIterations = k: k iterations at half
+// the unknowns, pixels and samples per axis, then the full problem from there). "Seconds" are
+// the iterations' own (forward, back-projection, vectors), not the set-up — except that the
+// coarse stage counts whole, set-up included.
 // Usage: solver_race [--iterations N]. Prints tables, then one JSON line per problem.
 #include <spdlog/spdlog.h>
 
@@ -74,50 +75,36 @@ SolveOptions raceOptions(double step, int maxIterations) {
     return opt;
 }
 
-/// Solves from `start`; the history's seconds continue from `offset`.
-Race solveRace(GpuDevice& device, const Volume& start, const std::vector<SolveView>& views, const SolveOptions& opt,
-               double offset = 0, Volume* result = nullptr) {
+/// Solves from `start`.
+Race solveRace(GpuDevice& device, const Volume& start, const std::vector<SolveView>& views, const SolveOptions& opt) {
     Race r;
-    r.seconds.push_back(offset);
-    SolveResult out = Solver(device, start, defaultLighting(), views, opt).run([&](const SolveProgress& pr) {
+    r.seconds.push_back(0);
+    const SolveResult out = Solver(device, start, defaultLighting(), views, opt).run([&](const SolveProgress& pr) {
         r.seconds.push_back((pr.forwardMs + pr.adjointMs + pr.vectorMs) / 1000.0 + r.seconds.back());
         r.forwardMs += pr.forwardMs, r.adjointMs += pr.adjointMs, r.vectorMs += pr.vectorMs;
     });
     r.objective = out.report.objectiveHistory;
     r.iterations = out.report.iterations;
     r.seconds.resize(r.objective.size(), r.seconds.back());
-    if (result) *result = std::move(out.volume);
     return r;
 }
 
-/// Half the pixels along each axis: each target pixel the mean of a 2×2 block (weights too),
-/// the camera the same with half the size, so its pixel centres are the blocks' centres.
-std::vector<SolveView> halfResolution(const std::vector<SolveView>& views) {
-    std::vector<SolveView> out;
-    for (const SolveView& v : views) {
-        SolveView h = v;
-        h.camera.width = v.camera.width / 2, h.camera.height = v.camera.height / 2;
-        h.target = Image(h.camera.width, h.camera.height);
-        for (int y = 0; y < h.camera.height; ++y)
-            for (int x = 0; x < h.camera.width; ++x)
-                for (int c = 0; c < 4; ++c)
-                    h.target.pixel(x, y)[c] = 0.25f * (v.target.pixel(2 * x, 2 * y)[c] + v.target.pixel(2 * x + 1, 2 * y)[c] +
-                                                       v.target.pixel(2 * x, 2 * y + 1)[c] + v.target.pixel(2 * x + 1, 2 * y + 1)[c]);
-        out.push_back(std::move(h));
-    }
-    return out;
-}
-
-/// Coarse to fine: `coarseIterations` on half the unknowns per axis, half the pixels and twice
-/// the step, then the full problem from that result. The history is the full problem's,
-/// starting at the coarse stage's seconds; [0] is the full problem's start objective.
+/// Coarse to fine through SolveOptions::coarseIterations: the history is the fine solve's,
+/// starting after the coarse stage's whole time (its set-up included); [0] is the warm start.
 Race coarseToFine(GpuDevice& device, const Setup& s, const Problem& p, int coarseIterations, int maxIterations) {
-    SolveOptions coarse = raceOptions(2 * p.step, coarseIterations);
-    coarse.resolution = Int3{p.res / 2, p.res / 2, p.res / 2};
-    Volume warm;
-    const Race c = solveRace(device, s.plain, halfResolution(s.views), coarse, 0, &warm);
-    Race r = solveRace(device, warm, s.views, raceOptions(p.step, maxIterations), c.seconds.back());
-    r.forwardMs += c.forwardMs, r.adjointMs += c.adjointMs, r.vectorMs += c.vectorMs;
+    SolveOptions opt = raceOptions(p.step, maxIterations);
+    opt.coarseIterations = coarseIterations;
+    Race r;
+    std::vector<double> iterationSeconds;
+    SolveResult out = Solver(device, s.plain, defaultLighting(), s.views, opt).run([&](const SolveProgress& pr) {
+        iterationSeconds.push_back((pr.forwardMs + pr.adjointMs + pr.vectorMs) / 1000.0);
+        r.forwardMs += pr.forwardMs, r.adjointMs += pr.adjointMs, r.vectorMs += pr.vectorMs;
+    });
+    r.seconds.push_back(out.report.coarseMs / 1000.0);
+    for (double t : iterationSeconds) r.seconds.push_back(r.seconds.back() + t);
+    r.objective = out.report.objectiveHistory;
+    r.iterations = out.report.iterations;
+    r.seconds.resize(r.objective.size(), r.seconds.back());
     return r;
 }
 

@@ -48,6 +48,10 @@ struct SolveOptions {
     std::vector<std::string> views;       ///< which views; empty: all with a target
     bool enforceBounds = true;  ///< albedo in [0,1], emission and extinction ≥ 0 (tests may lift it)
     bool precondition = true;   ///< CGLS with the column scaling D² = 1/(AᵀA1) (solver_setup.cpp)
+    /// Coarse to fine: this many iterations on half the unknowns, pixels and samples per axis
+    /// first, whose result is the fine solve's warm start (0: none; solver_setup.cpp).
+    int coarseIterations = 0;
+    bool analyzeReach = true;   ///< report what the paint asks that the unknowns cannot give (reach.h)
 
     std::vector<FieldProblem> check() const;
     void validate() const;  ///< throws InvalidArgument listing check()'s problems
@@ -118,6 +122,8 @@ struct SolveReport {
     size_t ignoredPixels = 0;   ///< extinction: ratio not positive, or L_bg = L_m (weight 0)
     size_t clampedPixels = 0;   ///< extinction: ratio above 1, clamped to 1
     double totalMs = 0, forwardMs = 0, adjointMs = 0, vectorMs = 0;
+    int coarseIterations = 0;  ///< the coarse start's iterations (SolveOptions::coarseIterations)
+    double coarseMs = 0;       ///< its whole time, set-up included
     ReachReport reach;
 };
 

@@ -242,8 +242,11 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
         spdlog::warn("solve: nothing to solve ({})", stopReasonName(rep.stopReason));
         return {st.volume, rep};
     }
-    analyzeReach(st.device, st.volume, st.lighting, st.views, st.opt, rep);  // what the bounds leave out of reach
-    if (!rep.reach.advice.empty()) spdlog::info("solve: {}", rep.reach.advice);
+    if (st.opt.analyzeReach) {
+        analyzeReach(st.device, st.volume, st.lighting, st.views, st.opt, rep);  // what the bounds leave out of reach
+        if (!rep.reach.advice.empty()) spdlog::info("solve: {}", rep.reach.advice);
+    }
+    if (st.opt.coarseIterations > 0) st.warmStartFromCoarse(cancel);
     Vec3d gamma;  // s·D²s, s = Aᵀr restricted to the free variables (‖s‖² unpreconditioned)
     st.restart(gamma);
     Vec3d slope = gamma;  // p·s: the objective's descent rate along p (= γ in plain CGLS)

@@ -70,6 +70,8 @@ struct Solver::State {
     void initialUnknowns();
     void buildRegularizers();
     void buildPreconditioner();
+    /// Coarse to fine: solves opt.coarseIterations on half the resolution and starts from it.
+    void warmStartFromCoarse(const std::atomic<bool>* cancel);
     Volume result();
 
     // The operator and residuals (solver.cpp).
