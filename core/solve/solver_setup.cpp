@@ -375,7 +375,13 @@ void Solver::State::warmStartFromCoarse(const std::atomic<bool>* cancel) {
     c.coarseIterations = 0;
     c.analyzeReach = false;
     c.views.clear();  // `views` holds the chosen ones already
-    SolveResult r = Solver(device, volume, lighting, std::move(coarseViews), c).run({}, cancel);
+    SolveResult r;
+    try {
+        r = Solver(device, volume, lighting, std::move(coarseViews), c).run({}, cancel);
+    } catch (const InvalidArgument& e) {  // e.g. a view too small once halved: solve from cold
+        spdlog::warn("solve: no coarse start ({}); starting from the volume as it is", e.what());
+        return;
+    }
     if (r.report.iterations == 0) return;
     volume = std::move(r.volume);
     initialUnknowns();  // the coarse result, resampled onto the fine grid
