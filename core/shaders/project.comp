@@ -135,7 +135,8 @@ void flush(CornerCache c) {
 void apply(Basis b, inout CornerCache cache, vec3 weight, vec3 r, inout vec3 unused) {
     vec3 v = weight * r;
 #if VOLSTYLE_BASIS == VOLSTYLE_BASIS_BOX
-    uint i = 4u * (cache.block + uint((b.i0.z * u.unknownDims.y + b.i0.y) * u.unknownDims.x + b.i0.x));
+    float w;  // 1: the box's one corner
+    uint i = 4u * (cache.block + cornerIndex(b, 0, w));
     scatterAdd(i, v.r);
     scatterAdd(i + 1u, v.g);
     scatterAdd(i + 2u, v.b);
@@ -154,10 +155,10 @@ void apply(Basis b, inout CornerCache cache, vec3 weight, vec3 r, inout vec3 unu
 #else
 void flush(CornerCache unused) {}
 void apply(Basis b, inout CornerCache cache, vec3 weight, vec3 unusedResidual, inout vec3 sum) {
-#if VOLSTYLE_BASIS == VOLSTYLE_BASIS_BOX
-    sum += weight * unknown[cache.block + uint((b.i0.z * u.unknownDims.y + b.i0.y) * u.unknownDims.x + b.i0.x)].rgb;
-#else
     float w;
+#if VOLSTYLE_BASIS == VOLSTYLE_BASIS_BOX
+    sum += weight * unknown[cache.block + cornerIndex(b, 0, w)].rgb;  // w = 1: the box's one corner
+#else
     if (b.i0 != cache.b.i0) {
         cache.b = b;
 #define VS_LOAD(k, field) cache.field = unknown[cache.block + cornerIndex(b, k, w)].rgb;

@@ -61,6 +61,9 @@ float averageVisibilityNaive(vec3 e, vec3 dir, float s) {
     return visible / float(steps);
 }
 
+// The side of min-max level `level` of an n×n map (shadow_minmax.comp: odd sides round up).
+int mipSide(int n, int level) { return (n + (1 << level) - 1) >> level; }
+
 // t where the ray's projective coordinate (a0 + t a1) / (w0 + t w1) equals `target`.
 float crossingT(float a0, float a1, float w0, float w1, float target) {
     float den = a1 - target * w1;
@@ -109,7 +112,7 @@ float averageVisibilityMinMax(vec3 e, vec3 dir, float s) {
         vec4 h = h0 + t * h1;
         // The cell the ray is in just after t (nudged a thousandth of a texel along its motion).
         vec2 texel = (h.xy / h.w * 0.5 + 0.5) * fn + vec2(sx, sy) * 1e-3;
-        int cellSize = 1 << level, side = (n + cellSize - 1) >> level;
+        int cellSize = 1 << level, side = mipSide(n, level);
         ivec2 cell = ivec2(floor(texel / float(cellSize)));
         // Where the ray leaves the cell; a crossing at or before t is the projective line's other
         // branch (behind a spot, w < 0): that bound is never reached.
@@ -194,7 +197,7 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
             lit += dz > 0.0 ? clamp((limit - z0) / dz - t, 0.0, len) : dz < 0.0 ? clamp(tExit - (limit - z0) / dz, 0.0, len) : (zA <= limit ? len : 0.0);
         } else {
             level -= 1;  // undecided: open the cell
-            side = (n + (1 << level) - 1) >> level;
+            side = mipSide(n, level);
             offset -= side * side;
             continue;
         }
@@ -203,7 +206,7 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
         if (level < top && (texel >> (level + 1)) != (cell >> 1)) {  // left the parent
             offset += side * side;
             level += 1;
-            side = (n + (1 << level) - 1) >> level;
+            side = mipSide(n, level);
         }
     }
     return clamp(lit / s, 0.0, 1.0);

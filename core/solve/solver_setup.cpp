@@ -363,11 +363,12 @@ void Solver::State::warmStartFromCoarse(const std::atomic<bool>* cancel) {
     // The coarse problem costs about a sixteenth of the fine one per iteration (an eighth of the
     // unknowns, a quarter of the pixels, half the samples) and removes the error's smooth part,
     // which CGLS reduces slowest; the fine iterations are left with the detail.
+    if (udims.x < 8 || udims.y < 8 || udims.z < 8) return;  // nothing to coarsen
     const auto t0 = Clock::now();
     std::vector<SolveView> coarseViews;
     for (const SolveView& v : views)
         if (v.camera.width >= 8 && v.camera.height >= 8) coarseViews.push_back(halfView(v));
-    if (coarseViews.empty() || udims.x < 8 || udims.y < 8 || udims.z < 8) return;  // nothing to coarsen
+    if (coarseViews.empty()) return;
     SolveOptions c = opt;
     c.resolution = Int3{udims.x / 2, udims.y / 2, udims.z / 2};
     c.stepVoxels = std::min(8.0, 2 * opt.stepVoxels);

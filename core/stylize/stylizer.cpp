@@ -104,19 +104,29 @@ struct Stylizer::Gpu {
 
 namespace {
 
-/// The entries of the min-max mipmap of an n×n map after the map itself (levels 1 … down to 1×1).
-size_t minMaxEntriesAfterMap(int n) {
+/// The levels of the min-max mipmap of an n×n map, down to 1×1: each one's side and first entry
+/// (level 0 is the map itself, at entry 0); `entries` counts them all.
+struct MinMaxLevels {
+    std::vector<int> sides, offsets;
     size_t entries = 0;
-    for (int side = n; side > 1;) side = (side + 1) / 2, entries += size_t(side) * side;
-    return entries;
+};
+
+MinMaxLevels minMaxLevels(int n) {
+    MinMaxLevels l{{n}, {0}, size_t(n) * n};
+    while (l.sides.back() > 1) {
+        const int side = (l.sides.back() + 1) / 2;
+        l.offsets.push_back(int(l.entries));
+        l.sides.push_back(side);
+        l.entries += size_t(side) * side;
+    }
+    return l;
 }
 
 /// The min-max mipmap (shadow_minmax.comp) of the n×n map at the start of `depth`, written into the
-/// same buffer after the map (minMaxEntriesAfterMap entries; common/min_max_entry.glsl): level 0
+/// same buffer after the map (minMaxLevels(n).entries in all; common/min_max_entry.glsl): level 0
 /// is the map itself. The levels' offsets go to `p.mipOffset`, their count to `p.options.y`.
 void buildMinMaxMipmap(GpuDevice& device, const gl::Buffer& depth, int n, layout::StylizeParams& p) {
-    std::vector<int> sides{n}, offsets{0};
-    while (sides.back() > 1) offsets.push_back(offsets.back() + sides.back() * sides.back()), sides.push_back((sides.back() + 1) / 2);
+    const auto [sides, offsets, entries] = minMaxLevels(n);
     VOLSTYLE_CHECK(int(sides.size()), <=, layout::kMaxMinMaxLevels);
     glUseProgram(device.program(gl::ShaderBuilder("shadow_minmax.comp")).id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingMinMax, depth.id());
@@ -246,7 +256,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     gl::Texture shadowIds = texture2D(GL_R32F, n, n, "shadow-ids");
     renderShadow(shadowDepth, &shadowIds, all);
     // The accelerated V̄'s min-max levels follow the map in its buffer (no copy of level 0).
-    const size_t pyramidBytes = settings.method == VisibilityMethod::Accelerated ? minMaxEntriesAfterMap(n) * sizeof(uint32_t) : 0;
+    const size_t pyramidBytes = settings.method == VisibilityMethod::Accelerated ? (minMaxLevels(n).entries - size_t(n) * n) * sizeof(uint32_t) : 0;
     gl::Buffer scatterDepth = gl::createBuffer(mapBytes + pyramidBytes, nullptr, 0, "scatter-shadow-map");
     bool manipulated = false;
     for (const Occluder& o : scene.occluders) manipulated = manipulated || o.manipulation.any();
