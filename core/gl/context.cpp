@@ -156,6 +156,9 @@ std::unique_ptr<Context> Context::create(const ContextOptions& options) {
     caps.hasFloatAtomics = epoxy_has_gl_extension("GL_NV_shader_atomic_float");
     glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &caps.max3DTextureSize);
     glGetIntegerv(GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS, &caps.maxComputeInvocations);
+    GLint64 storageBlock = 0;
+    glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &storageBlock);
+    caps.maxStorageBlockBytes = storageBlock;
 
     glEnable(GL_DEBUG_OUTPUT);
     if (debug) glEnable(GL_DEBUG_OUTPUT_SYNCHRONOUS);

@@ -23,6 +23,7 @@ struct Capabilities {
     bool hasTimerQuery = true;      ///< core since 3.3
     int max3DTextureSize = 0;
     int maxComputeInvocations = 0;
+    long long maxStorageBlockBytes = 0;  ///< GL_MAX_SHADER_STORAGE_BLOCK_SIZE (llvmpipe: 128 MiB)
 };
 
 struct ContextOptions {

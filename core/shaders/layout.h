@@ -160,6 +160,27 @@ struct EditParams {
     VS_VEC4 holeNoise;  /* x: threshold h (holes where N < h); y: persistence; zw: the time offset of the first lookup */
 };
 
+/* The solver's cached rows of W (core/solve/sparse_rows.h): project.comp with VOLSTYLE_ROWS
+ * counts (1) or writes (2) each view's rows and their transpose; sparse_project.comp applies W
+ * from the rows and Wᵀ from the columns. Weights are 1 float per entry (grey) or 3 (rgb). */
+#define VOLSTYLE_ROWS_COUNT 1
+#define VOLSTYLE_ROWS_FILL 2
+VS_CONSTANT(int, kBindingRowStart, 1);    /* SSBO uint[pixels + 1]: count pass: entries per row; fill: first entry */
+VS_CONSTANT(int, kBindingRowIndex, 2);    /* SSBO uint[entries]: the element (unknown) of each row entry */
+VS_CONSTANT(int, kBindingRowWeight, 3);   /* SSBO float[entries * channels] */
+VS_CONSTANT(int, kBindingColStart, 4);    /* SSBO uint[elements + 1]: count pass: entries per column; fill: first entry */
+VS_CONSTANT(int, kBindingColCursor, 5);   /* SSBO uint[elements]: fill pass: entries written per column so far */
+VS_CONSTANT(int, kBindingColIndex, 6);    /* SSBO uint[entries]: the pixel (within the view) of each column entry */
+VS_CONSTANT(int, kBindingColWeight, 7);   /* SSBO float[entries * channels] */
+VS_CONSTANT(int, kBindingSparseIn, 1);    /* sparse_project.comp: SSBO vec4[]: a (W) or the residual (Wᵀ) */
+VS_CONSTANT(int, kBindingSparseOut, 2);   /* SSBO vec4[]: the view's pixels (W) or the unknowns, accumulated (Wᵀ) */
+VS_CONSTANT(int, kBindingSparseStart, 3); /* SSBO uint[]: rows' (W) or columns' (Wᵀ) first entries */
+VS_CONSTANT(int, kBindingSparseIndex, 4); /* SSBO uint[] */
+VS_CONSTANT(int, kBindingSparseWeight, 5);/* SSBO float[] */
+struct SparseParams {
+    VS_IVEC4 count;  /* x: rows (W) or columns (Wᵀ) of this dispatch; y: offset of the input's first entry; z: of the output's */
+};
+
 /* Parameters of the vector kernels (vector_ops.comp). Vectors are arrays of vec4 (rgb used). */
 struct VectorParams {
     VS_VEC4 alpha;           /* per-channel scalars */

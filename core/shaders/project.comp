@@ -24,10 +24,68 @@
 #ifndef VOLSTYLE_HAS_FLOAT_ATOMICS
 #define VOLSTYLE_HAS_FLOAT_ATOMICS 0
 #endif
+// VOLSTYLE_ROWS (core/solve/sparse_rows.h): instead of applying W or Wᵀ, write the rows of W
+// themselves — the adjoint's accumulation with a residual of 1, each flushed corner one entry
+// (element, weight) — and count or place their transpose. 1 counts, 2 fills.
+#ifndef VOLSTYLE_ROWS
+#define VOLSTYLE_ROWS 0
+#endif
+#ifndef VOLSTYLE_ROW_CHANNELS
+#define VOLSTYLE_ROW_CHANNELS 3
+#endif
+// The adjoint and the row builder accumulate per corner; the forward gathers.
+#define VOLSTYLE_ACCUMULATES (VOLSTYLE_ADJOINT || VOLSTYLE_ROWS)
 
 layout(local_size_x = kWorkgroup2D, local_size_y = kWorkgroup2D) in;
 
-#if VOLSTYLE_ADJOINT
+#if VOLSTYLE_ROWS
+layout(std430, binding = kBindingRowStart) buffer b_RowStart {
+    uint rowStart[];
+};
+layout(std430, binding = kBindingColStart) buffer b_ColStart {
+    uint colStart[];
+};
+#if VOLSTYLE_ROWS == VOLSTYLE_ROWS_FILL
+layout(std430, binding = kBindingRowIndex) writeonly buffer b_RowIndex {
+    uint rowIndex[];
+};
+layout(std430, binding = kBindingRowWeight) writeonly buffer b_RowWeight {
+    float rowWeight[];
+};
+layout(std430, binding = kBindingColCursor) buffer b_ColCursor {
+    uint colCursor[];
+};
+layout(std430, binding = kBindingColIndex) writeonly buffer b_ColIndex {
+    uint colIndex[];
+};
+layout(std430, binding = kBindingColWeight) writeonly buffer b_ColWeight {
+    float colWeight[];
+};
+#endif
+uint g_pixel;    // this invocation's pixel within its view
+uint g_entries;  // entries of its row so far
+
+// One entry of the row: counted (pass 1), or written to the row and to the element's column
+// (pass 2, at the slot the count pass reserved).
+void emitEntry(uint element, vec3 w) {
+#if VOLSTYLE_ROWS == VOLSTYLE_ROWS_COUNT
+    atomicAdd(colStart[element], 1u);
+#else
+    uint k = rowStart[g_pixel] + g_entries;
+    uint j = colStart[element] + atomicAdd(colCursor[element], 1u);
+    rowIndex[k] = element;
+    colIndex[j] = g_pixel;
+#if VOLSTYLE_ROW_CHANNELS == 1
+    rowWeight[k] = w.r;
+    colWeight[j] = w.r;
+#else
+    rowWeight[3u * k] = w.r, rowWeight[3u * k + 1u] = w.g, rowWeight[3u * k + 2u] = w.b;
+    colWeight[3u * j] = w.r, colWeight[3u * j + 1u] = w.g, colWeight[3u * j + 2u] = w.b;
+#endif
+#endif
+    ++g_entries;
+}
+#elif VOLSTYLE_ADJOINT
 #if VOLSTYLE_HAS_FLOAT_ATOMICS
 layout(std430, binding = kBindingUnknown) buffer b_Unknown {
     float unknown[];
@@ -117,33 +175,88 @@ CornerCache emptyCache(uint block) {
 #define VS_FOR_EACH_CORNER(X) X(0, v0) X(1, v1) X(2, v2) X(3, v3) X(4, v4) X(5, v5) X(6, v6) X(7, v7)
 
 // W: add weight · (Σ basis · a) of the cache's block; Wᵀ: scatter weight · r · basis into it.
-#if VOLSTYLE_ADJOINT
-void scatterCorner(CornerCache c, int corner, vec3 v) {
-    if (v == vec3(0.0)) return;  // a weight-0 corner (or nothing summed) scatters nothing
+#if VOLSTYLE_ACCUMULATES
+// A corner's sum leaves the cache: scattered into the unknowns (Wᵀ) or emitted as a row entry.
+void flushCorner(CornerCache c, int corner, vec3 v) {
+    if (v == vec3(0.0)) return;  // a weight-0 corner (or nothing summed) adds nothing
     float unusedWeight;
-    uint i = 4u * (c.block + cornerIndex(c.b, corner, unusedWeight));
-    scatterAdd(i, v.r);
-    scatterAdd(i + 1u, v.g);
-    scatterAdd(i + 2u, v.b);
+    uint element = c.block + cornerIndex(c.b, corner, unusedWeight);
+#if VOLSTYLE_ROWS
+    emitEntry(element, v);
+#else
+    scatterAdd(4u * element, v.r);
+    scatterAdd(4u * element + 1u, v.g);
+    scatterAdd(4u * element + 2u, v.b);
+#endif
 }
 void flush(CornerCache c) {
     if (c.b.i0.x < 0) return;
-#define VS_SCATTER(k, field) scatterCorner(c, k, c.field);
-    VS_FOR_EACH_CORNER(VS_SCATTER)
-#undef VS_SCATTER
+#define VS_FLUSH(k, field) flushCorner(c, k, c.field);
+    VS_FOR_EACH_CORNER(VS_FLUSH)
+#undef VS_FLUSH
+}
+// Moving the stencil one cell along an axis: a ray's direction is fixed, so a voxel it has left
+// behind is never in its stencil again. The corners left behind are flushed; the four shared
+// ones move to their new slots. Each voxel is then flushed about once per ray (4 entries per
+// cell crossed instead of 8). Corners k and k + step differ in that axis (step 1, 2, 4 for x, y, z).
+void moveAlong(inout CornerCache c, int axis, int dir) {
+    ivec3 n = u.unknownDims.xyz;
+    if (axis == 0) {
+        if (dir > 0) {
+            flushCorner(c, 0, c.v0), flushCorner(c, 2, c.v2), flushCorner(c, 4, c.v4), flushCorner(c, 6, c.v6);
+            c.v0 = c.v1, c.v2 = c.v3, c.v4 = c.v5, c.v6 = c.v7;
+            c.v1 = c.v3 = c.v5 = c.v7 = vec3(0.0);
+        } else {
+            flushCorner(c, 1, c.v1), flushCorner(c, 3, c.v3), flushCorner(c, 5, c.v5), flushCorner(c, 7, c.v7);
+            c.v1 = c.v0, c.v3 = c.v2, c.v5 = c.v4, c.v7 = c.v6;
+            c.v0 = c.v2 = c.v4 = c.v6 = vec3(0.0);
+        }
+        c.b.i0.x += dir;
+    } else if (axis == 1) {
+        if (dir > 0) {
+            flushCorner(c, 0, c.v0), flushCorner(c, 1, c.v1), flushCorner(c, 4, c.v4), flushCorner(c, 5, c.v5);
+            c.v0 = c.v2, c.v1 = c.v3, c.v4 = c.v6, c.v5 = c.v7;
+            c.v2 = c.v3 = c.v6 = c.v7 = vec3(0.0);
+        } else {
+            flushCorner(c, 2, c.v2), flushCorner(c, 3, c.v3), flushCorner(c, 6, c.v6), flushCorner(c, 7, c.v7);
+            c.v2 = c.v0, c.v3 = c.v1, c.v6 = c.v4, c.v7 = c.v5;
+            c.v0 = c.v1 = c.v4 = c.v5 = vec3(0.0);
+        }
+        c.b.i0.y += dir;
+    } else {
+        if (dir > 0) {
+            flushCorner(c, 0, c.v0), flushCorner(c, 1, c.v1), flushCorner(c, 2, c.v2), flushCorner(c, 3, c.v3);
+            c.v0 = c.v4, c.v1 = c.v5, c.v2 = c.v6, c.v3 = c.v7;
+            c.v4 = c.v5 = c.v6 = c.v7 = vec3(0.0);
+        } else {
+            flushCorner(c, 4, c.v4), flushCorner(c, 5, c.v5), flushCorner(c, 6, c.v6), flushCorner(c, 7, c.v7);
+            c.v4 = c.v0, c.v5 = c.v1, c.v6 = c.v2, c.v7 = c.v3;
+            c.v0 = c.v1 = c.v2 = c.v3 = vec3(0.0);
+        }
+        c.b.i0.z += dir;
+    }
+    c.b.i1 = min(c.b.i0 + 1, n - 1);
 }
 void apply(Basis b, inout CornerCache cache, vec3 weight, vec3 r, inout vec3 unused) {
     vec3 v = weight * r;
 #if VOLSTYLE_BASIS == VOLSTYLE_BASIS_BOX
-    float w;  // 1: the box's one corner
-    uint i = 4u * (cache.block + cornerIndex(b, 0, w));
-    scatterAdd(i, v.r);
-    scatterAdd(i + 1u, v.g);
-    scatterAdd(i + 2u, v.b);
-#else
-    if (b.i0 != cache.b.i0) {
+    if (b.i0 != cache.b.i0) {  // the box's one corner, summed while the ray stays in its cell
         flush(cache);
         cache = emptyCache(cache.block);
+        cache.b = b;
+    }
+    cache.v0 += v;
+#else
+    ivec3 delta = b.i0 - cache.b.i0;
+    if (delta != ivec3(0)) {
+        if (cache.b.i0.x >= 0 && all(lessThanEqual(abs(delta), ivec3(1)))) {
+            if (delta.x != 0) moveAlong(cache, 0, delta.x);
+            if (delta.y != 0) moveAlong(cache, 1, delta.y);
+            if (delta.z != 0) moveAlong(cache, 2, delta.z);
+        } else {  // a jump (empty space skipped) or the first sample
+            flush(cache);
+            cache = emptyCache(cache.block);
+        }
         cache.b = b;
     }
     float w;
@@ -178,7 +291,11 @@ void main() {
     ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
     if (pix.x >= u.imageSize.x || pix.y >= u.imageSize.y) return;
     uint pixelIndex = uint(u.viewPixels.x + pix.y * u.imageSize.x + pix.x);
-#if VOLSTYLE_ADJOINT
+#if VOLSTYLE_ROWS
+    g_pixel = uint(pix.y * u.imageSize.x + pix.x);
+    g_entries = 0u;
+    vec3 r = vec3(1.0);  // the weights themselves
+#elif VOLSTYLE_ADJOINT
     vec3 r = residual[pixelIndex].rgb;
     if (r == vec3(0.0)) return;  // weight-0 pixels scatter nothing
 #else
@@ -224,7 +341,9 @@ void main() {
         flush(albedo);
 #endif
     }
-#if !VOLSTYLE_ADJOINT
+#if VOLSTYLE_ROWS == VOLSTYLE_ROWS_COUNT
+    rowStart[g_pixel] = g_entries;
+#elif !VOLSTYLE_ADJOINT && !VOLSTYLE_ROWS
     pixels[pixelIndex] = vec4(sum, 0.0);
 #endif
 }

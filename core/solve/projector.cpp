@@ -4,6 +4,11 @@
 #include "core/base/stopwatch.h"
 #include "core/shaders/layout.h"
 
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cstdint>
+
 namespace volstyle::core {
 
 /// Rays stop once every channel's transmittance is below this: forward and adjoint use the same
@@ -32,7 +37,7 @@ void Projector::addView(const Camera& camera) {
     settings.stepVoxels = m_step;
     settings.exactTraversal = m_exactTraversal;
     RenderStats stats;
-    View view{camera, prepareMarch(m_device, m_volume, camera, m_lighting, settings, stats), m_pixelCount};
+    View view{camera, prepareMarch(m_device, m_volume, camera, m_lighting, settings, stats), m_pixelCount, nullptr};
     const Int3 n = m_volume.dims();
     layout::MarchParams& p = view.setup.params;
     p.unknownDims = {m_unknownDims.x, m_unknownDims.y, m_unknownDims.z, 0};
@@ -45,35 +50,139 @@ void Projector::addView(const Camera& camera) {
     m_views.push_back(std::move(view));
 }
 
+void Projector::useProgram(const View& v, gl::ShaderBuilder& builder) {
+    const bool needsLight = m_unknown == Unknown::Albedo || m_unknown == Unknown::EmissionAlbedo;
+    builder.define("VOLSTYLE_UNKNOWN", int(m_unknown))
+        .define("VOLSTYLE_BASIS", int(m_basis))
+        .define("VOLSTYLE_NUM_LIGHTS", needsLight ? (long long)v.setup.lightDepth.size() : 0)
+        .define("VOLSTYLE_SKIP_EMPTY", 1)
+        .define("VOLSTYLE_EXACT_TRAVERSAL", m_exactTraversal ? 1 : 0);
+    glUseProgram(m_device.program(builder).id());
+    bindMarch(m_device, m_volume, v.setup);
+}
+
+void Projector::dispatchView(const View& v) {
+    const int g = layout::kWorkgroup2D;
+    glDispatchCompute(GLuint((v.camera.width + g - 1) / g), GLuint((v.camera.height + g - 1) / g), 1);
+}
+
 void Projector::dispatch(bool adjoint, const GpuVector& unknowns, const GpuVector& pixels) {
     VOLSTYLE_CHECK(unknowns.size(), ==, elementCount());
     VOLSTYLE_CHECK(pixels.size(), ==, m_pixelCount);
-    const bool needsLight = m_unknown == Unknown::Albedo || m_unknown == Unknown::EmissionAlbedo;
     for (const View& v : m_views) {
+        if (v.rows) continue;
         gl::ShaderBuilder builder("project.comp");
-        builder.define("VOLSTYLE_ADJOINT", adjoint ? 1 : 0)
-            .define("VOLSTYLE_UNKNOWN", int(m_unknown))
-            .define("VOLSTYLE_BASIS", int(m_basis))
-            .define("VOLSTYLE_NUM_LIGHTS", needsLight ? (long long)v.setup.lightDepth.size() : 0)
-            .define("VOLSTYLE_SKIP_EMPTY", 1)
-            .define("VOLSTYLE_EXACT_TRAVERSAL", m_exactTraversal ? 1 : 0);
+        builder.define("VOLSTYLE_ADJOINT", adjoint ? 1 : 0);
         if (adjoint && m_useFloatAtomics) {
             builder.define("VOLSTYLE_HAS_FLOAT_ATOMICS", 1).extension("GL_NV_shader_atomic_float");
         }
-        glUseProgram(m_device.program(builder).id());
-        bindMarch(m_device, m_volume, v.setup);
+        useProgram(v, builder);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingUnknown, unknowns.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, adjoint ? layout::kBindingResidual : layout::kBindingImageOut,
                          pixels.id());
-        const int g = layout::kWorkgroup2D;
-        glDispatchCompute(GLuint((v.camera.width + g - 1) / g), GLuint((v.camera.height + g - 1) / g), 1);
+        dispatchView(v);
     }
     gl::barrierAfterComputeWrites();
+}
+
+namespace {
+
+gl::Buffer zeroedBuffer(size_t bytes, const std::string& label) {
+    gl::Buffer b = gl::createBuffer(std::max<size_t>(bytes, 4), nullptr, GL_DYNAMIC_STORAGE_BIT, label);
+    const GLuint zero = 0;
+    glClearNamedBufferData(b.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    return b;
+}
+
+/// Counts in place → exclusive prefix sums with the total appended; the total.
+uint64_t exclusiveScan(std::vector<uint32_t>& counts) {
+    uint64_t total = 0;
+    for (auto& c : counts) {
+        const uint64_t n = c;
+        c = uint32_t(std::min<uint64_t>(total, 0xffffffffu));
+        total += n;
+    }
+    counts.push_back(uint32_t(std::min<uint64_t>(total, 0xffffffffu)));
+    return total;
+}
+
+}  // namespace
+
+std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetBytes, int channels) {
+    auto r = std::make_unique<SparseRows>();
+    r->rows = size_t(v.camera.width) * v.camera.height;
+    r->columns = elementCount();
+    r->channels = channels;
+    r->rowStart = zeroedBuffer(4 * (r->rows + 1), "rows-start");
+    r->colStart = zeroedBuffer(4 * (r->columns + 1), "columns-start");
+    auto bindStarts = [&] {
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowStart, r->rowStart.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColStart, r->colStart.id());
+    };
+    // Pass 1: entries per row (written by each ray) and per column (counted with atomics).
+    gl::ShaderBuilder count("project.comp");
+    count.define("VOLSTYLE_ROWS", VOLSTYLE_ROWS_COUNT).define("VOLSTYLE_ROW_CHANNELS", channels);
+    useProgram(v, count);
+    bindStarts();
+    dispatchView(v);
+    gl::barrierAfterComputeWrites();
+    std::vector<uint32_t> rowStart(r->rows), colStart(r->columns);
+    glGetNamedBufferSubData(r->rowStart.id(), 0, GLsizeiptr(4 * r->rows), rowStart.data());
+    glGetNamedBufferSubData(r->colStart.id(), 0, GLsizeiptr(4 * r->columns), colStart.data());
+    const uint64_t entries = exclusiveScan(rowStart);
+    VOLSTYLE_CHECK(exclusiveScan(colStart), ==, entries);
+    const size_t weightBytes = entries * 4 * size_t(channels);
+    if (entries >= 0xffffffffu || sparseRowsBytes(r->rows, r->columns, entries, channels) > budgetBytes ||
+        (long long)weightBytes > m_device.capabilities().maxStorageBlockBytes)
+        return nullptr;
+    r->entries = entries;
+    glNamedBufferSubData(r->rowStart.id(), 0, GLsizeiptr(4 * rowStart.size()), rowStart.data());
+    glNamedBufferSubData(r->colStart.id(), 0, GLsizeiptr(4 * colStart.size()), colStart.data());
+    r->rowIndex = gl::createBuffer(std::max<size_t>(4 * entries, 4), nullptr, 0, "rows-index");
+    r->rowWeight = gl::createBuffer(std::max<size_t>(weightBytes, 4), nullptr, 0, "rows-weight");
+    r->colIndex = gl::createBuffer(std::max<size_t>(4 * entries, 4), nullptr, 0, "columns-index");
+    r->colWeight = gl::createBuffer(std::max<size_t>(weightBytes, 4), nullptr, 0, "columns-weight");
+    const gl::Buffer cursor = zeroedBuffer(4 * r->columns, "columns-cursor");
+    // Pass 2: the same rays write their entries into their row and into each element's column.
+    gl::ShaderBuilder fill("project.comp");
+    fill.define("VOLSTYLE_ROWS", VOLSTYLE_ROWS_FILL).define("VOLSTYLE_ROW_CHANNELS", channels);
+    useProgram(v, fill);
+    bindStarts();
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowIndex, r->rowIndex.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowWeight, r->rowWeight.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColCursor, cursor.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColIndex, r->colIndex.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColWeight, r->colWeight.id());
+    dispatchView(v);
+    gl::barrierAfterComputeWrites();
+    return r;
+}
+
+void Projector::cacheRows(size_t budgetBytes, int channels) {
+    const auto t0 = Clock::now();
+    for (View& v : m_views) {
+        if (v.rows) continue;
+        const size_t left = budgetBytes > m_stats.cacheBytes ? budgetBytes - m_stats.cacheBytes : 0;
+        v.rows = buildRows(v, left, channels);
+        if (!v.rows) {
+            spdlog::info("solve: rows of W past the cache budget ({} MiB) from view {} on: matrix-free there",
+                         budgetBytes >> 20, &v - m_views.data());
+            break;
+        }
+        m_stats.cacheBytes += sparseRowsBytes(v.rows->rows, v.rows->columns, v.rows->entries, channels);
+        m_stats.cachedEntries += v.rows->entries;
+        m_stats.cachedViews++;
+    }
+    m_device.finish();
+    m_stats.cacheMs += msSince(t0);
 }
 
 void Projector::forward(const GpuVector& a, GpuVector& pixels) {
     const auto t0 = Clock::now();
     dispatch(false, a, pixels);
+    for (const View& v : m_views)
+        if (v.rows) sparseForward(m_device, *v.rows, a, pixels, v.offset);
+    gl::barrierAfterComputeWrites();
     m_device.finish();
     m_stats.forwardMs += msSince(t0);
     m_stats.forwardCalls++;
@@ -83,6 +192,11 @@ void Projector::adjoint(const GpuVector& pixels, GpuVector& a) {
     const auto t0 = Clock::now();
     a.fill(0.0f);
     dispatch(true, a, pixels);
+    for (const View& v : m_views) {
+        if (!v.rows) continue;
+        sparseAdjointAdd(m_device, *v.rows, pixels, v.offset, a);
+        gl::barrierAfterComputeWrites();  // the next view adds to the same elements
+    }
     m_device.finish();
     m_stats.adjointMs += msSince(t0);
     m_stats.adjointCalls++;

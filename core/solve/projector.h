@@ -5,6 +5,7 @@
 /// `adjoint` scatters per-pixel residuals back into the unknown grid along the same rays with the
 /// same weights (Wᵀ r). GL thread only.
 
+#include <memory>
 #include <vector>
 
 #include "core/gpu/gpu_device.h"
@@ -12,6 +13,7 @@
 #include "core/render/march_setup.h"
 #include "core/solve/gpu_vector.h"
 #include "core/solve/solve_types.h"
+#include "core/solve/sparse_rows.h"
 
 namespace volstyle::core {
 
@@ -20,6 +22,10 @@ struct ProjectorStats {
     double adjointMs = 0;
     int forwardCalls = 0;
     int adjointCalls = 0;
+    double cacheMs = 0;       ///< writing the cached rows (cacheRows)
+    size_t cacheBytes = 0;    ///< GPU memory they take
+    size_t cachedViews = 0;   ///< views whose W and Wᵀ run from them
+    size_t cachedEntries = 0;
 };
 
 class Projector {
@@ -45,14 +51,26 @@ public:
     /// Scatter with GL_NV_shader_atomic_float (default where the context has it) or with the
     /// compare-and-swap fallback; tests cover both.
     void setUseFloatAtomics(bool use);
+    /// Writes each view's rows of W and their transpose (sparse_rows.h) while they fit in
+    /// `budgetBytes` and in one storage block; W and Wᵀ of those views then gather from them and
+    /// the others stay matrix-free. Valid while the extinction and the lighting stay as they
+    /// were (a solve never changes them). `channels`: weightChannels() of the problem.
+    void cacheRows(size_t budgetBytes, int channels);
 
 private:
     struct View {
         Camera camera;
         MarchSetup setup;
         size_t offset;
+        std::unique_ptr<SparseRows> rows;  ///< null: matrix-free
     };
+    /// project.comp over one view: the shader with the projector's defines and the view's march bound.
+    void useProgram(const View& v, gl::ShaderBuilder& builder);
+    void dispatchView(const View& v);
+    /// Matrix-free W or Wᵀ over the views without cached rows.
     void dispatch(bool adjoint, const GpuVector& unknowns, const GpuVector& pixels);
+    /// Counts, then writes, one view's rows and columns; null when past the budget.
+    std::unique_ptr<SparseRows> buildRows(const View& v, size_t budgetBytes, int channels);
 
     GpuDevice& m_device;
     GpuVolume& m_volume;

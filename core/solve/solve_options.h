@@ -51,6 +51,9 @@ struct SolveOptions {
     /// Coarse to fine: this many iterations on half the unknowns, pixels and samples per axis
     /// first, whose result is the fine solve's warm start (0: none; solver_setup.cpp).
     int coarseIterations = 0;
+    /// GPU memory for the views' cached rows of W and their transpose (sparse_rows.h); views
+    /// past it run matrix-free, and 0 runs every view matrix-free.
+    size_t rowCacheBytes = size_t(1) << 30;
     bool analyzeReach = true;   ///< report what the paint asks that the unknowns cannot give (reach.h)
 
     std::vector<FieldProblem> check() const;
@@ -124,6 +127,9 @@ struct SolveReport {
     double totalMs = 0, forwardMs = 0, adjointMs = 0, vectorMs = 0;
     int coarseIterations = 0;  ///< the coarse start's iterations (SolveOptions::coarseIterations)
     double coarseMs = 0;       ///< its whole time, set-up included
+    double rowCacheMs = 0;     ///< writing the views' cached rows of W (SolveOptions::rowCacheBytes)
+    size_t rowCacheBytes = 0;  ///< the GPU memory they take
+    size_t cachedViews = 0;    ///< views whose W and Wᵀ gather from them (the rest: matrix-free)
     ReachReport reach;
 };
 

@@ -82,6 +82,11 @@ Solver::Solver(GpuDevice& device, const Volume& volume, const Lighting& lighting
     st.W = std::make_unique<Projector>(device, *st.gpu, st.lighting, st.opt.unknown, st.opt.basis, st.udims,
                                        st.opt.stepVoxels, st.opt.exactTraversal);
     for (const auto& v : st.views) st.W->addView(v.camera);
+    if (st.opt.rowCacheBytes > 0) {
+        st.W->cacheRows(st.opt.rowCacheBytes, weightChannels(st.volume, st.lighting, st.opt.unknown));
+        const ProjectorStats& w = st.W->stats();
+        st.report.rowCacheMs = w.cacheMs, st.report.rowCacheBytes = w.cacheBytes, st.report.cachedViews = w.cachedViews;
+    }
     st.allocate();
     st.buildObservations();
     st.buildHull();

@@ -76,13 +76,28 @@ struct Case {
     bool coarse;
 };
 
-void checkCase(const Case& k, bool floatAtomics) {
+/// How W and Wᵀ run: matrix-free with float atomics or the compare-and-swap loop, or from the
+/// cached rows (sparse_rows.h; `budget` bytes, so a small one leaves some views matrix-free).
+struct Path {
+    bool floatAtomics = true;
+    bool cached = false;
+    size_t budget = size_t(1) << 30;
+    int expectCachedViews = -1;  ///< -1: all views
+};
+
+void checkCase(const Case& k, const Path& path) {
+    const bool floatAtomics = path.floatAtomics;
     Problem prob = makeProblem(7);
     const Int3 udims = k.coarse ? Int3{5, 5, 7} : prob.volume.dims();
     GpuVolume gpu(prob.volume);
     Projector W(test::device(), gpu, prob.lighting, k.unknown, k.basis, udims, 0.5);
     if (!floatAtomics) W.setUseFloatAtomics(false);
     for (const auto& c : prob.cameras) W.addView(c);
+    if (path.cached) {
+        W.cacheRows(path.budget, weightChannels(prob.volume, prob.lighting, k.unknown));
+        EXPECT_EQ(W.stats().cachedViews, path.expectCachedViews < 0 ? prob.cameras.size() : size_t(path.expectCachedViews));
+        EXPECT_LE(W.stats().cacheBytes, path.budget);
+    }
     cpu_ref::ReferenceProjector ref(prob.volume, prob.lighting, prob.cameras, {k.unknown, k.basis, udims, 0.5});
     ASSERT_EQ(ref.pixelCount(), W.pixelCount());
     ASSERT_EQ(ref.elementCount(), W.elementCount());
@@ -124,7 +139,9 @@ void checkCase(const Case& k, bool floatAtomics) {
     };
     double errF = compare(refWa, Wa, "forward"), errA = compare(refWtr, Wtr, "adjoint");
     std::cout << "[ measured ] unknown " << int(k.unknown) << " basis " << int(k.basis) << (k.coarse ? " coarse" : "")
-              << (floatAtomics ? " atomics" : " CAS") << ": identity " << std::abs(lhs.x - rhs.x) / std::abs(lhs.x)
+              << (path.cached ? " cached rows (" + std::to_string(W.stats().cachedViews) + " views)"
+                              : floatAtomics ? " atomics" : " CAS")
+              << ": identity " << std::abs(lhs.x - rhs.x) / std::abs(lhs.x)
               << ", forward vs float64 " << errF << ", adjoint vs float64 " << errA << "\n";
 }
 
@@ -134,7 +151,13 @@ class ProjectorAdjoint : public ::testing::TestWithParam<Case> {};
 
 TEST_P(ProjectorAdjoint, IdentityAndOracle) {
     VOLSTYLE_REQUIRE_GL();
-    checkCase(GetParam(), test::glContext()->capabilities().hasFloatAtomics);
+    checkCase(GetParam(), {test::glContext()->capabilities().hasFloatAtomics});
+}
+
+// The cached rows hold the same entries as the rays: the same oracle, the same tolerances.
+TEST_P(ProjectorAdjoint, CachedRowsMatchTheOracle) {
+    VOLSTYLE_REQUIRE_GL();
+    checkCase(GetParam(), {true, true});
 }
 
 INSTANTIATE_TEST_SUITE_P(AllUnknownsAndBases, ProjectorAdjoint,
@@ -151,7 +174,19 @@ INSTANTIATE_TEST_SUITE_P(AllUnknownsAndBases, ProjectorAdjoint,
 
 TEST(Projector, CompareAndSwapFallbackIsExactToo) {
     VOLSTYLE_REQUIRE_GL();
-    checkCase({Unknown::EmissionAlbedo, BasisType::Trilinear, false}, false);
+    checkCase({Unknown::EmissionAlbedo, BasisType::Trilinear, false}, {false});
+}
+
+TEST(Projector, ViewsPastTheCacheBudgetStayMatrixFree) {
+    VOLSTYLE_REQUIRE_GL();
+    // Room for all but the last view's rows: that one runs matrix-free; the sum is still W.
+    Problem prob = makeProblem(7);
+    GpuVolume gpu(prob.volume);
+    Projector all(test::device(), gpu, prob.lighting, Unknown::Albedo, BasisType::Trilinear, prob.volume.dims(), 0.5);
+    for (const auto& c : prob.cameras) all.addView(c);
+    all.cacheRows(size_t(1) << 30, 3);
+    ASSERT_EQ(all.stats().cachedViews, 2u);
+    checkCase({Unknown::Albedo, BasisType::Trilinear, false}, {true, true, all.stats().cacheBytes - 1, 1});
 }
 
 TEST(Projector, EmissionForwardIsTheRenderersEmission) {

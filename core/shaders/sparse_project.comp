@@ -1,0 +1,58 @@
+// The solver's operator from its cached rows (core/solve/sparse_rows.h), one source for both:
+// VOLSTYLE_ADJOINT = 0 gathers each pixel's row, (W a)_p = Σ_k w_k a[e_k]; = 1 gathers each
+// unknown's column of the same entries, (Wᵀ r)_e += Σ_k w_k r[p_k] — a gather, so no atomics,
+// and every element is written by one invocation. The entries are the ones project.comp's
+// VOLSTYLE_ROWS passes wrote from the same rays, so both agree with the matrix-free operator to
+// float rounding (the sums run in another order).
+#include "layout.h"
+
+#ifndef VOLSTYLE_ADJOINT
+#define VOLSTYLE_ADJOINT 0
+#endif
+#ifndef VOLSTYLE_ROW_CHANNELS
+#define VOLSTYLE_ROW_CHANNELS 3
+#endif
+
+layout(local_size_x = kWorkgroup1D) in;
+
+layout(std140, binding = kBindingParams) uniform b_SparseParams {
+    SparseParams sp;
+};
+layout(std430, binding = kBindingSparseIn) readonly buffer b_In {
+    vec4 inputs[];
+};
+layout(std430, binding = kBindingSparseOut) buffer b_Out {
+    vec4 outputs[];
+};
+layout(std430, binding = kBindingSparseStart) readonly buffer b_Start {
+    uint start[];
+};
+layout(std430, binding = kBindingSparseIndex) readonly buffer b_Index {
+    uint index[];
+};
+layout(std430, binding = kBindingSparseWeight) readonly buffer b_Weight {
+    float weight[];
+};
+
+vec3 weightOf(uint k) {
+#if VOLSTYLE_ROW_CHANNELS == 1
+    return vec3(weight[k]);
+#else
+    return vec3(weight[3u * k], weight[3u * k + 1u], weight[3u * k + 2u]);
+#endif
+}
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= uint(sp.count.x)) return;
+    uint first = start[i], last = start[i + 1u];
+    vec3 sum = vec3(0.0);
+    uint inputOffset = uint(sp.count.y);
+    for (uint k = first; k < last; ++k) sum += weightOf(k) * inputs[inputOffset + index[k]].rgb;
+    uint o = uint(sp.count.z) + i;
+#if VOLSTYLE_ADJOINT
+    if (first != last) outputs[o] += vec4(sum, 0.0);  // the views' columns add up, one dispatch each
+#else
+    outputs[o] = vec4(sum, 0.0);
+#endif
+}

@@ -1,0 +1,56 @@
+#include "core/solve/sparse_rows.h"
+
+#include "core/gl/shader_builder.h"
+#include "core/shaders/layout.h"
+
+namespace volstyle::core {
+
+size_t sparseRowsBytes(size_t rows, size_t columns, size_t entries, int channels) {
+    const size_t perEntry = 4 * (1 + size_t(channels));  // index and weights, rows and columns alike
+    return 4 * (rows + 1) + 4 * (columns + 1) + 2 * entries * perEntry;
+}
+
+int weightChannels(const Volume& volume, const Lighting& lighting, Unknown unknown) {
+    if (unknown == Unknown::Extinction) return 1;  // segment lengths
+    const std::vector<float>& sigma = volume.extinction();
+    for (size_t i = 0; i + 2 < sigma.size(); i += 3)
+        if (sigma[i] != sigma[i + 1] || sigma[i] != sigma[i + 2]) return 3;
+    if (unknown == Unknown::Albedo || unknown == Unknown::EmissionAlbedo) {
+        for (const auto& light : lighting.lights) {
+            const Vec3d& e = light.irradiance;
+            if (e.x != e.y || e.x != e.z) return 3;
+        }
+    }
+    return 1;
+}
+
+namespace {
+
+void apply(GpuDevice& device, const SparseRows& rows, bool adjoint, const GpuVector& in, GpuVector& out,
+           size_t pixelOffset) {
+    const size_t count = adjoint ? rows.columns : rows.rows;
+    layout::SparseParams p;
+    p.count = {int(count), adjoint ? int(pixelOffset) : 0, adjoint ? 0 : int(pixelOffset), 0};
+    device.setParams(p);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSparseIn, in.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSparseOut, out.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSparseStart, (adjoint ? rows.colStart : rows.rowStart).id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSparseIndex, (adjoint ? rows.colIndex : rows.rowIndex).id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSparseWeight, (adjoint ? rows.colWeight : rows.rowWeight).id());
+    gl::ShaderBuilder builder("sparse_project.comp");
+    builder.define("VOLSTYLE_ADJOINT", adjoint ? 1 : 0).define("VOLSTYLE_ROW_CHANNELS", rows.channels);
+    glUseProgram(device.program(builder).id());
+    glDispatchCompute(GLuint((count + layout::kWorkgroup1D - 1) / layout::kWorkgroup1D), 1, 1);
+}
+
+}  // namespace
+
+void sparseForward(GpuDevice& device, const SparseRows& rows, const GpuVector& a, GpuVector& pixels, size_t pixelOffset) {
+    apply(device, rows, false, a, pixels, pixelOffset);
+}
+
+void sparseAdjointAdd(GpuDevice& device, const SparseRows& rows, const GpuVector& pixels, size_t pixelOffset, GpuVector& a) {
+    apply(device, rows, true, pixels, a, pixelOffset);
+}
+
+}  // namespace volstyle::core

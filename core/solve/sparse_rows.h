@@ -1,0 +1,40 @@
+#pragma once
+/// \file sparse_rows.h
+/// One view's rows of W kept on the GPU, and their transpose. For emission, albedo and
+/// extinction solves W is fixed for the whole solve: its weights (transmittance, opacity,
+/// in-scattering, segment lengths) depend only on the extinction, the lighting and the camera,
+/// none of which a solve changes. Written once by project.comp's VOLSTYLE_ROWS passes
+/// (Projector::cacheRows), the rows make W a gather over about 4 entries per cell a ray crosses,
+/// and the columns make Wᵀ a gather too (no atomics); both in sparse_project.comp. GL thread only.
+
+#include <cstddef>
+
+#include "core/gl/object.h"
+#include "core/gpu/gpu_device.h"
+#include "core/render/params.h"
+#include "core/solve/gpu_vector.h"
+#include "core/solve/solve_types.h"
+#include "core/volume/volume.h"
+
+namespace volstyle::core {
+
+struct SparseRows {
+    gl::Buffer rowStart, rowIndex, rowWeight;  ///< per pixel: first entry; per entry: element, weight(s)
+    gl::Buffer colStart, colIndex, colWeight;  ///< per element: first entry; per entry: pixel, weight(s)
+    size_t rows = 0, columns = 0, entries = 0;
+    int channels = 3;  ///< weights per entry: 1 (grey) or 3 (rgb)
+};
+
+/// GPU bytes a view's rows and columns take.
+size_t sparseRowsBytes(size_t rows, size_t columns, size_t entries, int channels);
+
+/// 1 where every weight of W has r = g = b (grey extinction, and grey lights when the unknowns
+/// include albedo), else 3: a grey cache is a third of the size and of the loads.
+int weightChannels(const Volume& volume, const Lighting& lighting, Unknown unknown);
+
+/// pixels[pixelOffset + p] = (W a)_p for the view's pixels p.
+void sparseForward(GpuDevice& device, const SparseRows& rows, const GpuVector& a, GpuVector& pixels, size_t pixelOffset);
+/// a += Wᵀ r over the view's pixels r = pixels[pixelOffset ..].
+void sparseAdjointAdd(GpuDevice& device, const SparseRows& rows, const GpuVector& pixels, size_t pixelOffset, GpuVector& a);
+
+}  // namespace volstyle::core
