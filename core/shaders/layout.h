@@ -65,6 +65,7 @@ VS_CONSTANT(int, kBindingVectorY, 4);
 VS_CONSTANT(int, kBindingVectorZ, 5);
 VS_CONSTANT(int, kBindingPartials, 6);     /* per-workgroup partial sums (dvec4) */
 VS_CONSTANT(int, kWorkgroup1D, 256);
+VS_CONSTANT(int, kBindingIndexList, 7);    /* SSBO uint[]: the elements a vector kernel touches (VOLSTYLE_INDEXED) */
 
 /* Everything a march needs: camera, grid, lighting. World-space t parameterises rays. */
 struct MarchParams {
@@ -172,20 +173,23 @@ VS_CONSTANT(int, kBindingColStart, 4);    /* SSBO uint[elements + 1]: count pass
 VS_CONSTANT(int, kBindingColCursor, 5);   /* SSBO uint[elements]: fill pass: entries written per column so far */
 VS_CONSTANT(int, kBindingColIndex, 6);    /* SSBO uint[entries]: the pixel (within the view) of each column entry */
 VS_CONSTANT(int, kBindingColWeight, 7);   /* SSBO float[entries * channels] */
+VS_CONSTANT(int, kBindingRowMask, 0);     /* SSBO vec4[pixels] (VOLSTYLE_ROW_MASK): rays of pixels whose weight is 0 write no entries */
 VS_CONSTANT(int, kBindingSparseIn, 1);    /* sparse_project.comp: SSBO vec4[]: a (W) or the residual (Wᵀ) */
 VS_CONSTANT(int, kBindingSparseOut, 2);   /* SSBO vec4[]: the view's pixels (W) or the unknowns, accumulated (Wᵀ) */
 VS_CONSTANT(int, kBindingSparseStart, 3); /* SSBO uint[]: rows' (W) or columns' (Wᵀ) first entries */
 VS_CONSTANT(int, kBindingSparseIndex, 4); /* SSBO uint[] */
 VS_CONSTANT(int, kBindingSparseWeight, 5);/* SSBO float[] */
+VS_CONSTANT(int, kBindingSparseList, 6);  /* SSBO uint[]: the pixels (W) or elements (Wᵀ) to compute, if count.w >= 0 */
 struct SparseParams {
-    VS_IVEC4 count;  /* x: rows (W) or columns (Wᵀ) of this dispatch; y: offset of the input's first entry; z: of the output's */
+    VS_IVEC4 count;  /* x: rows (W) or columns (Wᵀ) of this dispatch; y: offset of the input's first entry; z: of the output's;
+                        w: -1, or where this dispatch's part of the list starts (then row/column k is list[w + k], output index included) */
 };
 
 /* Parameters of the vector kernels (vector_ops.comp). Vectors are arrays of vec4 (rgb used). */
 struct VectorParams {
     VS_VEC4 alpha;           /* per-channel scalars */
     VS_VEC4 bounds;          /* x, y: lower, upper bound of block 0; z, w: of block 1 */
-    VS_IVEC4 count;          /* x: elements; y: first element; z: elements per block */
+    VS_IVEC4 count;          /* x: elements; y: first element (indexed: first list position); z: elements per block */
     VS_IVEC4 dims;           /* xyz: grid of one block (Laplacian) */
 };
 

@@ -38,7 +38,15 @@
 
 layout(local_size_x = kWorkgroup2D, local_size_y = kWorkgroup2D) in;
 
+#ifndef VOLSTYLE_ROW_MASK
+#define VOLSTYLE_ROW_MASK 0
+#endif
 #if VOLSTYLE_ROWS
+#if VOLSTYLE_ROW_MASK
+layout(std430, binding = kBindingRowMask) readonly buffer b_RowMask {
+    vec4 pixelWeight[];  // the solver's √weights: a pixel with none gets an empty row
+};
+#endif
 layout(std430, binding = kBindingRowStart) buffer b_RowStart {
     uint rowStart[];
 };
@@ -295,6 +303,14 @@ void main() {
     g_pixel = uint(pix.y * u.imageSize.x + pix.x);
     g_entries = 0u;
     vec3 r = vec3(1.0);  // the weights themselves
+#if VOLSTYLE_ROW_MASK
+    if (pixelWeight[pixelIndex].rgb == vec3(0.0)) {
+#if VOLSTYLE_ROWS == VOLSTYLE_ROWS_COUNT
+        rowStart[g_pixel] = 0u;
+#endif
+        return;
+    }
+#endif
 #elif VOLSTYLE_ADJOINT
     vec3 r = residual[pixelIndex].rgb;
     if (r == vec3(0.0)) return;  // weight-0 pixels scatter nothing

@@ -33,6 +33,9 @@ layout(std430, binding = kBindingSparseIndex) readonly buffer b_Index {
 layout(std430, binding = kBindingSparseWeight) readonly buffer b_Weight {
     float weight[];
 };
+layout(std430, binding = kBindingSparseList) readonly buffer b_List {
+    uint list[];  // the solver's constrained pixels (W) or hull elements (Wᵀ): the rest are never read
+};
 
 vec3 weightOf(uint k) {
 #if VOLSTYLE_ROW_CHANNELS == 1
@@ -43,13 +46,15 @@ vec3 weightOf(uint k) {
 }
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
-    if (i >= uint(sp.count.x)) return;
+    uint k = gl_GlobalInvocationID.x;
+    if (k >= uint(sp.count.x)) return;
+    // Row or column i of this view's cache, written at output o.
+    uint o = sp.count.w >= 0 ? list[uint(sp.count.w) + k] : uint(sp.count.z) + k;
+    uint i = o - uint(sp.count.z);
     uint first = start[i], last = start[i + 1u];
     vec3 sum = vec3(0.0);
     uint inputOffset = uint(sp.count.y);
-    for (uint k = first; k < last; ++k) sum += weightOf(k) * inputs[inputOffset + index[k]].rgb;
-    uint o = uint(sp.count.z) + i;
+    for (uint e = first; e < last; ++e) sum += weightOf(e) * inputs[inputOffset + index[e]].rgb;
 #if VOLSTYLE_ADJOINT
     if (first != last) outputs[o] += vec4(sum, 0.0);  // the views' columns add up, one dispatch each
 #else

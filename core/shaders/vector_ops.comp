@@ -12,7 +12,8 @@
 //   VOLSTYLE_OP_FREE      y[i] = 0 where x (the unknowns) sits at a bound and y would push past it
 //   VOLSTYLE_OP_STEP      partial[workgroup] = min over i of the step t ≥ 0 at which x + t·y meets a bound
 //   VOLSTYLE_OP_CLAMP     y = clamp(y, lower, upper)
-// Elements [first, first + count) are processed; element i belongs to block i / blockSize, whose
+// Elements [first, first + count) are processed (VOLSTYLE_INDEXED: list[first .. first + count),
+// the solver's hull voxels or constrained pixels; the others keep their values); element i belongs to block i / blockSize, whose
 // bounds are bounds.xy (block 0) or bounds.zw (block 1).
 #include "layout.h"
 
@@ -33,6 +34,17 @@ layout(std430, binding = kBindingVectorZ) readonly buffer b_Z {
 layout(std430, binding = kBindingPartials) writeonly buffer b_Partials {
     dvec4 partial[];
 };
+#ifndef VOLSTYLE_INDEXED
+#define VOLSTYLE_INDEXED 0
+#endif
+#if VOLSTYLE_INDEXED
+layout(std430, binding = kBindingIndexList) readonly buffer b_List {
+    uint list[];
+};
+uint elementAt(uint k) { return list[uint(v.count.y) + k]; }
+#else
+uint elementAt(uint k) { return uint(v.count.y) + k; }
+#endif
 
 // VOLSTYLE_OP_* come from layout.h (core::VectorOps::Op takes the same values).
 
@@ -46,7 +58,7 @@ void main() {
     uint local = gl_LocalInvocationID.x;
     uint k = gl_GlobalInvocationID.x;
     bool inside = k < uint(v.count.x);
-    uint i = uint(v.count.y) + k;
+    uint i = inside ? elementAt(k) : 0u;
 
 #if VOLSTYLE_OP == VOLSTYLE_OP_AXPY
     if (inside) y[i].rgb += v.alpha.rgb * x[i].rgb;
@@ -58,7 +70,7 @@ void main() {
     // Grid-stride: few workgroups, so few barriers (costly on llvmpipe) and few partials to read.
     dvec4 acc = dvec4(0.0);
     for (uint e = k; e < uint(v.count.x); e += gl_NumWorkGroups.x * kWorkgroup1D) {
-        uint j = uint(v.count.y) + e;
+        uint j = elementAt(e);
         acc.rgb += dvec3(x[j].rgb) * dvec3(y[j].rgb);
     }
     s_reduce[local] = acc;
@@ -99,7 +111,7 @@ void main() {
     const double kNone = 1e300;
     dvec4 t = dvec4(kNone);
     for (uint e = k; e < uint(v.count.x); e += gl_NumWorkGroups.x * kWorkgroup1D) {
-        uint j = uint(v.count.y) + e;
+        uint j = elementAt(e);
         vec2 b = boundsOf(j);
         for (int c = 0; c < 3; ++c) {
             float p = y[j][c], a = x[j][c];

@@ -29,6 +29,18 @@ void GpuVector::fill(float value) {
     glClearNamedBufferData(m_buffer.id(), GL_R32F, GL_RED, GL_FLOAT, &value);
 }
 
+Support::Support(std::vector<uint32_t> elements)
+    : host(std::move(elements)),
+      list(gl::createBuffer(std::max<size_t>(host.size(), 1) * 4, host.empty() ? nullptr : host.data(), 0, "support")) {}
+
+std::pair<size_t, size_t> Support::positions(size_t first, size_t count) const {
+    const auto lo = std::lower_bound(host.begin(), host.end(), uint64_t(first),
+                                     [](uint32_t e, uint64_t v) { return uint64_t(e) < v; });
+    const uint64_t end = count == size_t(-1) ? ~uint64_t(0) : uint64_t(first) + count;
+    const auto hi = std::lower_bound(lo, host.end(), end, [](uint32_t e, uint64_t v) { return uint64_t(e) < v; });
+    return {size_t(lo - host.begin()), size_t(hi - host.begin())};
+}
+
 struct VectorOps::Dispatch {
     const GpuVector* x = nullptr;
     const GpuVector* y = nullptr;
@@ -43,8 +55,13 @@ VectorOps::VectorOps(GpuDevice& device) : m_device(device) {}
 
 std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
     const size_t size = d.y ? d.y->size() : d.x->size();
-    const size_t first = std::min(d.range.first, size);
-    const size_t count = std::min(d.range.count, size - first);
+    const Support* support = d.y && d.y->support() ? d.y->support() : d.x ? d.x->support() : nullptr;
+    size_t first = std::min(d.range.first, size);
+    size_t count = std::min(d.range.count, size - first);
+    if (support) {
+        const auto [lo, hi] = support->positions(first, count);
+        first = lo, count = hi - lo;
+    }
     layout::VectorParams p;
     p.alpha = {float(d.alpha.x), float(d.alpha.y), float(d.alpha.z), 0};
     p.bounds = {d.bounds.lower[0], d.bounds.upper[0], d.bounds.lower[1], d.bounds.upper[1]};
@@ -68,7 +85,10 @@ std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingVectorY, (d.y ? d.y : any)->id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingVectorZ, (d.z ? d.z : any)->id());
     if (m_partials) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingPartials, m_partials.id());
-    glUseProgram(m_device.program(gl::ShaderBuilder("vector_ops.comp").define("VOLSTYLE_OP", op)).id());
+    if (support) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingIndexList, support->list.id());
+    gl::ShaderBuilder builder("vector_ops.comp");
+    builder.define("VOLSTYLE_OP", op).define("VOLSTYLE_INDEXED", support ? 1 : 0);
+    glUseProgram(m_device.program(builder).id());
     if (count > 0) glDispatchCompute(GLuint(groups), 1, 1);
     gl::barrierAfterComputeWrites();
     if (!reduces) return {};

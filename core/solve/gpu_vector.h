@@ -4,6 +4,8 @@
 /// operations CGLS needs on them, each one dispatch of vector_ops.comp. Reductions accumulate in
 /// float64 on the GPU and finish on the host. GL thread only.
 
+#include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -15,6 +17,17 @@
 
 namespace volstyle::core {
 
+/// The elements a vector's operations touch, ascending: the solver's hull voxels or constrained
+/// pixels (13% and 28% of the race's (a)). The others are never read by an operation on the
+/// vector and keep what they hold. Shared by every vector of one space.
+struct Support {
+    explicit Support(std::vector<uint32_t> elements);
+    std::vector<uint32_t> host;
+    gl::Buffer list;
+    /// Positions in the list of the elements in [first, first + count).
+    std::pair<size_t, size_t> positions(size_t first, size_t count) const;
+};
+
 class GpuVector {
 public:
     GpuVector() = default;
@@ -24,10 +37,15 @@ public:
     void upload(const std::vector<float>& rgba);  ///< 4 floats per element
     std::vector<float> download() const;
     void fill(float value);
+    /// Restricts the vector operations on this vector (as output, or as input of a reduction)
+    /// to these elements; null: all. Copies and fills still cover every element.
+    void setSupport(std::shared_ptr<const Support> support) { m_support = std::move(support); }
+    const Support* support() const { return m_support.get(); }
 
 private:
     gl::Buffer m_buffer;
     size_t m_elements = 0;
+    std::shared_ptr<const Support> m_support;
 };
 
 /// Box constraints per block of unknowns (block = element / blockSize; at most two blocks).

@@ -108,7 +108,7 @@ uint64_t exclusiveScan(std::vector<uint32_t>& counts) {
 
 }  // namespace
 
-std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetBytes, int channels) {
+std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetBytes, int channels, const GpuVector* pixelMask) {
     auto r = std::make_unique<SparseRows>();
     r->rows = size_t(v.camera.width) * v.camera.height;
     r->columns = elementCount();
@@ -118,10 +118,12 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
     auto bindStarts = [&] {
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowStart, r->rowStart.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColStart, r->colStart.id());
+        if (pixelMask) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowMask, pixelMask->id());
     };
+    const int masked = pixelMask ? 1 : 0;
     // Pass 1: entries per row (written by each ray) and per column (counted with atomics).
     gl::ShaderBuilder count("project.comp");
-    count.define("VOLSTYLE_ROWS", VOLSTYLE_ROWS_COUNT).define("VOLSTYLE_ROW_CHANNELS", channels);
+    count.define("VOLSTYLE_ROWS", VOLSTYLE_ROWS_COUNT).define("VOLSTYLE_ROW_CHANNELS", channels).define("VOLSTYLE_ROW_MASK", masked);
     useProgram(v, count);
     bindStarts();
     dispatchView(v);
@@ -145,7 +147,7 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
     const gl::Buffer cursor = zeroedBuffer(4 * r->columns, "columns-cursor");
     // Pass 2: the same rays write their entries into their row and into each element's column.
     gl::ShaderBuilder fill("project.comp");
-    fill.define("VOLSTYLE_ROWS", VOLSTYLE_ROWS_FILL).define("VOLSTYLE_ROW_CHANNELS", channels);
+    fill.define("VOLSTYLE_ROWS", VOLSTYLE_ROWS_FILL).define("VOLSTYLE_ROW_CHANNELS", channels).define("VOLSTYLE_ROW_MASK", masked);
     useProgram(v, fill);
     bindStarts();
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowIndex, r->rowIndex.id());
@@ -158,12 +160,13 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
     return r;
 }
 
-void Projector::cacheRows(size_t budgetBytes, int channels) {
+void Projector::cacheRows(size_t budgetBytes, int channels, const GpuVector* pixelMask) {
+    if (pixelMask) VOLSTYLE_CHECK(pixelMask->size(), ==, m_pixelCount);
     const auto t0 = Clock::now();
     for (View& v : m_views) {
         if (v.rows) continue;
         const size_t left = budgetBytes > m_stats.cacheBytes ? budgetBytes - m_stats.cacheBytes : 0;
-        v.rows = buildRows(v, left, channels);
+        v.rows = buildRows(v, left, channels, pixelMask);
         if (!v.rows) {
             spdlog::info("solve: rows of W past the cache budget ({} MiB) from view {} on: matrix-free there",
                          budgetBytes >> 20, &v - m_views.data());
@@ -177,11 +180,17 @@ void Projector::cacheRows(size_t budgetBytes, int channels) {
     m_stats.cacheMs += msSince(t0);
 }
 
+void Projector::setSupports(std::shared_ptr<const Support> pixels, std::shared_ptr<const Support> elements) {
+    m_pixelSupport = std::move(pixels);
+    m_elementSupport = std::move(elements);
+}
+
 void Projector::forward(const GpuVector& a, GpuVector& pixels) {
     const auto t0 = Clock::now();
     dispatch(false, a, pixels);
+    const Support* only = allCached() ? m_pixelSupport.get() : nullptr;
     for (const View& v : m_views)
-        if (v.rows) sparseForward(m_device, *v.rows, a, pixels, v.offset);
+        if (v.rows) sparseForward(m_device, *v.rows, a, pixels, v.offset, only);
     gl::barrierAfterComputeWrites();
     m_device.finish();
     m_stats.forwardMs += msSince(t0);
@@ -194,7 +203,7 @@ void Projector::adjoint(const GpuVector& pixels, GpuVector& a) {
     dispatch(true, a, pixels);
     for (const View& v : m_views) {
         if (!v.rows) continue;
-        sparseAdjointAdd(m_device, *v.rows, pixels, v.offset, a);
+        sparseAdjointAdd(m_device, *v.rows, pixels, v.offset, a, allCached() ? m_elementSupport.get() : nullptr);
         gl::barrierAfterComputeWrites();  // the next view adds to the same elements
     }
     m_device.finish();

@@ -54,8 +54,14 @@ public:
     /// Writes each view's rows of W and their transpose (sparse_rows.h) while they fit in
     /// `budgetBytes` and in one storage block; W and Wᵀ of those views then gather from them and
     /// the others stay matrix-free. Valid while the extinction and the lighting stay as they
-    /// were (a solve never changes them). `channels`: weightChannels() of the problem.
-    void cacheRows(size_t budgetBytes, int channels);
+    /// were (a solve never changes them). `channels`: weightChannels() of the problem. With
+    /// `pixelMask` (the solver's √weights), pixels whose mask is 0 get empty rows: W from the
+    /// cache is then 0 there, which the solver multiplies by 0 anyway.
+    void cacheRows(size_t budgetBytes, int channels, const GpuVector* pixelMask = nullptr);
+    bool allCached() const { return m_stats.cachedViews == m_views.size(); }
+    /// With every view cached: W computes only these pixels (others keep their values) and Wᵀ
+    /// only these elements (others are 0). Null: all.
+    void setSupports(std::shared_ptr<const Support> pixels, std::shared_ptr<const Support> elements);
 
 private:
     struct View {
@@ -70,7 +76,7 @@ private:
     /// Matrix-free W or Wᵀ over the views without cached rows.
     void dispatch(bool adjoint, const GpuVector& unknowns, const GpuVector& pixels);
     /// Counts, then writes, one view's rows and columns; null when past the budget.
-    std::unique_ptr<SparseRows> buildRows(const View& v, size_t budgetBytes, int channels);
+    std::unique_ptr<SparseRows> buildRows(const View& v, size_t budgetBytes, int channels, const GpuVector* pixelMask);
 
     GpuDevice& m_device;
     GpuVolume& m_volume;
@@ -84,6 +90,7 @@ private:
     size_t m_pixelCount = 0;
     ProjectorStats m_stats;
     bool m_useFloatAtomics = false;
+    std::shared_ptr<const Support> m_pixelSupport, m_elementSupport;
 };
 
 }  // namespace volstyle::core

@@ -29,10 +29,6 @@ std::vector<double> pixelWeights(const SolveView& v) {
     return w;
 }
 
-/// The renders one view needs: the volume as it is and with the unknowns' terms at their bounds.
-struct ViewRenders {
-    Image now, noEmission, albedo0, albedo1, neither, background;
-};
 
 /// `lo` with +inf wherever the pixel is covered by the medium (what added emission can reach).
 Image openAbove(const Image& lo, const Image& coverage) {
@@ -89,42 +85,58 @@ double unreachableRms(const Image& target, const std::vector<double>& weights, c
     return channels ? total / channels : 0.0;
 }
 
-void analyzeReach(GpuDevice& device, const Volume& volume, const Lighting& lighting, const std::vector<SolveView>& views,
-                  const SolveOptions& options, SolveReport& report) {
-    const auto t0 = Clock::now();
+namespace {
+
+/// a + sign·b per pixel and channel; alpha from a.
+Image combine(const Image& a, const Image& b, float sign = -1.0f) {
+    Image out = a;
+    for (size_t i = 0; i < out.pixelCount(); ++i)
+        for (size_t k = 4 * i; k < 4 * i + 3; ++k) out.rgba[k] = a.rgba[k] + sign * b.rgba[k];
+    return out;
+}
+
+}  // namespace
+
+std::vector<ViewRenders> renderBounds(GpuDevice& device, const Volume& volume, const Lighting& lighting,
+                                      const std::vector<SolveView>& views, const SolveOptions& options, bool withAlbedoOne) {
     RenderSettings settings;
     settings.stepVoxels = options.stepVoxels;
     settings.exactTraversal = options.exactTraversal;
     Renderer renderer(device);
-
-    // One GPU copy, re-uploaded per variant: the extinction never changes, so neither do the
-    // light-depth volumes (cached) — each variant costs one upload and one march per view.
-    Volume variant = volume;
-    GpuVolume gpu(variant);
-    std::vector<ViewRenders> renders(views.size());
-    auto renderAll = [&](Image ViewRenders::*slot) {
-        for (size_t v = 0; v < views.size(); ++v) renders[v].*slot = renderer.render(gpu, views[v].camera, lighting, settings);
-    };
+    GpuVolume gpu(volume);
+    std::vector<ViewRenders> out(views.size());
     for (size_t v = 0; v < views.size(); ++v) {
-        const RenderLayers layers = renderer.renderLayers(gpu, views[v].camera, lighting, settings);
-        renders[v].now = layers.beauty;
-        renders[v].background = layers.background;
+        const RenderLayers l = renderer.renderLayers(gpu, views[v].camera, lighting, settings);
+        ViewRenders& r = out[v];
+        r.now = l.beauty;
+        r.background = l.background;
+        r.noEmission = combine(l.beauty, l.emission);
+        r.albedo0 = combine(l.beauty, l.scattering);
+        r.neither = combine(r.noEmission, l.scattering);
     }
-    variant.emission().clear();
-    gpu.upload(variant);
-    renderAll(&ViewRenders::noEmission);
-    variant.ensureAlbedo(0.0f).assign(variant.voxelCount() * 3, 0.0f);
-    gpu.upload(variant);
-    renderAll(&ViewRenders::neither);
-    variant.emission() = volume.emission();
-    gpu.upload(variant);
-    renderAll(&ViewRenders::albedo0);
-    variant.albedo().assign(variant.voxelCount() * 3, 1.0f);
-    gpu.upload(variant);
-    renderAll(&ViewRenders::albedo1);
+    if (!withAlbedoOne) return out;
+    // The same extinction, so the light-depth volumes come from the device's cache.
+    Volume white = volume;
+    white.ensureAlbedo(1.0f).assign(white.voxelCount() * 3, 1.0f);
+    gpu.upload(white);
+    for (size_t v = 0; v < views.size(); ++v) {
+        const RenderLayers l = renderer.renderLayers(gpu, views[v].camera, lighting, settings);
+        out[v].albedo1 = combine(out[v].albedo0, l.scattering, 1.0f);
+    }
+    return out;
+}
 
+void analyzeReach(GpuDevice& device, const Volume& volume, const Lighting& lighting, const std::vector<SolveView>& views,
+                  const SolveOptions& options, SolveReport& report) {
+    const auto t0 = Clock::now();
+    const std::vector<ViewRenders> renders = renderBounds(device, volume, lighting, views, options, true);
+    analyzeReach(renders, views, options, report);
+    report.reach.ms = msSince(t0);
+}
+
+void analyzeReach(const std::vector<ViewRenders>& renders, const std::vector<SolveView>& views, const SolveOptions& options,
+                  SolveReport& report) {
     ReachReport& reach = report.reach;
-    reach.ms = msSince(t0);
     const Unknown candidates[] = {Unknown::Emission, Unknown::Albedo, Unknown::EmissionAlbedo};
     std::map<Unknown, double> meanUnreachable;
     double meanChosen = 0, meanResidual = 0;

@@ -24,8 +24,27 @@ namespace volstyle::core {
 /// weight. `weights` per pixel (target alpha × weight image); `hi` may be +inf.
 double unreachableRms(const Image& target, const std::vector<double>& weights, const Image& lo, const Image& hi);
 
-/// Fills `report.reach` for solving `options.unknown` of `volume` toward `views`: a few renders
-/// per view (the volume without emission, with albedo 0 and 1).
+/// One view rendered with the unknowns' terms at their bounds. The extinction fixed, a render is
+/// linear in emission and albedo: beauty = emission + scattering + T·background, with the
+/// scattering proportional to the albedo. So two renders give them all: the volume as it is (in
+/// layers) and with albedo 1. The solver's observations take their fixed part from here too.
+struct ViewRenders {
+    Image now;         ///< the volume as it is
+    Image noEmission;  ///< now − emission
+    Image albedo0;     ///< now − scattering
+    Image albedo1;     ///< albedo0 + the scattering with albedo 1 (only with `withAlbedoOne`)
+    Image neither;     ///< T·background: no emission, albedo 0
+    Image background;  ///< the background alone (no medium)
+};
+
+/// Two renders per view (one without `withAlbedoOne`), under `options`' step and traversal.
+std::vector<ViewRenders> renderBounds(GpuDevice& device, const Volume& volume, const Lighting& lighting,
+                                      const std::vector<SolveView>& views, const SolveOptions& options, bool withAlbedoOne);
+
+/// Fills `report.reach` for solving `options.unknown` toward `views` from renderBounds() (with albedo 1).
+void analyzeReach(const std::vector<ViewRenders>& renders, const std::vector<SolveView>& views,
+                  const SolveOptions& options, SolveReport& report);
+/// The same, rendering first.
 void analyzeReach(GpuDevice& device, const Volume& volume, const Lighting& lighting,
                   const std::vector<SolveView>& views, const SolveOptions& options, SolveReport& report);
 

@@ -156,8 +156,9 @@ void Solver::State::projectedStep(const StepLength& step) {
     const Vec3d fBefore = objective();
     ops.axpy(step.alpha, p, a);
     ops.clamp(a, bounds);
-    ops.copy(a, tmpU);
-    ops.axpy(Vec3d(-1.0), aPrev, tmpU);  // d = a' − a
+    tmpU.fill(0.0f);  // d = a' − a, 0 off the vectors' support too
+    ops.axpy(Vec3d(1.0), a, tmpU);
+    ops.axpy(Vec3d(-1.0), aPrev, tmpU);
     ops.copy(aPrev, a);
     applyA(tmpU, dImg, dLap);
     move(Vec3d(1.0), tmpU, dImg, dLap);
@@ -243,9 +244,13 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
         return {st.volume, rep};
     }
     if (st.opt.analyzeReach) {
-        analyzeReach(st.device, st.volume, st.lighting, st.views, st.opt, rep);  // what the bounds leave out of reach
+        const auto tReach = Clock::now();
+        analyzeReach(st.viewRenders, st.views, st.opt, rep);  // what the bounds leave out of reach
+        rep.reach.ms = msSince(tReach);
         if (!rep.reach.advice.empty()) spdlog::info("solve: {}", rep.reach.advice);
     }
+    st.viewRenders.clear();
+    st.viewRenders.shrink_to_fit();
     if (st.opt.coarseIterations > 0) st.warmStartFromCoarse(cancel);
     Vec3d gamma;  // s·D²s, s = Aᵀr restricted to the free variables (‖s‖² unpreconditioned)
     st.restart(gamma);

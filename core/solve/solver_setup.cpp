@@ -82,14 +82,10 @@ Solver::Solver(GpuDevice& device, const Volume& volume, const Lighting& lighting
     st.W = std::make_unique<Projector>(device, *st.gpu, st.lighting, st.opt.unknown, st.opt.basis, st.udims,
                                        st.opt.stepVoxels, st.opt.exactTraversal);
     for (const auto& v : st.views) st.W->addView(v.camera);
-    if (st.opt.rowCacheBytes > 0) {
-        st.W->cacheRows(st.opt.rowCacheBytes, weightChannels(st.volume, st.lighting, st.opt.unknown));
-        const ProjectorStats& w = st.W->stats();
-        st.report.rowCacheMs = w.cacheMs, st.report.rowCacheBytes = w.cacheBytes, st.report.cachedViews = w.cachedViews;
-    }
     st.allocate();
     st.buildObservations();
     st.buildHull();
+    st.cacheOperator();
     st.initialUnknowns();
     st.buildRegularizers();
     st.buildPreconditioner();
@@ -132,23 +128,18 @@ void Solver::State::allocate() {
 }
 
 void Solver::State::buildObservations() {
-    // The fixed part of each pixel (everything but the unknown's term, TVCG Eq. 5 and after):
-    // rendered from a copy of the volume with the unknown's contribution removed.
-    Volume fixed = volume;
-    Lighting fixedLighting = lighting;
+    // The fixed part of each pixel (everything but the unknown's term, TVCG Eq. 5 and after),
+    // from the renders the reach analysis takes too (reach.h: two per view, not six).
     const Unknown u = opt.unknown;
-    if (u == Unknown::Emission || u == Unknown::EmissionAlbedo) fixed.emission().clear();
-    if (u == Unknown::Albedo || u == Unknown::EmissionAlbedo) fixed.ensureAlbedo(0.0f).assign(fixed.voxelCount() * 3, 0.0f);
-    if (u == Unknown::Extinction) {
-        fixed.extinction().assign(fixed.voxelCount() * 3, 0.0f);  // what lies behind: L_bg per pixel
-        fixedLighting.lights.clear();
-    }
-    GpuVolume fixedGpu(fixed);
-    Renderer renderer(device);
-    RenderSettings settings;
-    settings.stepVoxels = opt.stepVoxels;
-    settings.exactTraversal = opt.exactTraversal;
-
+    viewRenders = renderBounds(device, volume, lighting, views, opt, opt.analyzeReach);
+    auto fixedPart = [&](const ViewRenders& r) -> const Image& {
+        switch (u) {
+            case Unknown::Emission: return r.noEmission;
+            case Unknown::Albedo: return r.albedo0;
+            case Unknown::EmissionAlbedo: return r.neither;
+            default: return r.background;  // extinction: what lies behind, L_bg per pixel
+        }
+    };
     const size_t P = W->pixelCount();
     std::vector<float> o(P * 4, 0.0f), w(P * 4, 0.0f);
     viewWeightSum.assign(views.size(), Vec3d(0.0));
@@ -156,7 +147,7 @@ void Solver::State::buildObservations() {
     size_t pixel = 0;
     for (size_t vi = 0; vi < views.size(); ++vi) {
         const SolveView& v = views[vi];
-        Image F = renderer.render(fixedGpu, v.camera, fixedLighting, settings);
+        const Image& F = fixedPart(viewRenders[vi]);
         for (size_t i = 0; i < v.target.pixelCount(); ++i, ++pixel) {
             const float* t = &v.target.rgba[4 * i];
             const double weight = std::max(0.0f, t[3]) * (v.weights ? std::max(0.0f, v.weights->rgba[4 * i]) : 1.0f);
@@ -257,6 +248,29 @@ void Solver::State::markHullFromMasks(const std::vector<float>& o, const std::ve
             }
 }
 
+void Solver::State::cacheOperator() {
+    if (opt.rowCacheBytes == 0) return;
+    // Rows only for the pixels that count (a weight > 0): the others' rows would be multiplied by 0.
+    W->cacheRows(opt.rowCacheBytes, weightChannels(volume, lighting, opt.unknown), &sqrtW);
+    const ProjectorStats& w = W->stats();
+    report.rowCacheMs = w.cacheMs, report.rowCacheBytes = w.cacheBytes, report.cachedViews = w.cachedViews;
+    if (!W->allCached()) return;
+    // Every view gathers from its rows, which touch only constrained pixels and (for Wᵀ) the hull:
+    // the vector work runs over those alone (hull voxels outside keep their start values, and
+    // no operation reads a pixel without weight).
+    std::vector<uint32_t> pixels, voxels;
+    const std::vector<float> w2 = sqrtW.download();
+    for (size_t i = 0; i < W->pixelCount(); ++i)
+        if (w2[4 * i] > 0 || w2[4 * i + 1] > 0 || w2[4 * i + 2] > 0) pixels.push_back(uint32_t(i));
+    for (size_t e = 0; e < elements; ++e)
+        if (hullHost[4 * e] > 0) voxels.push_back(uint32_t(e));
+    auto pixelSupport = std::make_shared<const Support>(std::move(pixels));
+    auto voxelSupport = std::make_shared<const Support>(std::move(voxels));
+    for (GpuVector* v : {&obs, &sqrtW, &rImg, &qImg, &tmpImg, &dImg}) v->setSupport(pixelSupport);
+    for (GpuVector* v : {&a, &aPrev, &s, &p, &hull, &rLap, &qLap, &dLap, &tmpU, &rId, &precond, &z}) v->setSupport(voxelSupport);
+    W->setSupports(pixelSupport, voxelSupport);
+}
+
 void Solver::State::initialUnknowns() {
     // Warm start from the volume's current values, resampled onto the unknown grid.
     const Int3 n = volume.dims();
@@ -322,8 +336,7 @@ void Solver::State::buildPreconditioner() {
         precond.fill(1.0f);
         return;
     }
-    tmpU.fill(1.0f);
-    ops.multiply(hull, tmpU);
+    ops.copy(hull, tmpU);  // 1 on the hull (rgb), 0 elsewhere
     W->forward(tmpU, tmpImg);
     ops.multiply(sqrtW, tmpImg);
     ops.multiply(sqrtW, tmpImg);

@@ -12,6 +12,7 @@
 #include "core/render/gpu_volume.h"
 #include "core/solve/gpu_vector.h"
 #include "core/solve/projector.h"
+#include "core/solve/reach.h"
 #include "core/solve/solve_options.h"
 #include "core/solve/solver.h"
 
@@ -55,6 +56,7 @@ struct Solver::State {
     Vec3d weightSum{0, 0, 0};
     std::vector<Vec3d> viewWeightSum;
     std::vector<float> hullHost;
+    std::vector<ViewRenders> viewRenders;  ///< each view at the unknowns' bounds (reach.h), until the reach analysis
     SolveReport report;
 
     State(GpuDevice& d, const Volume& v, const Lighting& l, std::vector<SolveView> vs, SolveOptions o)
@@ -67,6 +69,9 @@ struct Solver::State {
     void buildHull();
     void markHullFromExtinction();
     void markHullFromMasks(const std::vector<float>& o, const std::vector<float>& w);
+    /// The views' rows of W (SolveOptions::rowCacheBytes) and, when all fit, vector work over
+    /// the hull and the constrained pixels only.
+    void cacheOperator();
     void initialUnknowns();
     void buildRegularizers();
     void buildPreconditioner();

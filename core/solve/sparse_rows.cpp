@@ -27,10 +27,18 @@ int weightChannels(const Volume& volume, const Lighting& lighting, Unknown unkno
 namespace {
 
 void apply(GpuDevice& device, const SparseRows& rows, bool adjoint, const GpuVector& in, GpuVector& out,
-           size_t pixelOffset) {
-    const size_t count = adjoint ? rows.columns : rows.rows;
+           size_t pixelOffset, const Support* only) {
+    size_t count = adjoint ? rows.columns : rows.rows;
+    const size_t outputOffset = adjoint ? 0 : pixelOffset;
+    int listFirst = -1;
+    if (only) {  // this view's part of the list: its pixels (W), every listed element (Wᵀ)
+        const auto [lo, hi] = only->positions(outputOffset, count);
+        listFirst = int(lo), count = hi - lo;
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSparseList, only->list.id());
+    }
+    if (count == 0) return;
     layout::SparseParams p;
-    p.count = {int(count), adjoint ? int(pixelOffset) : 0, adjoint ? 0 : int(pixelOffset), 0};
+    p.count = {int(count), adjoint ? int(pixelOffset) : 0, int(outputOffset), listFirst};
     device.setParams(p);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSparseIn, in.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSparseOut, out.id());
@@ -45,12 +53,14 @@ void apply(GpuDevice& device, const SparseRows& rows, bool adjoint, const GpuVec
 
 }  // namespace
 
-void sparseForward(GpuDevice& device, const SparseRows& rows, const GpuVector& a, GpuVector& pixels, size_t pixelOffset) {
-    apply(device, rows, false, a, pixels, pixelOffset);
+void sparseForward(GpuDevice& device, const SparseRows& rows, const GpuVector& a, GpuVector& pixels, size_t pixelOffset,
+                   const Support* only) {
+    apply(device, rows, false, a, pixels, pixelOffset, only);
 }
 
-void sparseAdjointAdd(GpuDevice& device, const SparseRows& rows, const GpuVector& pixels, size_t pixelOffset, GpuVector& a) {
-    apply(device, rows, true, pixels, a, pixelOffset);
+void sparseAdjointAdd(GpuDevice& device, const SparseRows& rows, const GpuVector& pixels, size_t pixelOffset, GpuVector& a,
+                      const Support* only) {
+    apply(device, rows, true, pixels, a, pixelOffset, only);
 }
 
 }  // namespace volstyle::core

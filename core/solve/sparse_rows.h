@@ -32,9 +32,11 @@ size_t sparseRowsBytes(size_t rows, size_t columns, size_t entries, int channels
 /// include albedo), else 3: a grey cache is a third of the size and of the loads.
 int weightChannels(const Volume& volume, const Lighting& lighting, Unknown unknown);
 
-/// pixels[pixelOffset + p] = (W a)_p for the view's pixels p.
-void sparseForward(GpuDevice& device, const SparseRows& rows, const GpuVector& a, GpuVector& pixels, size_t pixelOffset);
-/// a += Wᵀ r over the view's pixels r = pixels[pixelOffset ..].
-void sparseAdjointAdd(GpuDevice& device, const SparseRows& rows, const GpuVector& pixels, size_t pixelOffset, GpuVector& a);
+/// pixels[pixelOffset + p] = (W a)_p for the view's pixels p (with `only`: those in it).
+void sparseForward(GpuDevice& device, const SparseRows& rows, const GpuVector& a, GpuVector& pixels, size_t pixelOffset,
+                   const Support* only = nullptr);
+/// a += Wᵀ r over the view's pixels r = pixels[pixelOffset ..] (with `only`: for its elements).
+void sparseAdjointAdd(GpuDevice& device, const SparseRows& rows, const GpuVector& pixels, size_t pixelOffset, GpuVector& a,
+                      const Support* only = nullptr);
 
 }  // namespace volstyle::core
