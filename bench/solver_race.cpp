@@ -24,6 +24,7 @@
 #include "core/base/stopwatch.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/renderer.h"
+#include "core/solve/solve_cache.h"
 #include "core/solve/solver.h"
 #include "core/volume/builtin_scenes.h"
 
@@ -106,6 +107,38 @@ Race coarseToFine(GpuDevice& device, const Setup& s, const Problem& p, int coars
     return solveRace(device, s.plain, s.views, opt);
 }
 
+/// Issue #12's live loop: a converged solve, then one stroke on view 0 (a disc of 24 px radius
+/// painted 30% brighter) and the re-solve from the solved volume, with and without the first
+/// solve's cache (solve_cache.h). Default options (smoothing, tolerance, bounds), as the page.
+void strokeRace(GpuDevice& device, Renderer& renderer) {
+    const Problem p{"(c) 64³, 4 × 256², emission", 64, 4, 256, 256, 0.5};
+    Setup s = setUp(renderer, p);
+    SolveOptions opt;
+    opt.stepVoxels = p.step;
+    SolveCache cache;
+    auto t0 = Clock::now();
+    const SolveResult first = Solver(device, s.plain, defaultLighting(), s.views, opt, &cache).run();
+    const double firstSeconds = msSince(t0) / 1000.0;
+    Image& target = s.views[0].target;
+    for (int y = 0; y < target.height; ++y)
+        for (int x = 0; x < target.width; ++x)
+            if (std::hypot(x - target.width / 2.0, y - target.height / 2.0) < 24)
+                for (int c = 0; c < 3; ++c) target.pixel(x, y)[c] *= 1.3f;
+    std::printf("\n| %s | solve | iterations | seconds | of which set-up | cache |\n|---|---|---|---|---|---|\n", p.name.c_str());
+    std::printf("| | first solve | %d | %.2f | | %.0f MiB after |\n", first.report.iterations, firstSeconds, cache.bytes() / 1048576.0);
+    for (SolveCache* c : {&cache, static_cast<SolveCache*>(nullptr)}) {
+        t0 = Clock::now();
+        Solver again(device, first.volume, defaultLighting(), s.views, opt, c);
+        const double setup = msSince(t0) / 1000.0;
+        const size_t hits = c ? c->hits() : 0;
+        const SolveResult out = again.run();
+        std::printf("| | re-solve after one stroke, %s | %d | %.2f | %.2f | %s |\n", c ? "cache kept" : "no cache",
+                    out.report.iterations, msSince(t0) / 1000.0, setup,
+                    c ? (std::to_string(hits) + " hits").c_str() : "");
+    }
+    std::fflush(stdout);
+}
+
 std::string seconds(double s) {
     char b[32];
     if (s < 0) return "not reached";
@@ -165,6 +198,7 @@ int main(int argc, char** argv) {
             json.push_back(j + "]}");
         }
     }
+    strokeRace(*device, renderer);
     std::printf("\n");
     for (const auto& j : json) std::printf("%s\n", j.c_str());
 }

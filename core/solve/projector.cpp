@@ -160,6 +160,16 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
     return r;
 }
 
+void Projector::adoptRows(size_t view, std::shared_ptr<const SparseRows> rows) {
+    View& v = m_views.at(view);
+    VOLSTYLE_CHECK(rows->rows, ==, size_t(v.camera.width) * v.camera.height);
+    VOLSTYLE_CHECK(rows->columns, ==, elementCount());
+    if (!v.rows) m_stats.cachedViews++;
+    else m_stats.cacheBytes -= sparseRowsBytes(v.rows->rows, v.rows->columns, v.rows->entries, v.rows->channels);
+    m_stats.cacheBytes += sparseRowsBytes(rows->rows, rows->columns, rows->entries, rows->channels);
+    v.rows = std::move(rows);
+}
+
 void Projector::cacheRows(size_t budgetBytes, int channels, const GpuVector* pixelMask) {
     if (pixelMask) VOLSTYLE_CHECK(pixelMask->size(), ==, m_pixelCount);
     const auto t0 = Clock::now();

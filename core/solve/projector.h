@@ -59,6 +59,10 @@ public:
     /// cache is then 0 there, which the solver multiplies by 0 anyway.
     void cacheRows(size_t budgetBytes, int channels, const GpuVector* pixelMask = nullptr);
     bool allCached() const { return m_stats.cachedViews == m_views.size(); }
+    /// A view's rows, from an earlier solve (SolveCache) or for one: rows written for this view's
+    /// camera, unknowns and pixel mask.
+    void adoptRows(size_t view, std::shared_ptr<const SparseRows> rows);
+    std::shared_ptr<const SparseRows> rowsOf(size_t view) const { return m_views[view].rows; }
     /// With every view cached: W computes only these pixels (others keep their values) and Wᵀ
     /// only these elements (others are 0). Null: all.
     void setSupports(std::shared_ptr<const Support> pixels, std::shared_ptr<const Support> elements);
@@ -68,7 +72,7 @@ private:
         Camera camera;
         MarchSetup setup;
         size_t offset;
-        std::unique_ptr<SparseRows> rows;  ///< null: matrix-free
+        std::shared_ptr<const SparseRows> rows;  ///< null: matrix-free
     };
     /// project.comp over one view: the shader with the projector's defines and the view's march bound.
     void useProgram(const View& v, gl::ShaderBuilder& builder);

@@ -97,7 +97,7 @@ Image combine(const Image& a, const Image& b, float sign = -1.0f) {
 
 }  // namespace
 
-std::vector<ViewRenders> renderBounds(GpuDevice& device, const Volume& volume, const Lighting& lighting,
+std::vector<std::shared_ptr<const ViewRenders>> renderBounds(GpuDevice& device, const Volume& volume, const Lighting& lighting,
                                       const std::vector<SolveView>& views, const SolveOptions& options, bool withAlbedoOne) {
     RenderSettings settings;
     settings.stepVoxels = options.stepVoxels;
@@ -105,6 +105,7 @@ std::vector<ViewRenders> renderBounds(GpuDevice& device, const Volume& volume, c
     Renderer renderer(device);
     GpuVolume gpu(volume);
     std::vector<ViewRenders> out(views.size());
+    std::vector<std::shared_ptr<const ViewRenders>> shared;
     for (size_t v = 0; v < views.size(); ++v) {
         const RenderLayers l = renderer.renderLayers(gpu, views[v].camera, lighting, settings);
         ViewRenders& r = out[v];
@@ -114,7 +115,11 @@ std::vector<ViewRenders> renderBounds(GpuDevice& device, const Volume& volume, c
         r.albedo0 = combine(l.beauty, l.scattering);
         r.neither = combine(r.noEmission, l.scattering);
     }
-    if (!withAlbedoOne) return out;
+    auto share = [&] {
+        for (auto& r : out) shared.push_back(std::make_shared<const ViewRenders>(std::move(r)));
+        return shared;
+    };
+    if (!withAlbedoOne) return share();
     // The same extinction, so the light-depth volumes come from the device's cache.
     Volume white = volume;
     white.ensureAlbedo(1.0f).assign(white.voxelCount() * 3, 1.0f);
@@ -123,18 +128,18 @@ std::vector<ViewRenders> renderBounds(GpuDevice& device, const Volume& volume, c
         const RenderLayers l = renderer.renderLayers(gpu, views[v].camera, lighting, settings);
         out[v].albedo1 = combine(out[v].albedo0, l.scattering, 1.0f);
     }
-    return out;
+    return share();
 }
 
 void analyzeReach(GpuDevice& device, const Volume& volume, const Lighting& lighting, const std::vector<SolveView>& views,
                   const SolveOptions& options, SolveReport& report) {
     const auto t0 = Clock::now();
-    const std::vector<ViewRenders> renders = renderBounds(device, volume, lighting, views, options, true);
+    const auto renders = renderBounds(device, volume, lighting, views, options, true);
     analyzeReach(renders, views, options, report);
     report.reach.ms = msSince(t0);
 }
 
-void analyzeReach(const std::vector<ViewRenders>& renders, const std::vector<SolveView>& views, const SolveOptions& options,
+void analyzeReach(const std::vector<std::shared_ptr<const ViewRenders>>& renders, const std::vector<SolveView>& views, const SolveOptions& options,
                   SolveReport& report) {
     ReachReport& reach = report.reach;
     const Unknown candidates[] = {Unknown::Emission, Unknown::Albedo, Unknown::EmissionAlbedo};
@@ -142,14 +147,14 @@ void analyzeReach(const std::vector<ViewRenders>& renders, const std::vector<Sol
     double meanChosen = 0, meanResidual = 0;
     for (size_t v = 0; v < views.size(); ++v) {
         const std::vector<double> w = pixelWeights(views[v]);
-        auto [lo, hi] = reachable(options.unknown, renders[v], options.mediumRadiance);
+        auto [lo, hi] = reachable(options.unknown, *renders[v], options.mediumRadiance);
         const double chosen = unreachableRms(views[v].target, w, lo, hi);
         reach.unreachableRms.push_back(chosen);
         meanChosen += chosen / double(views.size());
-        meanResidual += unreachableRms(views[v].target, w, renders[v].now, renders[v].now) / double(views.size());
+        meanResidual += unreachableRms(views[v].target, w, renders[v]->now, renders[v]->now) / double(views.size());
         std::vector<std::pair<Unknown, double>> alternatives;
         for (Unknown u : candidates) {
-            auto [clo, chi] = reachable(u, renders[v], options.mediumRadiance);
+            auto [clo, chi] = reachable(u, *renders[v], options.mediumRadiance);
             const double x = u == options.unknown ? chosen : unreachableRms(views[v].target, w, clo, chi);
             alternatives.emplace_back(u, x);
             meanUnreachable[u] += x / double(views.size());

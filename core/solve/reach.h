@@ -8,6 +8,7 @@
 /// out of reach whatever the solve does: reported per view, with the unknowns that would reach
 /// more of it. GL thread only.
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -38,11 +39,13 @@ struct ViewRenders {
 };
 
 /// Two renders per view (one without `withAlbedoOne`), under `options`' step and traversal.
-std::vector<ViewRenders> renderBounds(GpuDevice& device, const Volume& volume, const Lighting& lighting,
+std::vector<std::shared_ptr<const ViewRenders>> renderBounds(GpuDevice& device, const Volume& volume, const Lighting& lighting,
                                       const std::vector<SolveView>& views, const SolveOptions& options, bool withAlbedoOne);
 
-/// Fills `report.reach` for solving `options.unknown` toward `views` from renderBounds() (with albedo 1).
-void analyzeReach(const std::vector<ViewRenders>& renders, const std::vector<SolveView>& views,
+/// Fills `report.reach` for solving `options.unknown` toward `views` from renderBounds() (with
+/// albedo 1). Renders kept from an earlier solve (SolveCache) are exact for the chosen unknowns'
+/// own bounds; the other candidates' bounds then hold the unknowns as that solve started.
+void analyzeReach(const std::vector<std::shared_ptr<const ViewRenders>>& renders, const std::vector<SolveView>& views,
                   const SolveOptions& options, SolveReport& report);
 /// The same, rendering first.
 void analyzeReach(GpuDevice& device, const Volume& volume, const Lighting& lighting,

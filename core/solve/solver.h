@@ -27,6 +27,8 @@
 
 namespace volstyle::core {
 
+class SolveCache;
+
 struct SolveResult {
     Volume volume;  ///< the input volume with the solved property replaced
     SolveReport report;
@@ -35,9 +37,11 @@ struct SolveResult {
 class Solver {
 public:
     /// Validates everything up front (throws InvalidArgument): options, views (a target per view,
-    /// sizes matching the camera, no NaN/Inf), the unknown's requirements.
+    /// sizes matching the camera, no NaN/Inf), the unknown's requirements. With `cache`, each
+    /// view's rows of W and bound renders come from an earlier solve where their keys match, and
+    /// what this solve makes is left there for the next (solve_cache.h).
     Solver(GpuDevice& device, const Volume& volume, const Lighting& lighting, std::vector<SolveView> views,
-           SolveOptions options);
+           SolveOptions options, SolveCache* cache = nullptr);
     ~Solver();
 
     using ProgressCallback = std::function<void(const SolveProgress&)>;

@@ -10,6 +10,7 @@
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
 #include "core/render/renderer.h"
+#include "core/solve/solve_cache.h"
 #include "core/solve/solver_state.h"
 #include "core/volume/resample.h"
 
@@ -71,9 +72,10 @@ Observation observeTransmittance(double target, double background, double medium
 }  // namespace
 
 Solver::Solver(GpuDevice& device, const Volume& volume, const Lighting& lighting, std::vector<SolveView> views,
-               SolveOptions options)
+               SolveOptions options, SolveCache* cache)
     : m_state(std::make_unique<State>(device, volume, lighting, std::move(views), std::move(options))) {
     State& st = *m_state;
+    st.cache = cache;
     st.validateInputs();
     st.udims = st.opt.resolution.value_or(st.volume.dims());
     st.cells = size_t(st.udims.volume());
@@ -131,7 +133,24 @@ void Solver::State::buildObservations() {
     // The fixed part of each pixel (everything but the unknown's term, TVCG Eq. 5 and after),
     // from the renders the reach analysis takes too (reach.h: two per view, not six).
     const Unknown u = opt.unknown;
-    viewRenders = renderBounds(device, volume, lighting, views, opt, opt.analyzeReach);
+    viewRenders.assign(views.size(), nullptr);
+    std::vector<std::string> keys(views.size());
+    std::vector<SolveView> missing;
+    for (size_t v = 0; v < views.size(); ++v) {
+        if (!cache) break;
+        keys[v] = rendersKey(volume, lighting, opt, views[v].camera, opt.analyzeReach);
+        viewRenders[v] = cache->findRenders(keys[v]);
+    }
+    for (size_t v = 0; v < views.size(); ++v)
+        if (!viewRenders[v]) missing.push_back({views[v].name, views[v].camera, Image(), std::nullopt});
+    if (!missing.empty()) {
+        auto fresh = renderBounds(device, volume, lighting, missing, opt, opt.analyzeReach);
+        for (size_t v = 0, k = 0; v < views.size(); ++v) {
+            if (viewRenders[v]) continue;
+            viewRenders[v] = fresh[k++];
+            if (cache) cache->putRenders(keys[v], viewRenders[v]);
+        }
+    }
     auto fixedPart = [&](const ViewRenders& r) -> const Image& {
         switch (u) {
             case Unknown::Emission: return r.noEmission;
@@ -147,7 +166,7 @@ void Solver::State::buildObservations() {
     size_t pixel = 0;
     for (size_t vi = 0; vi < views.size(); ++vi) {
         const SolveView& v = views[vi];
-        const Image& F = fixedPart(viewRenders[vi]);
+        const Image& F = fixedPart(*viewRenders[vi]);
         for (size_t i = 0; i < v.target.pixelCount(); ++i, ++pixel) {
             const float* t = &v.target.rgba[4 * i];
             const double weight = std::max(0.0f, t[3]) * (v.weights ? std::max(0.0f, v.weights->rgba[4 * i]) : 1.0f);
@@ -171,6 +190,7 @@ void Solver::State::buildObservations() {
         }
     obs.upload(o);
     sqrtW.upload(w);
+    sqrtWHost = std::move(w);
 }
 
 void Solver::State::buildHull() {
@@ -250,8 +270,16 @@ void Solver::State::markHullFromMasks(const std::vector<float>& o, const std::ve
 
 void Solver::State::cacheOperator() {
     if (opt.rowCacheBytes == 0) return;
+    const int channels = weightChannels(volume, lighting, opt.unknown);
+    std::vector<std::string> keys(views.size());
+    for (size_t v = 0; v < views.size() && cache; ++v) {
+        keys[v] = rowsKey(volume, lighting, opt, udims, views[v].camera, channels, sqrtWHost, W->viewRange(v).first);
+        if (auto rows = cache->findRows(keys[v])) W->adoptRows(v, std::move(rows));
+    }
     // Rows only for the pixels that count (a weight > 0): the others' rows would be multiplied by 0.
-    W->cacheRows(opt.rowCacheBytes, weightChannels(volume, lighting, opt.unknown), &sqrtW);
+    W->cacheRows(opt.rowCacheBytes, channels, &sqrtW);
+    for (size_t v = 0; v < views.size() && cache; ++v)
+        if (auto rows = W->rowsOf(v)) cache->putRows(keys[v], std::move(rows));
     const ProjectorStats& w = W->stats();
     report.rowCacheMs = w.cacheMs, report.rowCacheBytes = w.cacheBytes, report.cachedViews = w.cachedViews;
     if (!W->allCached()) return;
@@ -259,7 +287,7 @@ void Solver::State::cacheOperator() {
     // the vector work runs over those alone (hull voxels outside keep their start values, and
     // no operation reads a pixel without weight).
     std::vector<uint32_t> pixels, voxels;
-    const std::vector<float> w2 = sqrtW.download();
+    const std::vector<float>& w2 = sqrtWHost;
     for (size_t i = 0; i < W->pixelCount(); ++i)
         if (w2[4 * i] > 0 || w2[4 * i + 1] > 0 || w2[4 * i + 2] > 0) pixels.push_back(uint32_t(i));
     for (size_t e = 0; e < elements; ++e)

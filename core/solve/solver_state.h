@@ -18,6 +18,8 @@
 
 namespace volstyle::core {
 
+class SolveCache;
+
 /// Regularizer rows of one block of unknowns (emission, albedo or extinction): √(λ_lap/M) L and
 /// √((λ0+λ1)/M) (a − t) with t = λ1/(λ0+λ1), M the block's hull unknowns (SPEC §2).
 struct BlockRegularizer {
@@ -56,7 +58,9 @@ struct Solver::State {
     Vec3d weightSum{0, 0, 0};
     std::vector<Vec3d> viewWeightSum;
     std::vector<float> hullHost;
-    std::vector<ViewRenders> viewRenders;  ///< each view at the unknowns' bounds (reach.h), until the reach analysis
+    std::vector<std::shared_ptr<const ViewRenders>> viewRenders;  ///< each view at the unknowns' bounds (reach.h), until the reach analysis
+    std::vector<float> sqrtWHost;  ///< sqrtW as uploaded
+    SolveCache* cache = nullptr;   ///< parts kept between solves (solve_cache.h); may be null
     SolveReport report;
 
     State(GpuDevice& d, const Volume& v, const Lighting& l, std::vector<SolveView> vs, SolveOptions o)

@@ -1,12 +1,14 @@
-// Issue #12's levers that change the iterations, not the operator: the preconditioned CGLS
-// (SolveOptions::precondition) and the coarse start (SolveOptions::coarseIterations). Both must
-// keep every guarantee of the plain solver (the objective never rises) and reach its minimum.
+// Issue #12's levers: the preconditioned CGLS (SolveOptions::precondition), the coarse start
+// (SolveOptions::coarseIterations), W from cached rows (SolveOptions::rowCacheBytes) and the cache
+// between solves (solve_cache.h). Each must keep every guarantee of the plain solver (the
+// objective never rises) and reach its minimum; the caches must not change the iterates.
 #include <gtest/gtest.h>
 
 #include <numbers>
 
 #include "../common/stamped_cloud.h"
 #include "core/render/gpu_volume.h"
+#include "core/solve/solve_cache.h"
 #include "core/solve/solver.h"
 #include "gl_test_env.h"
 
@@ -95,4 +97,48 @@ TEST(SolverSpeed, CoarseStartWarmsTheFineSolve) {
     // A cancelled coarse stage cancels the solve.
     std::atomic<bool> cancel{true};
     EXPECT_THROW(Solver(test::device(), p.plain, defaultLighting(), p.views, warm).run({}, &cancel), Cancelled);
+}
+
+TEST(SolverSpeed, CachedRowsGiveTheMatrixFreeSolve) {
+    VOLSTYLE_REQUIRE_GL();
+    // W and Wᵀ from the cached rows (the default) against marching every ray each time: the same
+    // iterates up to float rounding in the sums' order.
+    const Problem p = stampedProblem();
+    const SolveOptions cached = plainOptions(8);
+    SolveOptions marched = cached;
+    marched.rowCacheBytes = 0;
+    const SolveReport a = Solver(test::device(), p.plain, defaultLighting(), p.views, cached).run().report;
+    const SolveReport b = Solver(test::device(), p.plain, defaultLighting(), p.views, marched).run().report;
+    EXPECT_EQ(a.cachedViews, p.views.size());
+    EXPECT_GT(a.rowCacheBytes, 0u);
+    EXPECT_EQ(b.cachedViews, 0u);
+    ASSERT_EQ(a.objectiveHistory.size(), b.objectiveHistory.size());
+    for (size_t i = 0; i < a.objectiveHistory.size(); ++i)
+        EXPECT_NEAR(a.objectiveHistory[i] / b.objectiveHistory[i], 1.0, 1e-4) << "iteration " << i;
+}
+
+TEST(SolverSpeed, ASecondSolveTakesEveryUnchangedPartFromTheCache) {
+    VOLSTYLE_REQUIRE_GL();
+    // A stroke changes one target, not the weights: the re-solve finds every view's rows and
+    // renders, and lands where a solve without the cache lands. A new extinction misses all.
+    Problem p = stampedProblem();
+    SolveOptions opt = plainOptions(6);
+    SolveCache cache;
+    const SolveResult first = Solver(test::device(), p.plain, defaultLighting(), p.views, opt, &cache).run();
+    EXPECT_EQ(cache.hits(), 0u);
+    EXPECT_EQ(cache.entries(), 2 * p.views.size());
+    for (size_t i = 0; i < 40; ++i) p.views[0].target.rgba[4 * (400 + i)] *= 1.3f;
+    const SolveReport warm = Solver(test::device(), first.volume, defaultLighting(), p.views, opt, &cache).run().report;
+    EXPECT_EQ(cache.hits(), 2 * p.views.size());
+    const SolveReport cold = Solver(test::device(), first.volume, defaultLighting(), p.views, opt).run().report;
+    ASSERT_EQ(warm.objectiveHistory.size(), cold.objectiveHistory.size());
+    for (size_t i = 0; i < warm.objectiveHistory.size(); ++i)
+        EXPECT_NEAR(warm.objectiveHistory[i] / cold.objectiveHistory[i], 1.0, 1e-4) << "iteration " << i;
+    EXPECT_NEAR(warm.finalRms[0], cold.finalRms[0], 1e-5);
+
+    Volume denser = first.volume;
+    for (float& s : denser.extinction()) s *= 1.5f;
+    const size_t misses = cache.misses();
+    Solver(test::device(), denser, defaultLighting(), p.views, opt, &cache);
+    EXPECT_EQ(cache.misses() - misses, 2 * p.views.size());
 }

@@ -1,0 +1,100 @@
+#include "core/solve/solve_cache.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <string_view>
+
+namespace volstyle::core {
+namespace {
+
+size_t hashOf(const void* data, size_t bytes) {
+    return std::hash<std::string_view>{}(std::string_view(static_cast<const char*>(data), bytes));
+}
+size_t hashOf(const std::vector<float>& v) { return hashOf(v.data(), v.size() * sizeof(float)); }
+
+size_t imageBytes(const Image& i) { return i.rgba.size() * sizeof(float); }
+
+std::string gridKey(const Volume& v) {
+    std::string key = fmt::format("{}x{}x{}:", v.dims().x, v.dims().y, v.dims().z);
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) key += fmt::format("{},", v.worldFromIndex()(r, c));  // shortest round-trip: exact
+    return key + fmt::format(":σ{:x}", hashOf(v.extinction()));
+}
+
+std::string cameraKey(const Camera& c) {
+    return fmt::format("cam:{},{},{}:{},{},{}:{},{},{}:{}:{}x{}:{},{}", c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y,
+                       c.target.z, c.up.x, c.up.y, c.up.z, c.fovYDeg, c.width, c.height, c.nearDist, c.farDist);
+}
+
+std::string lightingKey(const Lighting& l) {
+    std::string key = "light:";
+    for (const auto& d : l.lights)
+        key += fmt::format("{},{},{}/{},{},{};", d.direction.x, d.direction.y, d.direction.z, d.irradiance.x,
+                           d.irradiance.y, d.irradiance.z);
+    key += fmt::format("phase{}:{}:bg{},{},{}", int(l.phase.type), l.phase.g, l.background.color.x, l.background.color.y,
+                       l.background.color.z);
+    if (l.background.environment)  // its content, not its address: a session reloads it
+        key += fmt::format(":env{}x{}:{:x}", l.background.environment->width, l.background.environment->height,
+                           hashOf(l.background.environment->rgba));
+    return key;
+}
+
+std::string marchKey(const SolveOptions& o) { return fmt::format("step{}:{}", o.stepVoxels, o.exactTraversal ? "exact" : "march"); }
+
+}  // namespace
+
+void SolveCache::putRows(const std::string& key, std::shared_ptr<const SparseRows> rows) {
+    const size_t bytes = sparseRowsBytes(rows->rows, rows->columns, rows->entries, rows->channels);
+    put(key, std::move(rows), bytes);
+}
+
+void SolveCache::putRenders(const std::string& key, std::shared_ptr<const ViewRenders> r) {
+    const size_t bytes = imageBytes(r->now) + imageBytes(r->noEmission) + imageBytes(r->albedo0) + imageBytes(r->albedo1) +
+                         imageBytes(r->neither) + imageBytes(r->background);
+    put(key, std::move(r), bytes);
+}
+
+void SolveCache::put(const std::string& key, std::shared_ptr<const void> value, size_t bytes) {
+    if (auto it = m_entries.find(key); it != m_entries.end()) m_bytes -= it->second.bytes;
+    m_entries[key] = Entry{std::move(value), bytes, ++m_clock};
+    m_bytes += bytes;
+    while (m_bytes > m_budget && m_entries.size() > 1) {
+        auto oldest = std::min_element(m_entries.begin(), m_entries.end(),
+                                       [](const auto& a, const auto& b) { return a.second.lastUsed < b.second.lastUsed; });
+        m_bytes -= oldest->second.bytes;
+        m_entries.erase(oldest);
+    }
+}
+
+void SolveCache::clear() {
+    m_entries.clear();
+    m_bytes = 0;
+}
+
+std::string rowsKey(const Volume& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,
+                    const Camera& camera, int channels, const std::vector<float>& sqrtWeights, size_t firstPixel) {
+    const bool lit = options.unknown == Unknown::Albedo || options.unknown == Unknown::EmissionAlbedo;
+    std::vector<uint8_t> mask(size_t(camera.width) * camera.height);
+    for (size_t i = 0; i < mask.size(); ++i) {
+        const float* w = &sqrtWeights[4 * (firstPixel + i)];
+        mask[i] = w[0] > 0 || w[1] > 0 || w[2] > 0;
+    }
+    return fmt::format("rows:{}:{}:{}x{}x{}:{}:{}:{}:{}:{}:mask{:x}", int(options.unknown), int(options.basis), unknownDims.x,
+                       unknownDims.y, unknownDims.z, channels, marchKey(options), gridKey(volume),
+                       lit ? lightingKey(lighting) : "", cameraKey(camera), hashOf(mask.data(), mask.size()));
+}
+
+std::string rendersKey(const Volume& volume, const Lighting& lighting, const SolveOptions& options, const Camera& camera,
+                       bool withAlbedoOne) {
+    const Unknown u = options.unknown;
+    const bool ownsEmission = u == Unknown::Emission || u == Unknown::EmissionAlbedo;
+    const bool ownsAlbedo = u == Unknown::Albedo || u == Unknown::EmissionAlbedo;
+    std::string key = fmt::format("renders:{}:{}:{}:{}:{}", int(u), withAlbedoOne ? 1 : 0, marchKey(options), gridKey(volume),
+                                  lightingKey(lighting));
+    if (!ownsEmission) key += fmt::format(":e{:x}", volume.hasEmission() ? hashOf(volume.emission()) : 0);
+    if (!ownsAlbedo) key += fmt::format(":a{:x}", volume.hasAlbedo() ? hashOf(volume.albedo()) : 0);
+    return key + ":" + cameraKey(camera);
+}
+
+}  // namespace volstyle::core
