@@ -1,5 +1,7 @@
 #include "server/session_service.h"
 
+#include "core/solve/solve_cache.h"
+
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -67,6 +69,7 @@ SessionService::~SessionService() {
         }
         m_renderer.reset();
         m_stylizer.reset();
+        m_solveCache.reset();
     });
 }
 

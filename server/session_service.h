@@ -27,6 +27,7 @@
 
 namespace volstyle::core {
 class Stylizer;
+class SolveCache;
 struct StylizedFrame;
 }  // namespace volstyle::core
 
@@ -48,6 +49,9 @@ struct ServiceLimits {
     /// Finished jobs kept (memory and disk; GET /jobs/{id} of an older one: 404). Unfinished
     /// jobs are always kept.
     size_t finishedJobsKept = 256;
+    /// GPU memory for the parts one solve leaves for the next (core/solve/solve_cache.h), shared by
+    /// every session: the keys name content, not sessions. 0: every solve starts cold.
+    size_t solveCacheBytes = size_t(1) << 30;
 };
 
 enum class ViewImage { Target, Weights };
@@ -195,6 +199,7 @@ private:
     ServiceLimits m_limits;
     std::unique_ptr<core::Renderer> m_renderer;  ///< GL thread only
     std::unique_ptr<core::Stylizer> m_stylizer;  ///< GL thread only
+    std::unique_ptr<core::SolveCache> m_solveCache;  ///< GL thread only; created by the first solve
     SessionStore m_sessions;
     JobStore m_jobs;
     std::mutex m_jobRecords;  ///< orders writing a job's record against forgetting it

@@ -4,6 +4,7 @@
 
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
+#include "core/solve/solve_cache.h"
 #include "core/solve/solver.h"
 #include "protocol/error_body.h"
 #include "protocol/solve_json.h"
@@ -69,7 +70,9 @@ void SessionService::runSolve(const std::shared_ptr<Job>& job, const std::shared
 void SessionService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,
                                     core::GpuDevice& device) {
     SolveInputs in = snapshot(*s);
-    core::Solver solver(device, in.volume, in.lighting, std::move(in.views), options);
+    // Every view a stroke left alone keeps its rows of W and renders from the last solve.
+    if (!m_solveCache && m_limits.solveCacheBytes > 0) m_solveCache = std::make_unique<core::SolveCache>(m_limits.solveCacheBytes);
+    core::Solver solver(device, in.volume, in.lighting, std::move(in.views), options, m_solveCache.get());
     auto lastPreview = Clock::now() - std::chrono::hours(1);
     core::SolveResult result = solver.run(
         [&](const core::SolveProgress& p) {
