@@ -17,7 +17,7 @@ std::optional<core::Unknown> parseUnknowns(const std::vector<std::string>& names
 core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::string& path, core::SolveOptions o) {
     JsonReader r;
     if (r.object(j, path, {"unknowns", "basis", "regularization", "max_iterations", "tolerance", "step", "traversal", "hull",
-                           "resolution", "medium_radiance", "views"})) {
+                           "resolution", "medium_radiance", "views", "coarse_iterations"})) {
         if (j.contains("unknowns")) {
             std::vector<std::string> names;
             if (!j["unknowns"].is_array()) {
@@ -56,6 +56,8 @@ core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::stri
             }
         }
         if (j.contains("max_iterations")) o.maxIterations = r.integer(j["max_iterations"], path + "/max_iterations").value_or(o.maxIterations);
+        if (j.contains("coarse_iterations"))
+            o.coarseIterations = r.integer(j["coarse_iterations"], path + "/coarse_iterations").value_or(o.coarseIterations);
         if (j.contains("tolerance")) o.tolerance = r.number(j["tolerance"], path + "/tolerance").value_or(o.tolerance);
         if (j.contains("step")) o.stepVoxels = r.number(j["step"], path + "/step").value_or(o.stepVoxels);
         if (j.contains("traversal")) {
@@ -108,7 +110,8 @@ nlohmann::json solveOptionsToJson(const core::SolveOptions& o) {
                                             {"toward_one", o.regularization.towardOne}}},
                         {"max_iterations", o.maxIterations}, {"tolerance", o.tolerance}, {"step", o.stepVoxels},
                         {"traversal", o.exactTraversal ? "exact" : "march"},
-                        {"hull", o.useHull ? "extinction" : "none"}, {"views", o.views}};
+                        {"hull", o.useHull ? "extinction" : "none"}, {"views", o.views},
+                        {"coarse_iterations", o.coarseIterations}};
     for (auto [name, reg] : {std::pair{"emission", &o.emissionRegularization}, std::pair{"albedo", &o.albedoRegularization}})
         if (*reg) j["regularization"][name] = {{"laplacian", (*reg)->laplacian}, {"l2", (*reg)->l2}, {"toward_one", (*reg)->towardOne}};
     if (o.resolution) j["resolution"] = {{o.unknown == core::Unknown::Extinction ? "extinction" : "emission",
@@ -145,7 +148,9 @@ nlohmann::json solveReportToJson(const core::SolveReport& r) {
             {"final_objective", r.finalObjective}, {"initial_rms", r.initialRms}, {"final_rms", r.finalRms},
             {"unknowns", r.unknownCount}, {"hull_unknowns", r.hullCount}, {"constraint_pixels", r.constraintPixels},
             {"ignored_pixels", r.ignoredPixels}, {"clamped_pixels", r.clampedPixels}, {"total_ms", r.totalMs},
-            {"forward_ms", r.forwardMs}, {"adjoint_ms", r.adjointMs}, {"vector_ms", r.vectorMs}, {"reach", reachToJson(r.reach)}};
+            {"forward_ms", r.forwardMs}, {"adjoint_ms", r.adjointMs}, {"vector_ms", r.vectorMs}, {"reach", reachToJson(r.reach)},
+            {"coarse_iterations", r.coarseIterations}, {"coarse_ms", r.coarseMs},
+            {"row_cache", {{"ms", r.rowCacheMs}, {"bytes", r.rowCacheBytes}, {"cached_views", r.cachedViews}}}};
 }
 
 nlohmann::json solveProgressToJson(const core::SolveProgress& p) {

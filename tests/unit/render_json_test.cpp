@@ -101,8 +101,10 @@ TEST(SolveJson, ParsesEveryFieldAndPerUnknownWeights) {
     auto o = protocol::solveOptionsFromJson(nlohmann::json::parse(R"({
         "unknowns": ["albedo", "emission"], "basis": "box", "max_iterations": 12, "tolerance": 1e-5,
         "step": 1.0, "traversal": "exact", "hull": "none", "resolution": {"emission": [8, 8, 8], "albedo": [8, 8, 8]},
-        "regularization": {"laplacian": 0.01, "albedo": {"toward_one": 0.5}}, "views": ["v2"]})"));
+        "regularization": {"laplacian": 0.01, "albedo": {"toward_one": 0.5}}, "views": ["v2"],
+        "coarse_iterations": 3})"));
     EXPECT_EQ(o.unknown, core::Unknown::EmissionAlbedo);
+    EXPECT_EQ(o.coarseIterations, 3);
     EXPECT_EQ(o.basis, core::BasisType::Box);
     EXPECT_EQ(o.maxIterations, 12);
     EXPECT_FALSE(o.useHull);
