@@ -174,6 +174,7 @@ int main(int argc, char** argv) {
             opt.regularization.laplacian = 2e-4;
             opt.maxIterations = 60;
             opt.tolerance = 0;
+            opt.visibleChange = 0;
             opt.boundsMethod = m;
             SolveResult r = Solver(*device, s.plain, defaultLighting(), v, opt).run();
             double rel = mean(r.report.finalRms) / mean(r.report.initialRms);
@@ -199,6 +200,7 @@ int main(int argc, char** argv) {
         opt.basis = basis;
         opt.maxIterations = iterations;
         opt.tolerance = 0;
+        opt.visibleChange = 0;
         auto t0 = std::chrono::steady_clock::now();
         SolveResult r = Solver(*device, scene.plain, defaultLighting(), views, opt).run();
         seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

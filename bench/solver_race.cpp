@@ -76,6 +76,7 @@ SolveOptions raceOptions(double step, int maxIterations) {
     opt.stepVoxels = step;
     opt.maxIterations = maxIterations;
     opt.tolerance = 0;  // run the iterations: the race reads the history
+    opt.visibleChange = 0;
     opt.regularization.laplacian = 0;
     return opt;
 }

@@ -17,7 +17,7 @@ std::optional<core::Unknown> parseUnknowns(const std::vector<std::string>& names
 core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::string& path, core::SolveOptions o) {
     JsonReader r;
     if (r.object(j, path, {"unknowns", "basis", "regularization", "max_iterations", "tolerance", "step", "traversal", "hull",
-                           "resolution", "medium_radiance", "views", "coarse_iterations"})) {
+                           "resolution", "medium_radiance", "views", "coarse_iterations", "visible_change"})) {
         if (j.contains("unknowns")) {
             std::vector<std::string> names;
             if (!j["unknowns"].is_array()) {
@@ -58,6 +58,8 @@ core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::stri
         if (j.contains("max_iterations")) o.maxIterations = r.integer(j["max_iterations"], path + "/max_iterations").value_or(o.maxIterations);
         if (j.contains("coarse_iterations"))
             o.coarseIterations = r.integer(j["coarse_iterations"], path + "/coarse_iterations").value_or(o.coarseIterations);
+        if (j.contains("visible_change"))
+            o.visibleChange = r.number(j["visible_change"], path + "/visible_change").value_or(o.visibleChange);
         if (j.contains("tolerance")) o.tolerance = r.number(j["tolerance"], path + "/tolerance").value_or(o.tolerance);
         if (j.contains("step")) o.stepVoxels = r.number(j["step"], path + "/step").value_or(o.stepVoxels);
         if (j.contains("traversal")) {
@@ -111,7 +113,7 @@ nlohmann::json solveOptionsToJson(const core::SolveOptions& o) {
                         {"max_iterations", o.maxIterations}, {"tolerance", o.tolerance}, {"step", o.stepVoxels},
                         {"traversal", o.exactTraversal ? "exact" : "march"},
                         {"hull", o.useHull ? "extinction" : "none"}, {"views", o.views},
-                        {"coarse_iterations", o.coarseIterations}};
+                        {"coarse_iterations", o.coarseIterations}, {"visible_change", o.visibleChange}};
     for (auto [name, reg] : {std::pair{"emission", &o.emissionRegularization}, std::pair{"albedo", &o.albedoRegularization}})
         if (*reg) j["regularization"][name] = {{"laplacian", (*reg)->laplacian}, {"l2", (*reg)->l2}, {"toward_one", (*reg)->towardOne}};
     if (o.resolution) j["resolution"] = {{o.unknown == core::Unknown::Extinction ? "extinction" : "emission",

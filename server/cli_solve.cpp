@@ -42,6 +42,7 @@ const CommandSpec kSolve{
         {"iterations", "N", "most CGLS iterations; default 30"},
         {"tolerance", "T", "stop when an iteration lowers the objective by less than T, relatively; default 1e-4"},
         {"coarse", "N", "first N iterations on half the unknowns and pixels per axis, as the warm start; default 0"},
+        {"visible-change", "V", "stop once two iterations change no constrained pixel by more than V (linear; 0: off); default 0.5/255"},
         {"regularization", "TERMS", "laplacian=W,l2=W,toward_one=W (per unknown: albedo.toward_one=W); default laplacian=0.002"},
         {"basis", "B", "trilinear or box; default trilinear"},
         {"step", "VOXELS", "march step in voxels; default 0.5"},
@@ -192,6 +193,7 @@ core::SolveOptions solveOptions(const Arguments& args, const core::Lighting& lig
     if (args.has("iterations")) opt.maxIterations = int(args.number("iterations", opt.maxIterations));
     if (args.has("tolerance")) opt.tolerance = args.number("tolerance", opt.tolerance);
     if (args.has("coarse")) opt.coarseIterations = int(args.number("coarse", opt.coarseIterations));
+    if (args.has("visible-change")) opt.visibleChange = args.number("visible-change", opt.visibleChange);
     if (args.has("step")) opt.stepVoxels = args.number("step", opt.stepVoxels);
     if (args.has("basis")) opt.basis = choice(args, "basis", {"trilinear", "box"}) == "box" ? core::BasisType::Box : core::BasisType::Trilinear;
     if (args.has("traversal")) opt.exactTraversal = choice(args, "traversal", {"march", "exact"}) == "exact";

@@ -45,6 +45,7 @@ VS_CONSTANT(int, kLightSlots, 4);    /* light-depth volumes bound at once */
 #define VOLSTYLE_OP_FREE 6
 #define VOLSTYLE_OP_STEP 7
 #define VOLSTYLE_OP_CLAMP 8
+#define VOLSTYLE_OP_MAXCHANGE 9
 
 /* Binding points. */
 VS_CONSTANT(int, kBindingParams, 0);       /* UBO MarchParams */

@@ -12,6 +12,8 @@
 //   VOLSTYLE_OP_FREE      y[i] = 0 where x (the unknowns) sits at a bound and y would push past it
 //   VOLSTYLE_OP_STEP      partial[workgroup] = min over i of the step t ≥ 0 at which x + t·y meets a bound
 //   VOLSTYLE_OP_CLAMP     y = clamp(y, lower, upper)
+//   VOLSTYLE_OP_MAXCHANGE partial[workgroup] = max over i with z[i] > 0 of |x[i] − y[i]| / z[i]: how much a
+//                pixel changed between two weighted residuals (z = the weights' square roots)
 // Elements [first, first + count) are processed (VOLSTYLE_INDEXED: list[first .. first + count),
 // the solver's hull voxels or constrained pixels; the others keep their values); element i belongs to block i / blockSize, whose
 // bounds are bounds.xy (block 0) or bounds.zw (block 1).
@@ -48,7 +50,7 @@ uint elementAt(uint k) { return uint(v.count.y) + k; }
 
 // VOLSTYLE_OP_* come from layout.h (core::VectorOps::Op takes the same values).
 
-#if VOLSTYLE_OP == VOLSTYLE_OP_DOT || VOLSTYLE_OP == VOLSTYLE_OP_STEP
+#if VOLSTYLE_OP == VOLSTYLE_OP_DOT || VOLSTYLE_OP == VOLSTYLE_OP_STEP || VOLSTYLE_OP == VOLSTYLE_OP_MAXCHANGE
 shared dvec4 s_reduce[kWorkgroup1D];
 #endif
 
@@ -123,6 +125,20 @@ void main() {
     barrier();
     for (uint stride = kWorkgroup1D / 2; stride > 0; stride >>= 1) {
         if (local < stride) s_reduce[local] = min(s_reduce[local], s_reduce[local + stride]);
+        barrier();
+    }
+    if (local == 0) partial[gl_WorkGroupID.x] = s_reduce[0];
+#elif VOLSTYLE_OP == VOLSTYLE_OP_MAXCHANGE
+    dvec4 m = dvec4(0.0);
+    for (uint e = k; e < uint(v.count.x); e += gl_NumWorkGroups.x * kWorkgroup1D) {
+        uint j = elementAt(e);
+        for (int c = 0; c < 3; ++c)
+            if (z[j][c] > 0.0) m[c] = max(m[c], abs(double(x[j][c]) - double(y[j][c])) / double(z[j][c]));
+    }
+    s_reduce[local] = m;
+    barrier();
+    for (uint stride = kWorkgroup1D / 2; stride > 0; stride >>= 1) {
+        if (local < stride) s_reduce[local] = max(s_reduce[local], s_reduce[local + stride]);
         barrier();
     }
     if (local == 0) partial[gl_WorkGroupID.x] = s_reduce[0];

@@ -70,7 +70,7 @@ std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
     p.dims = {d.dims.x, d.dims.y, d.dims.z, 0};
     m_device.setParams(p);
 
-    const bool reduces = op == kDot || op == kStep;
+    const bool reduces = op == kDot || op == kStep || op == kMaxChange;
     // Reductions loop over elements within fewer workgroups: fewer barriers and partials.
     constexpr size_t kReduceGroups = 64;
     size_t groups = std::max<size_t>(1, (count + layout::kWorkgroup1D - 1) / layout::kWorkgroup1D);
@@ -143,6 +143,16 @@ Vec3d VectorOps::maxStep(const GpuVector& a, const GpuVector& p, const Bounds& b
     Vec3d m(1e300);
     for (size_t g = 0; g < partials.size(); g += 4)
         for (int c = 0; c < 3; ++c) m[c] = std::min(m[c], partials[g + size_t(c)]);
+    return m;
+}
+
+Vec3d VectorOps::maxChange(const GpuVector& x, const GpuVector& y, const GpuVector& scale) {
+    Dispatch d;
+    d.x = &x, d.y = &y, d.z = &scale;
+    auto partials = run(kMaxChange, d);
+    Vec3d m(0.0);
+    for (size_t g = 0; g < partials.size(); g += 4)
+        for (int c = 0; c < 3; ++c) m[c] = std::max(m[c], partials[g + size_t(c)]);
     return m;
 }
 

@@ -75,6 +75,8 @@ public:
     /// Per channel, the largest t ≥ 0 with a + t·p inside the bounds (1e300 if unbounded).
     Vec3d maxStep(const GpuVector& a, const GpuVector& p, const Bounds& bounds);
     void clamp(GpuVector& a, const Bounds& bounds);
+    /// Per channel, max over i with scale[i] > 0 of |x[i] − y[i]| / scale[i].
+    Vec3d maxChange(const GpuVector& x, const GpuVector& y, const GpuVector& scale);
     void copy(const GpuVector& from, GpuVector& to);
 
 private:
@@ -88,6 +90,7 @@ private:
         kFree = VOLSTYLE_OP_FREE,
         kStep = VOLSTYLE_OP_STEP,
         kClamp = VOLSTYLE_OP_CLAMP,
+        kMaxChange = VOLSTYLE_OP_MAXCHANGE,
     };
     struct Dispatch;
     std::vector<double> run(Op op, const Dispatch& d);

@@ -34,6 +34,7 @@ std::vector<FieldProblem> SolveOptions::check() const {
     if (albedoRegularization) weights(*albedoRegularization, "albedo/");
     if (maxIterations < 1 || maxIterations > 10000) out.push_back({"max_iterations", "must be in [1, 10000]"});
     if (coarseIterations < 0 || coarseIterations > 1000) out.push_back({"coarse_iterations", "must be in [0, 1000]"});
+    if (!(visibleChange >= 0) || !std::isfinite(visibleChange)) out.push_back({"visible_change", "must be a finite number >= 0"});
     if (!(tolerance >= 0 && tolerance < 1)) out.push_back({"tolerance", "must be in [0, 1)"});
     if (!(stepVoxels >= 0.05 && stepVoxels <= 8)) out.push_back({"step", "must be in [0.05, 8] voxels"});
     if (resolution && (resolution->x < 1 || resolution->y < 1 || resolution->z < 1 || resolution->x > 1024 ||

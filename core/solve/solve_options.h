@@ -40,6 +40,10 @@ struct SolveOptions {
     BoundsMethod boundsMethod = BoundsMethod::Projected;
     int maxIterations = 30;
     double tolerance = 1e-4;    ///< stop when an iteration lowers the objective by less than this, relatively
+    /// Stop once two iterations in a row change no constrained pixel of any view by more than
+    /// this (linear radiance; 0.5/255 is half an 8-bit step at white, about a third at mid-grey
+    /// in sRGB): the error left no longer changes what a user sees. 0: off.
+    double visibleChange = 0.5 / 255;
     double stepVoxels = 0.5;
     bool exactTraversal = false;  ///< "traversal": "march" (equal steps) or "exact" (voxel cells)
     bool useHull = true;        ///< "hull": "extinction" (true) or "none"
@@ -84,6 +88,7 @@ enum class StopReason {
     None,                ///< still running (never in a finished report)
     Converged,           ///< an iteration lowered the objective by less than the tolerance
     Stagnated,           ///< no decrease three iterations in a row
+    Settled,             ///< two iterations in a row changed no pixel visibly (visibleChange)
     MaxIterations,       ///< max_iterations reached
     ZeroGradient,        ///< the gradient over the free variables vanished: a minimum
     NoConstraints,       ///< no pixel has a positive weight
@@ -94,6 +99,7 @@ inline constexpr Named<StopReason> kStopReasons[] = {
     {StopReason::None, "none"},
     {StopReason::Converged, "converged"},
     {StopReason::Stagnated, "stagnated"},
+    {StopReason::Settled, "settled"},
     {StopReason::MaxIterations, "max_iterations"},
     {StopReason::ZeroGradient, "zero_gradient"},
     {StopReason::NoConstraints, "no_constraints"},

@@ -25,6 +25,9 @@ constexpr double kMinDescentFraction = 0.2;
 constexpr double kFlatDecrease = 1e-12;
 /// ... and this many in a row stop the solve as stagnated.
 constexpr int kFlatIterationsToStop = 3;
+/// Iterations in a row that change no pixel visibly before the solve stops as settled: one alone
+/// can be a step cut short at a bound.
+constexpr int kSettledIterationsToStop = 2;
 /// Guards the relative decrease against a zero objective.
 constexpr double kTinyObjective = 1e-300;
 
@@ -260,7 +263,7 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
     rep.objectiveHistory.push_back(f);
     rep.initialRms = st.rmsPerView();
     rep.finalRms = rep.initialRms;
-    int flat = 0;
+    int flat = 0, settled = 0;
 
     for (int it = 1; it <= st.opt.maxIterations && rep.stopReason == StopReason::None; ++it) {
         if (cancel && cancel->load()) throw Cancelled("solve cancelled after " + std::to_string(it - 1) + " iterations");
@@ -271,6 +274,8 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
             break;
         }
         const StepLength step = st.stepLength(slope);
+        const bool watchChange = st.opt.visibleChange > 0;
+        if (watchChange) st.ops.copy(st.rImg, st.rPrev);
         st.takeStep(step);
         const double fNew = st.totalObjective();
         if (!std::isfinite(fNew)) {
@@ -285,6 +290,12 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
         if (progress) progress(pr);
 
         rep.stopReason = stopTest(f, fNew, step.anyHit(), st.opt.tolerance, flat);
+        if (watchChange && rep.stopReason == StopReason::None) {
+            // The largest change of any constrained pixel: (r_prev − r)/√w = W Δa at that pixel.
+            const double change = maxComponent(st.ops.maxChange(st.rPrev, st.rImg, st.sqrtW));
+            settled = change < st.opt.visibleChange ? settled + 1 : 0;
+            if (settled >= kSettledIterationsToStop) rep.stopReason = StopReason::Settled;
+        }
         f = fNew;
     }
     if (rep.stopReason == StopReason::None) rep.stopReason = StopReason::MaxIterations;

@@ -121,7 +121,7 @@ void Solver::State::validateInputs() {
 void Solver::State::allocate() {
     const size_t P = W->pixelCount(), E = elements;
     for (auto [vector, name] : {std::pair{&obs, "obs"}, {&sqrtW, "sqrt-weights"}, {&rImg, "r-img"}, {&qImg, "q-img"},
-                                {&tmpImg, "tmp-img"}, {&dImg, "d-img"}})
+                                {&tmpImg, "tmp-img"}, {&dImg, "d-img"}, {&rPrev, "r-prev"}})
         *vector = GpuVector(P, name);
     for (auto [vector, name] : {std::pair{&a, "a"}, {&aPrev, "a-prev"}, {&s, "s"}, {&p, "p"}, {&hull, "hull"},
                                 {&rLap, "r-lap"}, {&qLap, "q-lap"}, {&dLap, "d-lap"}, {&tmpU, "tmp-u"}, {&rId, "r-id"},
@@ -294,7 +294,7 @@ void Solver::State::cacheOperator() {
         if (hullHost[4 * e] > 0) voxels.push_back(uint32_t(e));
     auto pixelSupport = std::make_shared<const Support>(std::move(pixels));
     auto voxelSupport = std::make_shared<const Support>(std::move(voxels));
-    for (GpuVector* v : {&obs, &sqrtW, &rImg, &qImg, &tmpImg, &dImg}) v->setSupport(pixelSupport);
+    for (GpuVector* v : {&obs, &sqrtW, &rImg, &qImg, &tmpImg, &dImg, &rPrev}) v->setSupport(pixelSupport);
     for (GpuVector* v : {&a, &aPrev, &s, &p, &hull, &rLap, &qLap, &dLap, &tmpU, &rId, &precond, &z}) v->setSupport(voxelSupport);
     W->setSupports(pixelSupport, voxelSupport);
 }

@@ -52,6 +52,7 @@ struct Solver::State {
     GpuVector a, aPrev, s, p, hull, obs, sqrtW, rImg, qImg, tmpImg, dImg, rLap, qLap, dLap, tmpU, rId;
     // The preconditioner D² (per unknown and channel) and the preconditioned gradient z = D² s.
     GpuVector precond, z;
+    GpuVector rPrev;  ///< rImg before the step: what the step changed (SolveOptions::visibleChange)
     Bounds bounds;
     std::vector<BlockRegularizer> blocks;
     Vec3d constant{0, 0, 0};  // λ0‖a‖² + λ1‖a−1‖² = λ‖a−t‖² + λ0λ1/λ per element

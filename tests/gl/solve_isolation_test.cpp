@@ -51,6 +51,7 @@ struct AlbedoProblem {
         options.unknown = Unknown::Albedo;
         options.maxIterations = 12;
         options.tolerance = 0;
+        options.visibleChange = 0;
     }
 };
 

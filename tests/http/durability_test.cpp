@@ -72,7 +72,7 @@ TEST(Durability, KillDuringASolveThenRestart) {
             for (float& x : target.rgba) x = 0.6f;
             ASSERT_EQ(c.Put((base + "/views/v" + std::to_string(i + 1) + "/target").c_str(), volstyle::core::encodeImage(target, "png"), "image/png")->status, 200);
         }
-        r = c.Post((base + "/solve").c_str(), R"({"max_iterations": 10000, "tolerance": 0})", "application/json");
+        r = c.Post((base + "/solve").c_str(), R"({"max_iterations": 10000, "tolerance": 0, "visible_change": 0})", "application/json");
         ASSERT_EQ(r->status, 202);
         job = json::parse(r->body)["job"];
         for (int i = 0; i < 200; ++i) {

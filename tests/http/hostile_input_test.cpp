@@ -153,7 +153,7 @@ TEST_F(Hostile, OpenEventStreamsCannotStarveTheServer) {
     // threads and /health timed out; now a client may hold 8, the server 16, out of 32 threads.
     const std::string base = "/api/v1/sessions/" + createSession(24);
     addConstantTargetView(client(), base, 24, 0.7f);
-    auto r = postJson(base + "/solve", R"({"max_iterations": 5000, "tolerance": 0})");
+    auto r = postJson(base + "/solve", R"({"max_iterations": 5000, "tolerance": 0, "visible_change": 0})");
     const std::string events = "/api/v1/jobs/" + json::parse(r->body)["job"].get<std::string>() + "/events";
     const std::string job = events.substr(0, events.size() - 7);
     std::atomic<int> connected{0}, ended{0};

@@ -188,7 +188,7 @@ TEST_F(Api, CancellingASolveLeavesTheVolumeAlone) {
     std::string id = createSession(24);
     const std::string base = "/api/v1/sessions/" + id;
     addConstantTargetView(client(), base, 32, 0.8f);
-    auto r = client().Post((base + "/solve").c_str(), R"({"max_iterations": 500, "tolerance": 0})", "application/json");
+    auto r = client().Post((base + "/solve").c_str(), R"({"max_iterations": 500, "tolerance": 0, "visible_change": 0})", "application/json");
     std::string job = json::parse(r->body)["job"];
     // While it runs, /health answers quickly (p99 of 50 probes under 100 ms).
     std::vector<double> ms;
@@ -229,7 +229,7 @@ TEST_F(Api, ConcurrentRendersDuringASolveAllSucceed) {
     std::string id = createSession(24);
     const std::string base = "/api/v1/sessions/" + id;
     addConstantTargetView(client(), base, 24, 0.7f);
-    auto r = client().Post((base + "/solve").c_str(), R"({"max_iterations": 40, "tolerance": 0})", "application/json");
+    auto r = client().Post((base + "/solve").c_str(), R"({"max_iterations": 40, "tolerance": 0, "visible_change": 0})", "application/json");
     std::string job = json::parse(r->body)["job"];
     // 8 clients, 3 renders each, while the solve runs: renders are served between iterations.
     std::atomic<int> ok{0}, failed{0};
@@ -304,7 +304,7 @@ std::string albedoSession(httplib::Client& c) {
 
 /// Solves the session's albedo, returns the solved version's albedo grid (from its VDB).
 std::vector<float> solveAlbedo(httplib::Client& c, const std::string& base, const std::function<void(const std::string&)>& during = {}) {
-    auto r = c.Post((base + "/solve").c_str(), R"({"unknowns": ["albedo"], "max_iterations": 40, "tolerance": 0})", "application/json");
+    auto r = c.Post((base + "/solve").c_str(), R"({"unknowns": ["albedo"], "max_iterations": 40, "tolerance": 0, "visible_change": 0})", "application/json");
     EXPECT_EQ(r->status, 202) << r->body;
     const std::string job = json::parse(r->body)["job"];
     if (during) during(job);
@@ -369,7 +369,7 @@ TEST_F(Api, DeletingASessionDuringASolveCancelsItsJob) {
     std::string id = createSession(24);
     const std::string base = "/api/v1/sessions/" + id;
     const std::string vid = addConstantTargetView(client(), base, 24, 0.7f);
-    auto r = client().Post((base + "/solve").c_str(), R"({"max_iterations": 500, "tolerance": 0})", "application/json");
+    auto r = client().Post((base + "/solve").c_str(), R"({"max_iterations": 500, "tolerance": 0, "visible_change": 0})", "application/json");
     const std::string job = json::parse(r->body)["job"];
     for (int i = 0; i < 100 && json::parse(client().Get(("/api/v1/jobs/" + job).c_str())->body)["state"] != "running"; ++i)
         std::this_thread::sleep_for(std::chrono::milliseconds(20));

@@ -264,7 +264,7 @@ TEST_F(StylizerApi, FramesAreServedWhileAnotherSessionSolves) {
     auto r = client().Post("/api/v1/sessions", R"({"scene": "builtin:cloud", "resolution": 24})", "application/json");
     const std::string solving = "/api/v1/sessions/" + json::parse(r->body)["id"].get<std::string>();
     addConstantTargetView(client(), solving, 32, 0.06f);
-    r = client().Post((solving + "/solve").c_str(), R"({"unknowns": ["albedo"], "max_iterations": 60, "tolerance": 0})", "application/json");
+    r = client().Post((solving + "/solve").c_str(), R"({"unknowns": ["albedo"], "max_iterations": 60, "tolerance": 0, "visible_change": 0})", "application/json");
     ASSERT_EQ(r->status, 202) << r->body;
     const std::string job = "/api/v1/jobs/" + json::parse(r->body)["job"].get<std::string>();
     auto state = [&] { return json::parse(client().Get(job.c_str())->body)["state"].get<std::string>(); };
