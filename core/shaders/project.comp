@@ -79,8 +79,12 @@ void emitEntry(uint element, vec3 w) {
 #if VOLSTYLE_ROWS == VOLSTYLE_ROWS_COUNT
     atomicAdd(colStart[element], 1u);
 #else
+    // The count pass reserved these slots; a ray that (by rounding in another compilation)
+    // finds more entries than it counted drops the extra ones instead of writing a neighbour's.
     uint k = rowStart[g_pixel] + g_entries;
+    if (k >= rowStart[g_pixel + 1u]) return;
     uint j = colStart[element] + atomicAdd(colCursor[element], 1u);
+    if (j >= colStart[element + 1u]) return;
     rowIndex[k] = element;
     colIndex[j] = g_pixel;
 #if VOLSTYLE_ROW_CHANNELS == 1

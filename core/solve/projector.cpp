@@ -140,10 +140,11 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
     r->entries = entries;
     glNamedBufferSubData(r->rowStart.id(), 0, GLsizeiptr(4 * rowStart.size()), rowStart.data());
     glNamedBufferSubData(r->colStart.id(), 0, GLsizeiptr(4 * colStart.size()), colStart.data());
-    r->rowIndex = gl::createBuffer(std::max<size_t>(4 * entries, 4), nullptr, 0, "rows-index");
-    r->rowWeight = gl::createBuffer(std::max<size_t>(weightBytes, 4), nullptr, 0, "rows-weight");
-    r->colIndex = gl::createBuffer(std::max<size_t>(4 * entries, 4), nullptr, 0, "columns-index");
-    r->colWeight = gl::createBuffer(std::max<size_t>(weightBytes, 4), nullptr, 0, "columns-weight");
+    // Zeroed: a slot a ray left unfilled (fewer entries than counted) is element 0 with weight 0.
+    r->rowIndex = zeroedBuffer(4 * entries, "rows-index");
+    r->rowWeight = zeroedBuffer(weightBytes, "rows-weight");
+    r->colIndex = zeroedBuffer(4 * entries, "columns-index");
+    r->colWeight = zeroedBuffer(weightBytes, "columns-weight");
     const gl::Buffer cursor = zeroedBuffer(4 * r->columns, "columns-cursor");
     // Pass 2: the same rays write their entries into their row and into each element's column.
     gl::ShaderBuilder fill("project.comp");

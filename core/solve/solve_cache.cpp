@@ -15,12 +15,14 @@ size_t hashOf(const std::vector<float>& v) { return hashOf(v.data(), v.size() * 
 
 size_t imageBytes(const Image& i) { return i.rgba.size() * sizeof(float); }
 
-std::string gridKey(const Volume& v) {
+std::string boxKey(const Volume& v) {
     std::string key = fmt::format("{}x{}x{}:", v.dims().x, v.dims().y, v.dims().z);
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 4; ++c) key += fmt::format("{},", v.worldFromIndex()(r, c));  // shortest round-trip: exact
-    return key + fmt::format(":σ{:x}", hashOf(v.extinction()));
+    return key;
 }
+
+std::string gridKey(const Volume& v) { return boxKey(v) + fmt::format(":σ{:x}", hashOf(v.extinction())); }
 
 std::string cameraKey(const Camera& c) {
     return fmt::format("cam:{},{},{}:{},{},{}:{},{},{}:{}:{}x{}:{},{}", c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y,
@@ -81,7 +83,9 @@ std::string rowsKey(const Volume& volume, const Lighting& lighting, const SolveO
         mask[i] = w[0] > 0 || w[1] > 0 || w[2] > 0;
     }
     return fmt::format("rows:{}:{}:{}x{}x{}:{}:{}:{}:{}:{}:mask{:x}", int(options.unknown), int(options.basis), unknownDims.x,
-                       unknownDims.y, unknownDims.z, channels, marchKey(options), gridKey(volume),
+                       unknownDims.y, unknownDims.z, channels, marchKey(options),
+                       // extinction solves' rows are segment lengths: the grid's box, not its values
+                       options.unknown == Unknown::Extinction ? boxKey(volume) : gridKey(volume),
                        lit ? lightingKey(lighting) : "", cameraKey(camera), hashOf(mask.data(), mask.size()));
 }
 

@@ -25,8 +25,8 @@ constexpr double kMinDescentFraction = 0.2;
 constexpr double kFlatDecrease = 1e-12;
 /// ... and this many in a row stop the solve as stagnated.
 constexpr int kFlatIterationsToStop = 3;
-/// Iterations in a row that change no pixel visibly before the solve stops as settled: one alone
-/// can be a step cut short at a bound.
+/// Iterations in a row (not cut short at the first bound) that change no pixel visibly before the
+/// solve stops as settled.
 constexpr int kSettledIterationsToStop = 2;
 /// Guards the relative decrease against a zero objective.
 constexpr double kTinyObjective = 1e-300;
@@ -274,7 +274,8 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
             break;
         }
         const StepLength step = st.stepLength(slope);
-        const bool watchChange = st.opt.visibleChange > 0;
+        // Radiance only: an extinction solve's residuals are optical depths.
+        const bool watchChange = st.opt.visibleChange > 0 && st.opt.unknown != Unknown::Extinction;
         if (watchChange) st.ops.copy(st.rImg, st.rPrev);
         st.takeStep(step);
         const double fNew = st.totalObjective();
@@ -293,7 +294,11 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
         if (watchChange && rep.stopReason == StopReason::None) {
             // The largest change of any constrained pixel: (r_prev − r)/√w = W Δa at that pixel.
             const double change = maxComponent(st.ops.maxChange(st.rPrev, st.rImg, st.sqrtW));
-            settled = change < st.opt.visibleChange ? settled + 1 : 0;
+            // A step cut short at the first bound (CutAtBound) can be tiny while the next free one
+            // is not: it neither counts nor resets. Projected steps move every variable they can.
+            const bool cutShort = step.anyHit() && st.opt.boundsMethod == BoundsMethod::CutAtBound;
+            if (change >= st.opt.visibleChange) settled = 0;
+            else if (!cutShort) ++settled;
             if (settled >= kSettledIterationsToStop) rep.stopReason = StopReason::Settled;
         }
         f = fNew;
