@@ -9,7 +9,6 @@
 
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
-#include "core/render/renderer.h"
 #include "core/solve/solve_cache.h"
 #include "core/solve/solver_state.h"
 #include "core/volume/resample.h"
