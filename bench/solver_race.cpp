@@ -8,12 +8,14 @@
 // (SolveOptions::rowCacheBytes = 0: W and Wᵀ march every ray each time instead of gathering from
 // the cached rows). "Seconds" are wall-clock from the solver's construction: everything counts
 // (set-up with the rows' cache and the preconditioner, the reach analysis, a coarse stage).
-// Usage: solver_race [--iterations N]. Prints tables, then one JSON line per problem.
+// Usage: solver_race [--iterations N] [--only a|ct|stroke]. Prints tables, then one JSON line per
+// problem of (a).
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <numbers>
 #include <string>
@@ -109,8 +111,10 @@ Race coarseToFine(GpuDevice& device, const Setup& s, const Problem& p, int coars
 }
 
 /// Issue #12's live loop: a converged solve, then one stroke on view 0 (a disc of 24 px radius
-/// painted 30% brighter) and the re-solve from the solved volume, with and without the first
-/// solve's cache (solve_cache.h). Default options (smoothing, tolerance, bounds), as the page.
+/// painted 30% brighter) and the re-solve from the solved volume: local (the default: only the
+/// unknowns the stroke sees move), the whole problem with the first solve's cache
+/// (solve_cache.h), and the whole problem without it. Default options (smoothing, tolerance,
+/// bounds), as the page. Each row's end is measured by a fresh solver over the whole problem.
 void strokeRace(GpuDevice& device, Renderer& renderer) {
     const Problem p{"(c) 64³, 4 × 256², emission", 64, 4, 256, 256, 0.5};
     Setup s = setUp(renderer, p);
@@ -125,19 +129,40 @@ void strokeRace(GpuDevice& device, Renderer& renderer) {
         for (int x = 0; x < target.width; ++x)
             if (std::hypot(x - target.width / 2.0, y - target.height / 2.0) < 24)
                 for (int c = 0; c < 3; ++c) target.pixel(x, y)[c] *= 1.3f;
-    std::printf("\n| %s | solve | iterations | seconds | of which set-up | cache |\n|---|---|---|---|---|---|\n", p.name.c_str());
-    std::printf("| | first solve | %d | %.2f | | %.0f MiB after |\n", first.report.iterations, firstSeconds, cache.bytes() / 1048576.0);
-    for (SolveCache* c : {&cache, static_cast<SolveCache*>(nullptr)}) {
+    std::printf("\n| %s | solve | iterations | seconds | of which set-up | objective start → end | view 0 RMS start → end | moved unknowns | recomputed pixels |\n"
+                "|---|---|---|---|---|---|---|---|---|\n", p.name.c_str());
+    std::printf("| | first solve | %d | %.2f | | %.4g → %.4g | | %zu (all) | %zu (all) |\n", first.report.iterations, firstSeconds,
+                first.report.initialObjective, first.report.finalObjective, first.report.hullCount, first.report.constraintPixels);
+    // Each re-solve starts from the first solve's volume with the cache as the first solve left it.
+    struct Way {
+        const char* name;
+        bool local, cached;
+    };
+    for (const Way& way : {Way{"re-solve after one stroke, local (the default)", true, true},
+                           Way{"re-solve, whole problem, cache kept", false, true}, Way{"re-solve, whole problem, no cache", false, false}}) {
+        SolveCache copy = cache;
+        SolveOptions o = opt;
+        o.localResolve = way.local;
         t0 = Clock::now();
-        Solver again(device, first.volume, defaultLighting(), s.views, opt, c);
+        Solver again(device, first.volume, defaultLighting(), s.views, o, way.cached ? &copy : nullptr);
         const double setup = msSince(t0) / 1000.0;
-        const size_t hits = c ? c->hits() : 0;
         const SolveResult out = again.run();
-        std::printf("| | re-solve after one stroke, %s | %d | %.2f | %.2f | %s |\n", c ? "cache kept" : "no cache",
-                    out.report.iterations, msSince(t0) / 1000.0, setup,
-                    c ? (std::to_string(hits) + " hits").c_str() : "");
+        const double total = msSince(t0) / 1000.0;
+        SolveOptions measure = opt;
+        measure.maxIterations = 1;
+        const SolveReport check = Solver(device, out.volume, defaultLighting(), s.views, measure).run().report;
+        const SolveReport& r = out.report;
+        if (std::getenv("VOLSTYLE_RACE_HISTORY")) {
+            for (double f : r.objectiveHistory) std::fprintf(stderr, "%.4g ", f);
+            std::fprintf(stderr, " (%.1f ms/iteration: forward %.1f, back-projection %.1f, vectors %.1f)\n", (total - setup) * 1000 / std::max(1, r.iterations),
+                         r.forwardMs / std::max(1, r.iterations), r.adjointMs / std::max(1, r.iterations), r.vectorMs / std::max(1, r.iterations));
+        }
+        std::printf("| | %s | %d | %.2f | %.2f | %.4g → %.4g | %.4f → %.4f | %s | %s |\n", way.name, r.iterations, total, setup,
+                    r.initialObjective, check.initialObjective, r.initialRms[0], check.initialRms[0],
+                    r.local.active ? std::to_string(r.local.unknowns).c_str() : "all",
+                    r.local.active ? std::to_string(r.local.pixels).c_str() : "all");
+        std::fflush(stdout);
     }
-    std::fflush(stdout);
 }
 
 std::string seconds(double s);
@@ -210,13 +235,16 @@ std::string seconds(double s) {
 
 int main(int argc, char** argv) {
     int maxIterations = 40;
+    std::string only;  // empty: every table
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--iterations") && i + 1 < argc) maxIterations = std::max(1, std::atoi(argv[++i]));
+        else if (!std::strcmp(argv[i], "--only") && i + 1 < argc) only = argv[++i];
         else {
-            std::fprintf(stderr, "usage: solver_race [--iterations N]\n");
+            std::fprintf(stderr, "usage: solver_race [--iterations N] [--only a|ct|stroke]\n");
             return 2;
         }
     }
+    auto wanted = [&](const char* table) { return only.empty() || only == table; };
     spdlog::set_level(spdlog::level::warn);
     auto device = GpuDevice::create();
     Renderer renderer(*device);
@@ -234,6 +262,7 @@ int main(int argc, char** argv) {
     }
     std::vector<std::string> json;
     for (const Problem& p : problems) {
+        if (!wanted("a")) break;
         const Setup setup = setUp(renderer, p);
         const Race direct = solveRace(*device, setup.plain, setup.views, raceOptions(p.step, maxIterations));
         const double start = direct.objective[0];
@@ -258,8 +287,8 @@ int main(int argc, char** argv) {
             json.push_back(j + "]}");
         }
     }
-    ctRace(*device, renderer);
-    strokeRace(*device, renderer);
+    if (wanted("ct")) ctRace(*device, renderer);
+    if (wanted("stroke")) strokeRace(*device, renderer);
     std::printf("\n");
     for (const auto& j : json) std::printf("%s\n", j.c_str());
 }

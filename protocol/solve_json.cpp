@@ -17,7 +17,7 @@ std::optional<core::Unknown> parseUnknowns(const std::vector<std::string>& names
 core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::string& path, core::SolveOptions o) {
     JsonReader r;
     if (r.object(j, path, {"unknowns", "basis", "regularization", "max_iterations", "tolerance", "step", "traversal", "hull",
-                           "resolution", "medium_radiance", "views", "coarse_iterations", "visible_change"})) {
+                           "resolution", "medium_radiance", "views", "coarse_iterations", "visible_change", "local_resolve"})) {
         if (j.contains("unknowns")) {
             std::vector<std::string> names;
             if (!j["unknowns"].is_array()) {
@@ -60,6 +60,8 @@ core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::stri
             o.coarseIterations = r.integer(j["coarse_iterations"], path + "/coarse_iterations").value_or(o.coarseIterations);
         if (j.contains("visible_change"))
             o.visibleChange = r.number(j["visible_change"], path + "/visible_change").value_or(o.visibleChange);
+        if (j.contains("local_resolve"))
+            o.localResolve = r.boolean(j["local_resolve"], path + "/local_resolve").value_or(o.localResolve);
         if (j.contains("tolerance")) o.tolerance = r.number(j["tolerance"], path + "/tolerance").value_or(o.tolerance);
         if (j.contains("step")) o.stepVoxels = r.number(j["step"], path + "/step").value_or(o.stepVoxels);
         if (j.contains("traversal")) {
@@ -113,7 +115,8 @@ nlohmann::json solveOptionsToJson(const core::SolveOptions& o) {
                         {"max_iterations", o.maxIterations}, {"tolerance", o.tolerance}, {"step", o.stepVoxels},
                         {"traversal", o.exactTraversal ? "exact" : "march"},
                         {"hull", o.useHull ? "extinction" : "none"}, {"views", o.views},
-                        {"coarse_iterations", o.coarseIterations}, {"visible_change", o.visibleChange}};
+                        {"coarse_iterations", o.coarseIterations}, {"visible_change", o.visibleChange},
+                        {"local_resolve", o.localResolve}};
     for (auto [name, reg] : {std::pair{"emission", &o.emissionRegularization}, std::pair{"albedo", &o.albedoRegularization}})
         if (*reg) j["regularization"][name] = {{"laplacian", (*reg)->laplacian}, {"l2", (*reg)->l2}, {"toward_one", (*reg)->towardOne}};
     if (o.resolution) j["resolution"] = {{o.unknown == core::Unknown::Extinction ? "extinction" : "emission",
@@ -152,7 +155,10 @@ nlohmann::json solveReportToJson(const core::SolveReport& r) {
             {"ignored_pixels", r.ignoredPixels}, {"clamped_pixels", r.clampedPixels}, {"total_ms", r.totalMs},
             {"forward_ms", r.forwardMs}, {"adjoint_ms", r.adjointMs}, {"vector_ms", r.vectorMs}, {"reach", reachToJson(r.reach)},
             {"coarse_iterations", r.coarseIterations}, {"coarse_ms", r.coarseMs},
-            {"row_cache", {{"ms", r.rowCacheMs}, {"bytes", r.rowCacheBytes}, {"cached_views", r.cachedViews}}}};
+            {"row_cache", {{"ms", r.rowCacheMs}, {"bytes", r.rowCacheBytes}, {"cached_views", r.cachedViews}}},
+            {"local", r.local.active ? nlohmann::json{{"changed_pixels", r.local.changedPixels}, {"unknowns", r.local.unknowns},
+                                                      {"pixels", r.local.pixels}}
+                                     : nlohmann::json(nullptr)}};
 }
 
 nlohmann::json solveProgressToJson(const core::SolveProgress& p) {

@@ -90,6 +90,14 @@ std::optional<std::string> JsonReader::string(const nlohmann::json& j, const std
     return j.get<std::string>();
 }
 
+std::optional<bool> JsonReader::boolean(const nlohmann::json& j, const std::string& path) {
+    if (!j.is_boolean()) {
+        fail(path, std::string("must be true or false, got ") + typeName(j));
+        return std::nullopt;
+    }
+    return j.get<bool>();
+}
+
 std::optional<Vec3d> JsonReader::vec3(const nlohmann::json& j, const std::string& path) {
     if (!j.is_array() || j.size() != 3) {
         fail(path, std::string("must be an array of 3 numbers, got ") + typeName(j));

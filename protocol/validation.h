@@ -44,6 +44,7 @@ public:
     std::optional<double> number(const nlohmann::json& j, const std::string& path);
     std::optional<int> integer(const nlohmann::json& j, const std::string& path);
     std::optional<std::string> string(const nlohmann::json& j, const std::string& path);
+    std::optional<bool> boolean(const nlohmann::json& j, const std::string& path);
     std::optional<Vec3d> vec3(const nlohmann::json& j, const std::string& path);
     void fail(const std::string& path, const std::string& message) { m_errors.push_back({path, message}); }
     /// Records a value check (`path` + "/" + `field`) unless that field, or one it `dependsOn`,

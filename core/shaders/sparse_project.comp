@@ -3,8 +3,14 @@
 // unknown's column of the same entries, (Wᵀ r)_e += Σ_k w_k r[p_k] — a gather, so no atomics,
 // and every element is written by one invocation. The entries are the ones project.comp's
 // VOLSTYLE_ROWS passes wrote from the same rays, so both agree with the matrix-free operator to
-// float rounding (the sums run in another order).
+// float rounding (the sums run in another order). VOLSTYLE_MARK = 1 reads no values: every entry
+// of the listed rows (or columns) sets its element (or pixel) to 1 — which unknowns a set of pixels
+// sees, and which pixels see a set of unknowns (the solver's local re-solve, solver_local.cpp).
 #include "layout.h"
+
+#ifndef VOLSTYLE_MARK
+#define VOLSTYLE_MARK 0
+#endif
 
 #ifndef VOLSTYLE_ADJOINT
 #define VOLSTYLE_ADJOINT 0
@@ -52,12 +58,16 @@ void main() {
     uint o = sp.count.w >= 0 ? list[uint(sp.count.w) + k] : uint(sp.count.z) + k;
     uint i = o - uint(sp.count.z);
     uint first = start[i], last = start[i + 1u];
-    vec3 sum = vec3(0.0);
     uint inputOffset = uint(sp.count.y);
+#if VOLSTYLE_MARK
+    for (uint e = first; e < last; ++e) outputs[inputOffset + index[e]] = vec4(1.0);  // races store the same value
+#else
+    vec3 sum = vec3(0.0);
     for (uint e = first; e < last; ++e) sum += weightOf(e) * inputs[inputOffset + index[e]].rgb;
 #if VOLSTYLE_ADJOINT
     if (first != last) outputs[o] += vec4(sum, 0.0);  // the views' columns add up, one dispatch each
 #else
     outputs[o] = vec4(sum, 0.0);
+#endif
 #endif
 }

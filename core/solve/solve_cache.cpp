@@ -57,6 +57,11 @@ void SolveCache::putRenders(const std::string& key, std::shared_ptr<const ViewRe
     put(key, std::move(r), bytes);
 }
 
+void SolveCache::putLastSolve(const std::string& key, std::shared_ptr<const LastSolve> last) {
+    const size_t bytes = (last->observations.size() + last->weights.size()) * sizeof(float);
+    put(key, std::move(last), bytes);
+}
+
 void SolveCache::put(const std::string& key, std::shared_ptr<const void> value, size_t bytes) {
     if (auto it = m_entries.find(key); it != m_entries.end()) m_bytes -= it->second.bytes;
     m_entries[key] = Entry{std::move(value), bytes, ++m_clock};
@@ -99,6 +104,32 @@ std::string rendersKey(const Volume& volume, const Lighting& lighting, const Sol
     if (!ownsEmission) key += fmt::format(":e{:x}", volume.hasEmission() ? hashOf(volume.emission()) : 0);
     if (!ownsAlbedo) key += fmt::format(":a{:x}", volume.hasAlbedo() ? hashOf(volume.albedo()) : 0);
     return key + ":" + cameraKey(camera);
+}
+
+std::string lastSolveKey(const Volume& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,
+                         const std::vector<SolveView>& views) {
+    auto reg = [](const Regularization& r) { return fmt::format("{},{},{}", r.laplacian, r.l2, r.towardOne); };
+    std::string key = fmt::format("last:{}:{}x{}x{}:{}:{}:{}:{}:{}:{}:{}", int(options.basis), unknownDims.x, unknownDims.y,
+                                  unknownDims.z, reg(options.regularization),
+                                  reg(options.regularizationFor(Unknown::Emission)), reg(options.regularizationFor(Unknown::Albedo)),
+                                  options.enforceBounds ? 1 : 0, options.useHull ? 1 : 0,
+                                  options.mediumRadiance ? fmt::format("{},{},{}", options.mediumRadiance->x, options.mediumRadiance->y,
+                                                                       options.mediumRadiance->z)
+                                                         : "-",
+                                  options.precondition ? 1 : 0);
+    // rendersKey names the unknown, the march, every grid but the unknowns' own and the lighting.
+    for (const SolveView& v : views) key += "|" + rendersKey(volume, lighting, options, v.camera, false);
+    return key;
+}
+
+uint64_t unknownsHash(const Volume& volume, Unknown unknown) {
+    auto grid = [](const std::vector<float>& g) { return g.empty() ? uint64_t(0) : uint64_t(hashOf(g)); };
+    switch (unknown) {
+        case Unknown::Emission: return grid(volume.emission());
+        case Unknown::Albedo: return grid(volume.albedo());
+        case Unknown::EmissionAlbedo: return grid(volume.emission()) * 1000003u ^ grid(volume.albedo());
+        default: return grid(volume.extinction());
+    }
 }
 
 }  // namespace volstyle::core

@@ -22,6 +22,14 @@
 
 namespace volstyle::core {
 
+/// What a finished solve asked for and where it ended (SolveOptions::localResolve): per pixel the
+/// observations and raw weights (4 floats each, as the solver builds them), and a hash of the
+/// unknowns' grids in the volume it returned. The next solve with the same settings compares.
+struct LastSolve {
+    std::vector<float> observations, weights;
+    uint64_t resultHash = 0;
+};
+
 class SolveCache {
 public:
     explicit SolveCache(size_t budgetBytes = size_t(1) << 30) : m_budget(budgetBytes) {}
@@ -30,6 +38,8 @@ public:
     void putRows(const std::string& key, std::shared_ptr<const SparseRows> rows);
     std::shared_ptr<const ViewRenders> findRenders(const std::string& key) { return find<ViewRenders>(key); }
     void putRenders(const std::string& key, std::shared_ptr<const ViewRenders> renders);
+    std::shared_ptr<const LastSolve> findLastSolve(const std::string& key) { return find<LastSolve>(key); }
+    void putLastSolve(const std::string& key, std::shared_ptr<const LastSolve> last);
 
     size_t bytes() const { return m_bytes; }
     size_t entries() const { return m_entries.size(); }
@@ -69,5 +79,13 @@ std::string rowsKey(const Volume& volume, const Lighting& lighting, const SolveO
 /// those, and the fixed part it needs excludes them), the lighting, the camera, the march.
 std::string rendersKey(const Volume& volume, const Lighting& lighting, const SolveOptions& options, const Camera& camera,
                        bool withAlbedoOne);
+
+/// The key of the last solve over these views: everything a solve's optimum depends on but the
+/// targets, the weights and the unknowns' values (the settings, every other grid, the lighting,
+/// the cameras in order).
+std::string lastSolveKey(const Volume& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,
+                         const std::vector<SolveView>& views);
+/// A hash of the grids `unknown` solves for (emission, albedo, both or extinction) in `volume`.
+uint64_t unknownsHash(const Volume& volume, Unknown unknown);
 
 }  // namespace volstyle::core

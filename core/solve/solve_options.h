@@ -59,6 +59,11 @@ struct SolveOptions {
     /// past it run matrix-free, and 0 runs every view matrix-free.
     size_t rowCacheBytes = size_t(1) << 30;
     bool analyzeReach = true;   ///< report what the paint asks that the unknowns cannot give (reach.h)
+    /// Re-solve after a stroke (solver_local.cpp): when the solve starts from the volume the last
+    /// solve with the same settings left (SolveCache) and only some pixels' targets or weights
+    /// changed, only the unknowns those pixels see move, and only the pixels that see them are
+    /// recomputed. false: every solve moves every unknown.
+    bool localResolve = true;
 
     std::vector<FieldProblem> check() const;
     void validate() const;  ///< throws InvalidArgument listing check()'s problems
@@ -136,6 +141,13 @@ struct SolveReport {
     double rowCacheMs = 0;     ///< writing the views' cached rows of W (SolveOptions::rowCacheBytes)
     size_t rowCacheBytes = 0;  ///< the GPU memory they take
     size_t cachedViews = 0;    ///< views whose W and Wᵀ gather from them (the rest: matrix-free)
+    /// A re-solve after a stroke (SolveOptions::localResolve): what changed and what moved.
+    struct Local {
+        bool active = false;       ///< this solve moved only the unknowns the changed pixels see
+        size_t changedPixels = 0;  ///< pixels whose target or weight differ from the last solve's
+        size_t unknowns = 0;       ///< hull unknowns they see (the only ones that move)
+        size_t pixels = 0;         ///< constrained pixels that see those (the only ones recomputed)
+    } local;
     ReachReport reach;
 };
 

@@ -89,6 +89,7 @@ Solver::Solver(GpuDevice& device, const Volume& volume, const Lighting& lighting
     st.cacheOperator();
     st.initialUnknowns();
     st.buildRegularizers();
+    st.restrictToStroke();
     st.buildPreconditioner();
 }
 
@@ -124,7 +125,7 @@ void Solver::State::allocate() {
         *vector = GpuVector(P, name);
     for (auto [vector, name] : {std::pair{&a, "a"}, {&aPrev, "a-prev"}, {&s, "s"}, {&p, "p"}, {&hull, "hull"},
                                 {&rLap, "r-lap"}, {&qLap, "q-lap"}, {&dLap, "d-lap"}, {&tmpU, "tmp-u"}, {&rId, "r-id"},
-                                {&precond, "precond"}, {&z, "z"}})
+                                {&precond, "precond"}, {&z, "z"}, {&movable, "movable"}})
         *vector = GpuVector(E, name);
 }
 
@@ -182,6 +183,7 @@ void Solver::State::buildObservations() {
             report.constraintPixels += constrained ? 1 : 0;
         }
     }
+    rawWeightHost = w;
     for (size_t i = 0; i < P; ++i)
         for (int c = 0; c < 3; ++c) {
             double sum = weightSum[c];
@@ -190,6 +192,7 @@ void Solver::State::buildObservations() {
     obs.upload(o);
     sqrtW.upload(w);
     sqrtWHost = std::move(w);
+    obsHost = std::move(o);
 }
 
 void Solver::State::buildHull() {
@@ -199,9 +202,10 @@ void Solver::State::buildHull() {
     } else if (opt.unknown != Unknown::Extinction) {
         markHullFromExtinction();
     } else {
-        markHullFromMasks(obs.download(), sqrtW.download());
+        markHullFromMasks(obsHost, sqrtWHost);
     }
     hull.upload(hullHost);
+    movable.upload(hullHost);
     size_t count = 0;
     for (size_t e = 0; e < elements; ++e) count += hullHost[4 * e] > 0 ? 1 : 0;
     report.unknownCount = elements;
@@ -291,11 +295,14 @@ void Solver::State::cacheOperator() {
         if (w2[4 * i] > 0 || w2[4 * i + 1] > 0 || w2[4 * i + 2] > 0) pixels.push_back(uint32_t(i));
     for (size_t e = 0; e < elements; ++e)
         if (hullHost[4 * e] > 0) voxels.push_back(uint32_t(e));
-    auto pixelSupport = std::make_shared<const Support>(std::move(pixels));
-    auto voxelSupport = std::make_shared<const Support>(std::move(voxels));
-    for (GpuVector* v : {&obs, &sqrtW, &rImg, &qImg, &tmpImg, &dImg, &rPrev}) v->setSupport(pixelSupport);
-    for (GpuVector* v : {&a, &aPrev, &s, &p, &hull, &rLap, &qLap, &dLap, &tmpU, &rId, &precond, &z}) v->setSupport(voxelSupport);
-    W->setSupports(pixelSupport, voxelSupport);
+    useSupports(std::make_shared<const Support>(std::move(pixels)), std::make_shared<const Support>(std::move(voxels)));
+}
+
+void Solver::State::useSupports(std::shared_ptr<const Support> pixels, std::shared_ptr<const Support> voxels) {
+    for (GpuVector* v : {&obs, &sqrtW, &rImg, &qImg, &tmpImg, &dImg, &rPrev}) v->setSupport(pixels);
+    for (GpuVector* v : {&a, &aPrev, &s, &p, &hull, &rLap, &qLap, &dLap, &tmpU, &rId, &precond, &z, &movable})
+        v->setSupport(voxels);
+    W->setSupports(std::move(pixels), std::move(voxels));
 }
 
 void Solver::State::initialUnknowns() {

@@ -53,6 +53,9 @@ struct Solver::State {
     // The preconditioner D² (per unknown and channel) and the preconditioned gradient z = D² s.
     GpuVector precond, z;
     GpuVector rPrev;  ///< rImg before the step: what the step changed (SolveOptions::visibleChange)
+    /// 1 where an unknown may move: the hull, or in a re-solve after a stroke the part of it the
+    /// changed pixels see (solver_local.cpp). The gradient is masked with it.
+    GpuVector movable;
     Bounds bounds;
     std::vector<BlockRegularizer> blocks;
     Vec3d constant{0, 0, 0};  // λ0‖a‖² + λ1‖a−1‖² = λ‖a−t‖² + λ0λ1/λ per element
@@ -61,6 +64,13 @@ struct Solver::State {
     std::vector<float> hullHost;
     std::vector<std::shared_ptr<const ViewRenders>> viewRenders;  ///< each view at the unknowns' bounds (reach.h), until the reach analysis
     std::vector<float> sqrtWHost;  ///< sqrtW as uploaded
+    /// The observations and the raw weights (before normalization) as built, for the next solve's
+    /// comparison (SolveCache::LastSolve), under this key.
+    std::vector<float> obsHost, rawWeightHost;
+    std::string lastKey;
+    /// Per view, the squared residual of the pixels a re-solve after a stroke leaves untouched
+    /// (they see no unknown that moves); added to each view's RMS. Empty: none.
+    std::vector<Vec3d> viewUntouched;
     SolveCache* cache = nullptr;   ///< parts kept between solves (solve_cache.h); may be null
     SolveReport report;
 
@@ -77,9 +87,17 @@ struct Solver::State {
     /// The views' rows of W (SolveOptions::rowCacheBytes) and, when all fit, vector work over
     /// the hull and the constrained pixels only.
     void cacheOperator();
+    /// Every vector operation (and W, Wᵀ) over these pixels and unknowns only (gpu_vector.h).
+    void useSupports(std::shared_ptr<const Support> pixels, std::shared_ptr<const Support> voxels);
     void initialUnknowns();
     void buildRegularizers();
     void buildPreconditioner();
+    /// Re-solve after a stroke (solver_local.cpp): when the last solve with the same settings left
+    /// the volume this one starts from and few pixels changed, restricts the solve to the
+    /// unknowns those pixels see and the pixels that see them.
+    void restrictToStroke();
+    /// Leaves this solve's observations and result in the cache for the next one.
+    void rememberSolve(const Volume& result);
     /// Coarse to fine: solves opt.coarseIterations on half the resolution and starts from it.
     void warmStartFromCoarse(const std::atomic<bool>* cancel);
     Volume result();
@@ -91,14 +109,17 @@ struct Solver::State {
     void applyAt();  // s from rImg, rLap, rId
     Vec3d precondition();  // z = D² s; returns s·z (γ of preconditioned CGLS)
     void restart(Vec3d& gamma);
+    /// [rImg; rLap; rId] = b − A a, from scratch, over the vectors' supports.
+    void computeResiduals();
     Vec3d objective();
     double totalObjective();
     std::vector<double> rmsPerView();
 
     // One iteration's named steps (solver.cpp).
     StepLength stepLength(const Vec3d& slope);
-    void takeStep(const StepLength& step);
-    void projectedStep(const StepLength& step);
+    /// Moves a along p; true when a bound cut some channel's step short of where it would go.
+    bool takeStep(const StepLength& step);
+    bool projectedStep(const StepLength& step);  ///< true when a channel rejected the projected step
     Vec3d nextDirection(int iteration, const Vec3d& gamma, Vec3d& slope);
     /// Adds the iteration to the report and returns its progress (with this iteration's times).
     SolveProgress recordIteration(int iteration, double objective, Clock::time_point start,

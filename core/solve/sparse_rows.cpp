@@ -26,8 +26,9 @@ int weightChannels(const Volume& volume, const Lighting& lighting, Unknown unkno
 
 namespace {
 
+/// W (rows) or Wᵀ (columns) over `only`'s part of this view, or with `mark` their entries' marks.
 void apply(GpuDevice& device, const SparseRows& rows, bool adjoint, const GpuVector& in, GpuVector& out,
-           size_t pixelOffset, const Support* only) {
+           size_t pixelOffset, const Support* only, bool mark = false) {
     size_t count = adjoint ? rows.columns : rows.rows;
     const size_t outputOffset = adjoint ? 0 : pixelOffset;
     int listFirst = -1;
@@ -46,12 +47,17 @@ void apply(GpuDevice& device, const SparseRows& rows, bool adjoint, const GpuVec
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSparseIndex, (adjoint ? rows.colIndex : rows.rowIndex).id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSparseWeight, (adjoint ? rows.colWeight : rows.rowWeight).id());
     gl::ShaderBuilder builder("sparse_project.comp");
-    builder.define("VOLSTYLE_ADJOINT", adjoint ? 1 : 0).define("VOLSTYLE_ROW_CHANNELS", rows.channels);
+    builder.define("VOLSTYLE_ADJOINT", adjoint ? 1 : 0).define("VOLSTYLE_ROW_CHANNELS", rows.channels).define("VOLSTYLE_MARK", mark ? 1 : 0);
     glUseProgram(device.program(builder).id());
     glDispatchCompute(GLuint((count + layout::kWorkgroup1D - 1) / layout::kWorkgroup1D), 1, 1);
 }
 
 }  // namespace
+
+void sparseMark(GpuDevice& device, const SparseRows& rows, bool columns, const Support& list, size_t pixelOffset,
+                GpuVector& marks) {
+    apply(device, rows, columns, marks, marks, pixelOffset, &list, true);
+}
 
 void sparseForward(GpuDevice& device, const SparseRows& rows, const GpuVector& a, GpuVector& pixels, size_t pixelOffset,
                    const Support* only) {

@@ -39,4 +39,10 @@ void sparseForward(GpuDevice& device, const SparseRows& rows, const GpuVector& a
 void sparseAdjointAdd(GpuDevice& device, const SparseRows& rows, const GpuVector& pixels, size_t pixelOffset, GpuVector& a,
                       const Support* only = nullptr);
 
+/// Sets marks[e] = 1 for every element e the view's rows of `list`'s pixels have an entry for
+/// (columns = false; `marks` over the elements), or marks[pixelOffset + p] = 1 for every pixel p
+/// the columns of `list`'s elements have one for (columns = true; `marks` over the pixels).
+void sparseMark(GpuDevice& device, const SparseRows& rows, bool columns, const Support& list, size_t pixelOffset,
+                GpuVector& marks);
+
 }  // namespace volstyle::core

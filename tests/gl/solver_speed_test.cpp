@@ -4,6 +4,7 @@
 // objective never rises) and reach its minimum; the caches must not change the iterates.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <numbers>
 
 #include "../common/stamped_cloud.h"
@@ -124,10 +125,11 @@ TEST(SolverSpeed, ASecondSolveTakesEveryUnchangedPartFromTheCache) {
     // renders, and lands where a solve without the cache lands. A new extinction misses all.
     Problem p = stampedProblem();
     SolveOptions opt = plainOptions(6);
+    opt.localResolve = false;  // the whole problem again: the iterates must match a solve without the cache
     SolveCache cache;
     const SolveResult first = Solver(test::device(), p.plain, defaultLighting(), p.views, opt, &cache).run();
     EXPECT_EQ(cache.hits(), 0u);
-    EXPECT_EQ(cache.entries(), 2 * p.views.size());
+    EXPECT_EQ(cache.entries(), 2 * p.views.size() + 1);  // rows and renders per view, and the last solve
     for (size_t i = 0; i < 40; ++i) p.views[0].target.rgba[4 * (400 + i)] *= 1.3f;
     const SolveReport warm = Solver(test::device(), first.volume, defaultLighting(), p.views, opt, &cache).run().report;
     EXPECT_EQ(cache.hits(), 2 * p.views.size());
@@ -169,4 +171,73 @@ TEST(SolverSpeed, ASolveSettlesOnceNoPixelChangesVisibly) {
     std::cout << "[ measured ] settled after " << a.report.iterations << " iterations; RMS to the 200-iteration views "
               << worst << "\n";
     EXPECT_LT(worst, 1.0 / 255);
+}
+
+TEST(SolverSpeed, AReSolveAfterAStrokeMovesOnlyWhatTheStrokeSees) {
+    VOLSTYLE_REQUIRE_GL();
+    // A solve, then a stroke (a disc of view 0 painted brighter), then the re-solve from the
+    // volume it left, with the cache (local: the default) and without the local restriction.
+    // The local one moves only the unknowns the stroke's pixels see, recomputes only the pixels
+    // that see those, and reports the whole problem's objective and RMS.
+    Problem p = stampedProblem();
+    SolveCache cache;
+    const SolveResult first = Solver(test::device(), p.plain, defaultLighting(), p.views, plainOptions(30), &cache).run();
+    SolveCache afterFirst = cache;  // shares the entries: for a second re-solve from the same state
+    size_t disc = 0;
+    Image& target = p.views[0].target;
+    for (int y = 0; y < target.height; ++y)
+        for (int x = 0; x < target.width; ++x)
+            if (std::hypot(x - 15.5, y - 15.5) < 4) {
+                for (int c = 0; c < 3; ++c) target.pixel(x, y)[c] *= 1.3f;
+                ++disc;
+            }
+    const SolveOptions opt = plainOptions(10);
+    const SolveResult local = Solver(test::device(), first.volume, defaultLighting(), p.views, opt, &cache).run();
+    SolveOptions wholeOpt = opt;
+    wholeOpt.localResolve = false;
+    const SolveResult whole = Solver(test::device(), first.volume, defaultLighting(), p.views, wholeOpt, &cache).run();
+    const SolveReport& l = local.report;
+    const SolveReport& w = whole.report;
+    ASSERT_TRUE(l.local.active);
+    EXPECT_FALSE(w.local.active);
+    EXPECT_EQ(l.local.changedPixels, disc);
+    EXPECT_LT(l.local.unknowns, l.hullCount / 2);
+    EXPECT_LT(l.local.pixels, l.constraintPixels);
+    std::cout << "[ measured ] stroke of " << disc << " pixels: " << l.local.unknowns << " of " << l.hullCount << " hull unknowns, "
+              << l.local.pixels << " of " << l.constraintPixels << " pixels; objective " << l.initialObjective << " -> "
+              << l.finalObjective << " (local), -> " << w.finalObjective << " (whole)\n";
+    // The objective and RMS are the whole problem's: the same start ...
+    EXPECT_NEAR(l.initialObjective / w.initialObjective, 1.0, 1e-5);
+    for (size_t v = 0; v < p.views.size(); ++v) EXPECT_NEAR(l.initialRms[v], w.initialRms[v], 1e-6 + 1e-5 * w.initialRms[v]);
+    expectMonotone(l);
+    // ... and the end a solve of the whole problem measures from the result.
+    const SolveReport check = Solver(test::device(), local.volume, defaultLighting(), p.views, plainOptions(1)).run().report;
+    EXPECT_NEAR(check.initialObjective / l.finalObjective, 1.0, 1e-4);
+    for (size_t v = 0; v < p.views.size(); ++v) EXPECT_NEAR(check.initialRms[v], l.finalRms[v], 1e-6 + 1e-4 * l.finalRms[v]);
+    // Only the unknowns the stroke sees moved.
+    size_t moved = 0;
+    for (size_t i = 0; i < first.volume.emission().size(); i += 3)
+        moved += first.volume.emission()[i] != local.volume.emission()[i] ? 1 : 0;
+    EXPECT_GT(moved, 0u);
+    EXPECT_LE(moved, l.local.unknowns);
+    // The stroke is taken in: the painted view's error falls to what the whole re-solve reaches.
+    EXPECT_LT(l.finalRms[0], 0.5 * l.initialRms[0]);
+    EXPECT_LT(l.finalRms[0], 1.5 * w.finalRms[0]);
+
+    // With a tolerance, a re-solve stops once an iteration gains under 1% of what it has gained:
+    // sooner, and the painted view close to where the 10 iterations take it.
+    SolveOptions stopping = opt;
+    stopping.tolerance = 1e-4;
+    const SolveReport early = Solver(test::device(), first.volume, defaultLighting(), p.views, stopping, &afterFirst).run().report;
+    std::cout << "[ measured ] the re-solve with tolerance 1e-4 stops after " << early.iterations << " iterations ("
+              << stopReasonName(early.stopReason) << "), view 0 RMS " << early.finalRms[0] << " (10 iterations: " << l.finalRms[0] << ")\n";
+    EXPECT_TRUE(early.local.active);
+    EXPECT_EQ(early.stopReason, StopReason::Converged);
+    EXPECT_LT(early.iterations, 10);
+    EXPECT_LT(early.finalRms[0], 1.15 * l.finalRms[0]);
+
+    // Erasing paint (weight 0 where there was some) solves the whole problem again.
+    for (size_t i = 0; i < 8; ++i) p.views[1].target.rgba[4 * (500 + i) + 3] = 0.0f;
+    const SolveReport erased = Solver(test::device(), local.volume, defaultLighting(), p.views, opt, &cache).run().report;
+    EXPECT_FALSE(erased.local.active);
 }

@@ -184,6 +184,39 @@ TEST_F(Api, PaintingFlowEndToEnd) {
     EXPECT_GT(vdb->body.size(), 1000u);
 }
 
+TEST_F(Api, ASolveAfterAStrokeMovesOnlyWhatTheStrokeSees) {
+    // Paint, solve, paint a few more pixels of one view, solve again: the second solve starts from
+    // the first one's volume, so it is a re-solve after a stroke (SolveOptions::localResolve) and
+    // says so in its report; "local_resolve": false solves everything again.
+    std::string id = createSession(24);
+    const std::string base = "/api/v1/sessions/" + id;
+    core::Image target(24, 24);
+    for (size_t i = 0; i < target.pixelCount(); ++i)
+        for (int c = 0; c < 4; ++c) target.rgba[4 * i + size_t(c)] = c < 3 ? 0.3f : 1.0f;
+    json camera = {{"camera", {{"eye", {0, 0.2, 3}}, {"target", {0, 0, 0}}, {"width", 24}, {"height", 24}}}};
+    const std::string vid = json::parse(client().Post((base + "/views").c_str(), camera.dump(), "application/json")->body)["id"];
+    auto solve = [&](const std::string& body) {
+        auto r = client().Post((base + "/solve").c_str(), body, "application/json");
+        EXPECT_EQ(r->status, 202) << r->body;
+        const std::string job = json::parse(r->body)["job"];
+        EXPECT_EQ(readEvents(client(), "/api/v1/jobs/" + job + "/events").back(), "done");
+        return json::parse(client().Get(("/api/v1/jobs/" + job).c_str())->body)["result"]["report"];
+    };
+    ASSERT_EQ(client().Put((base + "/views/" + vid + "/target").c_str(), pngOf(target), "image/png")->status, 200);
+    EXPECT_TRUE(solve(R"({"max_iterations": 6})")["local"].is_null());
+    for (int y = 10; y < 13; ++y)
+        for (int x = 10; x < 13; ++x) target.pixel(x, y)[0] = 0.8f;  // a stroke of 9 pixels
+    ASSERT_EQ(client().Put((base + "/views/" + vid + "/target").c_str(), pngOf(target), "image/png")->status, 200);
+    const json local = solve(R"({"max_iterations": 6})");
+    ASSERT_TRUE(local["local"].is_object()) << local.dump();
+    EXPECT_EQ(local["local"]["changed_pixels"], 9);
+    EXPECT_LT(local["local"]["unknowns"].get<int>(), local["hull_unknowns"].get<int>());
+    for (int y = 4; y < 6; ++y) target.pixel(4, y)[1] = 0.9f;
+    ASSERT_EQ(client().Put((base + "/views/" + vid + "/target").c_str(), pngOf(target), "image/png")->status, 200);
+    EXPECT_TRUE(solve(R"({"max_iterations": 6, "local_resolve": false})")["local"].is_null());
+    expectError(client().Post((base + "/solve").c_str(), R"({"local_resolve": 1})", "application/json"), 400, "invalid_argument");
+}
+
 TEST_F(Api, CancellingASolveLeavesTheVolumeAlone) {
     std::string id = createSession(24);
     const std::string base = "/api/v1/sessions/" + id;
