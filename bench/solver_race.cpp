@@ -18,6 +18,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,12 @@ struct Race {
     }
 };
 
+std::string fmtNumber(double x) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", x);
+    return b;
+}
+
 struct Setup {
     Volume plain;                 // where every solve starts
     std::vector<SolveView> views;  // renders of the stamped truth
@@ -83,18 +90,27 @@ SolveOptions raceOptions(double step, int maxIterations) {
     return opt;
 }
 
+/// CGLS (the solver), or a baseline method over the same set-up (solver.h).
+struct Method {
+    std::optional<BaselineMethod> baseline;
+    double rate = 0;
+};
+
 /// Solves from `start`, timing by the wall clock from the solver's construction: [0] is when the
 /// first iteration starts (set-up, reach analysis, a coarse stage and the first residual done).
-Race solveRace(GpuDevice& device, const Volume& start, const std::vector<SolveView>& views, const SolveOptions& opt) {
+Race solveRace(GpuDevice& device, const Volume& start, const std::vector<SolveView>& views, const SolveOptions& opt,
+               const Lighting& lighting = defaultLighting(), Method method = {}) {
     Race r;
     const auto t0 = Clock::now();
-    Solver solver(device, start, defaultLighting(), views, opt);
+    Solver solver(device, start, lighting, views, opt);
     double firstIterationMs = 0;
-    const SolveResult out = solver.run([&](const SolveProgress& pr) {
+    auto progress = [&](const SolveProgress& pr) {
         if (r.seconds.empty()) firstIterationMs = pr.forwardMs + pr.adjointMs + pr.vectorMs;
         r.seconds.push_back(msSince(t0) / 1000.0);
         r.forwardMs += pr.forwardMs, r.adjointMs += pr.adjointMs, r.vectorMs += pr.vectorMs;
-    });
+    };
+    const SolveResult out = method.baseline ? solver.runBaseline(*method.baseline, opt.maxIterations, method.rate, progress)
+                                            : solver.run(progress);
     r.setupSeconds = r.seconds.empty() ? msSince(t0) / 1000.0 : r.seconds.front() - firstIterationMs / 1000.0;
     r.seconds.insert(r.seconds.begin(), r.setupSeconds);
     r.rowsSeconds = out.report.rowCacheMs / 1000.0;
@@ -102,6 +118,22 @@ Race solveRace(GpuDevice& device, const Volume& start, const std::vector<SolveVi
     r.iterations = out.report.iterations;
     r.seconds.resize(r.objective.size(), r.seconds.back());
     return r;
+}
+
+/// A baseline at each of `rates`; the one whose last objective is lowest, named with its rate.
+std::pair<std::string, Race> bestBaseline(GpuDevice& device, const Volume& start, const std::vector<SolveView>& views,
+                                          const SolveOptions& opt, const Lighting& lighting, BaselineMethod method,
+                                          const std::vector<double>& rates) {
+    std::pair<std::string, Race> best;
+    double bestRate = 0;
+    std::string tried;
+    for (double rate : rates) {
+        Race r = solveRace(device, start, views, opt, lighting, {method, rate});
+        tried += (tried.empty() ? "" : ", ") + fmtNumber(rate);
+        if (best.second.objective.empty() || r.objective.back() < best.second.objective.back()) best.second = std::move(r), bestRate = rate;
+    }
+    best.first = std::string(method == BaselineMethod::Adam ? "Adam" : "SART") + ", rate " + fmtNumber(bestRate) + " (best of " + tried + ")";
+    return best;
 }
 
 Race coarseToFine(GpuDevice& device, const Setup& s, const Problem& p, int coarseIterations, int maxIterations) {
@@ -169,8 +201,10 @@ std::string seconds(double s);
 
 /// Issue #12's CT case: a 128×128 slice one voxel thick (two discs and a square hole of
 /// extinction) under a constant medium radiance, 60 views of 128×1 around it (nearly parallel
-/// rays: eyes 20 units away), extinction solved from zero. Prints the time to 10%, 1%, 0.1% of
-/// the start objective and after 100 iterations (the issue: 71 s for 100; SART's 20 sweeps ~2.3 s).
+/// rays: eyes 20 units away), extinction solved from zero. CGLS (cached rows and matrix-free)
+/// against SART's 20 sweeps and Adam on the same operators: the time to 10%, 1%, 0.1% of the
+/// start objective and to the objective SART's 20 sweeps reach (the issue: CGLS 71 s for 100
+/// iterations; a textbook SART's 20 sweeps ~2.3 s).
 void ctRace(GpuDevice& device, Renderer& renderer) {
     const Int3 dims{128, 128, 1};
     Volume truth(dims, unitBoxWorldFromIndex(dims));
@@ -202,24 +236,26 @@ void ctRace(GpuDevice& device, Renderer& renderer) {
     }
     Volume start = truth;
     start.extinction().assign(start.voxelCount() * 3, 0.0f);
-    std::printf("\n| CT: 128² slice, 60 views of 128×1, extinction | iterations | set-up s | s to 10%% | s to 1%% | s to 0.1%% | s for 100 iterations | objective after 100 |\n|---|---|---|---|---|---|---|---|\n");
-    for (bool cached : {true, false}) {
-        SolveOptions opt = raceOptions(0.5, 100);
+    auto options = [&](int iterations, bool cached) {
+        SolveOptions opt = raceOptions(0.5, iterations);
         opt.unknown = Unknown::Extinction;
         opt.mediumRadiance = Lm;
         if (!cached) opt.rowCacheBytes = 0;
-        Race r;
-        const auto t0 = Clock::now();
-        Solver solver(device, start, light, views, opt);
-        r.setupSeconds = msSince(t0) / 1000.0;
-        const SolveResult out = solver.run([&](const SolveProgress&) { r.seconds.push_back(msSince(t0) / 1000.0); });
-        r.seconds.insert(r.seconds.begin(), r.setupSeconds);
-        r.objective = out.report.objectiveHistory;
-        r.seconds.resize(r.objective.size(), r.seconds.back());
-        const double f0 = r.objective.front();
-        std::printf("| %s | %d | %.2f | %s | %s | %s | %.2f | %.2g of the start |\n", cached ? "cached rows" : "matrix-free",
-                    out.report.iterations, r.setupSeconds, seconds(r.timeTo(0.1, f0)).c_str(), seconds(r.timeTo(0.01, f0)).c_str(),
-                    seconds(r.timeTo(0.001, f0)).c_str(), r.seconds.back(), r.objective.back() / f0);
+        return opt;
+    };
+    std::vector<std::pair<std::string, Race>> rows;
+    rows.push_back(bestBaseline(device, start, views, options(20, true), light, BaselineMethod::Sart, {0.25, 0.5, 1.0}));
+    rows.push_back({"CGLS, cached rows (the default)", solveRace(device, start, views, options(100, true), light)});
+    rows.push_back({"CGLS, matrix-free", solveRace(device, start, views, options(100, false), light)});
+    rows.push_back(bestBaseline(device, start, views, options(100, true), light, BaselineMethod::Adam, {0.03, 0.1, 0.3}));
+    const double f0 = rows[1].second.objective.front();
+    const double sartEnd = rows[0].second.objective.back();
+    std::printf("\n| CT: 128² slice, 60 views of 128×1, extinction | iterations | set-up s | s to 10%% | s to 1%% | s to 0.1%% | s to SART's 20 sweeps (%.2g) | s for all | objective at the end |\n"
+                "|---|---|---|---|---|---|---|---|---|\n", sartEnd / f0);
+    for (const auto& [name, r] : rows) {
+        std::printf("| %s | %d | %.2f | %s | %s | %s | %s | %.2f | %.2g of the start |\n", name.c_str(), r.iterations, r.setupSeconds,
+                    seconds(r.timeTo(0.1, f0)).c_str(), seconds(r.timeTo(0.01, f0)).c_str(), seconds(r.timeTo(0.001, f0)).c_str(),
+                    seconds(r.timeTo(sartEnd / f0 * (1 + 1e-9), f0)).c_str(), r.seconds.back(), r.objective.back() / f0);
         std::fflush(stdout);
     }
 }
@@ -274,6 +310,9 @@ int main(int argc, char** argv) {
         matrixFree.rowCacheBytes = 0;
         rows.push_back({p.name + ", matrix-free", solveRace(*device, setup.plain, setup.views, matrixFree)});
         for (int k : {3, 6}) rows.push_back({p.name + ", coarse to fine (" + std::to_string(k) + " at half)", coarseToFine(*device, setup, p, k, maxIterations)});
+        auto adam = bestBaseline(*device, setup.plain, setup.views, raceOptions(p.step, std::max(maxIterations, 60)), defaultLighting(),
+                                 BaselineMethod::Adam, {0.01, 0.03, 0.1});
+        rows.push_back({p.name + ", " + adam.first, adam.second});
         for (const auto& [name, r] : rows) {
             const int n = std::max(1, r.iterations);
             std::printf("| %s | %d | %.2f (%.2f) | %s | %s | %s | %.0f | %.0f | %.0f |\n", name.c_str(), r.iterations, r.setupSeconds, r.rowsSeconds,

@@ -109,9 +109,10 @@ void VectorOps::xpby(const GpuVector& x, const Vec3d& beta, GpuVector& y) {
     run(kXpby, d);
 }
 
-void VectorOps::multiply(const GpuVector& x, GpuVector& y) {
+void VectorOps::multiply(const GpuVector& x, GpuVector& y, Range range) {
     Dispatch d;
     d.x = &x, d.y = &y;
+    d.range = range;
     run(kMul, d);
 }
 

@@ -66,7 +66,7 @@ public:
     explicit VectorOps(GpuDevice& device);
     void axpy(const Vec3d& alpha, const GpuVector& x, GpuVector& y, Range range = {});  ///< y += αx
     void xpby(const GpuVector& x, const Vec3d& beta, GpuVector& y);                     ///< y = x + βy
-    void multiply(const GpuVector& x, GpuVector& y);                                   ///< y ⊙= x
+    void multiply(const GpuVector& x, GpuVector& y, Range range = {});                 ///< y ⊙= x
     Vec3d dot(const GpuVector& x, const GpuVector& y, Range range = {});
     /// out = scale · L x over the cells of `hull` (rgb > 0), per block of `dims` cells.
     void laplacian(double scale, const GpuVector& x, const GpuVector& hull, Int3 dims, GpuVector& out, Range range = {});

@@ -66,11 +66,11 @@ void Projector::dispatchView(const View& v) {
     glDispatchCompute(GLuint((v.camera.width + g - 1) / g), GLuint((v.camera.height + g - 1) / g), 1);
 }
 
-void Projector::dispatch(bool adjoint, const GpuVector& unknowns, const GpuVector& pixels) {
+void Projector::dispatch(bool adjoint, const GpuVector& unknowns, const GpuVector& pixels, const View* only) {
     VOLSTYLE_CHECK(unknowns.size(), ==, elementCount());
     VOLSTYLE_CHECK(pixels.size(), ==, m_pixelCount);
     for (const View& v : m_views) {
-        if (v.rows) continue;
+        if (v.rows || (only && only != &v)) continue;
         gl::ShaderBuilder builder("project.comp");
         builder.define("VOLSTYLE_ADJOINT", adjoint ? 1 : 0);
         if (adjoint && m_useFloatAtomics) {
@@ -196,30 +196,53 @@ void Projector::setSupports(std::shared_ptr<const Support> pixels, std::shared_p
     m_elementSupport = std::move(elements);
 }
 
-void Projector::forward(const GpuVector& a, GpuVector& pixels) {
+void Projector::timed(bool adjoint, const std::function<void()>& work) {
     const auto t0 = Clock::now();
-    dispatch(false, a, pixels);
-    const Support* only = allCached() ? m_pixelSupport.get() : nullptr;
-    for (const View& v : m_views)
-        if (v.rows) sparseForward(m_device, *v.rows, a, pixels, v.offset, only);
-    gl::barrierAfterComputeWrites();
+    work();
     m_device.finish();
-    m_stats.forwardMs += msSince(t0);
-    m_stats.forwardCalls++;
+    (adjoint ? m_stats.adjointMs : m_stats.forwardMs) += msSince(t0);
+    (adjoint ? m_stats.adjointCalls : m_stats.forwardCalls)++;
+}
+
+void Projector::forward(const GpuVector& a, GpuVector& pixels) {
+    timed(false, [&] {
+        dispatch(false, a, pixels);
+        const Support* only = allCached() ? m_pixelSupport.get() : nullptr;
+        for (const View& v : m_views)
+            if (v.rows) sparseForward(m_device, *v.rows, a, pixels, v.offset, only);
+        gl::barrierAfterComputeWrites();
+    });
 }
 
 void Projector::adjoint(const GpuVector& pixels, GpuVector& a) {
-    const auto t0 = Clock::now();
-    a.fill(0.0f);
-    dispatch(true, a, pixels);
-    for (const View& v : m_views) {
-        if (!v.rows) continue;
-        sparseAdjointAdd(m_device, *v.rows, pixels, v.offset, a, allCached() ? m_elementSupport.get() : nullptr);
-        gl::barrierAfterComputeWrites();  // the next view adds to the same elements
-    }
-    m_device.finish();
-    m_stats.adjointMs += msSince(t0);
-    m_stats.adjointCalls++;
+    timed(true, [&] {
+        a.fill(0.0f);
+        dispatch(true, a, pixels);
+        for (const View& v : m_views) {
+            if (!v.rows) continue;
+            sparseAdjointAdd(m_device, *v.rows, pixels, v.offset, a, allCached() ? m_elementSupport.get() : nullptr);
+            gl::barrierAfterComputeWrites();  // the next view adds to the same elements
+        }
+    });
+}
+
+void Projector::forwardView(size_t view, const GpuVector& a, GpuVector& pixels) {
+    const View& v = m_views.at(view);
+    timed(false, [&] {
+        if (v.rows) sparseForward(m_device, *v.rows, a, pixels, v.offset, allCached() ? m_pixelSupport.get() : nullptr);
+        else dispatch(false, a, pixels, &v);
+        gl::barrierAfterComputeWrites();
+    });
+}
+
+void Projector::adjointView(size_t view, const GpuVector& pixels, GpuVector& a) {
+    const View& v = m_views.at(view);
+    timed(true, [&] {
+        a.fill(0.0f);
+        if (v.rows) sparseAdjointAdd(m_device, *v.rows, pixels, v.offset, a, allCached() ? m_elementSupport.get() : nullptr);
+        else dispatch(true, a, pixels, &v);
+        gl::barrierAfterComputeWrites();
+    });
 }
 
 }  // namespace volstyle::core

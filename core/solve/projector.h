@@ -5,6 +5,7 @@
 /// `adjoint` scatters per-pixel residuals back into the unknown grid along the same rays with the
 /// same weights (Wᵀ r). GL thread only.
 
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -47,6 +48,10 @@ public:
 
     void forward(const GpuVector& a, GpuVector& pixels);   ///< pixels = W a
     void adjoint(const GpuVector& pixels, GpuVector& a);   ///< a = Wᵀ pixels
+    /// One view's rows: its pixels of `pixels` = W_v a (the other views' pixels keep theirs), and
+    /// a = W_vᵀ (its pixels of `pixels`). For methods that sweep the views (SART, solver_baselines.cpp).
+    void forwardView(size_t view, const GpuVector& a, GpuVector& pixels);
+    void adjointView(size_t view, const GpuVector& pixels, GpuVector& a);
     const ProjectorStats& stats() const { return m_stats; }
     /// Scatter with GL_NV_shader_atomic_float (default where the context has it) or with the
     /// compare-and-swap fallback; tests cover both.
@@ -77,8 +82,9 @@ private:
     /// project.comp over one view: the shader with the projector's defines and the view's march bound.
     void useProgram(const View& v, gl::ShaderBuilder& builder);
     void dispatchView(const View& v);
-    /// Matrix-free W or Wᵀ over the views without cached rows.
-    void dispatch(bool adjoint, const GpuVector& unknowns, const GpuVector& pixels);
+    /// Matrix-free W or Wᵀ over the views without cached rows (with `only`: that view alone).
+    void dispatch(bool adjoint, const GpuVector& unknowns, const GpuVector& pixels, const View* only = nullptr);
+    void timed(bool adjoint, const std::function<void()>& work);
     /// Counts, then writes, one view's rows and columns; null when past the budget.
     std::unique_ptr<SparseRows> buildRows(const View& v, size_t budgetBytes, int channels, const GpuVector* pixelMask);
 

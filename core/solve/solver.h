@@ -29,6 +29,19 @@ namespace volstyle::core {
 
 class SolveCache;
 
+/// Reference methods over a Solver's set-up (the same operators, observations, weights, hull and
+/// bounds), for the benchmarks that race CGLS against them (bench/solver_race, issue #12). They
+/// minimize the data term only: the regularization must be 0.
+enum class BaselineMethod {
+    /// Adam on the gradient −Aᵀr (β1 = 0.9, β2 = 0.999, ε = 1e-8), `rate` the step, clamped to
+    /// the bounds after each step: what a differentiable-rendering solver does.
+    Adam,
+    /// SART (Andersen & Kak 1984): per view v, a += rate · V_v⁻¹ A_vᵀ M_v⁻¹ (b_v − A_v a) with M the
+    /// rows' and V_v the view's columns' sums, clamped to the bounds; an iteration sweeps every
+    /// view once, in an order that spreads consecutive views apart.
+    Sart,
+};
+
 struct SolveResult {
     Volume volume;  ///< the input volume with the solved property replaced
     SolveReport report;
@@ -47,6 +60,10 @@ public:
     using ProgressCallback = std::function<void(const SolveProgress&)>;
     /// Runs to a stopping rule. `cancel` is checked between iterations (throws Cancelled).
     SolveResult run(const ProgressCallback& progress = {}, const std::atomic<bool>* cancel = nullptr);
+
+    /// Runs `iterations` of a baseline method instead (call instead of run()); the report holds the
+    /// objective CGLS minimizes after each. Throws InvalidArgument with regularization on.
+    SolveResult runBaseline(BaselineMethod method, int iterations, double rate, const ProgressCallback& progress = {});
 
     /// The volume with the current iterate (for previews; call from the progress callback).
     Volume currentVolume();

@@ -241,3 +241,30 @@ TEST(SolverSpeed, AReSolveAfterAStrokeMovesOnlyWhatTheStrokeSees) {
     const SolveReport erased = Solver(test::device(), local.volume, defaultLighting(), p.views, opt, &cache).run().report;
     EXPECT_FALSE(erased.local.active);
 }
+
+TEST(SolverSpeed, BaselinesRunOnTheSolversOwnSetUp) {
+    VOLSTYLE_REQUIRE_GL();
+    // The methods bench/solver_race races CGLS against: Adam and SART over the same operators,
+    // observations and bounds. Both lower the objective CGLS minimizes from the same start; they
+    // refuse a regularized problem (they minimize the data term only).
+    const Problem p = stampedProblem();
+    const SolveReport cgls = Solver(test::device(), p.plain, defaultLighting(), p.views, plainOptions(10)).run().report;
+    const SolveResult sart = Solver(test::device(), p.plain, defaultLighting(), p.views, plainOptions(10)).runBaseline(BaselineMethod::Sart, 10, 1.0);
+    const SolveResult adam = Solver(test::device(), p.plain, defaultLighting(), p.views, plainOptions(10)).runBaseline(BaselineMethod::Adam, 10, 0.1);
+    EXPECT_DOUBLE_EQ(sart.report.initialObjective, cgls.initialObjective);
+    EXPECT_DOUBLE_EQ(adam.report.initialObjective, cgls.initialObjective);
+    ASSERT_EQ(sart.report.iterations, 10);
+    std::cout << "[ measured ] objective / start after 10 iterations: CGLS " << fractionAt(cgls, 10) << ", SART sweeps "
+              << fractionAt(sart.report, 10) << ", Adam " << fractionAt(adam.report, 10) << "\n";
+    EXPECT_LT(fractionAt(sart.report, 10), 0.05);
+    EXPECT_LT(fractionAt(adam.report, 10), 0.9);
+    expectMonotone(sart.report);  // SART with bounds on a consistent problem: every sweep lowers it here
+    for (float x : sart.volume.emission()) ASSERT_GE(x, 0.0f);  // clamped to the bounds
+    // The result is what a fresh solver measures from it.
+    const SolveReport check = Solver(test::device(), sart.volume, defaultLighting(), p.views, plainOptions(1)).run().report;
+    EXPECT_NEAR(check.initialObjective / sart.report.finalObjective, 1.0, 1e-3);
+    SolveOptions smooth = plainOptions(5);
+    smooth.regularization.laplacian = 0.01;
+    EXPECT_THROW(Solver(test::device(), p.plain, defaultLighting(), p.views, smooth).runBaseline(BaselineMethod::Adam, 5, 0.1),
+                 InvalidArgument);
+}
