@@ -186,7 +186,7 @@ void strokeRace(GpuDevice& device, Renderer& renderer) {
         const SolveReport& r = out.report;
         if (std::getenv("VOLSTYLE_RACE_HISTORY")) {
             for (double f : r.objectiveHistory) std::fprintf(stderr, "%.4g ", f);
-            std::fprintf(stderr, " (%.1f ms/iteration: forward %.1f, back-projection %.1f, vectors %.1f)\n", (total - setup) * 1000 / std::max(1, r.iterations),
+            std::fprintf(stderr, " (rows %.0f ms; %.1f ms/iteration: forward %.1f, back-projection %.1f, vectors %.1f)\n", r.rowCacheMs, (total - setup) * 1000 / std::max(1, r.iterations),
                          r.forwardMs / std::max(1, r.iterations), r.adjointMs / std::max(1, r.iterations), r.vectorMs / std::max(1, r.iterations));
         }
         std::printf("| | %s | %d | %.2f | %.2f | %.4g → %.4g | %.4f → %.4f | %s | %s |\n", way.name, r.iterations, total, setup,

@@ -161,10 +161,85 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
     return r;
 }
 
+void Projector::mergeRows(size_t budgetBytes) {
+    size_t entries = 0;
+    for (const View& v : m_views) entries += v.rows->entries;
+    const int channels = m_views.front().rows->channels;
+    const size_t bytes = sparseRowsBytes(m_pixelCount, elementCount(), entries, channels);
+    if (entries == 0 || entries >= 0xffffffffu || m_stats.cacheBytes + bytes > budgetBytes ||
+        (long long)(entries * 4 * size_t(channels)) > m_device.capabilities().maxStorageBlockBytes)
+        return;
+    auto m = std::make_unique<SparseRows>();
+    m->rows = m_pixelCount, m->columns = elementCount(), m->entries = entries, m->channels = channels;
+    // Rows: each view's, one after another; their starts shifted by the entries before them.
+    std::vector<uint32_t> rowStart;
+    rowStart.reserve(m_pixelCount + 1);
+    std::vector<uint32_t> colCount(elementCount() + 1, 0), viewStarts;
+    m->rowIndex = gl::createBuffer(4 * entries, nullptr, GL_DYNAMIC_STORAGE_BIT, "merged-rows-index");
+    m->rowWeight = gl::createBuffer(4 * entries * size_t(channels), nullptr, GL_DYNAMIC_STORAGE_BIT, "merged-rows-weight");
+    size_t before = 0;
+    for (const View& v : m_views) {
+        const SparseRows& r = *v.rows;
+        viewStarts.resize(r.rows + 1);
+        glGetNamedBufferSubData(r.rowStart.id(), 0, GLsizeiptr(4 * (r.rows + 1)), viewStarts.data());
+        for (size_t i = 0; i < r.rows; ++i) rowStart.push_back(uint32_t(before + viewStarts[i]));
+        viewStarts.resize(r.columns + 1);
+        glGetNamedBufferSubData(r.colStart.id(), 0, GLsizeiptr(4 * (r.columns + 1)), viewStarts.data());
+        for (size_t e = 0; e < r.columns; ++e) colCount[e] += viewStarts[e + 1] - viewStarts[e];
+        if (r.entries > 0) {
+            glCopyNamedBufferSubData(r.rowIndex.id(), m->rowIndex.id(), 0, GLintptr(4 * before), GLsizeiptr(4 * r.entries));
+            glCopyNamedBufferSubData(r.rowWeight.id(), m->rowWeight.id(), 0, GLintptr(4 * before * size_t(channels)),
+                                     GLsizeiptr(4 * r.entries * size_t(channels)));
+        }
+        before += r.entries;
+    }
+    rowStart.push_back(uint32_t(entries));
+    m->rowStart = gl::createBuffer(4 * rowStart.size(), rowStart.data(), 0, "merged-rows-start");
+    exclusiveScan(colCount);  // counts -> starts (one extra total appended, unused)
+    colCount.pop_back();
+    m->colStart = gl::createBuffer(4 * colCount.size(), colCount.data(), 0, "merged-columns-start");
+    // Columns: each element's entries of every view, in view order (sparse_merge.comp).
+    m->colIndex = gl::createBuffer(4 * entries, nullptr, GL_DYNAMIC_STORAGE_BIT, "merged-columns-index");
+    m->colWeight = gl::createBuffer(4 * entries * size_t(channels), nullptr, GL_DYNAMIC_STORAGE_BIT, "merged-columns-weight");
+    const gl::Buffer cursor = zeroedBuffer(4 * elementCount(), "merged-columns-cursor");
+    gl::ShaderBuilder builder("sparse_merge.comp");
+    builder.define("VOLSTYLE_ROW_CHANNELS", channels);
+    glUseProgram(m_device.program(builder).id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColStart, m->colStart.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColCursor, cursor.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColIndex, m->colIndex.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColWeight, m->colWeight.id());
+    for (const View& v : m_views) {
+        if (v.rows->entries == 0) continue;
+        layout::SparseParams p;
+        p.count = {int(elementCount()), int(v.offset), 0, -1};
+        m_device.setParams(p);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowStart, v.rows->colStart.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowIndex, v.rows->colIndex.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowWeight, v.rows->colWeight.id());
+        glDispatchCompute(GLuint((elementCount() + layout::kWorkgroup1D - 1) / layout::kWorkgroup1D), 1, 1);
+        gl::barrierAfterComputeWrites();  // the next view appends after these
+    }
+    m_stats.cacheBytes += bytes;
+    m_merged = std::move(m);
+}
+
+void Projector::adoptMergedRows(std::shared_ptr<const SparseRows> rows) {
+    VOLSTYLE_CHECK(rows->rows, ==, m_pixelCount);
+    VOLSTYLE_CHECK(rows->columns, ==, elementCount());
+    if (m_merged) m_stats.cacheBytes -= sparseRowsBytes(m_merged->rows, m_merged->columns, m_merged->entries, m_merged->channels);
+    m_stats.cacheBytes += sparseRowsBytes(rows->rows, rows->columns, rows->entries, rows->channels);
+    m_merged = std::move(rows);
+}
+
 void Projector::adoptRows(size_t view, std::shared_ptr<const SparseRows> rows) {
     View& v = m_views.at(view);
     VOLSTYLE_CHECK(rows->rows, ==, size_t(v.camera.width) * v.camera.height);
     VOLSTYLE_CHECK(rows->columns, ==, elementCount());
+    if (m_merged) {  // built from the rows this replaces
+        m_stats.cacheBytes -= sparseRowsBytes(m_merged->rows, m_merged->columns, m_merged->entries, m_merged->channels);
+        m_merged.reset();
+    }
     if (!v.rows) m_stats.cachedViews++;
     else m_stats.cacheBytes -= sparseRowsBytes(v.rows->rows, v.rows->columns, v.rows->entries, v.rows->channels);
     m_stats.cacheBytes += sparseRowsBytes(rows->rows, rows->columns, rows->entries, rows->channels);
@@ -187,6 +262,7 @@ void Projector::cacheRows(size_t budgetBytes, int channels, const GpuVector* pix
         m_stats.cachedEntries += v.rows->entries;
         m_stats.cachedViews++;
     }
+    if (allCached() && m_views.size() > 1 && !m_merged) mergeRows(budgetBytes);
     m_device.finish();
     m_stats.cacheMs += msSince(t0);
 }
@@ -206,10 +282,14 @@ void Projector::timed(bool adjoint, const std::function<void()>& work) {
 
 void Projector::forward(const GpuVector& a, GpuVector& pixels) {
     timed(false, [&] {
-        dispatch(false, a, pixels);
         const Support* only = allCached() ? m_pixelSupport.get() : nullptr;
-        for (const View& v : m_views)
-            if (v.rows) sparseForward(m_device, *v.rows, a, pixels, v.offset, only);
+        if (m_merged) {
+            sparseForward(m_device, *m_merged, a, pixels, 0, only);
+        } else {
+            dispatch(false, a, pixels);
+            for (const View& v : m_views)
+                if (v.rows) sparseForward(m_device, *v.rows, a, pixels, v.offset, only);
+        }
         gl::barrierAfterComputeWrites();
     });
 }
@@ -217,6 +297,11 @@ void Projector::forward(const GpuVector& a, GpuVector& pixels) {
 void Projector::adjoint(const GpuVector& pixels, GpuVector& a) {
     timed(true, [&] {
         a.fill(0.0f);
+        if (m_merged) {
+            sparseAdjointAdd(m_device, *m_merged, pixels, 0, a, m_elementSupport.get());
+            gl::barrierAfterComputeWrites();
+            return;
+        }
         dispatch(true, a, pixels);
         for (const View& v : m_views) {
             if (!v.rows) continue;

@@ -68,6 +68,12 @@ public:
     /// camera, unknowns and pixel mask.
     void adoptRows(size_t view, std::shared_ptr<const SparseRows> rows);
     std::shared_ptr<const SparseRows> rowsOf(size_t view) const { return m_views[view].rows; }
+    /// Whether W and Wᵀ run as one gather over every view's rows at once (mergeRows).
+    bool merged() const { return m_merged != nullptr; }
+    /// Those rows, to keep for a later solve (SolveCache), and to take from one: rows merged from
+    /// exactly this projector's views' rows, in order.
+    std::shared_ptr<const SparseRows> mergedRows() const { return m_merged; }
+    void adoptMergedRows(std::shared_ptr<const SparseRows> rows);
     /// With every view cached: W computes only these pixels (others keep their values) and Wᵀ
     /// only these elements (others are 0). Null: all.
     void setSupports(std::shared_ptr<const Support> pixels, std::shared_ptr<const Support> elements);
@@ -87,6 +93,11 @@ private:
     void timed(bool adjoint, const std::function<void()>& work);
     /// Counts, then writes, one view's rows and columns; null when past the budget.
     std::unique_ptr<SparseRows> buildRows(const View& v, size_t budgetBytes, int channels, const GpuVector* pixelMask);
+    /// With every view cached: one row/column structure over all of them (rows concatenated,
+    /// each element's columns appended view after view by sparse_merge.comp), so W and Wᵀ are one
+    /// dispatch each instead of one per view. Skipped (per-view gathers stay) past `budgetBytes`
+    /// or one storage block.
+    void mergeRows(size_t budgetBytes);
 
     GpuDevice& m_device;
     GpuVolume& m_volume;
@@ -101,6 +112,7 @@ private:
     ProjectorStats m_stats;
     bool m_useFloatAtomics = false;
     std::shared_ptr<const Support> m_pixelSupport, m_elementSupport;
+    std::shared_ptr<const SparseRows> m_merged;  ///< every view's rows at once (mergeRows); null: per view
 };
 
 }  // namespace volstyle::core

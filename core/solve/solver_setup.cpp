@@ -279,10 +279,16 @@ void Solver::State::cacheOperator() {
         keys[v] = rowsKey(volume, lighting, opt, udims, views[v].camera, channels, sqrtWHost, W->viewRange(v).first);
         if (auto rows = cache->findRows(keys[v])) W->adoptRows(v, std::move(rows));
     }
+    // All views' rows as one (Projector::mergeRows), kept under the key of the rows it was made of.
+    std::string mergedKey = "merged";
+    for (const auto& k : keys) mergedKey += "|" + k;
+    if (cache && W->allCached())
+        if (auto merged = cache->findRows(mergedKey)) W->adoptMergedRows(std::move(merged));
     // Rows only for the pixels that count (a weight > 0): the others' rows would be multiplied by 0.
     W->cacheRows(opt.rowCacheBytes, channels, &sqrtW);
     for (size_t v = 0; v < views.size() && cache; ++v)
         if (auto rows = W->rowsOf(v)) cache->putRows(keys[v], std::move(rows));
+    if (cache && W->merged()) cache->putRows(mergedKey, W->mergedRows());
     const ProjectorStats& w = W->stats();
     report.rowCacheMs = w.cacheMs, report.rowCacheBytes = w.cacheBytes, report.cachedViews = w.cachedViews;
     if (!W->allCached()) return;
