@@ -8,8 +8,9 @@
 // (SolveOptions::rowCacheBytes = 0: W and Wᵀ march every ray each time instead of gathering from
 // the cached rows). "Seconds" are wall-clock from the solver's construction: everything counts
 // (set-up with the rows' cache and the preconditioner, the reach analysis, a coarse stage).
-// Usage: solver_race [--iterations N] [--only a|ct|stroke]. Prints tables, then one JSON line per
-// problem of (a).
+// Usage: solver_race [--iterations N] [--only a|b|c|ct|stroke] [--out DIR]. Prints tables, then one
+// JSON line per row of (a); writes DIR/solver_race_{a,ct,b,c}.png (objective / start against
+// seconds, log–log). Without --only: a, ct and stroke ((b) and (c) take minutes each).
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <numbers>
 #include <optional>
 #include <string>
@@ -24,6 +26,8 @@
 
 #include "../tests/common/stamped_cloud.h"
 #include "bench_util.h"
+#include "core/image/image_io.h"
+#include "log_plot.h"
 #include "core/base/stopwatch.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/renderer.h"
@@ -136,6 +140,27 @@ std::pair<std::string, Race> bestBaseline(GpuDevice& device, const Volume& start
     return best;
 }
 
+/// Objective / start against seconds for each row, log–log, coloured in the rows' order (red,
+/// orange, blue, grey, purple, green, black), written to `path`.
+void writePlot(const std::string& path, const std::vector<std::pair<std::string, Race>>& rows, double start) {
+    const Vec3 colours[] = {{0.85f, 0.1f, 0.1f}, {0.95f, 0.55f, 0.0f}, {0.1f, 0.35f, 0.85f}, {0.55f, 0.55f, 0.55f},
+                            {0.55f, 0.2f, 0.7f}, {0.1f, 0.6f, 0.2f}, {0.0f, 0.0f, 0.0f}};
+    double xmin = 1e300, xmax = 0, ymin = 1e300;
+    for (const auto& [name, r] : rows)
+        for (size_t i = 0; i < r.objective.size(); ++i) {
+            xmin = std::min(xmin, r.seconds[i]), xmax = std::max(xmax, r.seconds[i]);
+            if (r.objective[i] > 0) ymin = std::min(ymin, r.objective[i] / start);
+        }
+    bench::LogPlot plot(std::max(xmin, 1e-3), xmax, std::max(ymin, 1e-12), 1.0);
+    for (size_t k = 0; k < rows.size(); ++k) {
+        std::vector<std::pair<double, double>> pts;
+        for (size_t i = 0; i < rows[k].second.objective.size(); ++i) pts.push_back({rows[k].second.seconds[i], rows[k].second.objective[i] / start});
+        plot.series(pts, colours[k % 7]);
+    }
+    saveImage(path, plot.img);
+    std::printf("wrote %s\n", path.c_str());
+}
+
 Race coarseToFine(GpuDevice& device, const Setup& s, const Problem& p, int coarseIterations, int maxIterations) {
     SolveOptions opt = raceOptions(p.step, maxIterations);
     opt.coarseIterations = coarseIterations;
@@ -205,7 +230,7 @@ std::string seconds(double s);
 /// against SART's 20 sweeps and Adam on the same operators: the time to 10%, 1%, 0.1% of the
 /// start objective and to the objective SART's 20 sweeps reach (the issue: CGLS 71 s for 100
 /// iterations; a textbook SART's 20 sweeps ~2.3 s).
-void ctRace(GpuDevice& device, Renderer& renderer) {
+void ctRace(GpuDevice& device, Renderer& renderer, const std::string& outDir) {
     const Int3 dims{128, 128, 1};
     Volume truth(dims, unitBoxWorldFromIndex(dims));
     const Vec3d Lm{1.0, 1.0, 1.0};
@@ -258,6 +283,30 @@ void ctRace(GpuDevice& device, Renderer& renderer) {
                     seconds(r.timeTo(sartEnd / f0 * (1 + 1e-9), f0)).c_str(), r.seconds.back(), r.objective.back() / f0);
         std::fflush(stdout);
     }
+    writePlot(outDir + "/solver_race_ct.png", rows, f0);
+}
+
+/// The paper's configurations (issue #12's (b) and (c)): CGLS as it is (rows past the cache
+/// budget stay matrix-free) against the best Adam of a small sweep; the time to 1% of the start
+/// RMS (1e-4 of the objective) and to 10/1/0.1% of the objective.
+void paperRace(GpuDevice& device, Renderer& renderer, const Problem& p, int iterations, const std::string& outDir,
+               const std::string& tag) {
+    const Setup setup = setUp(renderer, p);
+    std::vector<std::pair<std::string, Race>> rows;
+    rows.push_back({"CGLS (the default)", solveRace(device, setup.plain, setup.views, raceOptions(p.step, iterations))});
+    rows.push_back(bestBaseline(device, setup.plain, setup.views, raceOptions(p.step, iterations), defaultLighting(),
+                                BaselineMethod::Adam, {0.03, 0.1}));
+    const double f0 = rows[0].second.objective.front();
+    std::printf("\n| %s | iterations | set-up s (rows) | s to 10%% | s to 1%% | s to 0.1%% | s to 1%% of the start RMS | s/iteration | end |\n"
+                "|---|---|---|---|---|---|---|---|---|\n", p.name.c_str());
+    for (const auto& [name, r] : rows) {
+        std::printf("| %s | %d | %.2f (%.2f) | %s | %s | %s | %s | %.2f | %.2g of the start |\n", name.c_str(), r.iterations, r.setupSeconds,
+                    r.rowsSeconds, seconds(r.timeTo(0.1, f0)).c_str(), seconds(r.timeTo(0.01, f0)).c_str(),
+                    seconds(r.timeTo(0.001, f0)).c_str(), seconds(r.timeTo(1e-4, f0)).c_str(),
+                    (r.seconds.back() - r.setupSeconds) / std::max(1, r.iterations), r.objective.back() / f0);
+        std::fflush(stdout);
+    }
+    writePlot(outDir + "/solver_race_" + tag + ".png", rows, f0);
 }
 
 std::string seconds(double s) {
@@ -271,16 +320,19 @@ std::string seconds(double s) {
 
 int main(int argc, char** argv) {
     int maxIterations = 40;
-    std::string only;  // empty: every table
+    std::string only;  // empty: tables a, ct and stroke (b and c take minutes: only when asked)
+    std::string outDir = "bench-results";
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--iterations") && i + 1 < argc) maxIterations = std::max(1, std::atoi(argv[++i]));
         else if (!std::strcmp(argv[i], "--only") && i + 1 < argc) only = argv[++i];
+        else if (!std::strcmp(argv[i], "--out") && i + 1 < argc) outDir = argv[++i];
         else {
-            std::fprintf(stderr, "usage: solver_race [--iterations N] [--only a|ct|stroke]\n");
+            std::fprintf(stderr, "usage: solver_race [--iterations N] [--only a|b|c|ct|stroke] [--out DIR]\n");
             return 2;
         }
     }
-    auto wanted = [&](const char* table) { return only.empty() || only == table; };
+    auto wanted = [&](const std::string& table) { return only.empty() ? table != "b" && table != "c" : only == table; };
+    std::filesystem::create_directories(outDir);
     spdlog::set_level(spdlog::level::warn);
     auto device = GpuDevice::create();
     Renderer renderer(*device);
@@ -325,8 +377,12 @@ int main(int argc, char** argv) {
                 j += (i ? "," : "") + std::string("[") + std::to_string(r.seconds[i]) + "," + std::to_string(r.objective[i] / start) + "]";
             json.push_back(j + "]}");
         }
+        writePlot(outDir + "/solver_race_a.png", rows, start);
     }
-    if (wanted("ct")) ctRace(*device, renderer);
+    // 256 steps along the volume's diagonal: 128·√3/256 voxels.
+    if (wanted("b")) paperRace(*device, renderer, {"(b) 128³, 2 × 480², 256 steps per diagonal", 128, 2, 480, 480, 0.866}, maxIterations, outDir, "b");
+    if (wanted("c")) paperRace(*device, renderer, {"(c) 128³, 10 × 640×360", 128, 10, 640, 360, 0.866}, maxIterations, outDir, "c");
+    if (wanted("ct")) ctRace(*device, renderer, outDir);
     if (wanted("stroke")) strokeRace(*device, renderer);
     std::printf("\n");
     for (const auto& j : json) std::printf("%s\n", j.c_str());
