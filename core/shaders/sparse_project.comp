@@ -60,7 +60,8 @@ void main() {
     uint first = start[i], last = start[i + 1u];
     uint inputOffset = uint(sp.count.y);
 #if VOLSTYLE_MARK
-    for (uint e = first; e < last; ++e) outputs[inputOffset + index[e]] = vec4(1.0);  // races store the same value
+    for (uint e = first; e < last; ++e)  // races store the same value; unfilled slots (weight 0) mark nothing
+        if (any(notEqual(weightOf(e), vec3(0.0)))) outputs[inputOffset + index[e]] = vec4(1.0);
 #else
     vec3 sum = vec3(0.0);
     for (uint e = first; e < last; ++e) sum += weightOf(e) * inputs[inputOffset + index[e]].rgb;

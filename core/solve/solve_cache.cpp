@@ -117,8 +117,15 @@ std::string lastSolveKey(const Volume& volume, const Lighting& lighting, const S
                                                                        options.mediumRadiance->z)
                                                          : "-",
                                   options.precondition ? 1 : 0);
-    // rendersKey names the unknown, the march, every grid but the unknowns' own and the lighting.
-    for (const SolveView& v : views) key += "|" + rendersKey(volume, lighting, options, v.camera, false);
+    // Every grid but the unknowns' own (an extinction solve's result is a new σ), the lighting, the
+    // march and the cameras.
+    const Unknown u = options.unknown;
+    key += fmt::format(":{}:{}:{}:{}", int(u), marchKey(options), boxKey(volume), lightingKey(lighting));
+    if (u != Unknown::Extinction) key += fmt::format(":σ{:x}", hashOf(volume.extinction()));
+    if (u != Unknown::Emission && u != Unknown::EmissionAlbedo)
+        key += fmt::format(":e{:x}", volume.hasEmission() ? hashOf(volume.emission()) : 0);
+    if (u != Unknown::Albedo && u != Unknown::EmissionAlbedo) key += fmt::format(":a{:x}", volume.hasAlbedo() ? hashOf(volume.albedo()) : 0);
+    for (const SolveView& v : views) key += "|" + cameraKey(v.camera);
     return key;
 }
 

@@ -315,8 +315,10 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
         const SolveProgress pr = st.recordIteration(it, fNew, t0, tIt, before);
         if (progress) progress(pr);
 
-        rep.stopReason = stopTest(f, fNew, cutShort, st.opt.tolerance, flat,
-                                  rep.local.active ? std::optional<double>(rep.initialObjective) : std::nullopt);
+        // A re-solve measures its decrease against the part of the objective it can move.
+        const double fixed = st.untouchedObjective;
+        rep.stopReason = stopTest(f - fixed, fNew - fixed, cutShort, st.opt.tolerance, flat,
+                                  rep.local.active ? std::optional<double>(rep.initialObjective - fixed) : std::nullopt);
         if (watchChange && rep.stopReason == StopReason::None) {
             // The largest change of any constrained pixel: (r_prev − r)/√w = W Δa at that pixel.
             const double change = maxComponent(st.ops.maxChange(st.rPrev, st.rImg, st.sqrtW));

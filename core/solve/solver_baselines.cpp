@@ -37,6 +37,8 @@ SolveResult Solver::runBaseline(BaselineMethod method, int iterations, double ra
     for (const auto& b : st.blocks)
         if (b.cLap > 0 || b.cId > 0) throw InvalidArgument("baseline methods solve the data term only: set the regularization to 0");
     SolveReport& rep = st.report;
+    if (rep.local.active)
+        throw InvalidArgument("baseline methods solve the whole problem: build the solver without a cache or with local_resolve off");
     st.viewRenders.clear();
     const auto t0 = Clock::now();
     auto measure = [&] {

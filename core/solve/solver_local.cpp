@@ -51,7 +51,9 @@ std::vector<uint32_t> withNeighbours(const std::vector<uint32_t>& elements, cons
 void Solver::State::restrictToStroke() {
     if (!cache) return;
     lastKey = lastSolveKey(volume, lighting, opt, udims, views);
-    if (!opt.localResolve || !W->allCached()) return;  // the marks below read every view's rows
+    // The marks below read every view's rows; and the unknowns must be the volume's own grid: a
+    // coarser one is resampled on the way in and out (a blur), so the rest would not stay put.
+    if (!opt.localResolve || !W->allCached() || !(udims == volume.dims())) return;
     const auto last = cache->findLastSolve(lastKey);
     if (!last || last->observations.size() != obsHost.size() || last->resultHash != unknownsHash(volume, opt.unknown))
         return;  // not the volume the last solve over these views left
@@ -99,6 +101,7 @@ void Solver::State::restrictToStroke() {
         for (size_t v = 0; v < views.size(); ++v) perView.push_back(ops.dot(rImg, rImg, W->viewRange(v)));
         regularizers = ops.dot(rLap, rLap) + ops.dot(rId, rId);
     };
+    const double constantBefore = constant.x + constant.y + constant.z;
     std::vector<Vec3d> wholeViews, localViews;
     Vec3d wholeRegularizers, localRegularizers;
     measure(wholeViews, wholeRegularizers);
@@ -113,6 +116,7 @@ void Solver::State::restrictToStroke() {
         constant += viewUntouched[v];
     }
     for (int c = 0; c < 3; ++c) constant[c] += std::max(0.0, wholeRegularizers[c] - localRegularizers[c]);
+    untouchedObjective = constant.x + constant.y + constant.z - constantBefore;
 
     report.local = {true, changed.size(), moving.size(), pixelCount};
     spdlog::info("solve: re-solve after a stroke: {} changed pixels see {} of {} hull unknowns, seen by {} of {} constrained pixels",

@@ -71,6 +71,7 @@ struct Solver::State {
     /// Per view, the squared residual of the pixels a re-solve after a stroke leaves untouched
     /// (they see no unknown that moves); added to each view's RMS. Empty: none.
     std::vector<Vec3d> viewUntouched;
+    double untouchedObjective = 0;  ///< all of that and the untouched regularizer rows: the objective's part a re-solve cannot move
     SolveCache* cache = nullptr;   ///< parts kept between solves (solve_cache.h); may be null
     SolveReport report;
 

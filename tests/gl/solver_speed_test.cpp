@@ -269,3 +269,24 @@ TEST(SolverSpeed, BaselinesRunOnTheSolversOwnSetUp) {
     EXPECT_THROW(Solver(test::device(), p.plain, defaultLighting(), p.views, smooth).runBaseline(BaselineMethod::Adam, 5, 0.1),
                  InvalidArgument);
 }
+
+TEST(SolverSpeed, TheLastSolveIsKeyedOnEverythingButTheUnknowns) {
+    // A re-solve after a stroke finds the last solve by a key that leaves out what that solve
+    // changed: the unknowns' own grids (an extinction solve's result is a new σ), never the rest.
+    const Problem p = stampedProblem();
+    SolveOptions emission = plainOptions(1), extinction = emission;
+    extinction.unknown = Unknown::Extinction;
+    Volume otherSigma = p.plain, otherEmission = p.plain;
+    for (float& s : otherSigma.extinction()) s *= 1.5f;
+    otherEmission.ensureEmission().assign(otherEmission.voxelCount() * 3, 0.25f);
+    const Int3 n = p.plain.dims();
+    auto key = [&](const Volume& v, const SolveOptions& o) { return lastSolveKey(v, defaultLighting(), o, n, p.views); };
+    EXPECT_EQ(key(p.plain, extinction), key(otherSigma, extinction));
+    EXPECT_NE(key(p.plain, emission), key(otherSigma, emission));
+    EXPECT_EQ(key(p.plain, emission), key(otherEmission, emission));
+    EXPECT_NE(key(p.plain, extinction), key(otherEmission, extinction));
+    EXPECT_NE(key(p.plain, emission), key(p.plain, extinction));
+    std::vector<SolveView> moved = p.views;
+    moved[1].camera.eye.x += 0.01;
+    EXPECT_NE(lastSolveKey(p.plain, defaultLighting(), emission, n, moved), key(p.plain, emission));
+}
