@@ -104,7 +104,7 @@ TEST(SolverSpeed, CoarseStartWarmsTheFineSolve) {
 TEST(SolverSpeed, CachedRowsGiveTheMatrixFreeSolve) {
     VOLSTYLE_REQUIRE_GL();
     // W and Wᵀ from the cached rows (the default) against marching every ray each time: the same
-    // iterates up to float rounding in the sums' order.
+    // iterates up to float rounding in the sums' order: the objectives agree to 1e-5 relative (issue #12).
     const Problem p = stampedProblem();
     const SolveOptions cached = plainOptions(8);
     SolveOptions marched = cached;
@@ -116,7 +116,7 @@ TEST(SolverSpeed, CachedRowsGiveTheMatrixFreeSolve) {
     EXPECT_EQ(b.cachedViews, 0u);
     ASSERT_EQ(a.objectiveHistory.size(), b.objectiveHistory.size());
     for (size_t i = 0; i < a.objectiveHistory.size(); ++i)
-        EXPECT_NEAR(a.objectiveHistory[i] / b.objectiveHistory[i], 1.0, 1e-4) << "iteration " << i;
+        EXPECT_NEAR(a.objectiveHistory[i] / b.objectiveHistory[i], 1.0, 1e-5) << "iteration " << i;
 }
 
 TEST(SolverSpeed, ASecondSolveTakesEveryUnchangedPartFromTheCache) {
