@@ -250,7 +250,9 @@ const solve = guard(async () => {
       const r = j.result.report;
       // Say when the paint asks what the chosen unknowns cannot give, and what would give it.
       const advice = r.reach && r.reach.advice ? ` — ${r.reach.advice}` : '';
-      status(`solved: ${r.iterations} iterations (${r.stop_reason}), version ${j.result.version}${advice}`,
+      // A re-solve after a stroke moves only what the repainted pixels see: say how much.
+      const local = r.local ? ` — re-solved the stroke: ${r.local.changed_pixels} repainted pixels, ${r.local.unknowns} of ${r.hull_unknowns} voxels moved` : '';
+      status(`solved: ${r.iterations} iterations (${r.stop_reason}) in ${(r.total_ms / 1000).toFixed(1)} s, version ${j.result.version}${local}${advice}`,
              advice ? 'warn' : 'ok');
       if (r.reach && r.reach.suggested_unknowns) $('unknowns').value = r.reach.suggested_unknowns.join(',');
       showSession(await call('GET', `/sessions/${state.sid}`));

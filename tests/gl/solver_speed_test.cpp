@@ -271,6 +271,7 @@ TEST(SolverSpeed, BaselinesRunOnTheSolversOwnSetUp) {
 }
 
 TEST(SolverSpeed, TheLastSolveIsKeyedOnEverythingButTheUnknowns) {
+    VOLSTYLE_REQUIRE_GL();  // the views are renders
     // A re-solve after a stroke finds the last solve by a key that leaves out what that solve
     // changed: the unknowns' own grids (an extinction solve's result is a new σ), never the rest.
     const Problem p = stampedProblem();

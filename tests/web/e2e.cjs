@@ -1,7 +1,8 @@
 // Browser end-to-end test: Debian's chromium driven headless by playwright-core. Loads the page,
 // uses the cloud session it creates, adds a view, paints a warm glow over it, uploads it as the
 // target, solves, waits for the progress bar to finish, and checks that the view's rendering moved
-// toward the target. Saves a screenshot. Usage: NODE_PATH=…/node_modules node e2e.cjs URL OUT.png
+// toward the target; then one more stroke and solve, which must be a re-solve of that stroke alone.
+// Saves a screenshot. Usage: NODE_PATH=…/node_modules node e2e.cjs URL OUT.png
 'use strict';
 const { openBrowser } = require('./browser.cjs');
 
@@ -56,6 +57,20 @@ try {
   // Emission only adds light: orange paint over a white cloud also asks for less blue, which no
   // emission can give, so the error cannot vanish; it must fall clearly (measured: 33.6 -> 28.4).
   if (!(after < 0.95 * before)) await fail(`the rendering did not move toward the target (${before} -> ${after})`);
+
+  // One more small stroke on the same canvas, uploaded and solved again: the page's paint → solve
+  // loop, where the server re-solves only what the stroke sees (issue #12) and the page says so.
+  await page.mouse.move(box.x + box.width * 0.45, box.y + box.height * 0.3);
+  await page.mouse.down();
+  await page.mouse.move(box.x + box.width * 0.55, box.y + box.height * 0.3, { steps: 4 });
+  await page.mouse.up();
+  await page.click('#upload-target');
+  await page.waitForFunction(() => document.getElementById('status').textContent.includes('target of v1 uploaded'), null, { timeout: 30000 });
+  await page.click('#solve');
+  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('solved'), null, { timeout: 300000 });
+  const second = await page.evaluate(() => document.getElementById('status').textContent);
+  console.log(`[ measured ] after one more stroke: ${second}`);
+  if (!second.includes('re-solved the stroke')) await fail(`the second solve was not a re-solve of the stroke: ${second}`);
   console.log('1 passed, 0 failed');
 } catch (e) {
   await fail(e.message);
