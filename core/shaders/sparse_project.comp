@@ -6,6 +6,7 @@
 // float rounding (the sums run in another order). VOLSTYLE_MARK = 1 reads no values: every entry
 // of the listed rows (or columns) sets its element (or pixel) to 1 — which unknowns a set of pixels
 // sees, and which pixels see a set of unknowns (the solver's local re-solve, solver_local.cpp).
+// VOLSTYLE_SCATTER = 1 applies W by columns to a mostly-zero c (Projector::forwardByColumns).
 #include "layout.h"
 
 #ifndef VOLSTYLE_MARK
@@ -27,9 +28,39 @@ layout(std140, binding = kBindingParams) uniform b_SparseParams {
 layout(std430, binding = kBindingSparseIn) readonly buffer b_In {
     vec4 inputs[];
 };
+#ifndef VOLSTYLE_SCATTER
+#define VOLSTYLE_SCATTER 0
+#endif
+#ifndef VOLSTYLE_HAS_FLOAT_ATOMICS
+#define VOLSTYLE_HAS_FLOAT_ATOMICS 0
+#endif
+#if VOLSTYLE_SCATTER
+// W c by columns, for a c that is 0 almost everywhere (what a bound clamped in a projected step):
+// only the non-zero elements' columns are read, their entries added to the pixels atomically.
+#if VOLSTYLE_HAS_FLOAT_ATOMICS
+layout(std430, binding = kBindingSparseOut) buffer b_Out {
+    float outputs[];
+};
+void scatterAdd(uint i, float v) { atomicAdd(outputs[i], v); }
+#else
+// No float atomics (core GL 4.5 has none): a compare-and-swap loop on the bits.
+layout(std430, binding = kBindingSparseOut) buffer b_Out {
+    uint outputBits[];
+};
+void scatterAdd(uint i, float v) {
+    uint seen = outputBits[i];
+    for (;;) {
+        uint expected = seen;
+        seen = atomicCompSwap(outputBits[i], expected, floatBitsToUint(uintBitsToFloat(expected) + v));
+        if (seen == expected) break;
+    }
+}
+#endif
+#else
 layout(std430, binding = kBindingSparseOut) buffer b_Out {
     vec4 outputs[];
 };
+#endif
 layout(std430, binding = kBindingSparseStart) readonly buffer b_Start {
     uint start[];
 };
@@ -59,7 +90,19 @@ void main() {
     uint i = o - uint(sp.count.z);
     uint first = start[i], last = start[i + 1u];
     uint inputOffset = uint(sp.count.y);
-#if VOLSTYLE_MARK
+#if VOLSTYLE_SCATTER
+    // Column o of the unknowns c (inputs); its pixels (after the output offset) receive w · c.
+    vec3 c = inputs[o].rgb;
+    if (c == vec3(0.0)) return;
+    uint outputOffset = uint(sp.count.y);
+    for (uint e = first; e < last; ++e) {
+        vec3 v = weightOf(e) * c;
+        uint q = 4u * (outputOffset + index[e]);
+        scatterAdd(q, v.r);
+        scatterAdd(q + 1u, v.g);
+        scatterAdd(q + 2u, v.b);
+    }
+#elif VOLSTYLE_MARK
     for (uint e = first; e < last; ++e)  // races store the same value; unfilled slots (weight 0) mark nothing
         if (any(notEqual(weightOf(e), vec3(0.0)))) outputs[inputOffset + index[e]] = vec4(1.0);
 #else

@@ -311,6 +311,16 @@ void Projector::adjoint(const GpuVector& pixels, GpuVector& a) {
     });
 }
 
+void Projector::forwardByColumns(const GpuVector& c, GpuVector& pixels) {
+    VOLSTYLE_CHECK(canForwardByColumns(), ==, true);
+    timed(false, [&] {
+        pixels.fill(0.0f);
+        sparseForwardByColumns(m_device, m_merged ? *m_merged : *m_views.front().rows, c, pixels, 0, m_elementSupport.get(),
+                               m_useFloatAtomics);
+        gl::barrierAfterComputeWrites();
+    });
+}
+
 void Projector::forwardView(size_t view, const GpuVector& a, GpuVector& pixels) {
     const View& v = m_views.at(view);
     timed(false, [&] {

@@ -48,6 +48,10 @@ public:
 
     void forward(const GpuVector& a, GpuVector& pixels);   ///< pixels = W a
     void adjoint(const GpuVector& pixels, GpuVector& a);   ///< a = Wᵀ pixels
+    /// pixels = W c by the columns of the cached rows, reading only the columns where c ≠ 0 (the
+    /// unknowns a bound clamped): cheap where c is sparse. Needs canForwardByColumns().
+    void forwardByColumns(const GpuVector& c, GpuVector& pixels);
+    bool canForwardByColumns() const { return m_merged || (allCached() && m_views.size() == 1); }
     /// One view's rows: its pixels of `pixels` = W_v a (the other views' pixels keep theirs), and
     /// a = W_vᵀ (its pixels of `pixels`). For methods that sweep the views (SART, solver_baselines.cpp).
     void forwardView(size_t view, const GpuVector& a, GpuVector& pixels);

@@ -167,12 +167,26 @@ bool Solver::State::projectedStep(const StepLength& step) {
     // others take the step cut at the first bound, which always lowers it.
     const Vec3d fBefore = objective();
     ops.axpy(step.alpha, p, a);
+    const bool byColumns = W->canForwardByColumns();
+    if (byColumns) ops.copy(a, z);  // z is free until the next direction: a + αp before the clamp
     ops.clamp(a, bounds);
     tmpU.fill(0.0f);  // d = a' − a, 0 off the vectors' support too
     ops.axpy(Vec3d(1.0), a, tmpU);
     ops.axpy(Vec3d(-1.0), aPrev, tmpU);
     ops.copy(aPrev, a);
-    applyA(tmpU, dImg, dLap);
+    if (byColumns) {
+        // A d = α A p + A c with c = a' − (a + αp), exactly 0 wherever no bound clamped: A p is
+        // qImg already, and A c reads only the clamped unknowns' columns (one forward saved).
+        ops.xpby(a, Vec3d(-1.0), z);  // a is back at aPrev: z = aPrev − (a + αp) ...
+        ops.axpy(Vec3d(1.0), tmpU, z);  // ... + d = a' − (a + αp)
+        W->forwardByColumns(z, dImg);
+        ops.multiply(sqrtW, dImg);
+        ops.axpy(step.alpha, qImg, dImg);
+        for (const auto& b : blocks)
+            if (b.cLap > 0) ops.laplacian(b.cLap, tmpU, hull, udims, dLap, b.range);
+    } else {
+        applyA(tmpU, dImg, dLap);
+    }
     move(Vec3d(1.0), tmpU, dImg, dLap);
     const Vec3d fProjected = objective();
     Vec3d undo(0.0), cut(0.0);

@@ -1,5 +1,6 @@
 #include "core/solve/sparse_rows.h"
 
+#include "core/base/errors.h"
 #include "core/gl/shader_builder.h"
 #include "core/shaders/layout.h"
 
@@ -28,7 +29,7 @@ namespace {
 
 /// W (rows) or Wᵀ (columns) over `only`'s part of this view, or with `mark` their entries' marks.
 void apply(GpuDevice& device, const SparseRows& rows, bool adjoint, const GpuVector& in, GpuVector& out,
-           size_t pixelOffset, const Support* only, bool mark = false) {
+           size_t pixelOffset, const Support* only, bool mark = false, bool scatter = false, bool floatAtomics = false) {
     size_t count = adjoint ? rows.columns : rows.rows;
     const size_t outputOffset = adjoint ? 0 : pixelOffset;
     int listFirst = -1;
@@ -39,6 +40,7 @@ void apply(GpuDevice& device, const SparseRows& rows, bool adjoint, const GpuVec
     }
     if (count == 0) return;
     layout::SparseParams p;
+    // Gathers read the input at count.y; a scatter (columns, unknowns in) writes pixels from there.
     p.count = {int(count), adjoint ? int(pixelOffset) : 0, int(outputOffset), listFirst};
     device.setParams(p);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSparseIn, in.id());
@@ -48,6 +50,11 @@ void apply(GpuDevice& device, const SparseRows& rows, bool adjoint, const GpuVec
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSparseWeight, (adjoint ? rows.colWeight : rows.rowWeight).id());
     gl::ShaderBuilder builder("sparse_project.comp");
     builder.define("VOLSTYLE_ADJOINT", adjoint ? 1 : 0).define("VOLSTYLE_ROW_CHANNELS", rows.channels).define("VOLSTYLE_MARK", mark ? 1 : 0);
+    if (scatter) {
+        builder.define("VOLSTYLE_SCATTER", 1);
+        if (floatAtomics)
+            builder.define("VOLSTYLE_HAS_FLOAT_ATOMICS", 1).extension("GL_NV_shader_atomic_float");
+    }
     glUseProgram(device.program(builder).id());
     glDispatchCompute(GLuint((count + layout::kWorkgroup1D - 1) / layout::kWorkgroup1D), 1, 1);
 }
@@ -57,6 +64,12 @@ void apply(GpuDevice& device, const SparseRows& rows, bool adjoint, const GpuVec
 void sparseMark(GpuDevice& device, const SparseRows& rows, bool columns, const Support& list, size_t pixelOffset,
                 GpuVector& marks) {
     apply(device, rows, columns, marks, marks, pixelOffset, &list, true);
+}
+
+void sparseForwardByColumns(GpuDevice& device, const SparseRows& rows, const GpuVector& c, GpuVector& pixels, size_t pixelOffset,
+                            const Support* only, bool floatAtomics) {
+    VOLSTYLE_CHECK(!floatAtomics || device.capabilities().hasFloatAtomics, ==, true);
+    apply(device, rows, true, c, pixels, pixelOffset, only, false, true, floatAtomics);
 }
 
 void sparseForward(GpuDevice& device, const SparseRows& rows, const GpuVector& a, GpuVector& pixels, size_t pixelOffset,

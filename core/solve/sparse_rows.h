@@ -39,6 +39,13 @@ void sparseForward(GpuDevice& device, const SparseRows& rows, const GpuVector& a
 void sparseAdjointAdd(GpuDevice& device, const SparseRows& rows, const GpuVector& pixels, size_t pixelOffset, GpuVector& a,
                       const Support* only = nullptr);
 
+/// pixels[pixelOffset + p] += (W c)_p by the view's columns (with `only`: those elements'), reading
+/// only the columns of elements where c ≠ 0 and adding atomically: cheap when c is 0 almost
+/// everywhere (the unknowns a bound clamped), where a row gather would read every entry. With
+/// GL_NV_shader_atomic_float (`floatAtomics`) or a compare-and-swap loop.
+void sparseForwardByColumns(GpuDevice& device, const SparseRows& rows, const GpuVector& c, GpuVector& pixels, size_t pixelOffset,
+                            const Support* only, bool floatAtomics);
+
 /// Sets marks[e] = 1 for every element e the view's rows of `list`'s pixels have an entry for
 /// (columns = false; `marks` over the elements), or marks[pixelOffset + p] = 1 for every pixel p
 /// the columns of `list`'s elements have one for (columns = true; `marks` over the pixels).

@@ -242,3 +242,34 @@ TEST(Projector, ExactTraversalKeepsTheAdjointIdentity) {
                     << "unknown " << int(u) << " basis " << int(basis) << " channel " << c;
         }
 }
+
+TEST(Projector, ForwardByColumnsIsTheRowGatherOnASparseVector) {
+    VOLSTYLE_REQUIRE_GL();
+    // W c for a c that is 0 but at a few unknowns (a projected step's clamped ones), by the columns
+    // (only those read, added atomically) against the row gather over all of W, with float atomics
+    // and with the compare-and-swap loop.
+    Problem prob = makeProblem(7);
+    GpuVolume gpu(prob.volume);
+    for (bool floatAtomics : {true, false}) {
+        if (floatAtomics && !test::device().capabilities().hasFloatAtomics) continue;
+        Projector W(test::device(), gpu, prob.lighting, Unknown::EmissionAlbedo, BasisType::Trilinear, prob.volume.dims(), 0.5);
+        W.setUseFloatAtomics(floatAtomics);
+        for (const auto& c : prob.cameras) W.addView(c);
+        W.cacheRows(size_t(1) << 30, weightChannels(prob.volume, prob.lighting, Unknown::EmissionAlbedo));
+        ASSERT_TRUE(W.canForwardByColumns());
+        std::vector<double> c(W.elementCount() * 4, 0.0);
+        const auto noise = randomVector(W.elementCount(), 3);
+        for (size_t e = 0; e < W.elementCount(); e += 37)
+            for (int k = 0; k < 3; ++k) c[4 * e + size_t(k)] = noise[4 * e + size_t(k)];
+        GpuVector gc(W.elementCount(), "c"), byRows(W.pixelCount(), "rows"), byColumns(W.pixelCount(), "columns");
+        gc.upload(toFloat(c));
+        W.forward(gc, byRows);
+        W.forwardByColumns(gc, byColumns);
+        const auto want = byRows.download(), got = byColumns.download();
+        double peak = 0, worst = 0;
+        for (size_t i = 0; i < want.size(); ++i) peak = std::max(peak, double(std::abs(want[i])));
+        for (size_t i = 0; i < want.size(); ++i) worst = std::max(worst, double(std::abs(want[i] - got[i])));
+        EXPECT_GT(peak, 0.0);
+        EXPECT_LE(worst, 1e-5 * peak) << (floatAtomics ? "float atomics" : "compare-and-swap");
+    }
+}
