@@ -172,7 +172,7 @@ Race coarseToFine(GpuDevice& device, const Setup& s, const Problem& p, int coars
 /// unknowns the stroke sees move), the whole problem with the first solve's cache
 /// (solve_cache.h), and the whole problem without it. Default options (smoothing, tolerance,
 /// bounds), as the page. Each row's end is measured by a fresh solver over the whole problem.
-void strokeRace(GpuDevice& device, Renderer& renderer) {
+void strokeRace(GpuDevice& device, Renderer& renderer, const std::string& outDir) {
     const Problem p{"(c) 64³, 4 × 256², emission", 64, 4, 256, 256, 0.5};
     Setup s = setUp(renderer, p);
     SolveOptions opt;
@@ -181,6 +181,13 @@ void strokeRace(GpuDevice& device, Renderer& renderer) {
     auto t0 = Clock::now();
     const SolveResult first = Solver(device, s.plain, defaultLighting(), s.views, opt, &cache).run();
     const double firstSeconds = msSince(t0) / 1000.0;
+    {
+        GpuVolume gpu(first.volume);
+        RenderSettings rs;
+        rs.stepVoxels = p.step;
+        for (size_t v : {size_t(0), size_t(1)})
+            saveImage(outDir + "/stroke_first_view" + std::to_string(v) + ".png", renderer.render(gpu, s.views[v].camera, defaultLighting(), rs));
+    }
     Image& target = s.views[0].target;
     for (int y = 0; y < target.height; ++y)
         for (int x = 0; x < target.width; ++x)
@@ -209,6 +216,13 @@ void strokeRace(GpuDevice& device, Renderer& renderer) {
         measure.maxIterations = 1;
         const SolveReport check = Solver(device, out.volume, defaultLighting(), s.views, measure).run().report;
         const SolveReport& r = out.report;
+        // What an artist sees: the painted view and another one, rendered from each result.
+        GpuVolume gpu(out.volume);
+        RenderSettings rs;
+        rs.stepVoxels = p.step;
+        const std::string tag = way.local ? "local" : way.cached ? "whole" : "whole_nocache";
+        for (size_t v : {size_t(0), size_t(1)})
+            saveImage(outDir + "/stroke_" + tag + "_view" + std::to_string(v) + ".png", renderer.render(gpu, s.views[v].camera, defaultLighting(), rs));
         if (std::getenv("VOLSTYLE_RACE_HISTORY")) {
             for (double f : r.objectiveHistory) std::fprintf(stderr, "%.4g ", f);
             std::fprintf(stderr, " (rows %.0f ms; %.1f ms/iteration: forward %.1f, back-projection %.1f, vectors %.1f)\n", r.rowCacheMs, (total - setup) * 1000 / std::max(1, r.iterations),
@@ -392,7 +406,7 @@ int main(int argc, char** argv) {
     if (wanted("b")) paperRace(*device, renderer, {"(b) 128³, 2 × 480², 256 steps per diagonal", 128, 2, 480, 480, 0.866}, maxIterations, outDir, "b");
     if (wanted("c")) paperRace(*device, renderer, {"(c) 128³, 10 × 640×360", 128, 10, 640, 360, 0.866}, maxIterations, outDir, "c");
     if (wanted("ct")) ctRace(*device, renderer, outDir);
-    if (wanted("stroke")) strokeRace(*device, renderer);
+    if (wanted("stroke")) strokeRace(*device, renderer, outDir);
     std::printf("\n");
     for (const auto& j : json) std::printf("%s\n", j.c_str());
 }

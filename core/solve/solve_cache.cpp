@@ -42,6 +42,16 @@ std::string lightingKey(const Lighting& l) {
     return key;
 }
 
+/// The emission and albedo grids, but those `u` solves for (a solve changes only its own).
+std::string otherPropertiesKey(const Volume& v, Unknown u) {
+    const bool ownsEmission = u == Unknown::Emission || u == Unknown::EmissionAlbedo;
+    const bool ownsAlbedo = u == Unknown::Albedo || u == Unknown::EmissionAlbedo;
+    std::string key;
+    if (!ownsEmission) key += fmt::format(":e{:x}", v.hasEmission() ? hashOf(v.emission()) : 0);
+    if (!ownsAlbedo) key += fmt::format(":a{:x}", v.hasAlbedo() ? hashOf(v.albedo()) : 0);
+    return key;
+}
+
 std::string marchKey(const SolveOptions& o) { return fmt::format("step{}:{}", o.stepVoxels, o.exactTraversal ? "exact" : "march"); }
 
 }  // namespace
@@ -97,13 +107,9 @@ std::string rowsKey(const Volume& volume, const Lighting& lighting, const SolveO
 std::string rendersKey(const Volume& volume, const Lighting& lighting, const SolveOptions& options, const Camera& camera,
                        bool withAlbedoOne) {
     const Unknown u = options.unknown;
-    const bool ownsEmission = u == Unknown::Emission || u == Unknown::EmissionAlbedo;
-    const bool ownsAlbedo = u == Unknown::Albedo || u == Unknown::EmissionAlbedo;
-    std::string key = fmt::format("renders:{}:{}:{}:{}:{}", int(u), withAlbedoOne ? 1 : 0, marchKey(options), gridKey(volume),
-                                  lightingKey(lighting));
-    if (!ownsEmission) key += fmt::format(":e{:x}", volume.hasEmission() ? hashOf(volume.emission()) : 0);
-    if (!ownsAlbedo) key += fmt::format(":a{:x}", volume.hasAlbedo() ? hashOf(volume.albedo()) : 0);
-    return key + ":" + cameraKey(camera);
+    return fmt::format("renders:{}:{}:{}:{}:{}", int(u), withAlbedoOne ? 1 : 0, marchKey(options), gridKey(volume),
+                       lightingKey(lighting)) +
+           otherPropertiesKey(volume, u) + ":" + cameraKey(camera);
 }
 
 std::string lastSolveKey(const Volume& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,
@@ -122,9 +128,7 @@ std::string lastSolveKey(const Volume& volume, const Lighting& lighting, const S
     const Unknown u = options.unknown;
     key += fmt::format(":{}:{}:{}:{}", int(u), marchKey(options), boxKey(volume), lightingKey(lighting));
     if (u != Unknown::Extinction) key += fmt::format(":σ{:x}", hashOf(volume.extinction()));
-    if (u != Unknown::Emission && u != Unknown::EmissionAlbedo)
-        key += fmt::format(":e{:x}", volume.hasEmission() ? hashOf(volume.emission()) : 0);
-    if (u != Unknown::Albedo && u != Unknown::EmissionAlbedo) key += fmt::format(":a{:x}", volume.hasAlbedo() ? hashOf(volume.albedo()) : 0);
+    key += otherPropertiesKey(volume, u);
     for (const SolveView& v : views) key += "|" + cameraKey(v.camera);
     return key;
 }

@@ -43,6 +43,10 @@ double sum(const Vec3d& v) { return v.x + v.y + v.z; }
 void Solver::State::applyA(const GpuVector& x, GpuVector& img, GpuVector& lap) {
     W->forward(x, img);
     ops.multiply(sqrtW, img);
+    applyLaplacian(x, lap);
+}
+
+void Solver::State::applyLaplacian(const GpuVector& x, GpuVector& lap) {
     for (const auto& b : blocks)
         if (b.cLap > 0) ops.laplacian(b.cLap, x, hull, udims, lap, b.range);  // blocks without stay 0
 }
@@ -182,8 +186,7 @@ bool Solver::State::projectedStep(const StepLength& step) {
         W->forwardByColumns(z, dImg);
         ops.multiply(sqrtW, dImg);
         ops.axpy(step.alpha, qImg, dImg);
-        for (const auto& b : blocks)
-            if (b.cLap > 0) ops.laplacian(b.cLap, tmpU, hull, udims, dLap, b.range);
+        applyLaplacian(tmpU, dLap);
     } else {
         applyA(tmpU, dImg, dLap);
     }

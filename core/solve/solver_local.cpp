@@ -126,8 +126,8 @@ void Solver::State::restrictToStroke() {
 void Solver::State::rememberSolve(const Volume& result) {
     if (!cache || lastKey.empty()) return;
     auto last = std::make_shared<LastSolve>();
-    last->observations = obsHost;
-    last->weights = rawWeightHost;
+    last->observations = std::move(obsHost);  // the solve is over: nothing reads them again
+    last->weights = std::move(rawWeightHost);
     last->resultHash = unknownsHash(result, opt.unknown);
     cache->putLastSolve(lastKey, std::move(last));
 }

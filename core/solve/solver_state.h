@@ -97,7 +97,7 @@ struct Solver::State {
     /// the volume this one starts from and few pixels changed, restricts the solve to the
     /// unknowns those pixels see and the pixels that see them.
     void restrictToStroke();
-    /// Leaves this solve's observations and result in the cache for the next one.
+    /// Leaves this solve's observations (moved out: the solve is over) and result in the cache for the next one.
     void rememberSolve(const Volume& result);
     /// Coarse to fine: solves opt.coarseIterations on half the resolution and starts from it.
     void warmStartFromCoarse(const std::atomic<bool>* cancel);
@@ -105,6 +105,7 @@ struct Solver::State {
 
     // The operator and residuals (solver.cpp).
     void applyA(const GpuVector& x, GpuVector& img, GpuVector& lap);  // [img; lap] = A x (identity rows implicit)
+    void applyLaplacian(const GpuVector& x, GpuVector& lap);          // lap = the Laplacian rows of A x
     /// Moves a by step·x with residuals [rImg; rLap; rId] updated by the matching A x = [img; lap].
     void move(const Vec3d& step, const GpuVector& x, const GpuVector& img, const GpuVector& lap);
     void applyAt();  // s from rImg, rLap, rId
