@@ -111,6 +111,51 @@ V3<S> LightDepthLookup<S>::at(const V3<S>& p) const {
     return V3<S>(S(0));
 }
 
+/// The environment's lobes as the GL path holds them (core/render/lobe_volumes.h): per lobe the
+/// transmittance e^{−τ} at the nodes of the light volumes' grid, τ by `method`, trilinear between.
+template <typename S>
+struct LobesRef {
+    std::vector<Vec3d> direction, irradiance;  // toward the lobe; its radiance × solid angle
+    std::vector<std::vector<S>> transmittance;  // per lobe, 3 per node
+    Int3 dims;
+    V3<S> scale;
+
+    LobesRef(const Volume& volume, const EnvironmentLight& env, double stepVoxels, LightDepthMethod method) {
+        if (!env.active()) return;
+        const std::vector<Vec3d> radiance = lobeRadiance(env);
+        const LobeBasis basis = env.basis();
+        const std::vector<double> omega = basis.solidAngles();
+        const Int3 n = volume.dims();
+        dims = lobeGridDims(n, env.lightVolumeResolution);
+        scale = V3<S>(S(dims.x) / S(n.x), S(dims.y) / S(n.y), S(dims.z) / S(n.z));
+        for (int i = 0; i < basis.size(); ++i) {
+            if (maxComponent(radiance[size_t(i)]) <= 0) continue;
+            direction.push_back(basis.directions[size_t(i)]);
+            irradiance.push_back(radiance[size_t(i)] * omega[size_t(i)]);
+            const LightDepthLookup<S> depth(volume, basis.directions[size_t(i)], stepVoxels, method);
+            std::vector<S> t(size_t(dims.volume()) * 3);
+            for (int k = 0; k < dims.z; ++k)
+                for (int j = 0; j < dims.y; ++j)
+                    for (int a = 0; a < dims.x; ++a) {
+                        const V3<S> node{S(a), S(j), S(k)};
+                        const V3<S> tau = depth.at((node + V3<S>(S(0.5))) / scale - V3<S>(S(0.5)));
+                        const size_t idx = 3 * ((size_t(k) * dims.y + size_t(j)) * dims.x + size_t(a));
+                        t[idx] = std::exp(-tau.x), t[idx + 1] = std::exp(-tau.y), t[idx + 2] = std::exp(-tau.z);
+                    }
+            transmittance.push_back(std::move(t));
+        }
+    }
+
+    /// Σ_i p(ω_i·(−ω)) E_i T_i(p) at index-space point p.
+    V3<S> inScattering(const V3<S>& p, const V3<S>& dir, const Phase& ph) const {
+        V3<S> sum(S(0));
+        const V3<S> q = (p + V3<S>(S(0.5))) * scale - V3<S>(S(0.5));
+        for (size_t i = 0; i < direction.size(); ++i)
+            sum += toS<S>(irradiance[i]) * trilinear<S>(transmittance[i], dims, q) * phase<S>(ph, dot(toS<S>(direction[i]), -dir));
+        return sum;
+    }
+};
+
 template <typename S>
 Image renderReference(const Volume& volume, const Camera& camera, const Lighting& lighting, double stepVoxels,
                       LightDepthMethod method) {
@@ -126,6 +171,7 @@ Image renderReference(const Volume& volume, const Camera& camera, const Lighting
         lights.push_back(&l);
         depths.emplace_back(volume, l.direction, stepVoxels, method);
     }
+    const LobesRef<S> lobes(volume, lighting.environment, stepVoxels, method);
 
     Image image(camera.width, camera.height);
     const V3<S> eyeIndex = toS<S>(indexFromWorld.applyPoint(camera.eye));
@@ -143,7 +189,7 @@ Image renderReference(const Volume& volume, const Camera& camera, const Lighting
                     const V3<S> p = eyeIndex + d * seg.mid(s);
                     const V3<S> sigma = trilinear<S>(volume.extinction(), n, p);
                     V3<S> Lm = volume.hasEmission() ? trilinear<S>(volume.emission(), n, p) : V3<S>(S(0));
-                    if (!lights.empty()) {
+                    if (!lights.empty() || !lobes.direction.empty()) {
                         V3<S> albedo = volume.hasAlbedo() ? trilinear<S>(volume.albedo(), n, p) : V3<S>(S(1));
                         V3<S> scat(S(0));
                         for (size_t l = 0; l < lights.size(); ++l) {
@@ -152,6 +198,7 @@ Image renderReference(const Volume& volume, const Camera& camera, const Lighting
                             V3<S> Tl(std::exp(-tau.x), std::exp(-tau.y), std::exp(-tau.z));
                             scat += toS<S>(lights[l]->irradiance) * Tl * phase<S>(lighting.phase, cosTheta);
                         }
+                        if (!lobes.direction.empty()) scat += lobes.inScattering(p, dir, lighting.phase);
                         Lm += albedo * scat;
                     }
                     const V3<S> tau = sigma * seg.dt;

@@ -53,11 +53,11 @@ const gl::Program& GpuDevice::program(const gl::ShaderBuilder& builder) {
     return it->second;
 }
 
-void GpuDevice::setParams(std::type_index block, const void* data, size_t bytes) {
+void GpuDevice::setParams(std::type_index block, const void* data, size_t bytes, int binding) {
     gl::Buffer& buffer = m_programs->paramsByBlock[block];
     if (!buffer) buffer = gl::createBuffer(bytes, nullptr, GL_DYNAMIC_STORAGE_BIT, "params");
     glNamedBufferSubData(buffer.id(), 0, GLsizeiptr(bytes), data);
-    glBindBufferBase(GL_UNIFORM_BUFFER, layout::kBindingParams, buffer.id());
+    glBindBufferBase(GL_UNIFORM_BUFFER, GLuint(binding), buffer.id());
 }
 
 }  // namespace volstyle::core

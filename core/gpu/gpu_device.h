@@ -40,19 +40,20 @@ public:
 
     /// The compiled program of a shader variant: compiled once, then cached by its variant key.
     const gl::Program& program(const gl::ShaderBuilder& builder);
-    /// Uploads a parameter block (layout.h) and binds it at kBindingParams for the next
-    /// dispatches. Each block type has a buffer of its own, so the vector kernels' updates never
-    /// rewrite the buffer a march kernel still reads (drivers would stall or copy).
+    /// Uploads a parameter block (layout.h) and binds it at uniform binding `binding`
+    /// (kBindingParams, 0, unless the block has a binding of its own) for the next dispatches.
+    /// Each block type has a buffer of its own, so the vector kernels' updates never rewrite the
+    /// buffer a march kernel still reads (drivers would stall or copy).
     template <typename Block>
-    void setParams(const Block& block) {
-        setParams(std::type_index(typeid(Block)), &block, sizeof(Block));
+    void setParams(const Block& block, int binding = 0) {
+        setParams(std::type_index(typeid(Block)), &block, sizeof(Block), binding);
     }
     /// Derived resources shared by every engine (light-depth volumes, environment textures).
     ResourceCache& cache() { return m_cache; }
 
 private:
     struct Programs;
-    void setParams(std::type_index block, const void* data, size_t bytes);
+    void setParams(std::type_index block, const void* data, size_t bytes, int binding);
     GpuDevice(std::unique_ptr<gl::Context> owned, gl::Context& context);
 
     std::unique_ptr<gl::Context> m_owned;

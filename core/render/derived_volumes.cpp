@@ -40,23 +40,21 @@ void updateOccupancy(GpuDevice& device, GpuVolume& volume, RenderStats& stats) {
     stats.occupancyMs += msSince(t0);
 }
 
-std::string lightDepthKey(const GpuVolume& volume, const Vec3d& direction, const RenderSettings& march) {
+std::string extinctionKey(const GpuVolume& volume) {
     const Mat4& m = volume.worldFromIndex();
-    std::string key = fmt::format("light-depth:{}:{}x{}x{}:{},{},{}:{}:", volume.extinctionVersion(), volume.dims().x,
-                                  volume.dims().y, volume.dims().z, direction.x, direction.y, direction.z,
-                                  march.stepVoxels);
+    std::string key = fmt::format("{}:{}x{}x{}:", volume.extinctionVersion(), volume.dims().x, volume.dims().y, volume.dims().z);
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 4; ++c) key += fmt::format("{},", m(r, c));  // shortest round-trip: exact
     return key;
 }
 
-std::shared_ptr<const LightDepthVolume> lightDepthVolume(GpuDevice& device, const GpuVolume& volume,
-                                                         const DirectionalLight& light, const RenderSettings& march,
-                                                         RenderStats& stats, const WorkBudget& budget) {
-    const Vec3d dir = normalize(light.direction);
-    const std::string key = lightDepthKey(volume, dir, march);
-    if (auto cached = device.cache().find<LightDepthVolume>(key)) return cached;
+std::string lightDepthKey(const GpuVolume& volume, const Vec3d& direction, const RenderSettings& march) {
+    return fmt::format("light-depth:{}:{},{},{}:{}", extinctionKey(volume), direction.x, direction.y, direction.z, march.stepVoxels);
+}
 
+std::shared_ptr<LightDepthVolume> computeLightDepth(GpuDevice& device, const GpuVolume& volume, const Vec3d& towardLight,
+                                                   const RenderSettings& march, RenderStats& stats, const WorkBudget& budget) {
+    const Vec3d dir = normalize(towardLight);
     const auto t0 = Clock::now();
     auto result = std::make_shared<LightDepthVolume>();
     result->grid = makeLightGrid(volume.dims(), volume.worldFromIndex().inverseAffine(), dir);
@@ -99,7 +97,15 @@ std::shared_ptr<const LightDepthVolume> lightDepthVolume(GpuDevice& device, cons
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory building a light-depth volume");
     stats.lightMs += msSince(t0);
     stats.lightVolumesRecomputed++;
-    return device.cache().insert<LightDepthVolume>(key, std::move(result));
+    return result;
+}
+
+std::shared_ptr<const LightDepthVolume> lightDepthVolume(GpuDevice& device, const GpuVolume& volume,
+                                                         const DirectionalLight& light, const RenderSettings& march,
+                                                         RenderStats& stats, const WorkBudget& budget) {
+    const std::string key = lightDepthKey(volume, normalize(light.direction), march);
+    if (auto cached = device.cache().find<LightDepthVolume>(key)) return cached;
+    return device.cache().insert<LightDepthVolume>(key, computeLightDepth(device, volume, light.direction, march, stats, budget));
 }
 
 namespace {

@@ -23,6 +23,9 @@ namespace volstyle::core {
 /// Recomputes the occupancy bricks (occupancy.comp) if the extinction changed since.
 void updateOccupancy(GpuDevice& device, GpuVolume& volume, RenderStats& stats);
 
+/// The part of a cache key that names the extinction grid: its version, dims and transform.
+std::string extinctionKey(const GpuVolume& volume);
+
 /// The cache key of a light-depth volume: everything light_depth.comp reads — the extinction
 /// (its version), the grid (dims, transform), the light's direction and the step.
 std::string lightDepthKey(const GpuVolume& volume, const Vec3d& direction, const RenderSettings& march);
@@ -33,6 +36,12 @@ struct LightDepthVolume {
     LightGrid grid;
     gl::Texture texture;
 };
+
+/// The light-depth volume toward `towardLight` (light_depth.comp), computed now and not cached
+/// (the environment's lobes resample it into their light volumes and drop it).
+std::shared_ptr<LightDepthVolume> computeLightDepth(GpuDevice& device, const GpuVolume& volume, const Vec3d& towardLight,
+                                                   const RenderSettings& march, RenderStats& stats,
+                                                   const WorkBudget& budget = WorkBudget());
 
 /// The light-depth volume of `light` (light_depth.comp), from the cache or computed now, in
 /// chunks checked against `budget` (a pass stopped early caches nothing). Needs current occupancy.

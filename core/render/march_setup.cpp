@@ -1,5 +1,6 @@
 #include "core/render/march_setup.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -19,9 +20,16 @@ double maxPhase(const Phase& phase) {
 
 /// An upper bound on the radiance a ray can gather per unit opacity (early termination):
 /// L_m ≤ max L_e + max ρ · Σ p_max E_l (ρ ≤ 1, T_l ≤ 1); the background is bounded by its max.
-double radianceBound(const GpuVolume& volume, const Lighting& lighting, const EnvironmentTexture* environment) {
+double radianceBound(const GpuVolume& volume, const Lighting& lighting, const EnvironmentTexture* environment,
+                     const MarchSetup& setup) {
     double bound = volume.maxEmission();
     for (const auto& l : lighting.lights) bound += maxPhase(lighting.phase) * maxComponent(l.irradiance);
+    if (setup.lobes)
+        for (int i = 0; i < setup.lobes->lobes; ++i) {
+            const auto& d = setup.lobeParams.direction[i];
+            const auto& r = setup.lobeParams.radiance[i];
+            bound += maxPhase(lighting.phase) * d.w * std::max({r.x, r.y, r.z});
+        }
     return bound + (environment ? environment->maxValue : maxComponent(lighting.background.color));
 }
 
@@ -61,7 +69,24 @@ MarchSetup prepareMarch(GpuDevice& device, GpuVolume& volume, const Camera& came
         p.lightGridFromIndex[i] = toGl(setup.lightDepth[i]->grid.gridFromIndex);
         p.lightGridDims[i] = i4(setup.lightDepth[i]->grid.dims);
     }
-    p.march.z = float(radianceBound(volume, lighting, environment.get()));
+    // The environment's lobes, when any is lit: their light volumes (cached) and parameters.
+    if (lighting.environment.active()) {
+        const std::vector<Vec3d> radiance = lobeRadiance(lighting.environment);
+        if (std::any_of(radiance.begin(), radiance.end(), [](const Vec3d& r) { return maxComponent(r) > 0; })) {
+            const LobeBasis basis = lighting.environment.basis();
+            setup.lobes = lobeLightVolumes(device, volume, basis, lighting.environment.lightVolumeResolution, settings, stats, budget);
+            const std::vector<double> omega = basis.solidAngles();
+            for (int i = 0; i < basis.size(); ++i) {
+                setup.lobeParams.direction[i] = f4(basis.directions[size_t(i)], omega[size_t(i)]);
+                setup.lobeParams.radiance[i] = f4(radiance[size_t(i)]);
+            }
+            const LobeLightVolumes& lv = *setup.lobes;
+            p.lobeGrid = {lv.dims.x, lv.dims.y, lv.dims.z, lv.lobes};
+            p.lobeScale = {float(lv.dims.x) / float(volume.dims().x), float(lv.dims.y) / float(volume.dims().y),
+                           float(lv.dims.z) / float(volume.dims().z), float(lv.channels)};
+        }
+    }
+    p.march.z = float(radianceBound(volume, lighting, environment.get(), setup));
     return setup;
 }
 
@@ -72,6 +97,10 @@ void bindMarch(GpuDevice& device, const GpuVolume& volume, const MarchSetup& set
     if (setup.environment) glBindTextureUnit(layout::kUnitEnvironment, setup.environment->id());
     for (size_t i = 0; i < setup.lightDepth.size(); ++i)
         glBindTextureUnit(GLuint(layout::kUnitLightDepth0 + i), setup.lightDepth[i]->texture.id());
+    if (setup.lobes) {
+        device.setParams(setup.lobeParams, layout::kBindingLobeParams);
+        glBindTextureUnit(layout::kUnitLobeTransmittance, setup.lobes->texture.id());
+    }
 }
 
 }  // namespace volstyle::core

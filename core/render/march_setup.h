@@ -16,6 +16,7 @@
 #include "core/gpu/gpu_device.h"
 #include "core/render/derived_volumes.h"
 #include "core/render/gpu_volume.h"
+#include "core/render/lobe_volumes.h"
 #include "core/render/params.h"
 #include "core/render/render_stats.h"
 #include "core/shaders/layout.h"
@@ -27,13 +28,17 @@ struct MarchSetup {
     /// Light-depth volumes of the lights with non-zero irradiance, in lightDirection[] order.
     std::vector<std::shared_ptr<const LightDepthVolume>> lightDepth;
     std::shared_ptr<const gl::Texture> environment;  ///< null without an environment map
+    /// The environment's lobes when they light the medium (null otherwise: no lobes, or all dark),
+    /// and their directions, solid angles and radiances.
+    std::shared_ptr<const LobeLightVolumes> lobes;
+    layout::LobeParams lobeParams;
 };
 
 /// Updates occupancy if stale, finds or computes the derived volumes, fills the uniform block.
 /// Light-depth passes run under `budget` (OverBudget or Cancelled between chunks).
 MarchSetup prepareMarch(GpuDevice& device, GpuVolume& volume, const Camera& camera, const Lighting& lighting,
                         const RenderSettings& settings, RenderStats& stats, const WorkBudget& budget = WorkBudget());
-/// Uploads the block and binds extinction, occupancy, environment and light-depth textures.
+/// Uploads the blocks and binds extinction, occupancy, environment, light-depth and lobe textures.
 void bindMarch(GpuDevice& device, const GpuVolume& volume, const MarchSetup& setup);
 
 }  // namespace volstyle::core

@@ -10,6 +10,7 @@
 
 #include "core/image/image.h"
 #include "core/math/vec.h"
+#include "core/render/environment_lobes.h"
 
 namespace volstyle::core {
 
@@ -80,9 +81,36 @@ struct Background {
 
 constexpr int kMaxLights = 4;
 
+/// Environment lighting (SPEC §8): the sphere (or its upper half) as N lobes of constant radiance
+/// (core/render/environment_lobes.h), each lighting the volume like a directional light from its
+/// centre with irradiance radiance × its cell's solid angle, through a light volume of its own
+/// (the transmittance toward it, core/render/lobe_volumes.h). The `lights` unknown solves for
+/// `radiance`.
+struct EnvironmentLight {
+    int lobes = 0;  ///< 0: the environment does not light the volume
+    LobeDomain domain = LobeDomain::Sphere;
+    /// Per lobe, linear RGB radiance; empty: projected from `map` (lobeRadiance()).
+    std::vector<Vec3d> radiance;
+    std::shared_ptr<const Image> map;  ///< the lat-long map it is fitted to, if any
+    double strength = 1;                ///< multiplies the radiance
+    /// Nodes of the light volumes' grid along the volume's longest axis (the others in
+    /// proportion); the extinction's own dims when smaller.
+    int lightVolumeResolution = 64;
+
+    bool active() const { return lobes > 0; }
+    LobeBasis basis() const { return LobeBasis::make(lobes, domain); }
+};
+constexpr int kMinLightVolumeResolution = 2;
+constexpr int kMaxLightVolumeResolution = 256;
+
+/// The lobes' radiances times the strength: `radiance` as given, or the map projected onto the
+/// basis (remembered for the last few maps, so a render does not project it again).
+std::vector<Vec3d> lobeRadiance(const EnvironmentLight& environment);
+
 struct Lighting {
     std::vector<DirectionalLight> lights{DirectionalLight{}};  ///< at most kMaxLights
     Background background;
+    EnvironmentLight environment;
     Phase phase;
 
     std::vector<FieldProblem> check() const;

@@ -47,6 +47,7 @@ Image Renderer::march(GpuVolume& volume, const Camera& camera, const Lighting& l
     builder.define("VOLSTYLE_HAS_EMISSION", volume.hasEmission() ? 1 : 0)
         .define("VOLSTYLE_HAS_ALBEDO", volume.hasAlbedo() ? 1 : 0)
         .define("VOLSTYLE_NUM_LIGHTS", (long long)setup.lightDepth.size())
+        .define("VOLSTYLE_HAS_LOBES", setup.lobes ? 1 : 0)
         .define("VOLSTYLE_HAS_ENVIRONMENT", setup.environment ? 1 : 0)
         .define("VOLSTYLE_SKIP_EMPTY", settings.skipEmptySpace ? 1 : 0)
         .define("VOLSTYLE_HW_FILTER", settings.hardwareFilter ? 1 : 0)

@@ -97,6 +97,19 @@ struct MarchParams {
     VS_MAT4 lightGridFromIndex[kLightSlots];  /* index-space point -> grid coordinates (nodes at integers) */
     VS_IVEC4 lightGridDims[kLightSlots];      /* xyz: nodes; z runs away from the light */
     VS_MAT4 indexFromLightGrid;               /* light_depth.comp: the inverse, for light lightKernel.x */
+    /* Environment lobes (core/render/lobe_volumes.h): the transmittance toward each lobe on a grid of its own. */
+    VS_IVEC4 lobeGrid;    /* xyz: nodes of the light volumes' grid; w: lobes */
+    VS_VEC4 lobeScale;    /* xyz: light-volume nodes per extinction voxel (both grids span the voxels' box); w: channels (1 grey, 3 rgb) */
+    VS_IVEC4 lobeKernel;  /* lobe_volume.comp: x: the lobe it writes. lights_project.comp: x: first lobe of the chunk, y: its lobes */
+};
+
+/* The environment's lobes (core/render/environment_lobes.h), a uniform block of their own. */
+VS_CONSTANT(int, kMaxLobeSlots, 256);             /* = core::kMaxLobes */
+VS_CONSTANT(int, kBindingLobeParams, 1);          /* UBO LobeParams */
+VS_CONSTANT(int, kUnitLobeTransmittance, 13);     /* samplerBuffer r32f: [node][lobe][channel] (lobe_volume.comp writes it) */
+struct LobeParams {
+    VS_VEC4 direction[kMaxLobeSlots];  /* xyz: unit world direction toward the lobe; w: its solid angle */
+    VS_VEC4 radiance[kMaxLobeSlots];   /* rgb: its radiance (the lights unknown's forward: the coefficients) */
 };
 
 /* The light-shaft stylizer (core/stylize/, SPEC §7): its raster passes (occluders.raster) and its

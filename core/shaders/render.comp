@@ -3,7 +3,8 @@
 // then adds the attenuated background.
 //
 // Variant defines: VOLSTYLE_HAS_EMISSION, VOLSTYLE_HAS_ALBEDO (else albedo 1),
-// VOLSTYLE_NUM_LIGHTS (0..kLightSlots; 0 skips in-scattering), VOLSTYLE_HAS_ENVIRONMENT,
+// VOLSTYLE_NUM_LIGHTS (0..kLightSlots), VOLSTYLE_HAS_LOBES (the environment lights the medium;
+// with no lights either, in-scattering is compiled out), VOLSTYLE_HAS_ENVIRONMENT,
 // VOLSTYLE_SKIP_EMPTY, VOLSTYLE_HW_FILTER, VOLSTYLE_EXACT_TRAVERSAL, VOLSTYLE_LAYERS (also write
 // the compositing layers: the medium's light alone, premultiplied, and its emitted and scattered
 // parts, the transmittance and the background, planar in b_Layers).
@@ -56,7 +57,7 @@ void main() {
 #if VOLSTYLE_HAS_EMISSION
             Le = fetchTrilinear(s_emission, st);
 #endif
-#if VOLSTYLE_NUM_LIGHTS > 0
+#if VOLSTYLE_LIT
 #if VOLSTYLE_HAS_ALBEDO
             vec3 albedo = fetchTrilinear(s_albedo, st);
 #else

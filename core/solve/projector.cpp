@@ -22,6 +22,8 @@ Projector::Projector(GpuDevice& device, GpuVolume& volume, const Lighting& light
     if (unknownDims.x < 1 || unknownDims.y < 1 || unknownDims.z < 1)
         throw InvalidArgument("Projector: the unknown grid must have at least one voxel");
     if (unknown == Unknown::Extinction) m_lighting.lights.clear();  // log-space tomography: no light
+    // Only albedo's weights hold L_scat: the others need no light volumes for the environment.
+    if (unknown == Unknown::Extinction || unknown == Unknown::Emission) m_lighting.environment = EnvironmentLight{};
     m_useFloatAtomics = device.capabilities().hasFloatAtomics;
 }
 
@@ -55,6 +57,7 @@ void Projector::useProgram(const View& v, gl::ShaderBuilder& builder) {
     builder.define("VOLSTYLE_UNKNOWN", int(m_unknown))
         .define("VOLSTYLE_BASIS", int(m_basis))
         .define("VOLSTYLE_NUM_LIGHTS", needsLight ? (long long)v.setup.lightDepth.size() : 0)
+        .define("VOLSTYLE_HAS_LOBES", needsLight && v.setup.lobes ? 1 : 0)
         .define("VOLSTYLE_SKIP_EMPTY", 1)
         .define("VOLSTYLE_EXACT_TRAVERSAL", m_exactTraversal ? 1 : 0);
     glUseProgram(m_device.program(builder).id());

@@ -21,6 +21,9 @@ int weightChannels(const Volume& volume, const Lighting& lighting, Unknown unkno
             const Vec3d& e = light.irradiance;
             if (e.x != e.y || e.x != e.z) return 3;
         }
+        if (lighting.environment.active())
+            for (const Vec3d& e : lobeRadiance(lighting.environment))
+                if (e.x != e.y || e.x != e.z) return 3;
     }
     return 1;
 }

@@ -26,7 +26,9 @@ static_assert(offsetof(MarchParams, dispatchOffset) == 240 + 32 * volstyle::core
 static_assert(offsetof(MarchParams, lightGridFromIndex) == 240 + 32 * volstyle::core::layout::kLightSlots + 112);
 static_assert(offsetof(MarchParams, lightGridDims) == 240 + 96 * volstyle::core::layout::kLightSlots + 112);
 static_assert(offsetof(MarchParams, indexFromLightGrid) == 240 + 112 * volstyle::core::layout::kLightSlots + 112);
-static_assert(sizeof(MarchParams) == 240 + 112 * volstyle::core::layout::kLightSlots + 176);
+static_assert(offsetof(MarchParams, lobeGrid) == 240 + 112 * volstyle::core::layout::kLightSlots + 176);
+static_assert(sizeof(MarchParams) == 240 + 112 * volstyle::core::layout::kLightSlots + 224);
+static_assert(sizeof(volstyle::core::layout::LobeParams) == 32 * volstyle::core::layout::kMaxLobeSlots);
 static_assert(sizeof(volstyle::core::layout::VectorParams) == 64);
 static_assert(offsetof(volstyle::core::layout::StylizeParams, options) == 384);
 static_assert(offsetof(volstyle::core::layout::StylizeParams, mipOffset) == 432);
@@ -38,8 +40,9 @@ TEST(Layout, MarchParamsMatchesStd140) {
     // 416 bytes before issue #8 named the light index, pixel offset and cut-off (lightKernel,
     // viewPixels, projectorCutoff) instead of hiding them in spare components; 480 since #9 added
     // dispatchOffset for chunked (budgeted) dispatches; 864 since #10 put light depth on
-    // light-aligned grids (lightGridFromIndex, lightGridDims, indexFromLightGrid).
-    EXPECT_EQ(sizeof(MarchParams), 864u);
+    // light-aligned grids (lightGridFromIndex, lightGridDims, indexFromLightGrid); 912 since #13
+    // added the environment lobes' light volumes (lobeGrid, lobeScale, lobeKernel).
+    EXPECT_EQ(sizeof(MarchParams), 912u);
 }
 
 TEST(Layout, SolverVocabularyIsSharedWithTheShaders) {

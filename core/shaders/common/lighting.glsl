@@ -1,4 +1,5 @@
-// Sun in-scattering, phase functions and the background (SPEC §1).
+// In-scattering from the lights and the environment's lobes, phase functions and the background
+// (SPEC §1, §8).
 #include "common/volume.glsl"
 #include "common/precise_math.glsl"
 #include "common/phase.glsl"
@@ -13,6 +14,11 @@
 // p(cos) with cos = ω_l·(−ω), from the block's phase (common/phase.glsl).
 float phaseFunction(float cosTheta) { return phaseValue(u.phase.x, u.phase.y, cosTheta); }
 
+#include "common/lobes.glsl"
+
+// Whether anything lights the medium (else in-scattering is compiled out).
+#define VOLSTYLE_LIT (VOLSTYLE_NUM_LIGHTS > 0 || VOLSTYLE_HAS_LOBES)
+
 #if VOLSTYLE_NUM_LIGHTS > 0
 // Optical depth toward each light, stored on the nodes of a light-aligned grid by light_depth.comp
 // (core/render/light_grid.h) and interpolated trilinearly between them. Interpolating the depth
@@ -25,11 +31,20 @@ vec3 lightDepthAt(int l, vec3 p) {
     return fetchTrilinear(s_lightDepth[l], stencilOn(g, u.lightGridDims[l].xyz));
 }
 
-// L_scat(x, ω) = Σ_l p(ω_l·(−ω)) E_l T_l(x) at index-space point p   (V_l = 1: no occluders)
+#endif
+
+#if VOLSTYLE_LIT
+// L_scat(x, ω) = Σ_l p(ω_l·(−ω)) E_l T_l(x) + the lobes' share, at index-space point p
+// (V_l = 1: no occluders).
 vec3 inScattering(vec3 p, vec3 dir) {
     vec3 sum = vec3(0.0);
+#if VOLSTYLE_NUM_LIGHTS > 0
     for (int l = 0; l < VOLSTYLE_NUM_LIGHTS; ++l)
         sum += phaseFunction(dot(u.lightDirection[l].xyz, -dir)) * u.lightIrradiance[l].rgb * exp(-lightDepthAt(l, p));
+#endif
+#if VOLSTYLE_HAS_LOBES
+    sum += lobeInScattering(p, dir);
+#endif
     return sum;
 }
 #endif
