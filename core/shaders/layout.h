@@ -107,6 +107,8 @@ struct MarchParams {
 VS_CONSTANT(int, kMaxLobeSlots, 256);             /* = core::kMaxLobes */
 VS_CONSTANT(int, kBindingLobeParams, 1);          /* UBO LobeParams */
 VS_CONSTANT(int, kUnitLobeTransmittance, 13);     /* samplerBuffer r32f: [node][lobe][channel] (lobe_volume.comp writes it) */
+VS_CONSTANT(int, kLobeChunk, 16);                 /* lobes per adjoint pass of lights_project.comp (its per-invocation sums) */
+VS_CONSTANT(int, kBindingLobeSums, 3);            /* SSBO vec4[workgroups * kLobeChunk]: the adjoint's per-workgroup sums per lobe */
 struct LobeParams {
     VS_VEC4 direction[kMaxLobeSlots];  /* xyz: unit world direction toward the lobe; w: its solid angle */
     VS_VEC4 radiance[kMaxLobeSlots];   /* rgb: its radiance (the lights unknown's forward: the coefficients) */
