@@ -67,4 +67,27 @@ void SolveOptions::validate() const {
     throw InvalidArgument("solve options: " + msg);
 }
 
+void SolveView::validate() const {
+    const SolveView& v = *this;
+    const std::string name = "view '" + v.name + "'";
+    try {
+        v.camera.validate();
+    } catch (const InvalidArgument& e) {
+        throw InvalidArgument(name + ": " + e.what());
+    }
+    if (v.target.width != v.camera.width || v.target.height != v.camera.height)
+        throw InvalidArgument(name + ": the target is " + std::to_string(v.target.width) + "x" +
+                              std::to_string(v.target.height) + " but the camera renders " +
+                              std::to_string(v.camera.width) + "x" + std::to_string(v.camera.height));
+    if (size_t bad = v.target.countNonFinite())
+        throw InvalidArgument(name + ": the target has " + std::to_string(bad) + " non-finite (NaN/Inf) values");
+    if (v.weights) {
+        if (v.weights->width != v.target.width || v.weights->height != v.target.height)
+            throw InvalidArgument(name + ": the weight image size differs from the target's");
+        if (size_t bad = v.weights->countNonFinite())
+            throw InvalidArgument(name + ": the weight image has " + std::to_string(bad) + " non-finite values");
+    }
+}
+
+
 }  // namespace volstyle::core

@@ -77,6 +77,10 @@ struct SolveView {
     Camera camera;
     Image target;
     std::optional<Image> weights;  ///< single-channel (R used), multiplies the target's alpha
+
+    /// Throws InvalidArgument naming the view: a bad camera, a target or weight image whose size
+    /// differs from the camera's, non-finite values.
+    void validate() const;
 };
 
 /// Reported after every iteration.

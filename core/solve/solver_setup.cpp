@@ -25,27 +25,6 @@ constexpr float kUnbounded = 3e38f;
 
 std::string describeView(const SolveView& v) { return "view '" + v.name + "'"; }
 
-void validateView(const SolveView& v) {
-    const std::string name = describeView(v);
-    try {
-        v.camera.validate();
-    } catch (const InvalidArgument& e) {
-        throw InvalidArgument(name + ": " + e.what());
-    }
-    if (v.target.width != v.camera.width || v.target.height != v.camera.height)
-        throw InvalidArgument(name + ": the target is " + std::to_string(v.target.width) + "x" +
-                              std::to_string(v.target.height) + " but the camera renders " +
-                              std::to_string(v.camera.width) + "x" + std::to_string(v.camera.height));
-    if (size_t bad = v.target.countNonFinite())
-        throw InvalidArgument(name + ": the target has " + std::to_string(bad) + " non-finite (NaN/Inf) values");
-    if (v.weights) {
-        if (v.weights->width != v.target.width || v.weights->height != v.target.height)
-            throw InvalidArgument(name + ": the weight image size differs from the target's");
-        if (size_t bad = v.weights->countNonFinite())
-            throw InvalidArgument(name + ": the weight image has " + std::to_string(bad) + " non-finite values");
-    }
-}
-
 /// One channel of one pixel: the observation o and its weight w.
 struct Observation {
     double value = 0, weight = 0;
@@ -114,7 +93,7 @@ void Solver::State::validateInputs() {
     }
     if (!missing.empty()) throw InvalidArgument("solve options: views: no view named '" + *missing.begin() + "'");
     if (chosen.empty()) throw InvalidArgument("solve: no view has a target image; upload a painted target first");
-    for (const auto& v : chosen) validateView(v);
+    for (const auto& v : chosen) v.validate();
     views = std::move(chosen);
 }
 

@@ -1,0 +1,393 @@
+#include "core/solve/light_solver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "core/base/errors.h"
+#include "core/base/stopwatch.h"
+#include "core/render/gpu_volume.h"
+#include "core/render/renderer.h"
+#include "core/solve/gpu_vector.h"
+#include "core/solve/lights_projector.h"
+
+namespace volstyle::core {
+namespace {
+
+/// Neighbouring lobes for the smoothness term: each lobe with its 6 nearest, each pair once.
+constexpr int kLobeNeighbours = 6;
+
+using Lobes = std::vector<Vec3d>;  // one RGB value per lobe
+
+Vec3d channelwise(const Vec3d& a, const Vec3d& b) { return a * b; }
+double sum(const Vec3d& v) { return v.x + v.y + v.z; }
+
+Vec3d dotLobes(const Lobes& a, const Lobes& b) {
+    Vec3d s;
+    for (size_t i = 0; i < a.size(); ++i) s += a[i] * b[i];
+    return s;
+}
+
+}  // namespace
+
+struct LightSolver::State {
+    GpuDevice& device;
+    Lighting lighting;
+    SolveOptions opt;
+    std::vector<SolveView> views;
+    std::unique_ptr<GpuVolume> gpu;
+    std::unique_ptr<LightsProjector> T;
+    int n = 0;                                // lobes
+    std::vector<std::pair<int, int>> edges;   // neighbouring lobes
+    double cEdge = 0, cId = 0, target = 0;    // √(λ_lap/|E|), √((λ0+λ1)/N), λ1/(λ0+λ1)
+    double idConstant = 0;                    // λ0λ1/(λ0+λ1): the part of the objective no c changes
+    std::vector<Vec3d> sqrtW, b;              // per pixel: √(w/Σw) and o − f
+    std::vector<size_t> viewFirst;            // first pixel of each view
+    Vec3d weightSum;
+    std::vector<Vec3d> viewWeightSum;
+    GpuVector pixels;                         // T's input/output on the GPU
+    std::vector<float> upload;
+    Lobes x;                                  // the iterate
+    Lobes scale;                              // the column scaling D (1 without preconditioning)
+
+    State(GpuDevice& d, const Volume& volume, const Lighting& l, std::vector<SolveView> v, SolveOptions o)
+        : device(d), lighting(l), opt(std::move(o)) {
+        opt.validate();
+        lighting.validate();
+        if (!lighting.environment.active())
+            throw InvalidArgument("lights: the lighting has no environment lobes; set environment.lobes (1-256)");
+        for (auto& view : v)
+            if (view.target.empty()) {
+                if (!opt.views.empty()) throw InvalidArgument("view '" + view.name + "' has no target");
+            } else if (opt.views.empty() || std::find(opt.views.begin(), opt.views.end(), view.name) != opt.views.end()) {
+                view.validate();
+                views.push_back(std::move(view));
+            }
+        if (views.empty()) throw InvalidArgument("lights: no view with a target to solve against");
+        n = lighting.environment.lobes;
+        const Regularization& reg = opt.regularization;
+        const LobeBasis basis = lighting.environment.basis();
+        std::set<std::pair<int, int>> pairs;
+        const std::vector<std::vector<int>> neighbours = basis.neighbours(kLobeNeighbours);
+        for (int i = 0; i < n; ++i)
+            for (int j : neighbours[size_t(i)]) pairs.insert({std::min(i, j), std::max(i, j)});
+        edges.assign(pairs.begin(), pairs.end());
+        cEdge = edges.empty() ? 0 : std::sqrt(reg.laplacian / double(edges.size()));
+        const double lambdaId = reg.l2 + reg.towardOne;
+        cId = std::sqrt(lambdaId / n);
+        target = lambdaId > 0 ? reg.towardOne / lambdaId : 0;
+        idConstant = lambdaId > 0 ? reg.l2 * reg.towardOne / lambdaId : 0;
+
+        gpu = std::make_unique<GpuVolume>(volume);
+        T = std::make_unique<LightsProjector>(device, *gpu, lighting, opt.stepVoxels);
+        for (const auto& view : views) {
+            viewFirst.push_back(T->pixelCount());
+            T->addView(view.camera);
+        }
+        pixels = GpuVector(T->pixelCount(), "lights-pixels");
+        observe();
+        x = lobeRadiance(lighting.environment);
+        x.resize(size_t(n));
+        for (Vec3d& c : x) c = Vec3d(std::max(0.0, c.x), std::max(0.0, c.y), std::max(0.0, c.z));
+        scale.assign(size_t(n), Vec3d(1.0));
+    }
+
+    /// Right column scaling D² = 1/(AᵀA 1) (SIRT's, as the volume solver's) with the
+    /// regularizers' diagonals: lobes seen by few or dim pixels get longer steps. One T and one Tᵀ.
+    /// A lobe no pixel sees keeps D = 0: it never moves.
+    void precondition(double& forwardMs, double& adjointMs) {
+        Stacked ones = applyA(Lobes(size_t(n), Vec3d(1.0)), forwardMs);
+        ones.edge.assign(edges.size(), Vec3d());  // the differences' diagonal is added below instead
+        ones.id.assign(size_t(n), Vec3d());
+        Lobes diag = applyAt(ones, adjointMs);
+        std::vector<int> degree(size_t(n), 0);
+        for (const auto& [i, j] : edges) ++degree[size_t(i)], ++degree[size_t(j)];
+        for (int i = 0; i < n; ++i)
+            for (int c = 0; c < 3; ++c) {
+                const double d = diag[size_t(i)][c] + cEdge * cEdge * degree[size_t(i)] + cId * cId;
+                scale[size_t(i)][c] = d > 0 ? 1 / std::sqrt(d) : 0;
+            }
+    }
+
+    /// o − f and the weights: f is the scene without the lobes (emission, lights, background).
+    void observe() {
+        Lighting fixedLighting = lighting;
+        fixedLighting.environment = EnvironmentLight{};
+        Renderer renderer(device);
+        RenderSettings settings;
+        settings.stepVoxels = opt.stepVoxels;
+        settings.terminationThreshold = 0;  // as T: to the transmittance cut-off
+        const size_t P = T->pixelCount();
+        sqrtW.assign(P, Vec3d());
+        b.assign(P, Vec3d());
+        viewWeightSum.assign(views.size(), Vec3d());
+        for (size_t v = 0; v < views.size(); ++v) {
+            const SolveView& view = views[v];
+            const Image fixed = renderer.render(*gpu, view.camera, fixedLighting, settings);
+            for (size_t i = 0; i < view.target.pixelCount(); ++i) {
+                const float* t = &view.target.rgba[4 * i];
+                const double w = std::max(0.0f, t[3]) * (view.weights ? std::max(0.0f, view.weights->rgba[4 * i]) : 1.0f);
+                const size_t k = viewFirst[v] + i;
+                b[k] = Vec3d(t[0] - fixed.rgba[4 * i], t[1] - fixed.rgba[4 * i + 1], t[2] - fixed.rgba[4 * i + 2]);
+                sqrtW[k] = Vec3d(w);
+                viewWeightSum[v] += Vec3d(w);
+            }
+        }
+        weightSum = Vec3d();
+        for (const Vec3d& w : viewWeightSum) weightSum += w;
+        for (Vec3d& w : sqrtW)
+            for (int c = 0; c < 3; ++c) w[c] = weightSum[c] > 0 ? std::sqrt(w[c] / weightSum[c]) : 0;
+    }
+
+    /// Host pixels of T c.
+    std::vector<Vec3d> applyT(const Lobes& c, double& ms) {
+        const auto t0 = Clock::now();
+        T->forward(c, pixels);
+        const std::vector<float> out = pixels.download();
+        std::vector<Vec3d> img(T->pixelCount());
+        for (size_t i = 0; i < img.size(); ++i) img[i] = Vec3d(out[4 * i], out[4 * i + 1], out[4 * i + 2]);
+        ms += msSince(t0);
+        return img;
+    }
+
+    /// The stacked residual's parts: data √w ⊙ (b − T c), edges −cEdge (c_i − c_j), identity cId (t − c).
+    struct Stacked {
+        std::vector<Vec3d> data;
+        Lobes edge, id;
+        Vec3d norm2() const {
+            Vec3d s;
+            for (const Vec3d& v : data) s += v * v;
+            for (const Vec3d& v : edge) s += v * v;
+            for (const Vec3d& v : id) s += v * v;
+            return s;
+        }
+    };
+
+    /// A p (the stacked rows applied to a direction).
+    Stacked applyA(const Lobes& p, double& forwardMs) {
+        Stacked q;
+        q.data = applyT(p, forwardMs);
+        for (size_t i = 0; i < q.data.size(); ++i) q.data[i] = channelwise(sqrtW[i], q.data[i]);
+        for (const auto& [i, j] : edges) q.edge.push_back((p[size_t(i)] - p[size_t(j)]) * cEdge);
+        for (const Vec3d& v : p) q.id.push_back(v * cId);
+        return q;
+    }
+
+    /// Aᵀ y.
+    Lobes applyAt(const Stacked& y, double& adjointMs) {
+        const auto t0 = Clock::now();
+        upload.assign(4 * y.data.size(), 0.0f);
+        for (size_t i = 0; i < y.data.size(); ++i) {
+            const Vec3d v = channelwise(sqrtW[i], y.data[i]);
+            upload[4 * i] = float(v.x), upload[4 * i + 1] = float(v.y), upload[4 * i + 2] = float(v.z);
+        }
+        pixels.upload(upload);
+        Lobes g = T->adjoint(pixels);
+        adjointMs += msSince(t0);
+        for (size_t e = 0; e < edges.size(); ++e) {
+            g[size_t(edges[e].first)] += y.edge[e] * cEdge;
+            g[size_t(edges[e].second)] += y.edge[e] * -cEdge;
+        }
+        for (int i = 0; i < n; ++i) g[size_t(i)] += y.id[size_t(i)] * cId;
+        return g;
+    }
+
+    Stacked residual(double& forwardMs) {
+        Stacked r = applyA(x, forwardMs);
+        for (size_t i = 0; i < r.data.size(); ++i) r.data[i] = channelwise(sqrtW[i], b[i]) - r.data[i];
+        for (Vec3d& e : r.edge) e = e * -1.0;
+        for (size_t i = 0; i < r.id.size(); ++i) r.id[i] = Vec3d(target * cId) - r.id[i];
+        return r;
+    }
+
+    double objectiveOf(const Stacked& r) const { return sum(r.norm2()) + 3 * idConstant; }
+
+    std::vector<double> rmsPerView(const Stacked& r) const {
+        std::vector<double> out;
+        for (size_t v = 0; v < views.size(); ++v) {
+            Vec3d r2;
+            const size_t end = v + 1 < views.size() ? viewFirst[v + 1] : r.data.size();
+            for (size_t i = viewFirst[v]; i < end; ++i) r2 += r.data[i] * r.data[i];
+            double total = 0;
+            int channels = 0;
+            for (int c = 0; c < 3; ++c) {
+                if (viewWeightSum[v][c] <= 0) continue;
+                total += std::sqrt(std::max(0.0, r2[c] * weightSum[c] / viewWeightSum[v][c]));
+                ++channels;
+            }
+            out.push_back(channels ? total / channels : 0.0);
+        }
+        return out;
+    }
+
+    /// The gradient's components that may move: not at 0 with the descent pointing below it.
+    Lobes freeOf(const Lobes& g) const {
+        Lobes f = g;
+        if (!opt.enforceBounds) return f;
+        for (size_t i = 0; i < f.size(); ++i)
+            for (int c = 0; c < 3; ++c)
+                if (x[i][c] <= 0 && f[i][c] < 0) f[i][c] = 0;
+        return f;
+    }
+};
+
+LightSolver::LightSolver(GpuDevice& device, const Volume& volume, const Lighting& lighting, std::vector<SolveView> views,
+                         SolveOptions options)
+    : m_state(std::make_unique<State>(device, volume, lighting, std::move(views), std::move(options))) {}
+
+LightSolver::~LightSolver() = default;
+
+std::vector<Vec3d> LightSolver::currentRadiance() const { return m_state->x; }
+
+LightSolveResult LightSolver::run(const ProgressCallback& progress, const std::atomic<bool>* cancel) {
+    State& st = *m_state;
+    const auto start = Clock::now();
+    LightSolveResult out;
+    SolveReport& rep = out.report;
+    rep.unknownCount = rep.hullCount = size_t(st.n) * 3;
+    for (size_t v = 0; v < st.views.size(); ++v) {
+        const size_t end = v + 1 < st.views.size() ? st.viewFirst[v + 1] : st.sqrtW.size();
+        for (size_t i = st.viewFirst[v]; i < end; ++i) rep.constraintPixels += maxComponent(st.sqrtW[i]) > 0 ? 1 : 0;
+    }
+    double forwardMs = 0, adjointMs = 0;
+    State::Stacked r = st.residual(forwardMs);
+    double f = st.objectiveOf(r);
+    rep.initialObjective = rep.finalObjective = f;
+    rep.objectiveHistory = {f};
+    rep.initialRms = rep.finalRms = st.rmsPerView(r);
+    if (sum(st.weightSum) <= 0) {
+        rep.stopReason = StopReason::NoConstraints;
+    } else {
+        // CGLS on y with c = D y (D: the column scaling); bounds c ≥ 0 are y ≥ 0.
+        if (st.opt.precondition) st.precondition(forwardMs, adjointMs);
+        auto scaled = [&](const Lobes& v) {
+            Lobes out = v;
+            for (size_t i = 0; i < out.size(); ++i) out[i] = channelwise(out[i], st.scale[i]);
+            return out;
+        };
+        Lobes g = scaled(st.applyAt(r, adjointMs));
+        Lobes p = st.freeOf(g);
+        Vec3d gamma = dotLobes(p, p);
+        int rises = 0;
+        for (int it = 1; it <= st.opt.maxIterations; ++it) {
+            if (cancel && cancel->load()) throw Cancelled("the light solve was cancelled");
+            const double itForward = forwardMs, itAdjoint = adjointMs;
+            const Lobes dp = scaled(p);  // the step's direction in radiance
+            const Vec3d slope = dotLobes(g, p);
+            if (sum(slope) <= 0) {
+                rep.stopReason = StopReason::ZeroGradient;
+                break;
+            }
+            const State::Stacked q = st.applyA(dp, forwardMs);
+            const Vec3d qq = q.norm2();
+            // Per channel: the exact line minimum α = g·p / ‖A D p‖². Where a free lobe would go below
+            // 0 there are two candidates (the volume solver's "projected" bounds method): the step
+            // cut where the first lobe reaches 0, and the whole step with every lobe clamped at 0
+            // (one more T to know its residual); the lower objective wins. Either changes the free
+            // set, so that channel restarts from the gradient.
+            Vec3d alpha, alphaCut;
+            bool cut[3] = {false, false, false};
+            for (int c = 0; c < 3; ++c) {
+                alpha[c] = alphaCut[c] = qq[c] > 0 && slope[c] > 0 ? slope[c] / qq[c] : 0;
+                if (!st.opt.enforceBounds) continue;
+                for (int i = 0; i < st.n; ++i) {
+                    const double di = dp[size_t(i)][c];
+                    if (di < 0 && st.x[size_t(i)][c] + alphaCut[c] * di < 0) {
+                        alphaCut[c] = st.x[size_t(i)][c] / -di;
+                        cut[c] = true;
+                    }
+                }
+            }
+            Lobes next = st.x;
+            for (int i = 0; i < st.n; ++i)
+                for (int c = 0; c < 3; ++c) next[size_t(i)][c] = std::max(0.0, st.x[size_t(i)][c] + alpha[c] * dp[size_t(i)][c]);
+            bool useProjected[3] = {false, false, false};
+            State::Stacked qProjected;
+            if (cut[0] || cut[1] || cut[2]) {
+                Lobes move(size_t(st.n));
+                for (int i = 0; i < st.n; ++i) move[size_t(i)] = next[size_t(i)] - st.x[size_t(i)];
+                qProjected = st.applyA(move, forwardMs);
+                Vec3d fCut, fProjected;
+                for (size_t k = 0; k < r.data.size(); ++k) {
+                    const Vec3d a = r.data[k] - channelwise(alphaCut, q.data[k]), b2 = r.data[k] - qProjected.data[k];
+                    fCut += a * a, fProjected += b2 * b2;
+                }
+                for (size_t k = 0; k < r.edge.size(); ++k) {
+                    const Vec3d a = r.edge[k] - channelwise(alphaCut, q.edge[k]), b2 = r.edge[k] - qProjected.edge[k];
+                    fCut += a * a, fProjected += b2 * b2;
+                }
+                for (size_t k = 0; k < r.id.size(); ++k) {
+                    const Vec3d a = r.id[k] - channelwise(alphaCut, q.id[k]), b2 = r.id[k] - qProjected.id[k];
+                    fCut += a * a, fProjected += b2 * b2;
+                }
+                for (int c = 0; c < 3; ++c) useProjected[c] = cut[c] && fProjected[c] < fCut[c];
+            }
+            for (int c = 0; c < 3; ++c) {
+                for (int i = 0; i < st.n; ++i) {
+                    double& xi = st.x[size_t(i)][c];
+                    if (!st.opt.enforceBounds) xi += alpha[c] * dp[size_t(i)][c];
+                    else xi = useProjected[c] ? next[size_t(i)][c] : std::max(0.0, xi + alphaCut[c] * dp[size_t(i)][c]);
+                }
+                // r −= the step's A: the objective follows the step exactly, so it never rises.
+                auto update = [&](std::vector<Vec3d>& rr, const std::vector<Vec3d>& qq1, const std::vector<Vec3d>& qp) {
+                    for (size_t k = 0; k < rr.size(); ++k) rr[k][c] -= useProjected[c] ? qp[k][c] : alphaCut[c] * qq1[k][c];
+                };
+                update(r.data, q.data, qProjected.data);
+                update(r.edge, q.edge, qProjected.edge);
+                update(r.id, q.id, qProjected.id);
+            }
+            g = scaled(st.applyAt(r, adjointMs));
+            const Lobes free = st.freeOf(g);
+            const Vec3d gammaNext = dotLobes(free, free);
+            for (int c = 0; c < 3; ++c) {
+                double beta = cut[c] || gamma[c] <= 0 ? 0 : gammaNext[c] / gamma[c];  // a cut restarts
+                // A direction that would push a lobe at 0 below it restarts too (from the free
+                // gradient, which never does): conjugacy holds only on an unchanged free set.
+                for (int i = 0; i < st.n && beta > 0; ++i)
+                    if (st.opt.enforceBounds && st.x[size_t(i)][c] <= 0 && free[size_t(i)][c] + beta * p[size_t(i)][c] < 0) beta = 0;
+                for (int i = 0; i < st.n; ++i) p[size_t(i)][c] = free[size_t(i)][c] + beta * p[size_t(i)][c];
+            }
+            gamma = gammaNext;
+            const double fNext = st.objectiveOf(r);
+            rep.iterations = it;
+            rep.objectiveHistory.push_back(fNext);
+            rep.finalObjective = fNext;
+            rep.finalRms = st.rmsPerView(r);
+            if (progress) {
+                SolveProgress pr;
+                pr.iteration = it;
+                pr.objective = fNext;
+                pr.rmsPerView = rep.finalRms;
+                pr.elapsedMs = msSince(start);
+                pr.forwardMs = forwardMs - itForward;
+                pr.adjointMs = adjointMs - itAdjoint;
+                progress(pr);
+            }
+            if (!std::isfinite(fNext)) {
+                rep.stopReason = StopReason::NumericalBreakdown;
+                break;
+            }
+            rises = fNext >= f ? rises + 1 : 0;
+            const bool anyCut = cut[0] || cut[1] || cut[2];
+            if (!anyCut && f > 0 && (f - fNext) / f < st.opt.tolerance) {
+                rep.stopReason = StopReason::Converged;
+                break;
+            }
+            f = fNext;
+            if (rises >= 3) {
+                rep.stopReason = StopReason::Stagnated;
+                break;
+            }
+        }
+        if (rep.stopReason == StopReason::None) rep.stopReason = StopReason::MaxIterations;
+    }
+    out.radiance = st.x;
+    rep.forwardMs = forwardMs;
+    rep.adjointMs = adjointMs;
+    rep.totalMs = msSince(start);
+    out.lightVolumeMs = st.T->lightVolumeMs();
+    out.lightVolumeBytes = st.T->lightVolumeBytes();
+    return out;
+}
+
+}  // namespace volstyle::core

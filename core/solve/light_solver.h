@@ -1,0 +1,58 @@
+#pragma once
+/// \file light_solver.h
+/// Light reconstruction (SPEC §8; TVCG Sec. 4.4, 5.3): the environment lobes' radiances c ≥ 0
+/// whose single scattering, added to what the rest of the scene gives (emission, the sun and
+/// lights, the background), matches painted targets; the volume stays fixed. Each RGB channel is
+///
+///   minimise (1/Σw) Σ_k w_k (T c − (o − f))_k² + (λ_lap/|E|) Σ_{(i,j)∈E} (c_i − c_j)² + (λ_0/N) ‖c‖²
+///   subject to c ≥ 0,
+///
+/// with T the lights projector (lights_project.comp), f the fixed part rendered once, E the
+/// pairs of neighbouring lobes (each lobe's 6 nearest) and λ_lap, λ_0 the solve options'
+/// `laplacian` and `l2`. Solved by the same bounded CGLS as the volume solver (solver.h): an
+/// active set freezes lobes at 0 whose gradient points outward, a step is cut where a free lobe
+/// reaches 0 and that channel restarts from the gradient, so the objective never rises. The N
+/// unknowns live on the host; pixels on the GPU for T and Tᵀ, on the host in between (double).
+/// GL thread only.
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "core/gpu/gpu_device.h"
+#include "core/render/params.h"
+#include "core/solve/solve_options.h"
+#include "core/volume/volume.h"
+
+namespace volstyle::core {
+
+struct LightSolveResult {
+    std::vector<Vec3d> radiance;  ///< per lobe, linear RGB (the lighting's environment.radiance)
+    SolveReport report;
+    double lightVolumeMs = 0;   ///< building the lobes' light volumes (0 when cached)
+    size_t lightVolumeBytes = 0;
+};
+
+class LightSolver {
+public:
+    /// `lighting.environment` names the basis (lobes, domain, light-volume resolution) and the
+    /// start (its radiances, or its map's projection; none: 0). Uses `options`' iterations,
+    /// tolerance, step, regularization (laplacian: between neighbouring lobes; l2), views and
+    /// enforceBounds. Throws InvalidArgument for bad views, no lobes, or toward_one > 0.
+    LightSolver(GpuDevice& device, const Volume& volume, const Lighting& lighting, std::vector<SolveView> views,
+                SolveOptions options);
+    ~LightSolver();
+
+    using ProgressCallback = std::function<void(const SolveProgress&)>;
+    /// Runs to a stopping rule; `cancel` is checked between iterations (throws Cancelled).
+    LightSolveResult run(const ProgressCallback& progress = {}, const std::atomic<bool>* cancel = nullptr);
+    /// The current radiances (for previews; call from the progress callback).
+    std::vector<Vec3d> currentRadiance() const;
+
+private:
+    struct State;
+    std::unique_ptr<State> m_state;
+};
+
+}  // namespace volstyle::core
