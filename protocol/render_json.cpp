@@ -54,13 +54,51 @@ std::optional<core::DirectionalLight> lightFromJson(JsonReader& r, const nlohman
 
 }  // namespace
 
+namespace {
+
+/// "environment": lobes, domain, radiance per lobe, map (CLI only), strength, light_volume_resolution.
+void environmentFromJson(JsonReader& r, const nlohmann::json& e, const std::string& ep, bool allowFilePaths, LightingRequest& out) {
+    core::EnvironmentLight& env = out.lighting.environment;
+    if (!r.object(e, ep, {"lobes", "domain", "radiance", "map", "strength", "light_volume_resolution"})) return;
+    if (!e.contains("lobes")) r.fail(ep + "/lobes", "is required: the number of lobes, 1-256");
+    else if (auto n = r.integer(e["lobes"], ep + "/lobes")) {
+        if (*n < core::kMinLobes || *n > core::kMaxLobes) r.fail(ep + "/lobes", "must be in [1, 256], got " + std::to_string(*n));
+        else env.lobes = *n;
+    }
+    if (e.contains("domain")) {
+        const std::string d = r.string(e["domain"], ep + "/domain").value_or("sphere");
+        if (d == "upper_hemisphere") env.domain = core::LobeDomain::UpperHemisphere;
+        else if (d != "sphere") r.fail(ep + "/domain", "must be 'sphere' or 'upper_hemisphere', got '" + d + "'");
+    }
+    if (e.contains("radiance")) {
+        if (!e["radiance"].is_array()) {
+            r.fail(ep + "/radiance", "must be an array of [r,g,b], one per lobe");
+        } else {
+            for (size_t i = 0; i < e["radiance"].size(); ++i)
+                env.radiance.push_back(r.vec3(e["radiance"][i], ep + "/radiance/" + std::to_string(i)).value_or(Vec3d()));
+        }
+    }
+    if (e.contains("map")) {
+        if (!allowFilePaths) r.fail(ep + "/map", "file paths are not accepted here; give the radiance per lobe");
+        else out.environmentLightPath = r.string(e["map"], ep + "/map");
+    }
+    if (e.contains("strength")) env.strength = r.number(e["strength"], ep + "/strength").value_or(1);
+    if (e.contains("light_volume_resolution"))
+        env.lightVolumeResolution = r.integer(e["light_volume_resolution"], ep + "/light_volume_resolution").value_or(64);
+    if (!e.contains("radiance") && !e.contains("map")) r.fail(ep, "needs \"radiance\" (one [r,g,b] per lobe) or \"map\"");
+    // A map is loaded by the caller: until then, don't let check() ask for one.
+    if (out.environmentLightPath && env.radiance.empty()) env.radiance.assign(size_t(std::max(env.lobes, 0)), Vec3d());
+}
+
+}  // namespace
+
 LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& path, bool allowFilePaths) {
     JsonReader r;
     LightingRequest out;
     core::Lighting& L = out.lighting;
     L.lights.clear();
     std::vector<std::string> lightPaths;  // where each of L.lights came from, for its problems
-    if (r.object(j, path, {"sun", "lights", "background", "phase"})) {
+    if (r.object(j, path, {"sun", "lights", "background", "phase", "environment"})) {
         if (j.contains("sun"))
             if (auto l = lightFromJson(r, j["sun"], path + "/sun")) L.lights.push_back(*l), lightPaths.push_back(path + "/sun");
         if (j.contains("lights")) {
@@ -97,6 +135,7 @@ LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& pat
             }
             if (ph.contains("g")) L.phase.g = r.number(ph["g"], path + "/phase/g").value_or(0);
         }
+        if (j.contains("environment")) environmentFromJson(r, j["environment"], path + "/environment", allowFilePaths, out);
         // Every problem at once: values that parsed are checked even when others did not (those
         // keep valid defaults), each under the field it came from ("sun" is not "lights/0").
         for (const auto& problem : L.check()) {
@@ -124,6 +163,19 @@ nlohmann::json lightingToJson(const core::Lighting& L) {
     j["phase"] = L.phase.type == core::PhaseType::Isotropic
                      ? nlohmann::json{{"type", "isotropic"}}
                      : nlohmann::json{{"type", "henyey_greenstein"}, {"g", L.phase.g}};
+    if (L.environment.active()) {
+        const core::EnvironmentLight& e = L.environment;
+        nlohmann::json radiance = nlohmann::json::array();
+        // The radiances as the volume sees them (a map's projection included), strength 1.
+        core::EnvironmentLight unscaled = e;
+        unscaled.strength = 1;
+        for (const Vec3d& c : core::lobeRadiance(unscaled)) radiance.push_back(toJson(c));
+        j["environment"] = {{"lobes", e.lobes},
+                            {"domain", e.domain == core::LobeDomain::Sphere ? "sphere" : "upper_hemisphere"},
+                            {"radiance", radiance},
+                            {"strength", e.strength},
+                            {"light_volume_resolution", e.lightVolumeResolution}};
+    }
     return j;
 }
 

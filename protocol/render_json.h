@@ -7,8 +7,12 @@
 ///          "height":480, "near":0, "far":1e30}   (eye and target required)
 /// Lighting: {"sun":{"direction":[x,y,z],"irradiance":[r,g,b]}, "lights":[{…}, …],
 ///            "background":[r,g,b] | {"color":[r,g,b]} | {"environment":"sky.exr"},
-///            "phase":{"type":"isotropic"} | {"type":"henyey_greenstein","g":0.3}}
+///            "phase":{"type":"isotropic"} | {"type":"henyey_greenstein","g":0.3},
+///            "environment":{"lobes":16, "domain":"sphere"|"upper_hemisphere", "radiance":[[r,g,b], …],
+///                           "map":"sky.exr", "strength":1, "light_volume_resolution":64}}
 /// `sun` and `lights` together give at most 4 lights; no `sun` and no `lights` means no light.
+/// `environment` lights the medium through `lobes` directional lobes (SPEC §8, docs/LIGHTING.md):
+/// their radiances given, or fitted to `map` (a file path: the CLI only).
 
 #include <nlohmann/json.hpp>
 
@@ -29,6 +33,8 @@ struct LightingRequest {
     /// `background.environment`: an image path. Only the CLI accepts it (relative to the JSON
     /// file); the API never takes server-side paths.
     std::optional<std::string> environmentPath;
+    /// `environment.map`: the same, for the map the environment light is fitted to.
+    std::optional<std::string> environmentLightPath;
 };
 
 LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& path = "",

@@ -163,6 +163,11 @@ core::Lighting lightingFromJsonFile(const nlohmann::json& j, const std::string& 
         auto env = std::filesystem::path(jsonPath).parent_path() / *request.environmentPath;
         request.lighting.background.environment = std::make_shared<core::Image>(core::loadImage(env.string()).image);
     }
+    if (request.environmentLightPath) {  // the map the lobes are fitted to (environment.map)
+        auto env = std::filesystem::path(jsonPath).parent_path() / *request.environmentLightPath;
+        request.lighting.environment.map = std::make_shared<core::Image>(core::loadImage(env.string()).image);
+        request.lighting.environment.radiance.clear();  // projected from the map
+    }
     return request.lighting;
 }
 

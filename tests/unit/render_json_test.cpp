@@ -155,3 +155,37 @@ TEST(LightingJson, EveryProblemAtOnceUnderTheFieldItCameFrom) {
     for (const auto& e : errors) paths.insert(e.path);
     EXPECT_EQ(paths, (std::set<std::string>{"/eye", "/fov_y_deg"}));
 }
+
+TEST(LightingJson, EnvironmentLobesRoundTrip) {
+    json radiance = json::array();
+    for (int i = 0; i < 4; ++i) radiance.push_back({0.1 * i, 0.2, 0.3});
+    json j = {{"environment", {{"lobes", 4}, {"domain", "upper_hemisphere"}, {"radiance", radiance}, {"strength", 2.0},
+                               {"light_volume_resolution", 32}}}};
+    const core::Lighting l = protocol::lightingFromJson(j).lighting;
+    EXPECT_EQ(l.environment.lobes, 4);
+    EXPECT_EQ(l.environment.domain, core::LobeDomain::UpperHemisphere);
+    EXPECT_EQ(l.environment.lightVolumeResolution, 32);
+    ASSERT_EQ(l.environment.radiance.size(), 4u);
+    EXPECT_EQ(l.environment.radiance[3], Vec3d(0.1 * 3, 0.2, 0.3));
+    const core::Lighting back = protocol::lightingFromJson(protocol::lightingToJson(l)).lighting;
+    EXPECT_EQ(back.environment.radiance, l.environment.radiance);
+    EXPECT_EQ(back.environment.strength, 2.0);
+    EXPECT_FALSE(protocol::lightingToJson(core::Lighting{}).contains("environment"));
+}
+
+TEST(LightingJson, EnvironmentProblemsNameTheirField) {
+    auto paths = [](const json& env) {
+        std::set<std::string> out;
+        for (const auto& e : errorsOf([&] { protocol::lightingFromJson({{"environment", env}}); })) out.insert(e.path);
+        return out;
+    };
+    EXPECT_EQ(paths({{"lobes", 300}, {"radiance", json::array()}}), (std::set<std::string>{"/environment/lobes"}));
+    EXPECT_EQ(paths({{"lobes", 0}, {"radiance", json::array()}}), (std::set<std::string>{"/environment/lobes"}));
+    EXPECT_EQ(paths({{"lobes", 2}, {"radiance", {{1, 1, 1}}}}), (std::set<std::string>{"/environment/radiance"}));
+    EXPECT_EQ(paths({{"lobes", 1}, {"radiance", {{1, -1, 1}}}}), (std::set<std::string>{"/environment/radiance/0"}));
+    EXPECT_EQ(paths({{"lobes", 1}, {"map", "sky.exr"}}), (std::set<std::string>{"/environment/map"}));  // no server paths
+    EXPECT_EQ(paths({{"lobes", 1}, {"radiance", {{1, 1, 1}}}, {"domain", "disc"}}), (std::set<std::string>{"/environment/domain"}));
+    EXPECT_EQ(paths({{"lobes", 1}, {"radiance", {{1, 1, 1}}}, {"colour", 1}}), (std::set<std::string>{"/environment/colour"}));
+    EXPECT_EQ(paths({{"lobes", 1}, {"radiance", {{1, 1, 1}}}, {"light_volume_resolution", 1}}),
+              (std::set<std::string>{"/environment/light_volume_resolution"}));
+}
