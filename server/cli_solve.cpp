@@ -8,13 +8,17 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <sstream>
 
 #include "core/base/errors.h"
 #include "core/gpu/gpu_device.h"
 #include "core/image/image_io.h"
+#include "core/render/environment_lobes.h"
+#include "core/solve/light_solver.h"
 #include "core/solve/solver.h"
 #include "core/volume/vdb_io.h"
 #include "protocol/render_json.h"
@@ -30,15 +34,20 @@ namespace fs = std::filesystem;
 const CommandSpec kSolve{
     "solve",
     "restyle a volume from painted views",
-    "--scene builtin:NAME[:RES]|IN.vdb --views VIEWS.json [options] -o OUT.vdb",
+    "--scene builtin:NAME[:RES]|IN.vdb --views VIEWS.json [options] -o OUT.vdb|LIGHTING.json",
     "Restyles a volume from painted views: finds the emission, albedo or extinction whose\n"
     "single-scattering renders match the targets (bounded least squares, SPEC section 2), reports\n"
     "per view how much of the difference the chosen unknowns cannot reach, and writes the result\n"
-    "into the input's grids (docs/FORMATS.md: names, classes and metadata are kept).",
+    "into the input's grids (docs/FORMATS.md: names, classes and metadata are kept).\n"
+    "With --unknowns lights it finds the environment lighting instead (SPEC section 8): the\n"
+    "radiances of --lights N lobes, written as a lighting JSON with a lat-long EXR beside it\n"
+    "(docs/LIGHTING.md).",
     {
         {"scene", "SRC", "builtin:NAME[:RES] or a .vdb file (required)"},
         {"views", "VIEWS.json", "{\"views\": [{\"camera\", \"target\": IMAGE, \"weights\"?}], \"lighting\"?} (required)"},
-        {"unknowns", "LIST", "emission, albedo, emission,albedo or extinction; default emission"},
+        {"unknowns", "LIST", "emission, albedo, emission,albedo, extinction or lights; default emission"},
+        {"lights", "N", "lights: the environment's lobes, 1-256 (default: the lighting's environment.lobes, else 16)"},
+        {"lobe-domain", "D", "lights: sphere or upper_hemisphere; default sphere (or the lighting's)"},
         {"iterations", "N", "most CGLS iterations; default 30"},
         {"tolerance", "T", "stop when an iteration lowers the objective by less than T, relatively; default 1e-4"},
         {"coarse", "N", "first N iterations on half the unknowns and pixels per axis, as the warm start; default 0"},
@@ -54,7 +63,8 @@ const CommandSpec kSolve{
         {"quiet", "", "no progress bar"},
         {"output", "OUT.vdb", "the result; the folder must exist (required)"},
     },
-    "  volstyle solve --scene builtin:cloud:32 --views views.json --unknowns emission,albedo -o out.vdb\n"};
+    "  volstyle solve --scene builtin:cloud:32 --views views.json --unknowns emission,albedo -o out.vdb\n"
+    "  volstyle solve --scene builtin:cloud:32 --views views.json --unknowns lights --lights 32 -o sky.json\n"};
 
 std::vector<std::string> split(const std::string& s, char sep) {
     std::vector<std::string> out;
@@ -185,9 +195,9 @@ core::SolveOptions solveOptions(const Arguments& args, const core::Lighting& lig
     core::SolveOptions opt;
     if (args.has("options"))
         opt = fromFile(args.get("options"), [&](const nlohmann::json& j) { return protocol::solveOptionsFromJson(j, "", opt); });
-    if (args.has("unknowns")) {
+    if (args.has("unknowns") && args.get("unknowns") != "lights") {
         auto u = protocol::parseUnknowns(split(args.get("unknowns"), ','));
-        if (!u) throw InvalidArgument("--unknowns must be emission, albedo, emission,albedo or extinction");
+        if (!u) throw InvalidArgument("--unknowns must be emission, albedo, emission,albedo, extinction or lights");
         opt.unknown = *u;
     }
     if (args.has("iterations")) opt.maxIterations = int(args.number("iterations", opt.maxIterations));
@@ -223,6 +233,51 @@ double meanOf(const std::vector<double>& v) {
     return sum;
 }
 
+/// `--unknowns lights`: the environment lobes' radiances (LightSolver), written as the lighting
+/// JSON with them in environment.radiance and as a lat-long EXR of the same name beside it.
+int runLightSolve(const Arguments& args, core::Lighting lighting, std::vector<core::SolveView> views,
+                  const core::SolveOptions& opt, const std::string& output) {
+    core::EnvironmentLight& env = lighting.environment;
+    if (args.has("lights")) {
+        const double n = args.number("lights", 16);
+        if (!(n >= core::kMinLobes && n <= core::kMaxLobes && n == std::floor(n)))
+            throw InvalidArgument("--lights must be a whole number in [1, 256], got '" + args.get("lights") + "'");
+        if (int(n) != env.lobes) env.radiance.clear();  // a new basis: start from the map, or black
+        env.lobes = int(n);
+    }
+    if (args.has("lobe-domain"))
+        env.domain = choice(args, "lobe-domain", {"sphere", "upper_hemisphere"}) == "sphere" ? core::LobeDomain::Sphere
+                                                                                              : core::LobeDomain::UpperHemisphere;
+    if (!env.active()) env.lobes = 16;
+    if (env.radiance.size() != size_t(env.lobes) && !env.map) env.radiance.assign(size_t(env.lobes), Vec3d());  // neutral start
+    if (env.map && env.radiance.size() != size_t(env.lobes)) env.radiance.clear();  // fitted to the map
+
+    core::Volume volume = loadScene(args.get("scene"));
+    auto device = core::GpuDevice::create();
+    core::LightSolver solver(*device, volume, lighting, std::move(views), opt);
+    ProgressBar bar(opt.maxIterations, args.has("quiet"));
+    const core::LightSolveResult result = solver.run([&](const core::SolveProgress& p) { bar.update(p); });
+    bar.finish();
+
+    env.radiance = result.radiance;
+    env.map = nullptr;
+    env.strength = 1;
+    {
+        std::ofstream out(output);
+        out << protocol::toText(protocol::lightingToJson(lighting), 2) << "\n";
+        if (!out.flush()) throw InvalidArgument("cannot write '" + output + "'");
+    }
+    const std::string exr = fs::path(output).replace_extension(".exr").string();
+    core::saveImage(exr, core::lobesToLatLong(env.basis(), env.radiance, 512, 256));
+    const auto& rep = result.report;
+    std::fprintf(stderr, "lights: %d lobes, %d iterations (%s), RMS %.4g -> %.4g, %.2f s (forward %.2f, back-projection %.2f; "
+                         "light volumes %.2f s, %.1f MiB); wrote %s and %s\n",
+                 env.lobes, rep.iterations, core::stopReasonName(rep.stopReason), meanOf(rep.initialRms), meanOf(rep.finalRms),
+                 rep.totalMs / 1000, rep.forwardMs / 1000, rep.adjointMs / 1000, result.lightVolumeMs / 1000,
+                 double(result.lightVolumeBytes) / (1 << 20), output.c_str(), exr.c_str());
+    return 0;
+}
+
 }  // namespace
 
 const CommandSpec& solveCommand() { return kSolve; }
@@ -235,11 +290,17 @@ int runSolve(const std::vector<std::string>& argv) {
             throw InvalidArgument(std::string(std::string(required) == "output" ? "-o OUT.vdb" : "--" + std::string(required)) +
                                   " is required (volstyle solve --help)");
     const std::string output = args.get("output");
-    if (fs::path(output).extension() != ".vdb") throw InvalidArgument("-o must end in .vdb, got '" + output + "'");
+    const bool lights = args.has("unknowns") && args.get("unknowns") == "lights";
+    if (lights && fs::path(output).extension() != ".json")
+        throw InvalidArgument("--unknowns lights writes a lighting: -o must end in .json, got '" + output + "'");
+    if (!lights && fs::path(output).extension() != ".vdb") throw InvalidArgument("-o must end in .vdb, got '" + output + "'");
+    if (!lights && (args.has("lights") || args.has("lobe-domain")))
+        throw InvalidArgument("--lights and --lobe-domain need --unknowns lights");
     requireParentFolder(output);  // before the work, not after it
     core::Lighting lighting = core::defaultLighting();
     std::vector<core::SolveView> views = readViews(args.get("views"), lighting);
     const core::SolveOptions opt = solveOptions(args, lighting);
+    if (lights) return runLightSolve(args, lighting, std::move(views), opt, output);
 
     core::Volume volume = loadScene(args.get("scene"));
 

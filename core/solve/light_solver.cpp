@@ -39,7 +39,7 @@ struct LightSolver::State {
     std::unique_ptr<LightsProjector> T;
     int n = 0;                                // lobes
     std::vector<std::pair<int, int>> edges;   // neighbouring lobes
-    double cEdge = 0, cId = 0, target = 0;    // √(λ_lap/|E|), √((λ0+λ1)/N), λ1/(λ0+λ1)
+    double cEdge = 0, cId = 0, target = 0;    // s√(λ_lap/|E|), s√((λ0+λ1)/N), λ1/(λ0+λ1)/s (s = Ω̄/4π)
     double idConstant = 0;                    // λ0λ1/(λ0+λ1): the part of the objective no c changes
     std::vector<Vec3d> sqrtW, b;              // per pixel: √(w/Σw) and o − f
     std::vector<size_t> viewFirst;            // first pixel of each view
@@ -72,10 +72,15 @@ struct LightSolver::State {
         for (int i = 0; i < n; ++i)
             for (int j : neighbours[size_t(i)]) pairs.insert({std::min(i, j), std::max(i, j)});
         edges.assign(pairs.begin(), pairs.end());
-        cEdge = edges.empty() ? 0 : std::sqrt(reg.laplacian / double(edges.size()));
+        // The terms weigh u_i = c_i Ω̄/4π, about what lobe i adds to a pixel of a white opaque
+        // medium, so the volume solver's weights mean the same here whatever N.
+        double omegaSum = 0;
+        for (double w : basis.solidAngles()) omegaSum += w;
+        const double s = omegaSum / n / (4 * 3.14159265358979323846);
+        cEdge = edges.empty() ? 0 : s * std::sqrt(reg.laplacian / double(edges.size()));
         const double lambdaId = reg.l2 + reg.towardOne;
-        cId = std::sqrt(lambdaId / n);
-        target = lambdaId > 0 ? reg.towardOne / lambdaId : 0;
+        cId = s * std::sqrt(lambdaId / n);
+        target = lambdaId > 0 ? reg.towardOne / lambdaId / s : 0;  // u → λ1/(λ0+λ1), in c
         idConstant = lambdaId > 0 ? reg.l2 * reg.towardOne / lambdaId : 0;
 
         gpu = std::make_unique<GpuVolume>(volume);

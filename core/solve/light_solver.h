@@ -4,12 +4,14 @@
 /// whose single scattering, added to what the rest of the scene gives (emission, the sun and
 /// lights, the background), matches painted targets; the volume stays fixed. Each RGB channel is
 ///
-///   minimise (1/Σw) Σ_k w_k (T c − (o − f))_k² + (λ_lap/|E|) Σ_{(i,j)∈E} (c_i − c_j)² + (λ_0/N) ‖c‖²
+///   minimise (1/Σw) Σ_k w_k (T c − (o − f))_k² + (λ_lap/|E|) Σ_{(i,j)∈E} (u_i − u_j)²
+///            + (λ_0/N) ‖u‖² + (λ_1/N) ‖u − 1‖²,   u = c Ω̄/4π,
 ///   subject to c ≥ 0,
 ///
 /// with T the lights projector (lights_project.comp), f the fixed part rendered once, E the
-/// pairs of neighbouring lobes (each lobe's 6 nearest) and λ_lap, λ_0 the solve options'
-/// `laplacian` and `l2`. Solved by the same bounded CGLS as the volume solver (solver.h): an
+/// pairs of neighbouring lobes (each lobe's 6 nearest), Ω̄ the mean solid angle of a lobe (u_i is
+/// about what lobe i adds to a pixel of a white opaque medium, so the weights mean what the volume
+/// solver's do, whatever N) and λ_lap, λ_0, λ_1 the options' `laplacian`, `l2`, `toward_one`. Solved by the same bounded CGLS as the volume solver (solver.h): an
 /// active set freezes lobes at 0 whose gradient points outward, a step is cut where a free lobe
 /// reaches 0 and that channel restarts from the gradient, so the objective never rises. The N
 /// unknowns live on the host; pixels on the GPU for T and Tᵀ, on the host in between (double).
