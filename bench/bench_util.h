@@ -27,6 +27,12 @@ inline std::vector<core::Camera> orbitCameras(int count, int w, int h) {
     return cams;
 }
 
+inline double mean(const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x / double(v.size());
+    return s;
+}
+
 inline double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());
     size_t n = v.size();

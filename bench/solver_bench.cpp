@@ -55,12 +55,6 @@ std::vector<SolveView> targets(Renderer& r, const Volume& truth, const std::vect
     return v;
 }
 
-double mean(const std::vector<double>& v) {
-    double s = 0;
-    for (double x : v) s += x / double(v.size());
-    return s;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -107,7 +101,7 @@ int main(int argc, char** argv) {
         double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         const auto& rep = r.report;
         int n = std::max(1, rep.iterations);
-        double rel = mean(rep.finalRms) / mean(rep.initialRms);
+        double rel = bench::mean(rep.finalRms) / bench::mean(rep.initialRms);
         std::printf("| %d³ | %d | %d | %dx%d | %.0f | %.0f | %.0f | %.0f | %d | %s | %.1f | %.3f |\n", c.res, c.stepsPerDiagonal,
                     c.views, c.w, c.h, rep.forwardMs / n, rep.adjointMs / n, rep.vectorMs / n,
                     (rep.forwardMs + rep.adjointMs + rep.vectorMs) / n, rep.iterations, stopReasonName(rep.stopReason), total, rel);
@@ -142,7 +136,7 @@ int main(int argc, char** argv) {
             opt.visibleChange = 0;
             opt.boundsMethod = m;
             SolveResult r = Solver(*device, s.plain, defaultLighting(), v, opt).run();
-            double rel = mean(r.report.finalRms) / mean(r.report.initialRms);
+            double rel = bench::mean(r.report.finalRms) / bench::mean(r.report.initialRms);
             const char* name = m == BoundsMethod::Projected ? "projected steps (default)" : "steps cut at the first bound";
             std::printf("| %s | %d | %.1f | %.4f |\n", name, r.report.iterations, r.report.totalMs / 1000, rel);
             std::printf("{\"bench\":\"solver_bounds\",\"method\":\"%s\",\"iterations\":%d,\"seconds\":%.2f,\"final_rms_relative\":%.5f}\n",

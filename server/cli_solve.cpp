@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,7 @@
 #include "core/gpu/gpu_device.h"
 #include "core/image/image_io.h"
 #include "core/render/environment_lobes.h"
+#include "core/solve/combined_solve.h"
 #include "core/solve/light_solver.h"
 #include "core/solve/solver.h"
 #include "core/volume/vdb_io.h"
@@ -41,11 +43,13 @@ const CommandSpec kSolve{
     "into the input's grids (docs/FORMATS.md: names, classes and metadata are kept).\n"
     "With --unknowns lights it finds the environment lighting instead (SPEC section 8): the\n"
     "radiances of --lights N lobes, written as a lighting JSON with a lat-long EXR beside it\n"
-    "(docs/LIGHTING.md).",
+    "(docs/LIGHTING.md). With lights,emission (or albedo) it alternates between the two and writes\n"
+    "OUT.vdb with OUT.lighting.json and OUT.lighting.exr beside it.",
     {
         {"scene", "SRC", "builtin:NAME[:RES] or a .vdb file (required)"},
         {"views", "VIEWS.json", "{\"views\": [{\"camera\", \"target\": IMAGE, \"weights\"?}], \"lighting\"?} (required)"},
-        {"unknowns", "LIST", "emission, albedo, emission,albedo, extinction or lights; default emission"},
+        {"unknowns", "LIST", "emission, albedo, emission,albedo, extinction, lights, or lights with emission and/or albedo; default emission"},
+        {"rounds", "N", "lights with emission/albedo: rounds of lights then volume (each --iterations); default 8"},
         {"lights", "N", "lights: the environment's lobes, 1-256 (default: the lighting's environment.lobes, else 16)"},
         {"lobe-domain", "D", "lights: sphere or upper_hemisphere; default sphere (or the lighting's)"},
         {"iterations", "N", "most CGLS iterations; default 30"},
@@ -195,8 +199,12 @@ core::SolveOptions solveOptions(const Arguments& args, const core::Lighting& lig
     core::SolveOptions opt;
     if (args.has("options"))
         opt = fromFile(args.get("options"), [&](const nlohmann::json& j) { return protocol::solveOptionsFromJson(j, "", opt); });
-    if (args.has("unknowns") && args.get("unknowns") != "lights") {
-        auto u = protocol::parseUnknowns(split(args.get("unknowns"), ','));
+    std::vector<std::string> volumeUnknowns;
+    if (args.has("unknowns"))
+        for (const auto& u : split(args.get("unknowns"), ','))
+            if (u != "lights") volumeUnknowns.push_back(u);
+    if (!volumeUnknowns.empty()) {
+        auto u = protocol::parseUnknowns(volumeUnknowns);
         if (!u) throw InvalidArgument("--unknowns must be emission, albedo, emission,albedo, extinction or lights");
         opt.unknown = *u;
     }
@@ -233,10 +241,25 @@ double meanOf(const std::vector<double>& v) {
     return sum;
 }
 
-/// `--unknowns lights`: the environment lobes' radiances (LightSolver), written as the lighting
-/// JSON with them in environment.radiance and as a lat-long EXR of the same name beside it.
+/// Writes the lighting (with the solved lobes) as JSON at `json` and its lobes as a lat-long EXR
+/// of the same name beside it; returns the EXR's path.
+std::string writeLighting(const core::Lighting& lighting, const std::string& json) {
+    {
+        std::ofstream out(json);
+        out << protocol::toText(protocol::lightingToJson(lighting), 2) << "\n";
+        if (!out.flush()) throw InvalidArgument("cannot write '" + json + "'");
+    }
+    const std::string exr = fs::path(json).replace_extension(".exr").string();
+    core::saveImage(exr, core::lobesToLatLong(lighting.environment.basis(), core::lobeRadiance(lighting.environment), 512, 256));
+    return exr;
+}
+
+/// `--unknowns lights` (alone, or with emission and/or albedo): the environment lobes' radiances
+/// (LightSolver), or both blocks in turn (solveLightsAndVolume). Lights alone write the lighting
+/// JSON at `output` with a lat-long EXR beside it; with the volume, `output` is the VDB and the
+/// lighting goes to OUT.lighting.json / .exr.
 int runLightSolve(const Arguments& args, core::Lighting lighting, std::vector<core::SolveView> views,
-                  const core::SolveOptions& opt, const std::string& output) {
+                  const core::SolveOptions& opt, const std::string& output, bool withVolume) {
     core::EnvironmentLight& env = lighting.environment;
     if (args.has("lights")) {
         const double n = args.number("lights", 16);
@@ -254,6 +277,24 @@ int runLightSolve(const Arguments& args, core::Lighting lighting, std::vector<co
 
     core::Volume volume = loadScene(args.get("scene"));
     auto device = core::GpuDevice::create();
+    if (withVolume) {
+        const int rounds = int(args.number("rounds", 8));
+        if (rounds < 1 || rounds > 100) throw InvalidArgument("--rounds must be in [1, 100]");
+        ProgressBar bar(opt.maxIterations, args.has("quiet"));
+        const core::CombinedSolveResult result = core::solveLightsAndVolume(
+            *device, volume, lighting, views, opt, rounds, [&](const core::CombinedProgress& p) { bar.update(p.inner); });
+        bar.finish();
+        core::saveVdb(output, result.volume);
+        env.radiance = result.radiance;
+        env.map = nullptr;
+        env.strength = 1;
+        const std::string json = fs::path(output).replace_extension(".lighting.json").string();
+        const std::string exr = writeLighting(lighting, json);
+        std::fprintf(stderr, "lights and %s: %d rounds, RMS %.4g -> %.4g, %.2f s; wrote %s, %s and %s\n", core::unknownName(opt.unknown),
+                     result.rounds, result.rmsHistory.front(), result.rmsHistory.back(), result.totalMs / 1000, output.c_str(),
+                     json.c_str(), exr.c_str());
+        return 0;
+    }
     core::LightSolver solver(*device, volume, lighting, std::move(views), opt);
     ProgressBar bar(opt.maxIterations, args.has("quiet"));
     const core::LightSolveResult result = solver.run([&](const core::SolveProgress& p) { bar.update(p); });
@@ -262,13 +303,7 @@ int runLightSolve(const Arguments& args, core::Lighting lighting, std::vector<co
     env.radiance = result.radiance;
     env.map = nullptr;
     env.strength = 1;
-    {
-        std::ofstream out(output);
-        out << protocol::toText(protocol::lightingToJson(lighting), 2) << "\n";
-        if (!out.flush()) throw InvalidArgument("cannot write '" + output + "'");
-    }
-    const std::string exr = fs::path(output).replace_extension(".exr").string();
-    core::saveImage(exr, core::lobesToLatLong(env.basis(), env.radiance, 512, 256));
+    const std::string exr = writeLighting(lighting, output);
     const auto& rep = result.report;
     std::fprintf(stderr, "lights: %d lobes, %d iterations (%s), RMS %.4g -> %.4g, %.2f s (forward %.2f, back-projection %.2f; "
                          "light volumes %.2f s, %.1f MiB); wrote %s and %s\n",
@@ -290,17 +325,19 @@ int runSolve(const std::vector<std::string>& argv) {
             throw InvalidArgument(std::string(std::string(required) == "output" ? "-o OUT.vdb" : "--" + std::string(required)) +
                                   " is required (volstyle solve --help)");
     const std::string output = args.get("output");
-    const bool lights = args.has("unknowns") && args.get("unknowns") == "lights";
-    if (lights && fs::path(output).extension() != ".json")
+    std::vector<std::string> unknowns = args.has("unknowns") ? split(args.get("unknowns"), ',') : std::vector<std::string>{};
+    const bool lights = std::find(unknowns.begin(), unknowns.end(), "lights") != unknowns.end();
+    const bool withVolume = lights && unknowns.size() > 1;
+    if (lights && !withVolume && fs::path(output).extension() != ".json")
         throw InvalidArgument("--unknowns lights writes a lighting: -o must end in .json, got '" + output + "'");
-    if (!lights && fs::path(output).extension() != ".vdb") throw InvalidArgument("-o must end in .vdb, got '" + output + "'");
-    if (!lights && (args.has("lights") || args.has("lobe-domain")))
-        throw InvalidArgument("--lights and --lobe-domain need --unknowns lights");
+    if ((!lights || withVolume) && fs::path(output).extension() != ".vdb") throw InvalidArgument("-o must end in .vdb, got '" + output + "'");
+    if (!lights && (args.has("lights") || args.has("lobe-domain") || args.has("rounds")))
+        throw InvalidArgument("--lights, --lobe-domain and --rounds need --unknowns lights");
     requireParentFolder(output);  // before the work, not after it
     core::Lighting lighting = core::defaultLighting();
     std::vector<core::SolveView> views = readViews(args.get("views"), lighting);
     const core::SolveOptions opt = solveOptions(args, lighting);
-    if (lights) return runLightSolve(args, lighting, std::move(views), opt, output);
+    if (lights) return runLightSolve(args, lighting, std::move(views), opt, output, withVolume);
 
     core::Volume volume = loadScene(args.get("scene"));
 

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "../common/closed_form.h"
+#include "../common/environment_truth.h"
 #include "core/render/gpu_volume.h"
 #include "core/solve/light_solver.h"
 #include "gl_test_env.h"
@@ -55,19 +56,6 @@ std::vector<Camera> ring(int count, int size) {
     return out;
 }
 
-/// The truth: a few smooth coloured lobes (a warm key from the upper left, a blue sky, a dim
-/// green bounce from below), as radiances of a 16-lobe basis.
-std::vector<Vec3d> truthFor(const LobeBasis& basis) {
-    std::vector<Vec3d> c;
-    for (const Vec3d& d : basis.directions) {
-        const double key = std::pow(std::max(0.0, dot(d, normalize(Vec3d(-0.6, 0.6, 0.5)))), 2);
-        const double sky = std::max(0.0, d.y);
-        const double bounce = std::max(0.0, -d.y);
-        c.push_back(Vec3d(2.0, 1.5, 0.9) * key + Vec3d(0.3, 0.5, 0.9) * sky + Vec3d(0.1, 0.25, 0.1) * bounce);
-    }
-    return c;
-}
-
 }  // namespace
 
 TEST(LightSolver, RecoversALowFrequencyEnvironmentFromItsRenderings) {
@@ -79,7 +67,7 @@ TEST(LightSolver, RecoversALowFrequencyEnvironmentFromItsRenderings) {
     truth.phase = {PhaseType::HenyeyGreenstein, 0.2};
     truth.environment.lobes = 16;
     truth.environment.lightVolumeResolution = 20;
-    truth.environment.radiance = truthFor(truth.environment.basis());
+    truth.environment.radiance = test::threeColourSky(truth.environment.basis());
 
     GpuVolume gpu(volume);
     std::vector<Camera> cams = ring(6, 40);
