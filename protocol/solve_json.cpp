@@ -17,7 +17,8 @@ std::optional<core::Unknown> parseUnknowns(const std::vector<std::string>& names
 core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::string& path, core::SolveOptions o) {
     JsonReader r;
     if (r.object(j, path, {"unknowns", "basis", "regularization", "max_iterations", "tolerance", "step", "traversal", "hull",
-                           "resolution", "medium_radiance", "views", "coarse_iterations", "visible_change", "local_resolve"})) {
+                           "resolution", "medium_radiance", "views", "coarse_iterations", "visible_change", "local_resolve",
+                           "lights"})) {
         if (j.contains("unknowns")) {
             std::vector<std::string> names;
             if (!j["unknowns"].is_array()) {
@@ -26,9 +27,19 @@ core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::stri
                 const size_t before = r.errors().size();
                 for (size_t i = 0; i < j["unknowns"].size(); ++i)
                     if (auto s = r.string(j["unknowns"][i], path + "/unknowns/" + std::to_string(i))) names.push_back(*s);
-                if (auto u = parseUnknowns(names)) o.unknown = *u;
-                else if (r.errors().size() == before)
-                    r.fail(path + "/unknowns", "must be [\"emission\"], [\"albedo\"], [\"emission\", \"albedo\"] or [\"extinction\"]");
+                // "lights" (SPEC §8) alone, or with emission and/or albedo.
+                const auto lights = std::find(names.begin(), names.end(), "lights");
+                o.lights.solve = lights != names.end();
+                if (o.lights.solve) names.erase(lights);
+                o.lights.withVolume = o.lights.solve && !names.empty();
+                if (o.lights.solve && names.empty()) {
+                    o.unknown = core::Unknown::Emission;  // unused: the volume stays fixed
+                } else if (auto u = parseUnknowns(names)) {
+                    o.unknown = *u;
+                } else if (r.errors().size() == before) {
+                    r.fail(path + "/unknowns", "must be [\"emission\"], [\"albedo\"], [\"emission\", \"albedo\"], [\"extinction\"] "
+                                               "or [\"lights\"] (alone or with emission and/or albedo)");
+                }
             }
         }
         if (j.contains("basis")) {
@@ -53,6 +64,17 @@ core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::stri
                 core::Regularization reg = o.regularization;
                 weights(g[name], p + "/" + name, reg);
                 (std::string(name) == "emission" ? o.emissionRegularization : o.albedoRegularization) = reg;
+            }
+        }
+        if (j.contains("lights") && r.object(j["lights"], path + "/lights", {"lobes", "domain", "rounds"})) {
+            const auto& l = j["lights"];
+            if (l.contains("lobes")) o.lights.lobes = r.integer(l["lobes"], path + "/lights/lobes").value_or(o.lights.lobes);
+            if (l.contains("rounds")) o.lights.rounds = r.integer(l["rounds"], path + "/lights/rounds").value_or(o.lights.rounds);
+            if (l.contains("domain")) {
+                auto d = r.string(l["domain"], path + "/lights/domain");
+                if (d == "sphere") o.lights.domain = core::LobeDomain::Sphere;
+                else if (d == "upper_hemisphere") o.lights.domain = core::LobeDomain::UpperHemisphere;
+                else if (d) r.fail(path + "/lights/domain", "must be 'sphere' or 'upper_hemisphere'");
             }
         }
         if (j.contains("max_iterations")) o.maxIterations = r.integer(j["max_iterations"], path + "/max_iterations").value_or(o.maxIterations);

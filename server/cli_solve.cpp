@@ -260,20 +260,18 @@ std::string writeLighting(const core::Lighting& lighting, const std::string& jso
 /// lighting goes to OUT.lighting.json / .exr.
 int runLightSolve(const Arguments& args, core::Lighting lighting, std::vector<core::SolveView> views,
                   const core::SolveOptions& opt, const std::string& output, bool withVolume) {
-    core::EnvironmentLight& env = lighting.environment;
+    core::SolveOptions::Lights lightOptions;
     if (args.has("lights")) {
         const double n = args.number("lights", 16);
         if (!(n >= core::kMinLobes && n <= core::kMaxLobes && n == std::floor(n)))
             throw InvalidArgument("--lights must be a whole number in [1, 256], got '" + args.get("lights") + "'");
-        if (int(n) != env.lobes) env.radiance.clear();  // a new basis: start from the map, or black
-        env.lobes = int(n);
+        lightOptions.lobes = int(n);
     }
     if (args.has("lobe-domain"))
-        env.domain = choice(args, "lobe-domain", {"sphere", "upper_hemisphere"}) == "sphere" ? core::LobeDomain::Sphere
-                                                                                              : core::LobeDomain::UpperHemisphere;
-    if (!env.active()) env.lobes = 16;
-    if (env.radiance.size() != size_t(env.lobes) && !env.map) env.radiance.assign(size_t(env.lobes), Vec3d());  // neutral start
-    if (env.map && env.radiance.size() != size_t(env.lobes)) env.radiance.clear();  // fitted to the map
+        lightOptions.domain = choice(args, "lobe-domain", {"sphere", "upper_hemisphere"}) == "sphere" ? core::LobeDomain::Sphere
+                                                                                                      : core::LobeDomain::UpperHemisphere;
+    lighting = core::lightingForLightSolve(lighting, lightOptions);
+    core::EnvironmentLight& env = lighting.environment;
 
     core::Volume volume = loadScene(args.get("scene"));
     auto device = core::GpuDevice::create();
@@ -285,9 +283,7 @@ int runLightSolve(const Arguments& args, core::Lighting lighting, std::vector<co
             *device, volume, lighting, views, opt, rounds, [&](const core::CombinedProgress& p) { bar.update(p.inner); });
         bar.finish();
         core::saveVdb(output, result.volume);
-        env.radiance = result.radiance;
-        env.map = nullptr;
-        env.strength = 1;
+        env.setRadiance(result.radiance);
         const std::string json = fs::path(output).replace_extension(".lighting.json").string();
         const std::string exr = writeLighting(lighting, json);
         std::fprintf(stderr, "lights and %s: %d rounds, RMS %.4g -> %.4g, %.2f s; wrote %s, %s and %s\n", core::unknownName(opt.unknown),
@@ -300,9 +296,7 @@ int runLightSolve(const Arguments& args, core::Lighting lighting, std::vector<co
     const core::LightSolveResult result = solver.run([&](const core::SolveProgress& p) { bar.update(p); });
     bar.finish();
 
-    env.radiance = result.radiance;
-    env.map = nullptr;
-    env.strength = 1;
+    env.setRadiance(result.radiance);
     const std::string exr = writeLighting(lighting, output);
     const auto& rep = result.report;
     std::fprintf(stderr, "lights: %d lobes, %d iterations (%s), RMS %.4g -> %.4g, %.2f s (forward %.2f, back-projection %.2f; "

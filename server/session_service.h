@@ -179,6 +179,9 @@ private:
     void runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,
                   core::GpuDevice& device);
     void solveAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options, core::GpuDevice& device);
+    /// "unknowns": ["lights", …]: the environment lobes (and the volume's unknowns in turn); the
+    /// session's lighting gets the solved radiances (and the volume a new version).
+    void solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options, core::GpuDevice& device);
     void finishJob(Job& job);
 
     /// Writes the stylizer's scene, moves its revision and wakes its streams (the lock held).

@@ -4,9 +4,12 @@
 
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
+#include "core/solve/combined_solve.h"
+#include "core/solve/light_solver.h"
 #include "core/solve/solve_cache.h"
 #include "core/solve/solver.h"
 #include "protocol/error_body.h"
+#include "protocol/render_json.h"
 #include "protocol/solve_json.h"
 #include "server/session_service.h"
 
@@ -69,6 +72,7 @@ void SessionService::runSolve(const std::shared_ptr<Job>& job, const std::shared
 
 void SessionService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,
                                     core::GpuDevice& device) {
+    if (options.lights.solve) return solveLightsAndCommit(job, s, options, device);
     SolveInputs in = snapshot(*s);
     // Every view a stroke left alone keeps its rows of W and renders from the last solve.
     if (!m_solveCache && m_limits.solveCacheBytes > 0) m_solveCache = std::make_unique<core::SolveCache>(m_limits.solveCacheBytes);
@@ -114,6 +118,54 @@ void SessionService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s,
     std::lock_guard lock(job.mutex);
     job.state = JobState::Done;
     job.result = {{"version", version}, {"report", protocol::solveReportToJson(result.report)}};
+}
+
+void SessionService::solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,
+                                          core::GpuDevice& device) {
+    SolveInputs in = snapshot(*s);
+    core::Lighting lighting = core::lightingForLightSolve(in.lighting, options.lights);
+    auto report = [&](const core::SolveProgress& p, const char* block, int round) {
+        nlohmann::json progress = protocol::solveProgressToJson(p);
+        progress["block"] = block;
+        if (round > 0) progress["round"] = round;
+        {
+            std::lock_guard lock(job.mutex);
+            job.progress = progress;
+        }
+        job.emit(JobEvent::Progress, progress);
+        m_gl.runShortTasks(device);  // renders waiting for the GL thread run between iterations
+    };
+    nlohmann::json result;
+    std::optional<core::Volume> volume;
+    if (options.lights.withVolume) {
+        core::CombinedSolveResult r = core::solveLightsAndVolume(
+            device, in.volume, lighting, in.views, options, options.lights.rounds,
+            [&](const core::CombinedProgress& p) { report(p.inner, p.block, p.round); }, &job.cancel);
+        lighting.environment.setRadiance(r.radiance);
+        volume = std::move(r.volume);
+        result["rounds"] = r.rounds;
+        result["rms_history"] = r.rmsHistory;
+        result["total_ms"] = r.totalMs;
+    } else {
+        core::LightSolver solver(device, in.volume, lighting, std::move(in.views), options);
+        const core::LightSolveResult r = solver.run([&](const core::SolveProgress& p) { report(p, "lights", 0); }, &job.cancel);
+        lighting.environment.setRadiance(r.radiance);
+        result["report"] = protocol::solveReportToJson(r.report);
+        result["light_volumes"] = {{"ms", r.lightVolumeMs}, {"bytes", r.lightVolumeBytes}};
+    }
+    std::shared_ptr<core::GpuVolume> stale;  // freed here, on the GL thread
+    {
+        std::lock_guard lock(s->mutex);
+        s->lighting = lighting;
+        if (volume) stale = commitVersion(*s, std::move(*volume));  // saves the session, lighting included
+        else saved(*s);
+        result["version"] = s->version;
+    }
+    result["lighting"] = protocol::lightingToJson(lighting);
+    result["environment_url"] = "/api/v1/sessions/" + s->id + "/lighting/environment.exr";
+    std::lock_guard lock(job.mutex);
+    job.state = JobState::Done;
+    job.result = std::move(result);
 }
 
 void SessionService::finishJob(Job& job) {

@@ -99,6 +99,12 @@ struct EnvironmentLight {
 
     bool active() const { return lobes > 0; }
     LobeBasis basis() const { return LobeBasis::make(lobes, domain); }
+    /// Radiances as they are to be used from now on (a solve's): no map, strength 1.
+    void setRadiance(std::vector<Vec3d> perLobe) {
+        radiance = std::move(perLobe);
+        map = nullptr;
+        strength = 1;
+    }
 };
 constexpr int kMinLightVolumeResolution = 2;
 constexpr int kMaxLightVolumeResolution = 256;

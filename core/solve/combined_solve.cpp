@@ -38,9 +38,7 @@ CombinedSolveResult solveLightsAndVolume(GpuDevice& device, const Volume& volume
         }, cancel);
         if (out.rmsHistory.empty()) out.rmsHistory.push_back(mean(l.report.initialRms));
         out.rmsHistory.push_back(mean(l.report.finalRms));
-        lit.environment.radiance = l.radiance;
-        lit.environment.map = nullptr;
-        lit.environment.strength = 1;
+        lit.environment.setRadiance(l.radiance);
 
         Solver solver(device, out.volume, lit, views, volumeOpt);
         SolveResult v = solver.run([&](const SolveProgress& p) {

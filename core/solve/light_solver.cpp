@@ -236,6 +236,18 @@ struct LightSolver::State {
     }
 };
 
+Lighting lightingForLightSolve(const Lighting& lighting, const SolveOptions::Lights& options) {
+    Lighting out = lighting;
+    EnvironmentLight& env = out.environment;
+    const int lobes = options.lobes > 0 ? options.lobes : env.active() ? env.lobes : 16;
+    const LobeDomain domain = options.domain.value_or(env.domain);
+    if (lobes != env.lobes || domain != env.domain) env.radiance.clear();  // another basis: the map's, or black
+    env.lobes = lobes;
+    env.domain = domain;
+    if (env.radiance.empty() && !env.map) env.radiance.assign(size_t(lobes), Vec3d());
+    return out;
+}
+
 LightSolver::LightSolver(GpuDevice& device, const Volume& volume, const Lighting& lighting, std::vector<SolveView> views,
                          SolveOptions options)
     : m_state(std::make_unique<State>(device, volume, lighting, std::move(views), std::move(options))) {}

@@ -36,6 +36,11 @@ struct LightSolveResult {
     size_t lightVolumeBytes = 0;
 };
 
+/// The lighting a lights solve starts from: `lighting` with its environment on `options.lobes`
+/// lobes (0: its own count, 16 if it has none) over `options.domain` (unset: its own). The start
+/// is its radiances when the basis is unchanged, else its map's projection, else black.
+Lighting lightingForLightSolve(const Lighting& lighting, const SolveOptions::Lights& options);
+
 class LightSolver {
 public:
     /// `lighting.environment` names the basis (lobes, domain, light-volume resolution) and the

@@ -50,6 +50,10 @@ std::vector<FieldProblem> SolveOptions::check() const {
     } else if (mediumRadiance) {
         out.push_back({"medium_radiance", "applies to extinction solves only"});
     }
+    if (lights.lobes < 0 || lights.lobes > kMaxLobes) out.push_back({"lights/lobes", "must be in [1, 256] (0: the lighting's)"});
+    if (lights.rounds < 1 || lights.rounds > 100) out.push_back({"lights/rounds", "must be in [1, 100]"});
+    if (lights.solve && lights.withVolume && unknown == Unknown::Extinction)
+        out.push_back({"unknowns", "lights go with emission and/or albedo, not extinction"});
     return out;
 }
 

@@ -64,6 +64,17 @@ struct SolveOptions {
     /// changed, only the unknowns those pixels see move, and only the pixels that see them are
     /// recomputed. false: every solve moves every unknown.
     bool localResolve = true;
+    /// Light reconstruction (SPEC §8; "unknowns": ["lights"] alone or with emission/albedo): the
+    /// environment lobes' radiances, alone (LightSolver) or in turn with `unknown`
+    /// (solveLightsAndVolume, `lightRounds` rounds). `lobes` 0 keeps the lighting's own count
+    /// (16 if it has none).
+    struct Lights {
+        bool solve = false;
+        bool withVolume = false;
+        int lobes = 0;
+        std::optional<LobeDomain> domain;
+        int rounds = 8;
+    } lights;
 
     std::vector<FieldProblem> check() const;
     void validate() const;  ///< throws InvalidArgument listing check()'s problems

@@ -1,5 +1,6 @@
 // Sessions, their lighting and renders: POST/GET /sessions, GET/DELETE /sessions/{sid},
-// GET/PUT …/lighting, POST …/render.
+// GET/PUT …/lighting, GET …/lighting/environment.{exr,png}, POST …/render.
+#include "core/render/environment_lobes.h"
 #include "protocol/render_json.h"
 #include "server/responses.h"
 #include "server/routes/route_context.h"
@@ -25,6 +26,17 @@ void addSessionRoutes(RouteContext& c) {
     });
     c.http.Get(kSessionPath + "/lighting", [&c](const httplib::Request& req, httplib::Response& res) {
         reply(res, 200, protocol::lightingToJson(c.service.lighting(*c.service.find(req.matches[1]))));
+    });
+    // The environment light's lobes as a lat-long map (docs/LIGHTING.md): EXR (linear) for
+    // `background: {"environment": …}` and Blender, PNG (sRGB) for the page's thumbnail.
+    c.http.Get(kSessionPath + R"(/lighting/environment\.(exr|png))", [&c](const httplib::Request& req, httplib::Response& res) {
+        const core::Lighting l = c.service.lighting(*c.service.find(req.matches[1]));
+        if (!l.environment.active())
+            throw protocol::ApiError(protocol::ErrorCode::NotFound, "the lighting has no environment light (environment.lobes is 0)");
+        const bool exr = req.matches[2] == "exr";
+        const int width = exr ? 512 : 128;
+        replyImage(res, core::lobesToLatLong(l.environment.basis(), core::lobeRadiance(l.environment), width, width / 2),
+                   exr ? protocol::ImageFormat::Exr : protocol::ImageFormat::Png);
     });
     c.http.Put(kSessionPath + "/lighting", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);

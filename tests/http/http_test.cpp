@@ -414,3 +414,50 @@ TEST_F(Api, DeletingASessionDuringASolveCancelsItsJob) {
     expectError(client().Get(base.c_str()), 404, "not_found");
     expectError(client().Get(("/api/v1/jobs/" + job + "/preview/" + vid + ".png").c_str()), 404, "not_found");
 }
+
+TEST_F(Api, SolvesTheEnvironmentLightingAndServesItsMap) {
+    // Targets rendered under 8 lobes; the lighting set to a black environment; a lights solve
+    // brings the renders back and the session's lighting holds the solved radiances.
+    std::string id = createSession(24);
+    const std::string base = "/api/v1/sessions/" + id;
+    expectError(client().Get((base + "/lighting/environment.exr").c_str()), 404, "not_found");  // no environment yet
+    json radiance = json::array(), black = json::array();
+    for (int i = 0; i < 8; ++i) radiance.push_back({0.3 + 0.2 * (i % 3), 0.6, 1.2 - 0.1 * i}), black.push_back({0, 0, 0});
+    auto lighting = [&](const json& r) {
+        return json{{"background", {0, 0, 0}}, {"environment", {{"lobes", 8}, {"radiance", r}, {"light_volume_resolution", 12}}}}.dump();
+    };
+    ASSERT_EQ(client().Put((base + "/lighting").c_str(), lighting(radiance), "application/json")->status, 200);
+    for (json eye : {json{0, 0.3, 3}, json{3, 0.5, 0.5}}) {
+        auto r = client().Post((base + "/views").c_str(), json{{"camera", {{"eye", eye}, {"target", {0, 0, 0}}, {"width", 24}, {"height", 24}}}}.dump(), "application/json");
+        ASSERT_EQ(r->status, 201) << r->body;
+        const std::string vid = json::parse(r->body)["id"];
+        auto exr = client().Get((base + "/views/" + vid + "/render.exr").c_str());
+        ASSERT_EQ(exr->status, 200);
+        ASSERT_EQ(client().Put((base + "/views/" + vid + "/target").c_str(), exr->body, "image/x-exr")->status, 200);
+    }
+    ASSERT_EQ(client().Put((base + "/lighting").c_str(), lighting(black), "application/json")->status, 200);
+    expectError(client().Post((base + "/solve").c_str(), R"({"unknowns": ["lights", "extinction"]})", "application/json"), 400, "invalid_argument");
+    expectError(client().Post((base + "/solve").c_str(), R"({"unknowns": ["lights"], "lights": {"lobes": 300}})", "application/json"), 400, "invalid_argument");
+
+    auto r = client().Post((base + "/solve").c_str(), R"({"unknowns": ["lights"], "max_iterations": 25, "regularization": {"laplacian": 0}})", "application/json");
+    ASSERT_EQ(r->status, 202) << r->body;
+    const std::string job = json::parse(r->body)["job"];
+    auto events = readEvents(client(), "/api/v1/jobs/" + job + "/events");
+    ASSERT_FALSE(events.empty());
+    EXPECT_EQ(events.back(), "done");
+    const json result = json::parse(client().Get(("/api/v1/jobs/" + job).c_str())->body)["result"];
+    const json rep = result["report"];
+    double before = 0, after = 0;
+    for (size_t v = 0; v < rep["initial_rms"].size(); ++v) before += rep["initial_rms"][v].get<double>(), after += rep["final_rms"][v].get<double>();
+    std::cout << "[ measured ] lights over HTTP: RMS " << before / 2 << " -> " << after / 2 << " in " << rep["iterations"] << " iterations\n";
+    EXPECT_LT(after, 0.05 * before);
+    const json solved = json::parse(client().Get((base + "/lighting").c_str())->body);
+    ASSERT_EQ(solved["environment"]["radiance"].size(), 8u);
+    EXPECT_EQ(solved["environment"], result["lighting"]["environment"]);
+    auto map = client().Get((base + "/lighting/environment.exr").c_str());
+    ASSERT_EQ(map->status, 200);
+    const core::Image img = core::loadImageFromMemory(map->body.data(), map->body.size(), "environment").image;
+    EXPECT_EQ(img.width, 512);
+    EXPECT_EQ(img.height, 256);
+    EXPECT_EQ(client().Get((base + "/lighting/environment.png").c_str())->status, 200);
+}
