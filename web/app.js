@@ -245,7 +245,18 @@ const solve = guard(async () => {
     es.close();
     $('solve').disabled = false; $('cancel').disabled = true;
     const j = JSON.parse(e.data);
-    if (kind === 'done') {
+    if (kind === 'done' && j.result.lighting) {
+      // A lights solve (docs/LIGHTING.md): the session's lighting now holds the solved lobes.
+      $('progress').value = 1;
+      const r = j.result.report, lobes = j.result.lighting.environment.lobes;
+      const how = r ? `${r.iterations} iterations (${r.stop_reason}) in ${(r.total_ms / 1000).toFixed(1)} s`
+                    : `${j.result.rounds} rounds in ${(j.result.total_ms / 1000).toFixed(1)} s, version ${j.result.version}`;
+      status(`lit: ${lobes} lobes solved, ${how}`, 'ok');
+      $('environment').src = `${api}/sessions/${state.sid}/lighting/environment.png?t=${Date.now()}`;
+      $('environment-wrap').hidden = false;
+      showSession(await call('GET', `/sessions/${state.sid}`));
+      renderViewport(); renderViews();
+    } else if (kind === 'done') {
       $('progress').value = 1;
       const r = j.result.report;
       // Say when the paint asks what the chosen unknowns cannot give, and what would give it.

@@ -71,6 +71,17 @@ try {
   const second = await page.evaluate(() => document.getElementById('status').textContent);
   console.log(`[ measured ] after one more stroke: ${second}`);
   if (!second.includes('re-solved the stroke')) await fail(`the second solve was not a re-solve of the stroke: ${second}`);
+
+  // The lighting as the unknown (issue #13): the volume stays, the environment's lobes are solved
+  // and the page shows them as a small lat-long image.
+  await page.selectOption('#unknowns', 'lights');
+  await page.fill('#iterations', '5');
+  await page.click('#solve');
+  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('lit:'), null, { timeout: 300000 });
+  const lit = await page.evaluate(() => document.getElementById('status').textContent);
+  console.log(`[ measured ] lighting solve: ${lit}`);
+  await page.waitForFunction(() => { const i = document.getElementById('environment'); return i.complete && i.naturalWidth === 128; }, null, { timeout: 30000 });
+  if (await page.evaluate(() => document.getElementById('environment-wrap').hidden)) await fail('the solved environment is not shown');
   console.log('1 passed, 0 failed');
 } catch (e) {
   await fail(e.message);
