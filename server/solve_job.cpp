@@ -156,7 +156,10 @@ void SessionService::solveLightsAndCommit(Job& job, const std::shared_ptr<Sessio
     std::shared_ptr<core::GpuVolume> stale;  // freed here, on the GL thread
     {
         std::lock_guard lock(s->mutex);
-        s->lighting = lighting;
+        // Only the environment: the sun, lights, background or phase may have been set meanwhile.
+        lighting.validate();  // never store what a breakdown left non-finite
+        s->lighting.environment = lighting.environment;
+        lighting = s->lighting;
         if (volume) stale = commitVersion(*s, std::move(*volume));  // saves the session, lighting included
         else saved(*s);
         result["version"] = s->version;

@@ -42,6 +42,9 @@ public:
     /// derived data (occupancy, light depth) compare it to know when to recompute.
     uint64_t extinctionVersion() const { return m_extinctionVersion; }
     uint64_t occupancyVersion() const { return m_occupancyVersion; }
+    /// A hash of the extinction's content: equal for equal grids in different GpuVolumes (each
+    /// solve's copy), so derived data that is costly to rebuild can be shared between them.
+    size_t extinctionHash() const { return m_extinctionHash; }
     void markOccupancyCurrent() { m_occupancyVersion = m_extinctionVersion; }
 
 private:

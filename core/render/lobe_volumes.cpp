@@ -21,8 +21,12 @@ std::shared_ptr<const LobeLightVolumes> lobeLightVolumes(GpuDevice& device, GpuV
                                                          int resolution, const RenderSettings& march, RenderStats& stats,
                                                          const WorkBudget& budget) {
     const Int3 dims = lobeGridDims(volume.dims(), resolution);
-    const std::string key = fmt::format("lobe-volumes:{}:{}:{}x{}x{}:{}", extinctionKey(volume), basis.key(), dims.x, dims.y,
-                                        dims.z, march.stepVoxels);
+    // By the extinction's content, not its GpuVolume's version: every solve uploads its own copy,
+    // and N light-depth passes are worth not repeating for the same grid.
+    std::string grid = fmt::format("{:x}:{}x{}x{}:", volume.extinctionHash(), volume.dims().x, volume.dims().y, volume.dims().z);
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) grid += fmt::format("{},", volume.worldFromIndex()(r, c));
+    const std::string key = fmt::format("lobe-volumes:{}:{}:{}x{}x{}:{}", grid, basis.key(), dims.x, dims.y, dims.z, march.stepVoxels);
     if (auto cached = device.cache().find<LobeLightVolumes>(key)) return cached;
 
     auto result = std::make_shared<LobeLightVolumes>();

@@ -115,6 +115,12 @@ std::vector<FieldProblem> Lighting::check() const {
             break;
         }
     if (env.map && env.map->empty()) out.push_back({"environment/map", "the environment map is empty"});
+    // The product must stay a finite float on the GPU.
+    for (const Vec3d& r : env.radiance)
+        if (isFinite(r) && maxComponent(r) * env.strength > 1e30) {
+            out.push_back({"environment/strength", "times the largest radiance must be at most 1e30"});
+            break;
+        }
     return out;
 }
 

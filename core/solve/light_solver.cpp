@@ -63,6 +63,9 @@ struct LightSolver::State {
                 view.validate();
                 views.push_back(std::move(view));
             }
+        for (const std::string& name : opt.views)
+            if (std::none_of(views.begin(), views.end(), [&](const SolveView& v) { return v.name == name; }))
+                throw InvalidArgument("lights: no view named '" + name + "' with a target");
         if (views.empty()) throw InvalidArgument("lights: no view with a target to solve against");
         n = lighting.environment.lobes;
         const Regularization& reg = opt.regularization;
@@ -315,6 +318,7 @@ LightSolveResult LightSolver::run(const ProgressCallback& progress, const std::a
                     }
                 }
             }
+            const Lobes before = st.x;  // kept if this step breaks down (non-finite objective)
             Lobes next = st.x;
             for (int i = 0; i < st.n; ++i)
                 for (int c = 0; c < 3; ++c) next[size_t(i)][c] = std::max(0.0, st.x[size_t(i)][c] + alpha[c] * dp[size_t(i)][c]);
@@ -381,6 +385,10 @@ LightSolveResult LightSolver::run(const ProgressCallback& progress, const std::a
                 progress(pr);
             }
             if (!std::isfinite(fNext)) {
+                st.x = before;  // the last finite iterate, and what it gives
+                r = st.residual(forwardMs);
+                rep.finalRms = st.rmsPerView(r);
+                rep.objectiveHistory.back() = rep.finalObjective = f;
                 rep.stopReason = StopReason::NumericalBreakdown;
                 break;
             }

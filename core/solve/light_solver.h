@@ -46,7 +46,7 @@ public:
     /// `lighting.environment` names the basis (lobes, domain, light-volume resolution) and the
     /// start (its radiances, or its map's projection; none: 0). Uses `options`' iterations,
     /// tolerance, step, regularization (laplacian: between neighbouring lobes; l2), views and
-    /// enforceBounds. Throws InvalidArgument for bad views, no lobes, or toward_one > 0.
+    /// enforceBounds. Throws InvalidArgument for bad views, a view name with no target, no lobes.
     LightSolver(GpuDevice& device, const Volume& volume, const Lighting& lighting, std::vector<SolveView> views,
                 SolveOptions options);
     ~LightSolver();

@@ -186,6 +186,7 @@ TEST(LightingJson, EnvironmentProblemsNameTheirField) {
     EXPECT_EQ(paths({{"lobes", 1}, {"map", "sky.exr"}}), (std::set<std::string>{"/environment/map"}));  // no server paths
     EXPECT_EQ(paths({{"lobes", 1}, {"radiance", {{1, 1, 1}}}, {"domain", "disc"}}), (std::set<std::string>{"/environment/domain"}));
     EXPECT_EQ(paths({{"lobes", 1}, {"radiance", {{1, 1, 1}}}, {"colour", 1}}), (std::set<std::string>{"/environment/colour"}));
+    EXPECT_EQ(paths({{"lobes", 1}, {"radiance", {{1e10, 1, 1}}}, {"strength", 1e25}}), (std::set<std::string>{"/environment/strength"}));
     EXPECT_EQ(paths({{"lobes", 1}, {"radiance", {{1, 1, 1}}}, {"light_volume_resolution", 1}}),
               (std::set<std::string>{"/environment/light_volume_resolution"}));
 }
