@@ -147,7 +147,7 @@ void SessionService::solveLightsAndCommit(Job& job, const std::shared_ptr<Sessio
         result["rms_history"] = r.rmsHistory;
         result["total_ms"] = r.totalMs;
     } else {
-        core::LightSolver solver(device, in.volume, lighting, std::move(in.views), options);
+        core::LightSolver solver(device, in.volume, lighting, std::move(in.views), options, &job.cancel);
         const core::LightSolveResult r = solver.run([&](const core::SolveProgress& p) { report(p, "lights", 0); }, &job.cancel);
         lighting.environment.setRadiance(r.radiance);
         result["report"] = protocol::solveReportToJson(r.report);

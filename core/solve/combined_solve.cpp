@@ -32,7 +32,7 @@ CombinedSolveResult solveLightsAndVolume(GpuDevice& device, const Volume& volume
     volumeOpt.localResolve = false;  // each round changes the lighting: nothing to re-solve locally
     volumeOpt.analyzeReach = false;
     for (int round = 1; round <= std::max(1, rounds); ++round) {
-        LightSolver lights(device, out.volume, lit, views, volumeOptions);
+        LightSolver lights(device, out.volume, lit, views, volumeOptions, cancel);
         const LightSolveResult l = lights.run([&](const SolveProgress& p) {
             if (progress) progress({round, "lights", p});
         }, cancel);

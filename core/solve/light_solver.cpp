@@ -1,6 +1,7 @@
 #include "core/solve/light_solver.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <set>
 
@@ -50,8 +51,10 @@ struct LightSolver::State {
     Lobes x;                                  // the iterate
     Lobes scale;                              // the column scaling D (1 without preconditioning)
 
-    State(GpuDevice& d, const Volume& volume, const Lighting& l, std::vector<SolveView> v, SolveOptions o)
+    State(GpuDevice& d, const Volume& volume, const Lighting& l, std::vector<SolveView> v, SolveOptions o,
+          const std::atomic<bool>* cancel)
         : device(d), lighting(l), opt(std::move(o)) {
+        const WorkBudget budget(0, cancel);  // no deadline; cancellable between lobes and chunks
         opt.validate();
         lighting.validate();
         if (!lighting.environment.active())
@@ -90,10 +93,10 @@ struct LightSolver::State {
         T = std::make_unique<LightsProjector>(device, *gpu, lighting, opt.stepVoxels);
         for (const auto& view : views) {
             viewFirst.push_back(T->pixelCount());
-            T->addView(view.camera);
+            T->addView(view.camera, budget);
         }
         pixels = GpuVector(T->pixelCount(), "lights-pixels");
-        observe();
+        observe(budget);
         x = lobeRadiance(lighting.environment);
         x.resize(size_t(n));
         for (Vec3d& c : x) c = Vec3d(std::max(0.0, c.x), std::max(0.0, c.y), std::max(0.0, c.z));
@@ -118,7 +121,7 @@ struct LightSolver::State {
     }
 
     /// o − f and the weights: f is the scene without the lobes (emission, lights, background).
-    void observe() {
+    void observe(const WorkBudget& budget) {
         Lighting fixedLighting = lighting;
         fixedLighting.environment = EnvironmentLight{};
         Renderer renderer(device);
@@ -131,7 +134,7 @@ struct LightSolver::State {
         viewWeightSum.assign(views.size(), Vec3d());
         for (size_t v = 0; v < views.size(); ++v) {
             const SolveView& view = views[v];
-            const Image fixed = renderer.render(*gpu, view.camera, fixedLighting, settings);
+            const Image fixed = renderer.render(*gpu, view.camera, fixedLighting, settings, nullptr, budget);
             for (size_t i = 0; i < view.target.pixelCount(); ++i) {
                 const float* t = &view.target.rgba[4 * i];
                 const double w = std::max(0.0f, t[3]) * (view.weights ? std::max(0.0f, view.weights->rgba[4 * i]) : 1.0f);
@@ -252,8 +255,8 @@ Lighting lightingForLightSolve(const Lighting& lighting, const SolveOptions::Lig
 }
 
 LightSolver::LightSolver(GpuDevice& device, const Volume& volume, const Lighting& lighting, std::vector<SolveView> views,
-                         SolveOptions options)
-    : m_state(std::make_unique<State>(device, volume, lighting, std::move(views), std::move(options))) {}
+                         SolveOptions options, const std::atomic<bool>* cancel)
+    : m_state(std::make_unique<State>(device, volume, lighting, std::move(views), std::move(options), cancel)) {}
 
 LightSolver::~LightSolver() = default;
 

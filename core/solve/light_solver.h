@@ -47,8 +47,10 @@ public:
     /// start (its radiances, or its map's projection; none: 0). Uses `options`' iterations,
     /// tolerance, step, regularization (laplacian: between neighbouring lobes; l2), views and
     /// enforceBounds. Throws InvalidArgument for bad views, a view name with no target, no lobes.
+    /// `cancel`, if given, is also checked while the light volumes and the fixed part are built
+    /// (between lobes: N light-depth passes can take minutes), throwing Cancelled.
     LightSolver(GpuDevice& device, const Volume& volume, const Lighting& lighting, std::vector<SolveView> views,
-                SolveOptions options);
+                SolveOptions options, const std::atomic<bool>* cancel = nullptr);
     ~LightSolver();
 
     using ProgressCallback = std::function<void(const SolveProgress&)>;

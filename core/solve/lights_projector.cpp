@@ -40,12 +40,12 @@ LightsProjector::LightsProjector(GpuDevice& device, GpuVolume& volume, const Lig
 
 LightsProjector::~LightsProjector() = default;
 
-void LightsProjector::addView(const Camera& camera) {
+void LightsProjector::addView(const Camera& camera, const WorkBudget& budget) {
     camera.validate();
     RenderSettings settings;
     settings.stepVoxels = m_step;
     RenderStats stats;
-    View view{camera, prepareMarch(m_device, m_volume, camera, m_lighting, settings, stats), m_pixelCount};
+    View view{camera, prepareMarch(m_device, m_volume, camera, m_lighting, settings, stats, budget), m_pixelCount};
     m_lightVolumeMs += stats.lightMs;
     layout::MarchParams& p = view.setup.params;
     p.viewPixels = {int(m_pixelCount), 0, 0, 0};

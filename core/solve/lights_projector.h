@@ -11,6 +11,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/base/work_budget.h"
 #include "core/gpu/gpu_device.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/march_setup.h"
@@ -27,7 +28,8 @@ public:
     LightsProjector(GpuDevice& device, GpuVolume& volume, const Lighting& lighting, double stepVoxels);
     ~LightsProjector();
 
-    void addView(const Camera& camera);
+    /// Builds the light volumes on first use (cached), checking `budget` between lobes.
+    void addView(const Camera& camera, const WorkBudget& budget = WorkBudget());
     size_t pixelCount() const { return m_pixelCount; }
     int lobes() const { return m_lobes; }
 

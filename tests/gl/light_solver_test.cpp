@@ -3,6 +3,7 @@
 // neutral start.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <random>
 
@@ -140,4 +141,18 @@ TEST(LightSolver, KeepsRadiancesNonNegative) {
     for (const Vec3d& c : r.radiance) EXPECT_EQ(c.x, 0.0);  // red can only go to 0
     for (size_t i = 1; i < r.report.objectiveHistory.size(); ++i)
         EXPECT_LE(r.report.objectiveHistory[i], r.report.objectiveHistory[i - 1] * (1 + 1e-9));
+}
+
+TEST(LightSolver, ACancelStopsTheLightVolumesBeingBuilt) {
+    VOLSTYLE_REQUIRE_GL();
+    Volume volume = ball();
+    for (float& s : volume.extinction()) s *= 1.0001f;  // a grid no earlier test cached light volumes for
+    Lighting l;
+    l.lights.clear();
+    l.environment.lobes = 32;
+    l.environment.lightVolumeResolution = 20;
+    l.environment.radiance.assign(32, Vec3d(1.0));
+    const Camera cam = ring(1, 16).front();
+    const std::atomic<bool> cancelled{true};
+    EXPECT_THROW(LightSolver(test::device(), volume, l, {{"v", cam, Image(16, 16), std::nullopt}}, SolveOptions{}, &cancelled), Cancelled);
 }
