@@ -219,14 +219,7 @@ struct LightSolver::State {
             Vec3d r2;
             const size_t end = v + 1 < views.size() ? viewFirst[v + 1] : r.data.size();
             for (size_t i = viewFirst[v]; i < end; ++i) r2 += r.data[i] * r.data[i];
-            double total = 0;
-            int channels = 0;
-            for (int c = 0; c < 3; ++c) {
-                if (viewWeightSum[v][c] <= 0) continue;
-                total += std::sqrt(std::max(0.0, r2[c] * weightSum[c] / viewWeightSum[v][c]));
-                ++channels;
-            }
-            out.push_back(channels ? total / channels : 0.0);
+            out.push_back(viewRms(r2, weightSum, viewWeightSum[v]));
         }
         return out;
     }

@@ -1,5 +1,6 @@
 #include "core/solve/solve_options.h"
 
+#include <algorithm>
 #include <cmath>
 #include <ostream>
 
@@ -93,5 +94,16 @@ void SolveView::validate() const {
     }
 }
 
+
+double viewRms(const Vec3d& r2, const Vec3d& weightSum, const Vec3d& viewWeightSum) {
+    double total = 0;
+    int channels = 0;
+    for (int c = 0; c < 3; ++c) {
+        if (viewWeightSum[c] <= 0) continue;
+        total += std::sqrt(std::max(0.0, r2[c] * weightSum[c] / viewWeightSum[c]));
+        ++channels;
+    }
+    return channels ? total / channels : 0.0;
+}
 
 }  // namespace volstyle::core

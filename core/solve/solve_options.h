@@ -168,4 +168,8 @@ struct SolveReport {
 
 const char* unknownName(Unknown u);
 
+/// A view's weighted RMS error (the mean over its constrained channels) from r2, its sum of the
+/// squared residuals √(w/Σw)·(A a − o), with Σw over all views (`weightSum`) and over this one.
+double viewRms(const Vec3d& r2, const Vec3d& weightSum, const Vec3d& viewWeightSum);
+
 }  // namespace volstyle::core

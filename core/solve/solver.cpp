@@ -121,14 +121,7 @@ std::vector<double> Solver::State::rmsPerView() {
     for (size_t v = 0; v < views.size(); ++v) {
         Vec3d r2 = ops.dot(rImg, rImg, W->viewRange(v));
         if (!viewUntouched.empty()) r2 += viewUntouched[v];
-        double total = 0;
-        int channels = 0;
-        for (int c = 0; c < 3; ++c) {
-            if (viewWeightSum[v][c] <= 0) continue;
-            total += std::sqrt(std::max(0.0, r2[c] * weightSum[c] / viewWeightSum[v][c]));
-            ++channels;
-        }
-        out.push_back(channels ? total / channels : 0.0);
+        out.push_back(viewRms(r2, weightSum, viewWeightSum[v]));
     }
     return out;
 }
