@@ -79,15 +79,19 @@ void environmentFromJson(JsonReader& r, const nlohmann::json& e, const std::stri
         }
     }
     if (e.contains("map")) {
-        if (!allowFilePaths) r.fail(ep + "/map", "file paths are not accepted here; give the radiance per lobe");
-        else out.environmentLightPath = r.string(e["map"], ep + "/map");
+        const std::optional<std::string> map = r.string(e["map"], ep + "/map");
+        if (allowFilePaths) out.environmentLightPath = map;
+        else if (map == kSessionMap) out.environmentUsesSessionMap = true;
+        else if (map) r.fail(ep + "/map", "file paths are not accepted here; upload the map (PUT /sessions/{sid}/environment) and give \"session\", or give the radiance per lobe");
     }
     if (e.contains("strength")) env.strength = r.number(e["strength"], ep + "/strength").value_or(1);
     if (e.contains("light_volume_resolution"))
         env.lightVolumeResolution = r.integer(e["light_volume_resolution"], ep + "/light_volume_resolution").value_or(64);
     if (!e.contains("radiance") && !e.contains("map")) r.fail(ep, "needs \"radiance\" (one [r,g,b] per lobe) or \"map\"");
-    // A map is loaded by the caller: until then, don't let check() ask for one.
-    if (out.environmentLightPath && env.radiance.empty()) env.radiance.assign(size_t(std::max(env.lobes, 0)), Vec3d());
+    // A map is loaded by the caller (or resolve()): until then, don't let check() ask for one.
+    // Radiances given beside it (GET writes the map's projection) are kept as the fallback.
+    if ((out.environmentLightPath || out.environmentUsesSessionMap) && env.radiance.empty())
+        env.radiance.assign(size_t(std::max(env.lobes, 0)), Vec3d());
 }
 
 }  // namespace
@@ -118,8 +122,10 @@ LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& pat
             } else if (r.object(b, bp, {"color", "environment"})) {
                 if (b.contains("color")) L.background.color = r.vec3(b["color"], bp + "/color").value_or(L.background.color);
                 if (b.contains("environment")) {
-                    if (!allowFilePaths) r.fail(bp + "/environment", "file paths are not accepted here; upload the map instead");
-                    else out.environmentPath = r.string(b["environment"], bp + "/environment");
+                    const std::optional<std::string> map = r.string(b["environment"], bp + "/environment");
+                    if (allowFilePaths) out.environmentPath = map;
+                    else if (map == kSessionMap) out.backgroundUsesSessionMap = true;
+                    else if (map) r.fail(bp + "/environment", "file paths are not accepted here; upload the map (PUT /sessions/{sid}/environment) and give \"session\"");
                 }
             }
         }
@@ -150,7 +156,24 @@ LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& pat
     return out;
 }
 
-nlohmann::json lightingToJson(const core::Lighting& L) {
+core::Lighting LightingRequest::resolve(const std::shared_ptr<const core::Image>& sessionMap, const std::string& path) const {
+    core::Lighting L = lighting;
+    if (!usesSessionMap()) return L;
+    JsonReader r;
+    const std::string missing = "names the session's environment map, but none is uploaded (PUT /sessions/{sid}/environment)";
+    if (backgroundUsesSessionMap) {
+        if (sessionMap) L.background.environment = sessionMap;
+        else r.fail(path + "/background/environment", missing);
+    }
+    if (environmentUsesSessionMap) {
+        if (sessionMap) L.environment.map = sessionMap, L.environment.radiance.clear();
+        else r.fail(path + "/environment/map", missing);
+    }
+    r.throwIfErrors();
+    return L;
+}
+
+nlohmann::json lightingToJson(const core::Lighting& L, const core::Image* sessionMap) {
     nlohmann::json j;
     if (L.lights.size() == 1) {
         j["sun"] = {{"direction", toJson(L.lights[0].direction)}, {"irradiance", toJson(L.lights[0].irradiance)}};
@@ -159,7 +182,9 @@ nlohmann::json lightingToJson(const core::Lighting& L) {
         for (const auto& l : L.lights)
             j["lights"].push_back({{"direction", toJson(l.direction)}, {"irradiance", toJson(l.irradiance)}});
     }
-    j["background"] = toJson(L.background.color);
+    const bool sessionBackground = sessionMap && L.background.environment.get() == sessionMap;
+    j["background"] = sessionBackground ? nlohmann::json{{"color", toJson(L.background.color)}, {"environment", kSessionMap}}
+                                        : toJson(L.background.color);
     j["phase"] = L.phase.type == core::PhaseType::Isotropic
                      ? nlohmann::json{{"type", "isotropic"}}
                      : nlohmann::json{{"type", "henyey_greenstein"}, {"g", L.phase.g}};
@@ -175,6 +200,7 @@ nlohmann::json lightingToJson(const core::Lighting& L) {
                             {"radiance", radiance},
                             {"strength", e.strength},
                             {"light_volume_resolution", e.lightVolumeResolution}};
+        if (sessionMap && e.map.get() == sessionMap) j["environment"]["map"] = kSessionMap;  // radiance: its projection
     }
     return j;
 }

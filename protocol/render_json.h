@@ -35,10 +35,24 @@ struct LightingRequest {
     std::optional<std::string> environmentPath;
     /// `environment.map`: the same, for the map the environment light is fitted to.
     std::optional<std::string> environmentLightPath;
+    /// Over the API, both name the session's uploaded map instead: the string "session"
+    /// (PUT /sessions/{sid}/environment). resolve() puts the map in.
+    bool backgroundUsesSessionMap = false;
+    bool environmentUsesSessionMap = false;
+
+    bool usesSessionMap() const { return backgroundUsesSessionMap || environmentUsesSessionMap; }
+    /// The lighting with the session's map where it is named (the map wins over a radiance given
+    /// beside it). Throws ValidationError naming the field when it is named and `sessionMap` is null.
+    core::Lighting resolve(const std::shared_ptr<const core::Image>& sessionMap, const std::string& path = "") const;
 };
+
+/// The name by which lighting JSON refers to a session's uploaded environment map.
+inline constexpr const char* kSessionMap = "session";
 
 LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& path = "",
                                  bool allowFilePaths = false);
-nlohmann::json lightingToJson(const core::Lighting& lighting);
+/// The lighting as JSON; a map that is `sessionMap` is written as "session" (a map from a file is
+/// not written: the background as its colour, the environment light as its projected radiances).
+nlohmann::json lightingToJson(const core::Lighting& lighting, const core::Image* sessionMap = nullptr);
 
 }  // namespace volstyle::protocol

@@ -87,7 +87,7 @@ RevertRequest RevertRequest::fromJson(const nlohmann::json& j) {
     return q;
 }
 
-SetLightingRequest SetLightingRequest::fromJson(const nlohmann::json& j) { return {lightingFromJson(j).lighting}; }
+SetLightingRequest SetLightingRequest::fromJson(const nlohmann::json& j) { return {lightingFromJson(j)}; }
 
 SolveRequest SolveRequest::fromJson(const nlohmann::json& j, const RequestLimits& limits) {
     SolveRequest q{solveOptionsFromJson(j)};

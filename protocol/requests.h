@@ -15,6 +15,7 @@
 
 #include "core/render/params.h"
 #include "core/solve/solve_options.h"
+#include "protocol/render_json.h"
 #include "protocol/validation.h"
 
 namespace volstyle::protocol {
@@ -68,8 +69,9 @@ struct RevertRequest {
 };
 
 /// PUT /sessions/{sid}/lighting: the lighting object (render_json.h); no server-side paths.
+/// PUT /sessions/{sid}/lighting: "session" in it names the session's map (resolved by the service).
 struct SetLightingRequest {
-    core::Lighting lighting;
+    LightingRequest lighting;
     static SetLightingRequest fromJson(const nlohmann::json& j);
 };
 

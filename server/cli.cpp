@@ -159,13 +159,17 @@ nlohmann::json readJsonFile(const std::string& path) {
 
 core::Lighting lightingFromJsonFile(const nlohmann::json& j, const std::string& jsonPath, const std::string& pointer) {
     auto request = protocol::lightingFromJson(j, pointer, /*allowFilePaths=*/true);
-    if (request.environmentPath) {
-        auto env = std::filesystem::path(jsonPath).parent_path() / *request.environmentPath;
-        request.lighting.background.environment = std::make_shared<core::Image>(core::loadImage(env.string()).image);
-    }
+    // A lat-long map next to the JSON file, refused (naming the field) unless 2:1, finite, >= 0.
+    auto loadMap = [&](const std::string& file, const std::string& field) {
+        const auto path = std::filesystem::path(jsonPath).parent_path() / file;
+        auto map = std::make_shared<core::Image>(core::loadImage(path.string()).image);
+        if (std::string why = core::latLongMapProblem(*map); !why.empty())
+            throw InvalidArgument(pointer + field + ": '" + path.string() + "': " + why);
+        return map;
+    };
+    if (request.environmentPath) request.lighting.background.environment = loadMap(*request.environmentPath, "/background/environment");
     if (request.environmentLightPath) {  // the map the lobes are fitted to (environment.map)
-        auto env = std::filesystem::path(jsonPath).parent_path() / *request.environmentLightPath;
-        request.lighting.environment.map = std::make_shared<core::Image>(core::loadImage(env.string()).image);
+        request.lighting.environment.map = loadMap(*request.environmentLightPath, "/environment/map");
         request.lighting.environment.radiance.clear();  // projected from the map
     }
     return request.lighting;

@@ -47,7 +47,7 @@ const CommandSpec kSolve{
     "OUT.vdb with OUT.lighting.json and OUT.lighting.exr beside it.",
     {
         {"scene", "SRC", "builtin:NAME[:RES] or a .vdb file (required)"},
-        {"views", "VIEWS.json", "{\"views\": [{\"camera\", \"target\": IMAGE, \"weights\"?}], \"lighting\"?} (required)"},
+        {"views", "VIEWS.json", "{\"views\": [{\"camera\", \"target\": IMAGE, \"weights\"?, \"background\"?: PLATE}], \"lighting\"?} (required)"},
         {"unknowns", "LIST", "emission, albedo, emission,albedo, extinction, lights, or lights with emission and/or albedo; default emission"},
         {"rounds", "N", "lights with emission/albedo: rounds of lights then volume (each --iterations); default 8"},
         {"lights", "N", "lights: the environment's lobes, 1-256 (default: the lighting's environment.lobes, else 16)"},
@@ -86,7 +86,8 @@ std::vector<double> numbers(const std::string& flag, const std::string& value, s
     return out;
 }
 
-/// The views of VIEWS.json: {"views": [{"name"?, "camera", "target", "weights"?}], "lighting"?}.
+/// The views of VIEWS.json: {"views": [{"name"?, "camera", "target", "weights"?, "background"?}],
+/// "lighting"?}; "background" is the view's plate (SPEC §1), an image of the camera's size.
 std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& lighting) {
     nlohmann::json j = readJsonFile(path);
     protocol::JsonReader r;
@@ -99,7 +100,7 @@ std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& 
             for (size_t i = 0; i < j["views"].size(); ++i) {
                 const auto& v = j["views"][i];
                 const std::string p = "/views/" + std::to_string(i);
-                if (!r.object(v, p, {"name", "camera", "target", "weights"})) continue;
+                if (!r.object(v, p, {"name", "camera", "target", "weights", "background"})) continue;
                 core::SolveView view;
                 view.name = v.contains("name") ? r.string(v["name"], p + "/name").value_or("") : "v" + std::to_string(i + 1);
                 if (!v.contains("camera") || !v.contains("target")) {
@@ -113,9 +114,11 @@ std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& 
                 }
                 auto target = r.string(v["target"], p + "/target");
                 auto weights = v.contains("weights") ? r.string(v["weights"], p + "/weights") : std::nullopt;
+                auto plate = v.contains("background") ? r.string(v["background"], p + "/background") : std::nullopt;
                 if (!r.ok()) continue;
                 view.target = core::loadImage((base / *target).string()).image;
                 if (weights) view.weights = core::loadImage((base / *weights).string()).image;
+                if (plate) view.background = std::make_shared<const core::Image>(core::loadImage((base / *plate).string()).image);
                 views.push_back(std::move(view));
             }
         }

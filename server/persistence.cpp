@@ -10,6 +10,7 @@
 
 #include "core/base/errors.h"
 #include "core/image/image_io.h"
+#include "core/render/environment_lobes.h"
 #include "core/stylize/mesh_io.h"
 #include "core/volume/vdb_io.h"
 #include "protocol/error_body.h"
@@ -87,10 +88,10 @@ void Persistence::saveSession(Session& s) {
     json views = json::array();
     for (const auto& v : s.views)
         views.push_back({{"id", v.id}, {"camera", protocol::cameraToJson(v.camera)}, {"has_target", v.target.has_value()},
-                         {"has_weights", v.weights.has_value()}});
+                         {"has_weights", v.weights.has_value()}, {"has_background", bool(v.background)}});
     json j = {{"id", s.id}, {"created", s.created}, {"scene", s.scene}, {"version", s.version},
               {"versions", s.versions.numbers()}, {"version_bytes", bytes}, {"damaged", damaged},
-              {"lighting", protocol::lightingToJson(s.lighting)}, {"views", views}, {"next_view", s.nextView}, {"jobs", s.jobs}};
+              {"lighting", protocol::lightingToJson(s.lighting, s.environmentMap.get())}, {"views", views}, {"next_view", s.nextView}, {"jobs", s.jobs}};
     atomicWrite(dir / "session.json", protocol::toText(j, 2));
 }
 
@@ -172,6 +173,11 @@ void Persistence::saveViewImage(const std::string& session, const std::string& v
     fs::rename(tmp, path);
 }
 
+void Persistence::removeViewImage(const std::string& session, const std::string& view, const std::string& kind) {
+    std::error_code ec;
+    fs::remove(sessionDir(session) / "views" / view / (kind + ".exr"), ec);
+}
+
 void Persistence::removeView(const std::string& session, const std::string& view) {
     std::error_code ec;
     fs::remove_all(sessionDir(session) / "views" / view, ec);
@@ -218,18 +224,20 @@ std::shared_ptr<Session> Persistence::loadSession(const fs::path& dir) {
     s->scene = j.at("scene");
     s->nextView = j.at("next_view");
     s->jobs = j.at("jobs").get<std::vector<std::string>>();
-    s->lighting = protocol::lightingFromJson(j.at("lighting")).lighting;
     for (const auto& d : j.value("damaged", json::array())) s->damaged.push_back({d.at("file"), d.at("reason")});
     const size_t damagedBefore = s->damaged.size();
+    restoreLighting(*s, dir, j.at("lighting"));
     restoreVersions(*s, j);
     for (const auto& v : j.at("views")) {
         SessionView view{v.at("id"), protocol::cameraFromJson(v.at("camera")), std::nullopt, std::nullopt};
-        for (const char* kind : {"target", "weights"}) {
-            if (!v.at(std::string("has_") + kind).get<bool>()) continue;
+        for (const char* kind : {"target", "weights", "background"}) {
+            if (!v.value(std::string("has_") + kind, false)) continue;  // "has_background": since 2026-12
             const std::string file = "views/" + view.id + "/" + kind + ".exr";
             try {
                 core::Image image = core::loadImage((dir / file).string()).image;
-                (std::string(kind) == "target" ? view.target : view.weights) = std::move(image);
+                const std::string k = kind;
+                if (k == "background") view.background = std::make_shared<const core::Image>(std::move(image));
+                else (k == "target" ? view.target : view.weights) = std::move(image);
             } catch (const std::exception& e) {
                 quarantineFile(s->id, file, e.what());  // the view stays, without this image
                 s->damaged.push_back({file, e.what()});
@@ -247,15 +255,35 @@ void Persistence::saveStylizerScene(const std::string& session, const json& scen
     atomicWrite(sessionDir(session) / "stylizer" / "scene.json", protocol::toText({{"revision", revision}, {"scene", scene}}, 2));
 }
 
-void Persistence::saveStylizerFile(const std::string& session, const std::string& file, const std::string& bytes) {
+void Persistence::saveSessionFile(const std::string& session, const std::string& file, const std::string& bytes) {
     const fs::path path = sessionDir(session) / file;
     fs::create_directories(path.parent_path());
     atomicWrite(path, bytes);
 }
 
-void Persistence::removeStylizerFile(const std::string& session, const std::string& file) {
+void Persistence::removeSessionFile(const std::string& session, const std::string& file) {
     std::error_code ec;
     fs::remove(sessionDir(session) / file, ec);
+}
+
+void Persistence::restoreLighting(Session& s, const fs::path& dir, const json& lighting) {
+    const std::string file = "environment.image";
+    if (fs::exists(dir / file)) {
+        try {
+            const std::string bytes = readFile(dir / file);
+            auto map = std::make_shared<core::Image>(core::loadImageFromMemory(bytes.data(), bytes.size(), "the environment map").image);
+            if (std::string why = core::latLongMapProblem(*map); !why.empty()) throw IoError(why);
+            s.environmentMap = std::move(map);
+        } catch (const std::exception& e) {
+            quarantineFile(s.id, file, e.what());
+            s.damaged.push_back({file, e.what()});
+        }
+    }
+    protocol::LightingRequest request = protocol::lightingFromJson(lighting);
+    if (!s.environmentMap) {  // damaged: the background's colour, and the lobes' radiances as they were
+        request.backgroundUsesSessionMap = request.environmentUsesSessionMap = false;
+    }
+    s.lighting = request.resolve(s.environmentMap);
 }
 
 void Persistence::restoreStylizer(Session& s, const fs::path& dir) {

@@ -5,7 +5,7 @@
 /// when the server starts. Jobs that were queued or running when the server stopped read
 /// `failed` with code `interrupted`.
 ///
-/// Layout: DIR/sessions/<sid>/session.json, versions/<N>.vdb, views/<vid>/{target,weights}.exr;
+/// Layout: DIR/sessions/<sid>/session.json, versions/<N>.vdb, views/<vid>/{target,weights,background}.exr;
 /// DIR/jobs/<jid>.json; DIR/quarantine/.
 ///
 /// Damage (issue #9): a file found unreadable is moved to DIR/quarantine/<sid>/<file> beside a
@@ -42,13 +42,15 @@ public:
     /// session's mutex held.
     void saveSession(Session& s);
     void saveViewImage(const std::string& session, const std::string& view, const std::string& kind, const core::Image& image);
+    void removeViewImage(const std::string& session, const std::string& view, const std::string& kind);
     void removeView(const std::string& session, const std::string& view);
     void removeSession(const std::string& session);
     /// The stylizer (stylizer/scene.json, stylizer/occluders/NAME.EXT, stylizer/tf.image): the
     /// scene as JSON; uploaded files as they were sent.
     void saveStylizerScene(const std::string& session, const nlohmann::json& scene, uint64_t revision);
-    void saveStylizerFile(const std::string& session, const std::string& file, const std::string& bytes);
-    void removeStylizerFile(const std::string& session, const std::string& file);
+    /// An uploaded file as it was sent (the stylizer's, environment.image), atomically.
+    void saveSessionFile(const std::string& session, const std::string& file, const std::string& bytes);
+    void removeSessionFile(const std::string& session, const std::string& file);
     void saveJob(const Job& job);
     void removeJob(const std::string& job);
 
@@ -81,6 +83,10 @@ private:
     /// what it held is lost: an occluder whose mesh is gone is dropped, a transfer function whose
     /// image is gone is dropped, an unreadable scene is builtin:forest again (each recorded as damage).
     void restoreStylizer(Session& s, const std::filesystem::path& dir);
+    /// Restores the environment map (environment.image) and the lighting that may name it; a
+    /// damaged map is quarantined and the lighting falls back to the background colour and the
+    /// lobes' radiances as they were last written.
+    void restoreLighting(Session& s, const std::filesystem::path& dir, const nlohmann::json& lighting);
     std::filesystem::path m_dir;
 };
 

@@ -11,7 +11,7 @@ nlohmann::json vec(const Vec3d& v) { return nlohmann::json::array({v.x, v.y, v.z
 
 nlohmann::json viewJson(const SessionView& v) {
     return {{"id", v.id}, {"camera", protocol::cameraToJson(v.camera)}, {"has_target", v.target.has_value()},
-            {"has_weights", v.weights.has_value()}};
+            {"has_weights", v.weights.has_value()}, {"has_background", bool(v.background)}};
 }
 
 nlohmann::json viewsJson(const Session& s) {
@@ -33,16 +33,19 @@ nlohmann::json sessionJson(Session& s) {
     nlohmann::json grids = nlohmann::json::array({"extinction"});
     if (v.hasAlbedo()) grids.push_back("albedo");
     if (v.hasEmission()) grids.push_back("emission");
-    return {{"id", s.id},
+    nlohmann::json j = {{"id", s.id},
             {"created", s.created},
             {"scene", s.scene},
             {"volume", {{"dims", {v.dims().x, v.dims().y, v.dims().z}}, {"bbox", {vec(lo), vec(hi)}},
                         {"voxel_size", vec(v.voxelSize())}, {"grids", grids}, {"version", s.version}}},
-            {"lighting", protocol::lightingToJson(s.lighting)},
+            {"lighting", protocol::lightingToJson(s.lighting, s.environmentMap.get())},
             {"views", viewsJson(s)},
             {"jobs", s.jobs},
             {"versions", s.versions.numbers()},
             {"damaged", damagedJson(s.damaged)}};
+    if (auto map = environmentMapInfo(s))
+        j["environment_map"] = nlohmann::json{{"width", map->width}, {"height", map->height}, {"used", map->used}};
+    return j;
 }
 
 }  // namespace volstyle::server

@@ -1,7 +1,7 @@
 #pragma once
 /// \file responses.h
 /// The JSON answers for sessions and views (SPEC §3): {"id","created","scene","volume":{…},
-/// "lighting","views","jobs"} and {"id","camera","has_target","has_weights"}.
+/// "lighting","views","jobs"} and {"id","camera","has_target","has_weights","has_background"}.
 
 #include <nlohmann/json.hpp>
 

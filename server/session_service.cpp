@@ -149,10 +149,16 @@ core::Lighting SessionService::lighting(Session& s) const {
     return s.lighting;
 }
 
-void SessionService::setLighting(Session& s, const core::Lighting& lighting) {
+core::Lighting SessionService::setLighting(Session& s, const protocol::LightingRequest& request) {
     std::lock_guard lock(s.mutex);
-    s.lighting = lighting;
+    s.lighting = request.resolve(s.environmentMap);
     saved(s);
+    return s.lighting;
+}
+
+nlohmann::json SessionService::lightingJson(Session& s, const core::Lighting& lighting) const {
+    std::lock_guard lock(s.mutex);
+    return protocol::lightingToJson(lighting, s.environmentMap.get());
 }
 
 SessionView SessionService::addView(Session& s, const core::Camera& camera) {
@@ -181,9 +187,17 @@ void SessionService::checkUploadSize(const std::string& bytes, const std::string
                                                 std::to_string(m_limits.maxUploadBytes) + " bytes");
 }
 
+const char* viewImageName(ViewImage kind) {
+    switch (kind) {
+        case ViewImage::Target: return "target";
+        case ViewImage::Weights: return "weights";
+        default: return "background";
+    }
+}
+
 SessionView SessionService::setViewImage(Session& s, const std::string& viewId, ViewImage kind, const std::string& bytes) {
     const bool isTarget = kind == ViewImage::Target;
-    const std::string what = isTarget ? "the target" : "the weight image";
+    const std::string what = isTarget ? "the target" : kind == ViewImage::Weights ? "the weight image" : "the background plate";
     checkUploadSize(bytes, what);
     const core::Camera camera = view(s, viewId).camera;  // 404 before any decode
     // The size is checked from the header, before any pixel is decoded, and at most
@@ -203,20 +217,40 @@ SessionView SessionService::setViewImage(Session& s, const std::string& viewId, 
     } catch (const Error& e) {
         throw ApiError(ErrorCode::UnsupportedMedia, e.what());  // undecodable, or over the side limit
     }
-    // Weights are the target's alpha (or the weight image's first channel): negative values would
-    // be solved on silently; refuse them here, where the client can fix the file. (The decoder
-    // already refuses NaN and Inf.)
+    // Weights are the target's alpha (or the weight image's first channel), a plate is radiance:
+    // negative values would be solved on silently; refuse them here, where the client can fix the
+    // file. (The decoder already refuses NaN and Inf.)
+    const int channels = isTarget ? 4 : kind == ViewImage::Weights ? 1 : 3;
     size_t negative = 0;
     for (size_t i = 0; i < image.pixelCount(); ++i)
-        for (int c = 0; c < (isTarget ? 4 : 1); ++c) negative += image.rgba[4 * i + size_t(c)] < 0 ? 1 : 0;
+        for (int c = 0; c < channels; ++c) negative += image.rgba[4 * i + size_t(c)] < 0 ? 1 : 0;
     if (negative)
         throw ApiError(ErrorCode::InvalidArgument, what + " has " + std::to_string(negative) +
                                                        " negative values; colours and weights must be >= 0");
+    if (kind == ViewImage::Background)  // a plate is opaque: its alpha means nothing
+        for (size_t i = 0; i < image.pixelCount(); ++i) image.rgba[4 * i + 3] = 1;
     slot.reset();
     std::lock_guard lock(s.mutex);
     SessionView& v = findView(s, viewId);  // views keep their camera: the header check still holds
-    if (m_persist) m_persist->saveViewImage(s.id, v.id, isTarget ? "target" : "weights", image);
-    (isTarget ? v.target : v.weights) = std::move(image);
+    if (m_persist) m_persist->saveViewImage(s.id, v.id, viewImageName(kind), image);
+    switch (kind) {
+        case ViewImage::Target: v.target = std::move(image); break;
+        case ViewImage::Weights: v.weights = std::move(image); break;
+        case ViewImage::Background: v.background = std::make_shared<const core::Image>(std::move(image)); break;
+    }
+    saved(s);
+    return v;
+}
+
+SessionView SessionService::removeViewImage(Session& s, const std::string& viewId, ViewImage kind) {
+    std::lock_guard lock(s.mutex);
+    SessionView& v = findView(s, viewId);
+    const bool had = kind == ViewImage::Target ? v.target.has_value() : kind == ViewImage::Weights ? v.weights.has_value() : bool(v.background);
+    if (!had) throw ApiError(ErrorCode::NotFound, "view " + v.id + " has no " + viewImageName(kind));
+    if (m_persist) m_persist->removeViewImage(s.id, v.id, viewImageName(kind));
+    if (kind == ViewImage::Target) v.target.reset();
+    else if (kind == ViewImage::Weights) v.weights.reset();
+    else v.background.reset();
     saved(s);
     return v;
 }
@@ -391,14 +425,19 @@ core::RenderLayers SessionService::render(Session& s, const core::Camera& camera
 }
 
 core::RenderLayers SessionService::renderView(Session& s, const std::string& viewId, bool layers) {
-    return render(s, view(s, viewId).camera, layers);
+    const SessionView v = view(s, viewId);
+    core::Lighting l = lighting(s);
+    if (v.background) l.background.plate = v.background;  // the view's plate
+    return renderOnGl(s, v.camera, l, layers);
 }
 
 core::Image SessionService::renderPreview(const std::string& jobId, const std::string& viewId) {
     auto j = job(jobId);
     auto s = find(j->session);
-    const core::Camera camera = view(*s, viewId).camera;
-    const core::Lighting light = lighting(*s);
+    const SessionView v = view(*s, viewId);
+    const core::Camera camera = v.camera;
+    core::Lighting light = lighting(*s);
+    if (v.background) light.background.plate = v.background;
     return m_gl.run([&](core::GpuDevice& device) {
         std::shared_ptr<core::GpuVolume> preview;
         {

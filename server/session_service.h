@@ -17,6 +17,7 @@
 #include "core/render/params.h"
 #include "core/solve/solve_options.h"
 #include "core/volume/volume.h"
+#include "protocol/render_json.h"
 #include "protocol/requests.h"
 #include "server/gl_worker.h"
 #include "server/job_store.h"
@@ -54,7 +55,9 @@ struct ServiceLimits {
     size_t solveCacheBytes = size_t(1) << 30;
 };
 
-enum class ViewImage { Target, Weights };
+enum class ViewImage { Target, Weights, Background };
+/// "target", "weights", "background": its name in routes, files and "has_…" fields.
+const char* viewImageName(ViewImage kind);
 
 /// What a session's stylizer renders (a copy: the meshes are shared, not copied).
 struct StylizerSnapshot {
@@ -89,7 +92,19 @@ public:
     std::vector<std::shared_ptr<Session>> all() const { return m_sessions.all(); }
     void remove(const std::string& id);
     core::Lighting lighting(Session& s) const;
-    void setLighting(Session& s, const core::Lighting& lighting);
+    /// Sets the lighting, "session" resolved to the session's map (ValidationError naming the
+    /// field without one); the lighting as set.
+    core::Lighting setLighting(Session& s, const protocol::LightingRequest& request);
+    /// The lighting (and the solve result's) as JSON, naming the session's map "session".
+    nlohmann::json lightingJson(Session& s, const core::Lighting& lighting) const;
+
+    // The session's environment map (session_environment.cpp; docs/LIGHTING.md).
+    /// Decodes and stores a lat-long map (2:1, finite, >= 0; 422 otherwise, 413 over the limits);
+    /// a lighting that names it now uses this one.
+    EnvironmentMapInfo setEnvironmentMap(Session& s, const std::string& bytes);
+    std::shared_ptr<const core::Image> environmentMap(Session& s) const;  ///< not_found without one
+    void removeEnvironmentMap(Session& s);  ///< busy (409) while the lighting names it
+
 
     // Views.
     SessionView addView(Session& s, const core::Camera& camera);
@@ -98,6 +113,8 @@ public:
     /// Decodes an uploaded image (413 over the upload limit, 422 undecodable or over the side
     /// limit) and stores it as the view's target or weights.
     SessionView setViewImage(Session& s, const std::string& viewId, ViewImage kind, const std::string& bytes);
+    /// Forgets the view's image of `kind` (not_found without one).
+    SessionView removeViewImage(Session& s, const std::string& viewId, ViewImage kind);
 
     // Volume versions.
     int revert(Session& s, int version);                          ///< the new version number

@@ -26,12 +26,16 @@ struct DamagedFile {
     std::string reason;
 };
 
-/// A view of a session: a camera, and the painted target (alpha = weight) and weights once uploaded.
+/// A view of a session: a camera, and the painted target (alpha = weight), weights and background
+/// plate once uploaded.
 struct SessionView {
     std::string id;  ///< "v1", "v2", …
     core::Camera camera;
     std::optional<core::Image> target;
     std::optional<core::Image> weights;
+    /// The background plate (SPEC §1): what this view sees behind the volume, replacing the
+    /// lighting's background in its renders and solves. Shared: renders hold it, never copy it.
+    std::shared_ptr<const core::Image> background = nullptr;
 };
 
 struct Session {
@@ -46,6 +50,9 @@ struct Session {
     int nextView = 1;
     std::vector<std::string> jobs;
     core::Lighting lighting;
+    /// The uploaded lat-long map (PUT …/environment) that the lighting names "session"
+    /// (its background.environment and environment.map point at it).
+    std::shared_ptr<const core::Image> environmentMap;
     std::shared_ptr<core::GpuVolume> gpu;  ///< created and destroyed on the GL thread
     StylizerState stylizer = defaultStylizer();
     std::condition_variable stylizerChanged;  ///< notified (with `mutex`) when its revision moves
@@ -54,6 +61,13 @@ struct Session {
     bool removed = false;
     std::mutex mutex;                      ///< guards the fields above
 };
+
+struct EnvironmentMapInfo {
+    int width = 0, height = 0;
+    bool used = false;  ///< the lighting names it (background or environment light)
+};
+/// The session's environment map, if any (call with its lock held).
+std::optional<EnvironmentMapInfo> environmentMapInfo(const Session& s);
 
 /// Now, as ISO 8601 UTC ("2026-12-02T03:37:32Z").
 std::string isoNow();

@@ -110,8 +110,8 @@ OccluderMeshInfo SessionService::putOccluderMesh(Session& s, const std::string& 
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
     if (m_persist) {
         if (auto old = s.stylizer.meshes.find(name); old != s.stylizer.meshes.end() && old->second.format != uploaded.format)
-            m_persist->removeStylizerFile(s.id, meshFile(name, old->second.format));
-        m_persist->saveStylizerFile(s.id, meshFile(name, uploaded.format), bytes);
+            m_persist->removeSessionFile(s.id, meshFile(name, old->second.format));
+        m_persist->saveSessionFile(s.id, meshFile(name, uploaded.format), bytes);
     }
     s.stylizer.meshes[name] = uploaded;
     if (s.stylizer.uses(name)) {  // the scene shows the new mesh
@@ -128,7 +128,7 @@ void SessionService::removeOccluderMesh(Session& s, const std::string& name) {
     if (it == s.stylizer.meshes.end()) throw ApiError(ErrorCode::NotFound, "no occluder mesh '" + name + "' in session '" + s.id + "'");
     if (s.stylizer.uses(name))
         throw ApiError(ErrorCode::Busy, "the stylizer's scene uses mesh '" + name + "'; PUT a scene without it first");
-    if (m_persist) m_persist->removeStylizerFile(s.id, meshFile(name, it->second.format));
+    if (m_persist) m_persist->removeSessionFile(s.id, meshFile(name, it->second.format));
     s.stylizer.meshes.erase(it);
 }
 
@@ -150,7 +150,7 @@ TransferImageInfo SessionService::setTransferImage(Session& s, const std::string
     auto image = std::make_shared<const core::Image>(std::move(loaded.image));
     std::lock_guard lock(s.mutex);
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
-    if (m_persist) m_persist->saveStylizerFile(s.id, kTransferFile, bytes);
+    if (m_persist) m_persist->saveSessionFile(s.id, kTransferFile, bytes);
     s.stylizer.transferImage = image;
     const bool used = s.stylizer.scene.transferFunction.has_value();
     if (used) {
@@ -171,7 +171,7 @@ void SessionService::removeTransferImage(Session& s) {
     if (!s.stylizer.transferImage) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no transfer function uploaded");
     if (s.stylizer.scene.transferFunction)
         throw ApiError(ErrorCode::Busy, "the stylizer's scene uses the transfer function; PUT a scene without transfer_function first");
-    if (m_persist) m_persist->removeStylizerFile(s.id, kTransferFile);
+    if (m_persist) m_persist->removeSessionFile(s.id, kTransferFile);
     s.stylizer.transferImage.reset();
 }
 

@@ -35,7 +35,7 @@ SolveInputs snapshot(Session& s) {
     SolveInputs in{s.volume, s.lighting, {}, {}};
     for (const auto& v : s.views) {
         in.viewIds.push_back(v.id);
-        in.views.push_back({v.id, v.camera, v.target.value_or(core::Image()), v.weights});
+        in.views.push_back({v.id, v.camera, v.target.value_or(core::Image()), v.weights, v.background});
     }
     return in;
 }
@@ -164,7 +164,7 @@ void SessionService::solveLightsAndCommit(Job& job, const std::shared_ptr<Sessio
         else saved(*s);
         result["version"] = s->version;
     }
-    result["lighting"] = protocol::lightingToJson(lighting);
+    result["lighting"] = lightingJson(*s, lighting);
     result["environment_url"] = "/api/v1/sessions/" + s->id + "/lighting/environment.exr";
     std::lock_guard lock(job.mutex);
     job.state = JobState::Done;

@@ -208,8 +208,11 @@ Image renderReference(const Volume& volume, const Camera& camera, const Lighting
                     T = T * segT;
                 }
             }
-            L += T * (lighting.background.environment ? environment<S>(*lighting.background.environment, dir)
-                                                      : toS<S>(lighting.background.color));
+            const Background& bg = lighting.background;
+            const float* plate = bg.plate ? bg.plate->pixel(px, py) : nullptr;
+            L += T * (plate              ? V3<S>(S(plate[0]), S(plate[1]), S(plate[2]))
+                      : bg.environment ? environment<S>(*bg.environment, dir)
+                                       : toS<S>(bg.color));
             float* out = image.pixel(px, py);
             out[0] = float(L.x), out[1] = float(L.y), out[2] = float(L.z);
             out[3] = float(1 - (T.x + T.y + T.z) / 3);

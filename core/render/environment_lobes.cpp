@@ -169,4 +169,26 @@ Image lobesToLatLong(const LobeBasis& basis, const std::vector<Vec3d>& radiance,
     return img;
 }
 
+std::string latLongShapeProblem(const Image& latLong) {
+    if (latLong.empty()) return "the map is empty";
+    if (std::abs(latLong.width - 2 * latLong.height) > 1)
+        return "a latitude-longitude map is twice as wide as high; this one is " + std::to_string(latLong.width) + "x" +
+               std::to_string(latLong.height);
+    return "";
+}
+
+std::string latLongMapProblem(const Image& latLong) {
+    if (std::string shape = latLongShapeProblem(latLong); !shape.empty()) return shape;
+    size_t nonFinite = 0, negative = 0;
+    for (size_t i = 0; i < latLong.pixelCount(); ++i)
+        for (int c = 0; c < 3; ++c) {
+            const float x = latLong.rgba[4 * i + size_t(c)];
+            nonFinite += std::isfinite(x) ? 0 : 1;
+            negative += x < 0 ? 1 : 0;
+        }
+    if (nonFinite) return "the map has " + std::to_string(nonFinite) + " non-finite (NaN/Inf) values";
+    if (negative) return "the map has " + std::to_string(negative) + " negative values; radiance must be >= 0";
+    return "";
+}
+
 }  // namespace volstyle::core

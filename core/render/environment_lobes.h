@@ -70,4 +70,10 @@ Image lobesToLatLong(const LobeBasis& basis, const std::vector<Vec3d>& radiance,
 /// background lookup in lighting.glsl.
 Vec3d sampleLatLong(const Image& latLong, const Vec3d& direction);
 
+/// Why `latLong` cannot be a latitude-longitude map, or "" if it can: empty, not 2:1 (one pixel
+/// of slack for odd sizes), or holding non-finite or negative RGB values.
+std::string latLongMapProblem(const Image& latLong);
+/// Only the size part of latLongMapProblem (cheap: Lighting::check runs it on every render).
+std::string latLongShapeProblem(const Image& latLong);
+
 }  // namespace volstyle::core

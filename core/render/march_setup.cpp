@@ -46,8 +46,14 @@ MarchSetup prepareMarch(GpuDevice& device, GpuVolume& volume, const Camera& came
     MarchSetup setup;
     for (const DirectionalLight* l : lights) setup.lightDepth.push_back(lightDepthVolume(device, volume, *l, settings, stats, budget));
     std::shared_ptr<const EnvironmentTexture> environment;
-    if (lighting.background.environment) {
-        environment = environmentTexture(device, lighting.background.environment);
+    if (const auto& plate = lighting.background.plate) {
+        if (plate->width != camera.width || plate->height != camera.height)
+            throw InvalidArgument("the background plate is " + std::to_string(plate->width) + "x" + std::to_string(plate->height) +
+                                  " but the camera renders " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
+        setup.plate = true;
+    }
+    if (const auto& image = setup.plate ? lighting.background.plate : lighting.background.environment) {
+        environment = environmentTexture(device, image);
         setup.environment = std::shared_ptr<const gl::Texture>(environment, &environment->texture);  // shares ownership
     }
 

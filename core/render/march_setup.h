@@ -27,7 +27,8 @@ struct MarchSetup {
     layout::MarchParams params;
     /// Light-depth volumes of the lights with non-zero irradiance, in lightDirection[] order.
     std::vector<std::shared_ptr<const LightDepthVolume>> lightDepth;
-    std::shared_ptr<const gl::Texture> environment;  ///< null without an environment map
+    std::shared_ptr<const gl::Texture> environment;  ///< null without an environment map or plate
+    bool plate = false;  ///< `environment` is the view's plate (Background::plate), read per pixel
     /// The environment's lobes when they light the medium (null otherwise: no lobes, or all dark),
     /// and their directions, solid angles and radiances.
     std::shared_ptr<const LobeLightVolumes> lobes;

@@ -96,8 +96,9 @@ std::vector<FieldProblem> Lighting::check() const {
         out.push_back({"background", "must be finite and >= 0"});
     if (phase.type == PhaseType::HenyeyGreenstein && !(phase.g > -1 && phase.g < 1))
         out.push_back({"phase/g", "must be in (-1, 1)"});
-    if (background.environment && background.environment->empty())
-        out.push_back({"background/environment", "the environment map is empty"});
+    if (background.environment)
+        if (std::string why = latLongShapeProblem(*background.environment); !why.empty()) out.push_back({"background/environment", why});
+    if (background.plate && background.plate->empty()) out.push_back({"background/plate", "the background plate is empty"});
     const EnvironmentLight& env = environment;
     if (env.lobes < 0 || env.lobes > kMaxLobes)
         out.push_back({"environment/lobes", "must be in [" + std::to_string(kMinLobes) + ", " + std::to_string(kMaxLobes) + "] (or 0: no environment light)"});
@@ -114,7 +115,8 @@ std::vector<FieldProblem> Lighting::check() const {
             out.push_back({"environment/radiance/" + std::to_string(i), "must be finite and >= 0"});
             break;
         }
-    if (env.map && env.map->empty()) out.push_back({"environment/map", "the environment map is empty"});
+    if (env.map)
+        if (std::string why = latLongShapeProblem(*env.map); !why.empty()) out.push_back({"environment/map", why});
     // The product must stay a finite float on the GPU.
     for (const Vec3d& r : env.radiance)
         if (isFinite(r) && maxComponent(r) * env.strength > 1e30) {

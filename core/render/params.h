@@ -77,6 +77,10 @@ struct Background {
     /// Latitude-longitude map, looked up by ray direction: u = 0.5 + atan2(ω.x, −ω.z)/2π
     /// (so −z is the centre of the image), v = acos(ω.y)/π (+y is the top row). Linear RGB.
     std::shared_ptr<const Image> environment;
+    /// A per-view background image (a plate, SPEC §1), pixel-aligned with the camera it is
+    /// rendered with (the same size): replaces the colour and the map for that render. Set per
+    /// view (SolveView::lightingFor), never stored in a session's lighting.
+    std::shared_ptr<const Image> plate;
 };
 
 constexpr int kMaxLights = 4;

@@ -4,7 +4,8 @@
 //
 // Variant defines: VOLSTYLE_HAS_EMISSION, VOLSTYLE_HAS_ALBEDO (else albedo 1),
 // VOLSTYLE_NUM_LIGHTS (0..kLightSlots), VOLSTYLE_HAS_LOBES (the environment lights the medium;
-// with no lights either, in-scattering is compiled out), VOLSTYLE_HAS_ENVIRONMENT,
+// with no lights either, in-scattering is compiled out), VOLSTYLE_HAS_ENVIRONMENT (with
+// VOLSTYLE_BACKGROUND_PLATE: it is the view's plate),
 // VOLSTYLE_SKIP_EMPTY, VOLSTYLE_HW_FILTER, VOLSTYLE_EXACT_TRAVERSAL, VOLSTYLE_LAYERS (also write
 // the compositing layers: the medium's light alone, premultiplied, and its emitted and scattered
 // parts, the transmittance and the background, planar in b_Layers).
@@ -79,7 +80,7 @@ void main() {
             if ((T < u.march.y && T * u.march.z <= u.march.y * max3(radiance)) || T < 1e-3 * u.march.y) break;
         }
     }
-    vec3 background = backgroundRadiance(dir);
+    vec3 background = backgroundRadiance(pix, dir);
     float alpha = 1.0 - (transmittance.r + transmittance.g + transmittance.b) / 3.0;
     int p = pix.y * u.imageSize.x + pix.x;
     pixels[p] = vec4(radiance + transmittance * background, alpha);

@@ -134,7 +134,7 @@ struct LightSolver::State {
         viewWeightSum.assign(views.size(), Vec3d());
         for (size_t v = 0; v < views.size(); ++v) {
             const SolveView& view = views[v];
-            const Image fixed = renderer.render(*gpu, view.camera, fixedLighting, settings, nullptr, budget);
+            const Image fixed = renderer.render(*gpu, view.camera, view.lightingFor(fixedLighting), settings, nullptr, budget);
             for (size_t i = 0; i < view.target.pixelCount(); ++i) {
                 const float* t = &view.target.rgba[4 * i];
                 const double w = std::max(0.0f, t[3]) * (view.weights ? std::max(0.0f, view.weights->rgba[4 * i]) : 1.0f);

@@ -107,7 +107,7 @@ std::vector<std::shared_ptr<const ViewRenders>> renderBounds(GpuDevice& device, 
     std::vector<ViewRenders> out(views.size());
     std::vector<std::shared_ptr<const ViewRenders>> shared;
     for (size_t v = 0; v < views.size(); ++v) {
-        const RenderLayers l = renderer.renderLayers(gpu, views[v].camera, lighting, settings);
+        const RenderLayers l = renderer.renderLayers(gpu, views[v].camera, views[v].lightingFor(lighting), settings);
         ViewRenders& r = out[v];
         r.now = l.beauty;
         r.background = l.background;
@@ -125,7 +125,7 @@ std::vector<std::shared_ptr<const ViewRenders>> renderBounds(GpuDevice& device, 
     white.ensureAlbedo(1.0f).assign(white.voxelCount() * 3, 1.0f);
     gpu.upload(white);
     for (size_t v = 0; v < views.size(); ++v) {
-        const RenderLayers l = renderer.renderLayers(gpu, views[v].camera, lighting, settings);
+        const RenderLayers l = renderer.renderLayers(gpu, views[v].camera, views[v].lightingFor(lighting), settings);
         out[v].albedo1 = combine(out[v].albedo0, l.scattering, 1.0f);
     }
     return share();

@@ -39,6 +39,8 @@ std::string lightingKey(const Lighting& l) {
     if (l.background.environment)  // its content, not its address: a session reloads it
         key += fmt::format(":env{}x{}:{:x}", l.background.environment->width, l.background.environment->height,
                            hashOf(l.background.environment->rgba));
+    if (l.background.plate)  // a view's plate (SolveView::lightingFor)
+        key += fmt::format(":plate{}x{}:{:x}", l.background.plate->width, l.background.plate->height, hashOf(l.background.plate->rgba));
     if (l.environment.active()) {  // the lobes' radiances as they light the volume (the map's, or given)
         key += fmt::format(":lobes{}:{}:{}:", l.environment.lobes, int(l.environment.domain), l.environment.lightVolumeResolution);
         for (const Vec3d& r : lobeRadiance(l.environment)) key += fmt::format("{},{},{};", r.x, r.y, r.z);

@@ -92,6 +92,20 @@ void SolveView::validate() const {
         if (size_t bad = v.weights->countNonFinite())
             throw InvalidArgument(name + ": the weight image has " + std::to_string(bad) + " non-finite values");
     }
+    if (v.background) {
+        if (v.background->width != v.camera.width || v.background->height != v.camera.height)
+            throw InvalidArgument(name + ": the background plate is " + std::to_string(v.background->width) + "x" +
+                                  std::to_string(v.background->height) + " but the camera renders " +
+                                  std::to_string(v.camera.width) + "x" + std::to_string(v.camera.height));
+        if (size_t bad = v.background->countNonFinite())
+            throw InvalidArgument(name + ": the background plate has " + std::to_string(bad) + " non-finite values");
+    }
+}
+
+Lighting SolveView::lightingFor(const Lighting& lighting) const {
+    Lighting l = lighting;
+    if (background) l.background.plate = background;
+    return l;
 }
 
 

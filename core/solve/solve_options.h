@@ -88,9 +88,14 @@ struct SolveView {
     Camera camera;
     Image target;
     std::optional<Image> weights;  ///< single-channel (R used), multiplies the target's alpha
+    /// The view's background plate (SPEC §1; the camera's size): what lies behind the volume in
+    /// this view, replacing the lighting's background colour or map. Null: the lighting's.
+    std::shared_ptr<const Image> background = nullptr;
 
-    /// Throws InvalidArgument naming the view: a bad camera, a target or weight image whose size
-    /// differs from the camera's, non-finite values.
+    /// The lighting this view is rendered under: `lighting` with the view's plate, if any.
+    Lighting lightingFor(const Lighting& lighting) const;
+    /// Throws InvalidArgument naming the view: a bad camera, a target, weight or background
+    /// image whose size differs from the camera's, non-finite or negative background values.
     void validate() const;
 };
 

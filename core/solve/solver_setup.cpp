@@ -117,11 +117,11 @@ void Solver::State::buildObservations() {
     std::vector<SolveView> missing;
     for (size_t v = 0; v < views.size(); ++v) {
         if (!cache) break;
-        keys[v] = rendersKey(volume, lighting, opt, views[v].camera, opt.analyzeReach);
+        keys[v] = rendersKey(volume, views[v].lightingFor(lighting), opt, views[v].camera, opt.analyzeReach);
         viewRenders[v] = cache->findRenders(keys[v]);
     }
     for (size_t v = 0; v < views.size(); ++v)
-        if (!viewRenders[v]) missing.push_back({views[v].name, views[v].camera, Image(), std::nullopt});
+        if (!viewRenders[v]) missing.push_back({views[v].name, views[v].camera, Image(), std::nullopt, views[v].background});
     if (!missing.empty()) {
         auto fresh = renderBounds(device, volume, lighting, missing, opt, opt.analyzeReach);
         for (size_t v = 0, k = 0; v < views.size(); ++v) {
@@ -374,7 +374,7 @@ void Solver::State::buildPreconditioner() {
 
 namespace {
 
-/// Half the pixels along each axis: each target (and weight) pixel the mean of a 2×2 block, the
+/// Half the pixels along each axis: each target (weight, plate) pixel the mean of a 2×2 block, the
 /// camera the same with half the size, so that its pixel centres are the blocks' centres.
 Image halfImage(const Image& full, int w, int h) {
     Image out(w, h);
@@ -391,6 +391,7 @@ SolveView halfView(const SolveView& v) {
     h.camera.width = v.camera.width / 2, h.camera.height = v.camera.height / 2;
     h.target = halfImage(v.target, h.camera.width, h.camera.height);
     if (v.weights) h.weights = halfImage(*v.weights, h.camera.width, h.camera.height);
+    if (v.background) h.background = std::make_shared<const Image>(halfImage(*v.background, h.camera.width, h.camera.height));
     return h;
 }
 

@@ -1,5 +1,6 @@
 // Sessions, their lighting and renders: POST/GET /sessions, GET/DELETE /sessions/{sid},
-// GET/PUT …/lighting, GET …/lighting/environment.{exr,png}, POST …/render.
+// GET/PUT …/lighting, GET …/lighting/environment.{exr,png}, PUT/DELETE …/environment and
+// GET …/environment.{exr,png} (the uploaded map), POST …/render.
 #include "core/render/environment_lobes.h"
 #include "protocol/render_json.h"
 #include "server/responses.h"
@@ -25,7 +26,8 @@ void addSessionRoutes(RouteContext& c) {
         res.status = 204;
     });
     c.http.Get(kSessionPath + "/lighting", [&c](const httplib::Request& req, httplib::Response& res) {
-        reply(res, 200, protocol::lightingToJson(c.service.lighting(*c.service.find(req.matches[1]))));
+        auto s = c.service.find(req.matches[1]);
+        reply(res, 200, c.service.lightingJson(*s, c.service.lighting(*s)));
     });
     // The environment light's lobes as a lat-long map (docs/LIGHTING.md): EXR (linear) for
     // `background: {"environment": …}` and Blender, PNG (sRGB) for the page's thumbnail.
@@ -44,8 +46,21 @@ void addSessionRoutes(RouteContext& c) {
         if (req.body.find_first_not_of(" \t\r\n") == std::string::npos)
             throw protocol::ApiError(protocol::ErrorCode::InvalidArgument, "the body is empty; send the lighting object ({} means no light)");
         auto request = protocol::SetLightingRequest::fromJson(c.body(req));
-        c.service.setLighting(*s, request.lighting);
-        reply(res, 200, protocol::lightingToJson(request.lighting));
+        reply(res, 200, c.service.lightingJson(*s, c.service.setLighting(*s, request.lighting)));
+    });
+    // The session's environment map: a lat-long EXR/HDR (or PNG/JPEG, linearised) that the
+    // lighting names "session" (docs/LIGHTING.md).
+    putUpload(c, kSessionPath + "/environment", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
+        const EnvironmentMapInfo info = c.service.setEnvironmentMap(*c.service.find(req.matches[1]), bytes);
+        reply(res, 200, {{"width", info.width}, {"height", info.height}, {"used", info.used}});
+    });
+    c.http.Get(kSessionPath + R"(/environment\.(exr|png))", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto map = c.service.environmentMap(*c.service.find(req.matches[1]));
+        replyImage(res, *map, req.matches[2] == "exr" ? protocol::ImageFormat::Exr : protocol::ImageFormat::Png);
+    });
+    c.http.Delete(kSessionPath + "/environment", [&c](const httplib::Request& req, httplib::Response& res) {
+        c.service.removeEnvironmentMap(*c.service.find(req.matches[1]));
+        res.status = 204;
     });
     c.http.Post(kSessionPath + "/render", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);

@@ -1,5 +1,5 @@
-// A session's views: POST/GET …/views, GET/DELETE …/views/{vid}, PUT …/target and …/weights,
-// GET …/target.png and …/render.{png,exr}.
+// A session's views: POST/GET …/views, GET/DELETE …/views/{vid}, PUT/DELETE …/target, …/weights
+// and …/background (the plate), GET …/target.png, …/background.{png,exr} and …/render.{png,exr}.
 #include "core/image/image_io.h"
 #include "server/responses.h"
 #include "server/routes/route_context.h"
@@ -24,13 +24,23 @@ void addViewRoutes(RouteContext& c) {
         c.service.removeView(*c.service.find(req.matches[1]), req.matches[2]);
         res.status = 204;
     });
-    for (ViewImage kind : {ViewImage::Target, ViewImage::Weights}) {
-        const std::string part = kind == ViewImage::Target ? "/target" : "/weights";
+    for (ViewImage kind : {ViewImage::Target, ViewImage::Weights, ViewImage::Background}) {
+        const std::string part = std::string("/") + viewImageName(kind);
         putUpload(c, kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
             auto s = c.service.find(req.matches[1]);
             reply(res, 200, viewJson(c.service.setViewImage(*s, req.matches[2], kind, bytes)));
         });
+        c.http.Delete(kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res) {
+            auto s = c.service.find(req.matches[1]);
+            reply(res, 200, viewJson(c.service.removeViewImage(*s, req.matches[2], kind)));
+        });
     }
+    // The plate as stored (linear): EXR exactly, PNG sRGB-encoded for the page.
+    c.http.Get(kViewPath + R"(/background\.(png|exr))", [&c](const httplib::Request& req, httplib::Response& res) {
+        SessionView v = c.service.view(*c.service.find(req.matches[1]), req.matches[2]);
+        if (!v.background) throw protocol::ApiError(protocol::ErrorCode::NotFound, "view " + v.id + " has no background plate");
+        replyImage(res, *v.background, req.matches[3] == "exr" ? protocol::ImageFormat::Exr : protocol::ImageFormat::Png);
+    });
     c.http.Get(kViewPath + "/target.png", [&c](const httplib::Request& req, httplib::Response& res) {
         SessionView v = c.service.view(*c.service.find(req.matches[1]), req.matches[2]);
         if (!v.target) throw protocol::ApiError(protocol::ErrorCode::NotFound, "view " + v.id + " has no target yet");

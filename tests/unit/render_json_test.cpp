@@ -190,3 +190,50 @@ TEST(LightingJson, EnvironmentProblemsNameTheirField) {
     EXPECT_EQ(paths({{"lobes", 1}, {"radiance", {{1, 1, 1}}}, {"light_volume_resolution", 1}}),
               (std::set<std::string>{"/environment/light_volume_resolution"}));
 }
+
+TEST(LightingJson, SessionMapIsNamedResolvedAndWrittenBack) {
+    // Over the API, "session" names the session's uploaded map (and nothing else is a map).
+    const json j = {{"background", {{"color", {0.1, 0.2, 0.3}}, {"environment", "session"}}},
+                    {"environment", {{"lobes", 4}, {"map", "session"}}}};
+    const protocol::LightingRequest request = protocol::lightingFromJson(j);
+    EXPECT_TRUE(request.backgroundUsesSessionMap);
+    EXPECT_TRUE(request.environmentUsesSessionMap);
+    std::set<std::string> missing;
+    for (const auto& e : errorsOf([&] { request.resolve(nullptr); })) missing.insert(e.path);
+    EXPECT_EQ(missing, (std::set<std::string>{"/background/environment", "/environment/map"}));
+
+    auto map = std::make_shared<core::Image>(8, 4);
+    for (float& x : map->rgba) x = 0.5f;
+    const core::Lighting l = request.resolve(map);
+    EXPECT_EQ(l.background.environment, map);
+    EXPECT_EQ(l.environment.map, map);
+    EXPECT_TRUE(l.environment.radiance.empty());  // projected from the map
+    const json back = protocol::lightingToJson(l, map.get());
+    EXPECT_EQ(back["background"]["environment"], "session");
+    EXPECT_EQ(back["background"]["color"], json::array({0.1, 0.2, 0.3}));
+    EXPECT_EQ(back["environment"]["map"], "session");
+    ASSERT_EQ(back["environment"]["radiance"].size(), 4u);
+    EXPECT_NEAR(back["environment"]["radiance"][2][0].get<double>(), 0.5, 1e-6);
+    // Read back, the written radiances are the fallback when there is no map (a damaged file).
+    protocol::LightingRequest again = protocol::lightingFromJson(back);
+    again.backgroundUsesSessionMap = again.environmentUsesSessionMap = false;
+    EXPECT_NEAR(again.resolve(nullptr).environment.radiance[1].y, 0.5, 1e-6);
+    // Without the session's map to compare with, a map is not written as "session".
+    EXPECT_TRUE(protocol::lightingToJson(l)["background"].is_array());
+}
+
+TEST(LightingJson, MapsThatAreNotLatLongAreRefusedNamingTheField) {
+    core::Lighting l;
+    l.background.environment = std::make_shared<core::Image>(16, 16);
+    l.environment.lobes = 4;
+    l.environment.map = std::make_shared<core::Image>(30, 10);
+    std::set<std::string> fields;
+    for (const auto& p : l.check()) fields.insert(p.field);
+    EXPECT_EQ(fields, (std::set<std::string>{"background/environment", "environment/map"}));
+    core::Image negative(8, 4);
+    negative.pixel(1, 1)[2] = -0.5f;
+    EXPECT_NE(core::latLongMapProblem(negative).find("negative"), std::string::npos);
+    negative.pixel(1, 1)[2] = std::nanf("");
+    EXPECT_NE(core::latLongMapProblem(negative).find("non-finite"), std::string::npos);
+    EXPECT_EQ(core::latLongMapProblem(core::Image(9, 4)), "");  // one pixel of slack
+}

@@ -10,6 +10,9 @@
 #ifndef VOLSTYLE_HAS_ENVIRONMENT
 #define VOLSTYLE_HAS_ENVIRONMENT 0
 #endif
+#ifndef VOLSTYLE_BACKGROUND_PLATE  // s_environment holds a per-view plate, pixel-aligned
+#define VOLSTYLE_BACKGROUND_PLATE 0
+#endif
 
 // p(cos) with cos = ω_l·(−ω), from the block's phase (common/phase.glsl).
 float phaseFunction(float cosTheta) { return phaseValue(u.phase.x, u.phase.y, cosTheta); }
@@ -53,10 +56,12 @@ vec3 inScattering(vec3 p, vec3 dir) {
 layout(binding = kUnitEnvironment) uniform sampler2D s_environment;
 #endif
 
-// Background radiance seen along ω: the lat-long map (u = 0.5 + atan2(x, -z)/2π, v = acos(y)/π)
-// or the constant colour.
-vec3 backgroundRadiance(vec3 dir) {
-#if VOLSTYLE_HAS_ENVIRONMENT
+// Background radiance seen along ω from pixel `pix`: the view's plate (its pixel), the lat-long
+// map (u = 0.5 + atan2(x, -z)/2π, v = acos(y)/π) or the constant colour.
+vec3 backgroundRadiance(ivec2 pix, vec3 dir) {
+#if VOLSTYLE_HAS_ENVIRONMENT && VOLSTYLE_BACKGROUND_PLATE
+    return texelFetch(s_environment, pix, 0).rgb;
+#elif VOLSTYLE_HAS_ENVIRONMENT
     vec2 uv = vec2(0.5 + preciseAtan2(dir.x, -dir.z) / (2.0 * kPi),
                    preciseAtan2(length(dir.xz), dir.y) / kPi);
     // Bilinear by hand (texel centres at (i + 0.5) / size, longitude wraps, latitude clamps):
