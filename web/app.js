@@ -81,7 +81,8 @@ const newSession = guard(async () => {
   status('creating session…');
   const s = await call('POST', '/sessions', { scene: 'builtin:' + $('scene').value, resolution: Number($('resolution').value) });
   showSession(s);
-  state.views = []; state.selected = null;
+  state.views = []; state.selected = null; state.environment = false;
+  $('env-preview').style.display = 'none'; $('env-hint').style.display = '';
   renderViews(); clearPaint(); $('paint-base').removeAttribute('src');
   await renderViewport();
   status('session ready: orbit the view, add views, paint them, solve', 'ok');
@@ -105,7 +106,7 @@ function renderViews() {
     b.className = v.id === state.selected ? 'selected' : '';
     const img = document.createElement('img');
     img.src = `${api}/sessions/${state.sid}/views/${v.id}/${v.has_target ? 'target.png' : 'render.png'}?t=${Date.now()}`;
-    b.append(img, `${v.id}${v.has_target ? ' ✓' : ''}`);
+    b.append(img, `${v.id}${v.has_target ? ' ✓' : ''}${v.has_background ? ' · plate' : ''}`);
     b.onclick = () => selectView(v.id);
     box.append(b);
   }
@@ -199,6 +200,38 @@ const dropTarget = guard(async (file) => {
   await refreshViews();
   status(`${file.name} is the target of ${state.selected}`, 'ok');
 });
+
+// A background plate for the selected view: what lies behind the volume there (SPEC §1).
+const uploadPlate = guard(async (file) => {
+  if (!state.selected) throw new Error('add a view first, then give it a plate');
+  await call('PUT', `/sessions/${state.sid}/views/${state.selected}/background`, file, { type: 'application/octet-stream' });
+  await refreshViews();
+  selectView(state.selected);  // paint over the view as it now renders, plate behind
+  status(`${file.name} is the plate behind ${state.selected}`, 'ok');
+});
+
+// The session's environment map (docs/LIGHTING.md): uploaded once, then named "session" by the
+// lighting, as the map its lobes are fitted to and, when ticked, as the background.
+async function useEnvironment() {
+  const l = await call('GET', `/sessions/${state.sid}/lighting`);
+  const colour = Array.isArray(l.background) ? l.background : (l.background.color || [0, 0, 0]);
+  l.background = $('env-background').checked ? { color: colour, environment: 'session' } : colour;
+  l.environment = { lobes: Number($('env-lobes').value), map: 'session', light_volume_resolution: 32 };
+  await call('PUT', `/sessions/${state.sid}/lighting`, l);
+  await renderViewport(); renderViews();
+}
+
+const uploadEnvironment = guard(async (file) => {
+  status(`uploading the environment map ${file.name}…`);
+  const m = await call('PUT', `/sessions/${state.sid}/environment`, file, { type: 'application/octet-stream' });
+  $('env-preview').src = `${api}/sessions/${state.sid}/environment.png?t=${Date.now()}`;
+  $('env-preview').style.display = 'block';
+  $('env-hint').style.display = 'none';
+  state.environment = true;
+  await useEnvironment();
+  status(`environment map ${file.name} (${m.width}×${m.height}) lights the volume through ${$('env-lobes').value} lobes`, 'ok');
+});
+const changeEnvironment = guard(async () => { if (state.environment) await useEnvironment(); });
 
 // Solving, with live progress, a convergence plot and previews.
 function drawPlot() {
@@ -307,6 +340,14 @@ const wrap = $('paint-wrap');
 wrap.addEventListener('dragover', (e) => { e.preventDefault(); wrap.classList.add('drop'); });
 wrap.addEventListener('dragleave', () => wrap.classList.remove('drop'));
 wrap.addEventListener('drop', (e) => { e.preventDefault(); wrap.classList.remove('drop'); if (e.dataTransfer.files[0]) dropTarget(e.dataTransfer.files[0]); });
+const envDrop = $('env-drop');
+envDrop.addEventListener('dragover', (e) => { e.preventDefault(); envDrop.classList.add('drop'); });
+envDrop.addEventListener('dragleave', () => envDrop.classList.remove('drop'));
+envDrop.addEventListener('drop', (e) => { e.preventDefault(); envDrop.classList.remove('drop'); if (e.dataTransfer.files[0]) uploadEnvironment(e.dataTransfer.files[0]); });
+$('env-file').onchange = (e) => e.target.files[0] && uploadEnvironment(e.target.files[0]);
+$('env-lobes').onchange = changeEnvironment;
+$('env-background').onchange = changeEnvironment;
+$('plate-file').onchange = (e) => e.target.files[0] && uploadPlate(e.target.files[0]);
 
 $('new-session').onclick = newSession;
 $('vdb-file').onchange = (e) => e.target.files[0] && uploadVdb(e.target.files[0]);

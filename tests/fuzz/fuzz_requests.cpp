@@ -25,7 +25,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             case 1: RenderRequest::fromJson(j, limits); break;
             case 2: AddViewRequest::fromJson(j, limits); break;
             case 3: RevertRequest::fromJson(j); break;
-            case 4: SetLightingRequest::fromJson(j); break;
+            case 4: SetLightingRequest::fromJson(j).lighting.resolve(nullptr); break;  // "session": no map
             default: SolveRequest::fromJson(j, limits); break;
         }
     } catch (...) {

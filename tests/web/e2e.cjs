@@ -82,6 +82,47 @@ try {
   console.log(`[ measured ] lighting solve: ${lit}`);
   await page.waitForFunction(() => { const i = document.getElementById('environment'); return i.complete && i.naturalWidth === 128; }, null, { timeout: 30000 });
   if (await page.evaluate(() => document.getElementById('environment-wrap').hidden)) await fail('the solved environment is not shown');
+
+  // An environment map dropped on the page: uploaded, previewed, named by the lighting (lobes and
+  // background); then a plate chosen for v1 shows behind the volume in its render.
+  await page.evaluate(async () => {
+    const c = new OffscreenCanvas(64, 32), g = c.getContext('2d');
+    const sky = g.createLinearGradient(0, 0, 0, 32);
+    sky.addColorStop(0, '#6aa8ff'); sky.addColorStop(1, '#402a10');
+    g.fillStyle = sky; g.fillRect(0, 0, 64, 32);
+    const dt = new DataTransfer();
+    dt.items.add(new File([await c.convertToBlob({ type: 'image/png' })], 'sky.png', { type: 'image/png' }));
+    document.getElementById('env-drop').dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+  });
+  await page.waitForFunction(() => /^environment map sky\.png|^[0-9]{3}/.test(document.getElementById('status').textContent), null, { timeout: 60000 });
+  const envStatus = await page.evaluate(() => document.getElementById('status').textContent);
+  if (!envStatus.startsWith('environment map sky.png')) await fail(`the environment map was not taken: ${envStatus}`);
+  await page.waitForFunction(() => { const i = document.getElementById('env-preview'); return i.complete && i.naturalWidth === 64; }, null, { timeout: 30000 });
+  const used = await page.evaluate(async () => {
+    const sid = document.getElementById('download-vdb').href.split('/sessions/')[1].split('/')[0];
+    return (await (await fetch(`/api/v1/sessions/${sid}`)).json()).environment_map;
+  });
+  if (!used || !used.used) await fail(`the lighting does not name the uploaded map: ${JSON.stringify(used)}`);
+  console.log(`[ measured ] ${envStatus}`);
+
+  const corner = await page.evaluate(async () => {
+    const c = new OffscreenCanvas(256, 256), g = c.getContext('2d');
+    g.fillStyle = '#20a040'; g.fillRect(0, 0, 256, 256);
+    const dt = new DataTransfer();
+    dt.items.add(new File([await c.convertToBlob({ type: 'image/png' })], 'plate.png', { type: 'image/png' }));
+    const input = document.getElementById('plate-file');
+    input.files = dt.files;
+    input.dispatchEvent(new Event('change'));
+    for (let i = 0; i < 300 && !document.getElementById('status').textContent.includes('plate behind v1'); ++i) await new Promise((ok) => setTimeout(ok, 100));
+    const sid = document.getElementById('download-vdb').href.split('/sessions/')[1].split('/')[0];
+    const bmp = await createImageBitmap(await (await fetch(`/api/v1/sessions/${sid}/views/v1/render.png?t=${Date.now()}`)).blob());
+    const o = new OffscreenCanvas(bmp.width, bmp.height), og = o.getContext('2d');
+    og.drawImage(bmp, 0, 0);
+    return Array.from(og.getImageData(2, 2, 1, 1).data);
+  });
+  console.log(`[ measured ] v1's corner over the plate #20a040: ${corner.slice(0, 3)}`);
+  if (Math.abs(corner[0] - 0x20) > 3 || Math.abs(corner[1] - 0xa0) > 3 || Math.abs(corner[2] - 0x40) > 3) await fail(`v1's corner is not the plate's colour: ${corner}`);
+  if (!(await page.evaluate(() => document.getElementById('views').textContent.includes('plate')))) await fail('the view list does not mark the plate');
   console.log('1 passed, 0 failed');
 } catch (e) {
   await fail(e.message);
