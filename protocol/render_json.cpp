@@ -123,7 +123,8 @@ LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& pat
                 if (b.contains("color")) L.background.color = r.vec3(b["color"], bp + "/color").value_or(L.background.color);
                 if (b.contains("environment")) {
                     const std::optional<std::string> map = r.string(b["environment"], bp + "/environment");
-                    if (allowFilePaths) out.environmentPath = map;
+                    if (map == kLobesBackground) L.background.fromLobes = true;  // the environment light, seen
+                    else if (allowFilePaths) out.environmentPath = map;
                     else if (map == kSessionMap) out.backgroundUsesSessionMap = true;
                     else if (map) r.fail(bp + "/environment", "file paths are not accepted here; upload the map (PUT /sessions/{sid}/environment) and give \"session\"");
                 }
@@ -183,8 +184,10 @@ nlohmann::json lightingToJson(const core::Lighting& L, const core::Image* sessio
             j["lights"].push_back({{"direction", toJson(l.direction)}, {"irradiance", toJson(l.irradiance)}});
     }
     const bool sessionBackground = sessionMap && L.background.environment.get() == sessionMap;
-    j["background"] = sessionBackground ? nlohmann::json{{"color", toJson(L.background.color)}, {"environment", kSessionMap}}
-                                        : toJson(L.background.color);
+    if (sessionBackground || L.background.fromLobes)
+        j["background"] = {{"color", toJson(L.background.color)}, {"environment", L.background.fromLobes ? kLobesBackground : kSessionMap}};
+    else
+        j["background"] = toJson(L.background.color);
     j["phase"] = L.phase.type == core::PhaseType::Isotropic
                      ? nlohmann::json{{"type", "isotropic"}}
                      : nlohmann::json{{"type", "henyey_greenstein"}, {"g", L.phase.g}};

@@ -48,6 +48,8 @@ struct LightingRequest {
 
 /// The name by which lighting JSON refers to a session's uploaded environment map.
 inline constexpr const char* kSessionMap = "session";
+/// `"background": {"environment": "lobes"}`: the environment light's lobes are the background.
+inline constexpr const char* kLobesBackground = "lobes";
 
 LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& path = "",
                                  bool allowFilePaths = false);

@@ -66,8 +66,9 @@ core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::stri
                 (std::string(name) == "emission" ? o.emissionRegularization : o.albedoRegularization) = reg;
             }
         }
-        if (j.contains("lights") && r.object(j["lights"], path + "/lights", {"lobes", "domain", "rounds"})) {
+        if (j.contains("lights") && r.object(j["lights"], path + "/lights", {"lobes", "domain", "rounds", "background"})) {
             const auto& l = j["lights"];
+            if (l.contains("background")) o.lights.background = r.boolean(l["background"], path + "/lights/background").value_or(false);
             if (l.contains("lobes")) o.lights.lobes = r.integer(l["lobes"], path + "/lights/lobes").value_or(o.lights.lobes);
             if (l.contains("rounds")) o.lights.rounds = r.integer(l["rounds"], path + "/lights/rounds").value_or(o.lights.rounds);
             if (l.contains("domain")) {

@@ -52,6 +52,7 @@ const CommandSpec kSolve{
         {"rounds", "N", "lights with emission/albedo: rounds of lights then volume (each --iterations); default 8"},
         {"lights", "N", "lights: the environment's lobes, 1-256 (default: the lighting's environment.lobes, else 16)"},
         {"lobe-domain", "D", "lights: sphere or upper_hemisphere; default sphere (or the lighting's)"},
+        {"lights-background", "", "lights: the lobes are the background too, solved with the lighting (background \"lobes\")"},
         {"iterations", "N", "most CGLS iterations; default 30"},
         {"tolerance", "T", "stop when an iteration lowers the objective by less than T, relatively; default 1e-4"},
         {"coarse", "N", "first N iterations on half the unknowns and pixels per axis, as the warm start; default 0"},
@@ -263,7 +264,8 @@ std::string writeLighting(const core::Lighting& lighting, const std::string& jso
 /// lighting goes to OUT.lighting.json / .exr.
 int runLightSolve(const Arguments& args, core::Lighting lighting, std::vector<core::SolveView> views,
                   const core::SolveOptions& opt, const std::string& output, bool withVolume) {
-    core::SolveOptions::Lights lightOptions;
+    core::SolveOptions::Lights lightOptions = opt.lights;  // OPTS.json's "lights", then the flags
+    if (args.has("lights-background")) lightOptions.background = true;
     if (args.has("lights")) {
         const double n = args.number("lights", 16);
         if (!(n >= core::kMinLobes && n <= core::kMaxLobes && n == std::floor(n)))
@@ -328,8 +330,8 @@ int runSolve(const std::vector<std::string>& argv) {
     if (lights && !withVolume && fs::path(output).extension() != ".json")
         throw InvalidArgument("--unknowns lights writes a lighting: -o must end in .json, got '" + output + "'");
     if ((!lights || withVolume) && fs::path(output).extension() != ".vdb") throw InvalidArgument("-o must end in .vdb, got '" + output + "'");
-    if (!lights && (args.has("lights") || args.has("lobe-domain") || args.has("rounds")))
-        throw InvalidArgument("--lights, --lobe-domain and --rounds need --unknowns lights");
+    if (!lights && (args.has("lights") || args.has("lobe-domain") || args.has("rounds") || args.has("lights-background")))
+        throw InvalidArgument("--lights, --lobe-domain, --rounds and --lights-background need --unknowns lights");
     requireParentFolder(output);  // before the work, not after it
     core::Lighting lighting = core::defaultLighting();
     std::vector<core::SolveView> views = readViews(args.get("views"), lighting);

@@ -159,6 +159,8 @@ void SessionService::solveLightsAndCommit(Job& job, const std::shared_ptr<Sessio
         // Only the environment: the sun, lights, background or phase may have been set meanwhile.
         lighting.validate();  // never store what a breakdown left non-finite
         s->lighting.environment = lighting.environment;
+        if (lighting.background.fromLobes)  // "lights": {"background": true}: the sky behind is solved too
+            s->lighting.background.fromLobes = true, s->lighting.background.environment = nullptr;
         lighting = s->lighting;
         if (volume) stale = commitVersion(*s, std::move(*volume));  // saves the session, lighting included
         else saved(*s);

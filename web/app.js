@@ -256,6 +256,7 @@ const solve = guard(async () => {
     regularization: { laplacian: Number($('laplacian').value) },
     max_iterations: state.maxIterations,
   };
+  if (options.unknowns.includes('lights') && $('lights-background').checked) options.lights = { background: true };
   const { job } = await call('POST', `/sessions/${state.sid}/solve`, options);
   state.job = job; state.objectives = []; drawPlot();
   $('solve').disabled = true; $('cancel').disabled = false;

@@ -172,6 +172,10 @@ Image renderReference(const Volume& volume, const Camera& camera, const Lighting
         depths.emplace_back(volume, l.direction, stepVoxels, method);
     }
     const LobesRef<S> lobes(volume, lighting.environment, stepVoxels, method);
+    // The lobes seen directly as the background: each direction its cell's radiance.
+    const bool lobeBackground = lighting.background.fromLobes && lighting.environment.active() && !lighting.background.plate;
+    const LobeBasis backgroundBasis = lobeBackground ? lighting.environment.basis() : LobeBasis{};
+    const std::vector<Vec3d> backgroundRadiance = lobeBackground ? lobeRadiance(lighting.environment) : std::vector<Vec3d>{};
 
     Image image(camera.width, camera.height);
     const V3<S> eyeIndex = toS<S>(indexFromWorld.applyPoint(camera.eye));
@@ -210,7 +214,9 @@ Image renderReference(const Volume& volume, const Camera& camera, const Lighting
             }
             const Background& bg = lighting.background;
             const float* plate = bg.plate ? bg.plate->pixel(px, py) : nullptr;
+            const int cell = lobeBackground ? backgroundBasis.cellOf(camera.rayDirection(px, py)) : -1;
             L += T * (plate              ? V3<S>(S(plate[0]), S(plate[1]), S(plate[2]))
+                      : cell >= 0      ? toS<S>(backgroundRadiance[size_t(cell)])
                       : bg.environment ? environment<S>(*bg.environment, dir)
                                        : toS<S>(bg.color));
             float* out = image.pixel(px, py);

@@ -30,7 +30,12 @@ double radianceBound(const GpuVolume& volume, const Lighting& lighting, const En
             const auto& r = setup.lobeParams.radiance[i];
             bound += maxPhase(lighting.phase) * d.w * std::max({r.x, r.y, r.z});
         }
-    return bound + (environment ? environment->maxValue : maxComponent(lighting.background.color));
+    double background = environment ? environment->maxValue : maxComponent(lighting.background.color);
+    for (int i = 0; setup.backgroundLobes && i < lighting.environment.lobes; ++i) {
+        const auto& r = setup.lobeParams.radiance[i];
+        background = std::max(background, double(std::max({r.x, r.y, r.z})));
+    }
+    return bound + background;
 }
 
 }  // namespace
@@ -75,17 +80,22 @@ MarchSetup prepareMarch(GpuDevice& device, GpuVolume& volume, const Camera& came
         p.lightGridFromIndex[i] = toGl(setup.lightDepth[i]->grid.gridFromIndex);
         p.lightGridDims[i] = i4(setup.lightDepth[i]->grid.dims);
     }
-    // The environment's lobes, when any is lit: their light volumes (cached) and parameters.
+    // The environment's lobes: their parameters, the light volumes when any is lit (cached), and
+    // the lobes as the background when asked (and no plate hides it).
     if (lighting.environment.active()) {
         const std::vector<Vec3d> radiance = lobeRadiance(lighting.environment);
+        const LobeBasis basis = lighting.environment.basis();
+        const std::vector<double> omega = basis.solidAngles();
+        for (int i = 0; i < basis.size(); ++i) {
+            setup.lobeParams.direction[i] = f4(basis.directions[size_t(i)], omega[size_t(i)]);
+            setup.lobeParams.radiance[i] = f4(radiance[size_t(i)]);
+        }
+        if (lighting.background.fromLobes && !setup.plate) {
+            setup.backgroundLobes = true;
+            p.background.w = float(basis.domain == LobeDomain::Sphere ? basis.size() : -basis.size());
+        }
         if (std::any_of(radiance.begin(), radiance.end(), [](const Vec3d& r) { return maxComponent(r) > 0; })) {
-            const LobeBasis basis = lighting.environment.basis();
             setup.lobes = lobeLightVolumes(device, volume, basis, lighting.environment.lightVolumeResolution, settings, stats, budget);
-            const std::vector<double> omega = basis.solidAngles();
-            for (int i = 0; i < basis.size(); ++i) {
-                setup.lobeParams.direction[i] = f4(basis.directions[size_t(i)], omega[size_t(i)]);
-                setup.lobeParams.radiance[i] = f4(radiance[size_t(i)]);
-            }
             const LobeLightVolumes& lv = *setup.lobes;
             p.lobeGrid = {lv.dims.x, lv.dims.y, lv.dims.z, lv.lobes};
             p.lobeScale = {float(lv.dims.x) / float(volume.dims().x), float(lv.dims.y) / float(volume.dims().y),
@@ -103,10 +113,8 @@ void bindMarch(GpuDevice& device, const GpuVolume& volume, const MarchSetup& set
     if (setup.environment) glBindTextureUnit(layout::kUnitEnvironment, setup.environment->id());
     for (size_t i = 0; i < setup.lightDepth.size(); ++i)
         glBindTextureUnit(GLuint(layout::kUnitLightDepth0 + i), setup.lightDepth[i]->texture.id());
-    if (setup.lobes) {
-        device.setParams(setup.lobeParams, layout::kBindingLobeParams);
-        glBindTextureUnit(layout::kUnitLobeTransmittance, setup.lobes->texture.id());
-    }
+    if (setup.lobes || setup.backgroundLobes) device.setParams(setup.lobeParams, layout::kBindingLobeParams);
+    if (setup.lobes) glBindTextureUnit(layout::kUnitLobeTransmittance, setup.lobes->texture.id());
 }
 
 }  // namespace volstyle::core

@@ -29,6 +29,7 @@ struct MarchSetup {
     std::vector<std::shared_ptr<const LightDepthVolume>> lightDepth;
     std::shared_ptr<const gl::Texture> environment;  ///< null without an environment map or plate
     bool plate = false;  ///< `environment` is the view's plate (Background::plate), read per pixel
+    bool backgroundLobes = false;  ///< the lobes seen directly are the background (lobeParams bound)
     /// The environment's lobes when they light the medium (null otherwise: no lobes, or all dark),
     /// and their directions, solid angles and radiances.
     std::shared_ptr<const LobeLightVolumes> lobes;

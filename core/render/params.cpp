@@ -99,6 +99,10 @@ std::vector<FieldProblem> Lighting::check() const {
     if (background.environment)
         if (std::string why = latLongShapeProblem(*background.environment); !why.empty()) out.push_back({"background/environment", why});
     if (background.plate && background.plate->empty()) out.push_back({"background/plate", "the background plate is empty"});
+    if (background.fromLobes && !environment.active())
+        out.push_back({"background/environment", "\"lobes\" shows the environment light's lobes, but there is none (environment.lobes is 0)"});
+    if (background.fromLobes && background.environment)
+        out.push_back({"background/environment", "is either a map or \"lobes\", not both"});
     const EnvironmentLight& env = environment;
     if (env.lobes < 0 || env.lobes > kMaxLobes)
         out.push_back({"environment/lobes", "must be in [" + std::to_string(kMinLobes) + ", " + std::to_string(kMaxLobes) + "] (or 0: no environment light)"});

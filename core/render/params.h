@@ -81,6 +81,10 @@ struct Background {
     /// rendered with (the same size): replaces the colour and the map for that render. Set per
     /// view (SolveView::lightingFor), never stored in a session's lighting.
     std::shared_ptr<const Image> plate;
+    /// The environment light's lobes seen directly (`"environment": "lobes"`): each direction has
+    /// the radiance of the lobe whose cell holds it (below a hemisphere basis: `color`), so a
+    /// lights solve solves the background too. Needs an active environment light.
+    bool fromLobes = false;
 };
 
 constexpr int kMaxLights = 4;
@@ -118,7 +122,7 @@ constexpr int kMaxLightVolumeResolution = 256;
 std::vector<Vec3d> lobeRadiance(const EnvironmentLight& environment);
 
 struct Lighting {
-    std::vector<DirectionalLight> lights{DirectionalLight{}};  ///< at most kMaxLights
+    std::vector<DirectionalLight> lights = std::vector<DirectionalLight>(1);  ///< at most kMaxLights (one default sun; no initializer list: GCC 12 false -Wmaybe-uninitialized)
     Background background;
     EnvironmentLight environment;
     Phase phase;

@@ -50,6 +50,7 @@ Image Renderer::march(GpuVolume& volume, const Camera& camera, const Lighting& l
         .define("VOLSTYLE_HAS_LOBES", setup.lobes ? 1 : 0)
         .define("VOLSTYLE_HAS_ENVIRONMENT", setup.environment ? 1 : 0)
         .define("VOLSTYLE_BACKGROUND_PLATE", setup.plate ? 1 : 0)
+        .define("VOLSTYLE_BACKGROUND_LOBES", setup.backgroundLobes ? 1 : 0)
         .define("VOLSTYLE_SKIP_EMPTY", settings.skipEmptySpace ? 1 : 0)
         .define("VOLSTYLE_HW_FILTER", settings.hardwareFilter ? 1 : 0)
         .define("VOLSTYLE_EXACT_TRAVERSAL", settings.exactTraversal ? 1 : 0)

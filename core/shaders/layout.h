@@ -80,7 +80,7 @@ struct MarchParams {
     VS_IVEC4 brickDims;      /* xyz: occupancy bricks */
     VS_IVEC4 imageSize;      /* x: width, y: height (pixels) */
     VS_VEC4 march;           /* x: step (voxels), y: termination budget ε, z: bound on radiance */
-    VS_VEC4 background;      /* rgb: constant background radiance */
+    VS_VEC4 background;      /* rgb: constant background radiance; w: ±lobes when the lobes are the background (− for a hemisphere basis), else 0 */
     VS_VEC4 phase;           /* x: 0 isotropic, 1 Henyey-Greenstein; y: g */
     VS_VEC4 lightDirection[kLightSlots];   /* xyz: unit world direction toward the light */
     VS_VEC4 lightIrradiance[kLightSlots];  /* rgb: E_l */

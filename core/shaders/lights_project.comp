@@ -8,6 +8,8 @@
 //     residual times the same weights per lobe, the workgroup adds its rays' sums by a tree
 //     reduction in shared memory, and one invocation writes the group's sums: no atomics (the
 //     paper's mipmap gather); the host adds the groups' sums in double.
+// With VOLSTYLE_BACKGROUND_LOBES the lobes are also the background: each ray adds T(0,s) to the
+// column of the lobe whose cell its direction falls in.
 // Rays start, step, skip and stop exactly as project.comp's (its transmittance cut-off), so
 // ⟨T c, r⟩ = ⟨c, Tᵀ r⟩ to float precision.
 #include "common/march.glsl"
@@ -64,10 +66,10 @@ void main() {
         vec3 o, d;
         vec2 range;
         viewRay(dir, o, d, range);
+        vec3 transmittance = vec3(1.0);
         if (range.x < range.y) {
             RayMarch m = beginMarch(range, o, d);
             float tMid, dt;
-            vec3 transmittance = vec3(1.0);
             while (nextSegment(m, true, tMid, dt)) {
                 vec3 p = o + tMid * d;
                 Stencil st = stencilAt(p);
@@ -89,6 +91,19 @@ void main() {
                 if (max3(transmittance) < u.projectorCutoff.x) break;  // as project.comp
             }
         }
+#if VOLSTYLE_BACKGROUND_LOBES
+        // The lobes seen directly (Background::fromLobes): the cell the ray leaves through adds
+        // its radiance times T(0, s), the transmittance left at the ray's end.
+        int cell = lobeCellOf(dir);
+        if (cell >= 0) {
+#if VOLSTYLE_ADJOINT
+            int k = cell - first;
+            if (k >= 0 && k < count) s_sums[local * uint(kLobeChunk) + uint(k)] += r * transmittance;
+#else
+            sum += transmittance * lobes.radiance[cell].rgb;
+#endif
+        }
+#endif
     }
 #if VOLSTYLE_ADJOINT
     // Tree reduction over the group's invocations (every invocation reaches every barrier).

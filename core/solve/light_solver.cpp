@@ -93,7 +93,7 @@ struct LightSolver::State {
         T = std::make_unique<LightsProjector>(device, *gpu, lighting, opt.stepVoxels);
         for (const auto& view : views) {
             viewFirst.push_back(T->pixelCount());
-            T->addView(view.camera, budget);
+            T->addView(view.camera, budget, view.background);
         }
         pixels = GpuVector(T->pixelCount(), "lights-pixels");
         observe(budget);
@@ -124,6 +124,10 @@ struct LightSolver::State {
     void observe(const WorkBudget& budget) {
         Lighting fixedLighting = lighting;
         fixedLighting.environment = EnvironmentLight{};
+        if (lighting.background.fromLobes) {  // the lobes' cells are dark: T c adds what shows there
+            fixedLighting.environment = lighting.environment;
+            fixedLighting.environment.setRadiance(std::vector<Vec3d>(size_t(lighting.environment.lobes), Vec3d()));
+        }
         Renderer renderer(device);
         RenderSettings settings;
         settings.stepVoxels = opt.stepVoxels;
@@ -244,6 +248,7 @@ Lighting lightingForLightSolve(const Lighting& lighting, const SolveOptions::Lig
     env.lobes = lobes;
     env.domain = domain;
     if (env.radiance.empty() && !env.map) env.radiance.assign(size_t(lobes), Vec3d());
+    if (options.background) out.background.fromLobes = true, out.background.environment = nullptr;
     return out;
 }
 

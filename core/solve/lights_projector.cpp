@@ -32,6 +32,7 @@ LightsProjector::LightsProjector(GpuDevice& device, GpuVolume& volume, const Lig
     // T holds the lobes alone, each at unit radiance while the light volumes are prepared.
     m_lighting.lights.clear();
     m_lighting.background = Background{};
+    m_lighting.background.fromLobes = lighting.background.fromLobes;
     m_lighting.environment.map = nullptr;
     m_lighting.environment.strength = 1;
     m_lighting.environment.radiance.assign(size_t(lighting.environment.lobes), Vec3d(1.0));
@@ -40,12 +41,14 @@ LightsProjector::LightsProjector(GpuDevice& device, GpuVolume& volume, const Lig
 
 LightsProjector::~LightsProjector() = default;
 
-void LightsProjector::addView(const Camera& camera, const WorkBudget& budget) {
+void LightsProjector::addView(const Camera& camera, const WorkBudget& budget, std::shared_ptr<const Image> plate) {
     camera.validate();
     RenderSettings settings;
     settings.stepVoxels = m_step;
     RenderStats stats;
-    View view{camera, prepareMarch(m_device, m_volume, camera, m_lighting, settings, stats, budget), m_pixelCount};
+    Lighting lighting = m_lighting;
+    lighting.background.plate = std::move(plate);  // hides the lobes' background (and is checked)
+    View view{camera, prepareMarch(m_device, m_volume, camera, lighting, settings, stats, budget), m_pixelCount};
     m_lightVolumeMs += stats.lightMs;
     layout::MarchParams& p = view.setup.params;
     p.viewPixels = {int(m_pixelCount), 0, 0, 0};
@@ -62,6 +65,7 @@ void LightsProjector::use(const View& v, bool adjoint) {
     gl::ShaderBuilder builder("lights_project.comp");
     builder.define("VOLSTYLE_ADJOINT", adjoint ? 1 : 0)
         .define("VOLSTYLE_HAS_LOBES", 1)
+        .define("VOLSTYLE_BACKGROUND_LOBES", v.setup.backgroundLobes ? 1 : 0)
         .define("VOLSTYLE_HAS_ALBEDO", m_volume.hasAlbedo() ? 1 : 0)
         .define("VOLSTYLE_SKIP_EMPTY", 1);
     glUseProgram(m_device.program(builder).id());

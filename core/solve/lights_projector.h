@@ -23,13 +23,15 @@ namespace volstyle::core {
 class LightsProjector {
 public:
     /// The lobes of `lighting.environment` (its basis, domain and light-volume resolution; its
-    /// radiances are the unknowns and are ignored) and the phase function; lights and background
-    /// are not part of T. Builds the light volumes now (cached on the device).
+    /// radiances are the unknowns and are ignored) and the phase function; lights are not part of
+    /// T, nor is the background, unless it is the lobes (Background::fromLobes): then each ray's
+    /// transmittance T(0,s) joins the column of the lobe whose cell its direction falls in.
     LightsProjector(GpuDevice& device, GpuVolume& volume, const Lighting& lighting, double stepVoxels);
     ~LightsProjector();
 
-    /// Builds the light volumes on first use (cached), checking `budget` between lobes.
-    void addView(const Camera& camera, const WorkBudget& budget = WorkBudget());
+    /// Builds the light volumes on first use (cached), checking `budget` between lobes. A view with
+    /// a plate (SolveView::background) sees the plate, not the lobes, behind the volume.
+    void addView(const Camera& camera, const WorkBudget& budget = WorkBudget(), std::shared_ptr<const Image> plate = nullptr);
     size_t pixelCount() const { return m_pixelCount; }
     int lobes() const { return m_lobes; }
 

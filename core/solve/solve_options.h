@@ -74,6 +74,9 @@ struct SolveOptions {
         int lobes = 0;
         std::optional<LobeDomain> domain;
         int rounds = 8;
+        /// The lobes are the background too (Background::fromLobes): what the views show behind
+        /// the volume is solved with the lighting. Also on when the lighting says so.
+        bool background = false;
     } lights;
 
     std::vector<FieldProblem> check() const;

@@ -96,6 +96,29 @@ inline std::vector<std::string> readEvents(httplib::Client& c, const std::string
     return names;
 }
 
+/// Starts a solve with `options` and follows its events to the end; the finished job's JSON
+/// (state "done" expected by the caller), or {} when the solve was refused.
+inline json solveToEnd(httplib::Client& c, const std::string& base, const std::string& options) {
+    auto r = c.Post((base + "/solve").c_str(), options, "application/json");
+    EXPECT_EQ(r->status, 202) << r->body;
+    if (r->status != 202) return {};
+    const std::string job = json::parse(r->body)["job"];
+    const auto events = readEvents(c, "/api/v1/jobs/" + job + "/events");
+    EXPECT_FALSE(events.empty());
+    if (!events.empty()) {
+        EXPECT_EQ(events.back(), "done");
+    }
+    return json::parse(c.Get(("/api/v1/jobs/" + job).c_str())->body);
+}
+
+/// A solve report's mean initial and final RMS over its views.
+inline std::pair<double, double> meanRms(const json& report) {
+    double before = 0, after = 0;
+    const size_t n = report["initial_rms"].size();
+    for (size_t v = 0; v < n; ++v) before += report["initial_rms"][v].get<double>(), after += report["final_rms"][v].get<double>();
+    return {before / double(std::max<size_t>(n, 1)), after / double(std::max<size_t>(n, 1))};
+}
+
 /// Adds a `size`² view looking down -z and uploads a constant target; returns the view id.
 inline std::string addConstantTargetView(httplib::Client& c, const std::string& base, int size, float value) {
     json camera = {{"camera", {{"eye", {0, 0, 3}}, {"target", {0, 0, 0}}, {"width", size}, {"height", size}}}};

@@ -176,3 +176,32 @@ TEST_F(EnvironmentApi, AViewsBackgroundPlateIsWhatItsRendersShowBehindTheVolume)
     EXPECT_EQ(decode(client().Get((view + "/render.png").c_str())).pixel(0, 0)[2], 0.0f);
     expectError(client().Delete((view + "/background").c_str()), 404, "not_found");
 }
+
+TEST_F(EnvironmentApi, ALightsSolveCanSolveTheBackgroundToo) {
+    // Targets rendered with the lobes as the background; from black lobes, "lights":
+    // {"background": true} solves the sky behind the sphere with its lighting, and the session's
+    // lighting shows the lobes as its background afterwards.
+    const std::string id = createSession(16), base = "/api/v1/sessions/" + id;
+    json radiance = json::array(), black = json::array();
+    for (int i = 0; i < 8; ++i) radiance.push_back({0.2 + 0.1 * i, 0.5, 1.0 - 0.1 * i}), black.push_back({0, 0, 0});
+    const json truth = {{"background", {{"color", {0, 0, 0}}, {"environment", "lobes"}}},
+                        {"environment", {{"lobes", 8}, {"radiance", radiance}, {"light_volume_resolution", 8}}}};
+    auto r = client().Put((base + "/lighting").c_str(), truth.dump(), "application/json");
+    ASSERT_EQ(r->status, 200) << r->body;
+    EXPECT_EQ(json::parse(r->body)["background"]["environment"], "lobes");
+    for (json eye : {json{0, 0.3, 3}, json{3, 0.5, 0.5}}) {
+        r = client().Post((base + "/views").c_str(), json{{"camera", {{"eye", eye}, {"target", {0, 0, 0}}, {"fov_y_deg", 60}, {"width", 16}, {"height", 16}}}}.dump(), "application/json");
+        ASSERT_EQ(r->status, 201) << r->body;
+        const std::string vid = json::parse(r->body)["id"];
+        r = client().Post((base + "/render").c_str(), json{{"camera", {{"eye", eye}, {"target", {0, 0, 0}}, {"fov_y_deg", 60}, {"width", 16}, {"height", 16}}}, {"format", "png"}}.dump(), "application/json");
+        ASSERT_EQ(client().Put((base + "/views/" + vid + "/target").c_str(), r->body, "image/png")->status, 200);
+    }
+    ASSERT_EQ(client().Put((base + "/lighting").c_str(), json{{"background", {0, 0, 0}}, {"environment", {{"lobes", 8}, {"radiance", black}, {"light_volume_resolution", 8}}}}.dump(), "application/json")->status, 200);
+    const json result = solveToEnd(client(), base, R"({"unknowns": ["lights"], "lights": {"background": true}, "max_iterations": 30, "regularization": {"laplacian": 0}})")["result"];
+    const auto [before, after] = meanRms(result["report"]);
+    std::cout << "[ measured ] lights and background over HTTP: RMS " << before << " -> " << after << "\n";
+    EXPECT_LT(after, 0.05 * before);  // 8-bit targets
+    const json lighting = json::parse(client().Get((base + "/lighting").c_str())->body);
+    EXPECT_EQ(lighting["background"]["environment"], "lobes");
+    EXPECT_EQ(result["lighting"]["background"]["environment"], "lobes");
+}

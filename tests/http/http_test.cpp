@@ -22,6 +22,8 @@ using json = nlohmann::json;
 using volstyle::test::Api;
 using volstyle::test::addConstantTargetView;
 using volstyle::test::pngOf;
+using volstyle::test::meanRms;
+using volstyle::test::solveToEnd;
 using volstyle::test::readEvents;
 
 TEST_F(Api, HealthAndScenes) {
@@ -439,17 +441,10 @@ TEST_F(Api, SolvesTheEnvironmentLightingAndServesItsMap) {
     expectError(client().Post((base + "/solve").c_str(), R"({"unknowns": ["lights", "extinction"]})", "application/json"), 400, "invalid_argument");
     expectError(client().Post((base + "/solve").c_str(), R"({"unknowns": ["lights"], "lights": {"lobes": 300}})", "application/json"), 400, "invalid_argument");
 
-    auto r = client().Post((base + "/solve").c_str(), R"({"unknowns": ["lights"], "max_iterations": 25, "regularization": {"laplacian": 0}})", "application/json");
-    ASSERT_EQ(r->status, 202) << r->body;
-    const std::string job = json::parse(r->body)["job"];
-    auto events = readEvents(client(), "/api/v1/jobs/" + job + "/events");
-    ASSERT_FALSE(events.empty());
-    EXPECT_EQ(events.back(), "done");
-    const json result = json::parse(client().Get(("/api/v1/jobs/" + job).c_str())->body)["result"];
+    const json result = solveToEnd(client(), base, R"({"unknowns": ["lights"], "max_iterations": 25, "regularization": {"laplacian": 0}})")["result"];
     const json rep = result["report"];
-    double before = 0, after = 0;
-    for (size_t v = 0; v < rep["initial_rms"].size(); ++v) before += rep["initial_rms"][v].get<double>(), after += rep["final_rms"][v].get<double>();
-    std::cout << "[ measured ] lights over HTTP: RMS " << before / 2 << " -> " << after / 2 << " in " << rep["iterations"] << " iterations\n";
+    const auto [before, after] = meanRms(rep);
+    std::cout << "[ measured ] lights over HTTP: RMS " << before << " -> " << after << " in " << rep["iterations"] << " iterations\n";
     EXPECT_LT(after, 0.05 * before);
     const json solved = json::parse(client().Get((base + "/lighting").c_str())->body);
     ASSERT_EQ(solved["environment"]["radiance"].size(), 8u);

@@ -237,3 +237,16 @@ TEST(LightingJson, MapsThatAreNotLatLongAreRefusedNamingTheField) {
     EXPECT_NE(core::latLongMapProblem(negative).find("non-finite"), std::string::npos);
     EXPECT_EQ(core::latLongMapProblem(core::Image(9, 4)), "");  // one pixel of slack
 }
+
+TEST(LightingJson, TheLobesAsTheBackground) {
+    const json j = {{"background", {{"color", {0.1, 0.1, 0.1}}, {"environment", "lobes"}}},
+                    {"environment", {{"lobes", 2}, {"radiance", {{1, 1, 1}, {2, 2, 2}}}}}};
+    const core::Lighting l = protocol::lightingFromJson(j).lighting;  // API and CLI alike
+    EXPECT_TRUE(l.background.fromLobes);
+    EXPECT_FALSE(protocol::lightingFromJson(j, "", true).environmentPath.has_value());  // not a file
+    EXPECT_EQ(protocol::lightingToJson(l)["background"]["environment"], "lobes");
+    // Without an environment light there are no lobes to show.
+    std::set<std::string> paths;
+    for (const auto& e : errorsOf([&] { protocol::lightingFromJson({{"background", {{"environment", "lobes"}}}}); })) paths.insert(e.path);
+    EXPECT_EQ(paths, (std::set<std::string>{"/background/environment"}));
+}

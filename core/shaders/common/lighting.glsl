@@ -56,11 +56,15 @@ vec3 inScattering(vec3 p, vec3 dir) {
 layout(binding = kUnitEnvironment) uniform sampler2D s_environment;
 #endif
 
-// Background radiance seen along ω from pixel `pix`: the view's plate (its pixel), the lat-long
-// map (u = 0.5 + atan2(x, -z)/2π, v = acos(y)/π) or the constant colour.
+// Background radiance seen along ω from pixel `pix`: the view's plate (its pixel), the radiance of
+// the lobe whose cell holds ω, the lat-long map (u = 0.5 + atan2(x, -z)/2π, v = acos(y)/π) or the
+// constant colour.
 vec3 backgroundRadiance(ivec2 pix, vec3 dir) {
 #if VOLSTYLE_HAS_ENVIRONMENT && VOLSTYLE_BACKGROUND_PLATE
     return texelFetch(s_environment, pix, 0).rgb;
+#elif VOLSTYLE_BACKGROUND_LOBES
+    int cell = lobeCellOf(dir);
+    return cell < 0 ? u.background.rgb : lobes.radiance[cell].rgb;
 #elif VOLSTYLE_HAS_ENVIRONMENT
     vec2 uv = vec2(0.5 + preciseAtan2(dir.x, -dir.z) / (2.0 * kPi),
                    preciseAtan2(length(dir.xz), dir.y) / kPi);

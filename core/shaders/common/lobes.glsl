@@ -5,12 +5,34 @@
 #ifndef VOLSTYLE_HAS_LOBES
 #define VOLSTYLE_HAS_LOBES 0
 #endif
+#ifndef VOLSTYLE_BACKGROUND_LOBES  // the lobes seen directly are the background
+#define VOLSTYLE_BACKGROUND_LOBES 0
+#endif
 
-#if VOLSTYLE_HAS_LOBES
-layout(binding = kUnitLobeTransmittance) uniform samplerBuffer s_lobeTransmittance;
+#if VOLSTYLE_HAS_LOBES || VOLSTYLE_BACKGROUND_LOBES
 layout(std140, binding = kBindingLobeParams) uniform b_LobeParams {
     LobeParams lobes;
 };
+#endif
+
+#if VOLSTYLE_BACKGROUND_LOBES
+// The lobe whose cell holds direction ω: the nearest centre (LobeBasis::cellOf), none (−1) below
+// the horizon of a hemisphere basis. u.background.w = ±count (− for the hemisphere).
+int lobeCellOf(vec3 dir) {
+    int count = int(abs(u.background.w));
+    if (u.background.w < 0.0 && dir.y < 0.0) return -1;
+    int best = 0;
+    float bestDot = -2.0;
+    for (int i = 0; i < count; ++i) {
+        float d = dot(lobes.direction[i].xyz, dir);
+        if (d > bestDot) bestDot = d, best = i;
+    }
+    return best;
+}
+#endif
+
+#if VOLSTYLE_HAS_LOBES
+layout(binding = kUnitLobeTransmittance) uniform samplerBuffer s_lobeTransmittance;
 
 // The 8 light-volume nodes around an index-space point: each node's first value (lobe 0,
 // channel 0) and the trilinear fractions. Named fields: llvmpipe keeps arrays in memory.
