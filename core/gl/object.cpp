@@ -2,6 +2,8 @@
 
 #include "core/gl/object.h"
 
+#include "core/base/errors.h"
+
 namespace volstyle::core::gl {
 namespace {
 
@@ -32,6 +34,22 @@ Texture createTexture(GLenum target, const std::string& name) {
     glCreateTextures(target, 1, &id);
     label(GL_TEXTURE, id, name);
     return Texture(id);
+}
+
+Texture createTexture2D(GLenum format, int w, int h, GLenum filter, const std::string& name) {
+    Texture t = createTexture(GL_TEXTURE_2D, name);
+    glTextureStorage2D(t.id(), 1, format, w, h);
+    glTextureParameteri(t.id(), GL_TEXTURE_MIN_FILTER, GLint(filter));
+    glTextureParameteri(t.id(), GL_TEXTURE_MAG_FILTER, GLint(filter));
+    glTextureParameteri(t.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(t.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    return t;
+}
+
+void checkFramebufferComplete(const Framebuffer& fb, const std::string& what) {
+    const GLenum status = glCheckNamedFramebufferStatus(fb.id(), GL_FRAMEBUFFER);
+    if (status != GL_FRAMEBUFFER_COMPLETE)
+        throw GpuError(what + " framebuffer is incomplete (status " + std::to_string(status) + ")");
 }
 
 Program createProgram(const std::string& name) {

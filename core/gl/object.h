@@ -63,6 +63,11 @@ Sampler createSampler(const std::string& label);
 Query createQuery(GLenum target, const std::string& label);
 Framebuffer createFramebuffer(const std::string& label);
 VertexArray createVertexArray(const std::string& label);
+/// A w×h 2D texture of `format` (one level), sampled with `filter` (GL_NEAREST or GL_LINEAR) and
+/// clamped to its edge.
+Texture createTexture2D(GLenum format, int w, int h, GLenum filter, const std::string& label);
+/// Throws GpuError naming `what` unless `fb` is complete.
+void checkFramebufferComplete(const Framebuffer& fb, const std::string& what);
 
 /// A fence sync object (not a GLuint name, so it has its own owner).
 class Fence {

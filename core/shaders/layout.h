@@ -209,6 +209,28 @@ struct VectorParams {
     VS_IVEC4 dims;           /* xyz: grid of one block (Laplacian) */
 };
 
+/* The translucent preview (core/translucent/, SPEC §9; Kniss et al. 2003): half-angle slices
+ * rasterized into the eye buffer (blended) and into two ping-pong light buffers (translucent.raster). */
+VS_CONSTANT(int, kUnitLightDirect, 14);   /* light buffer: rgb transmittance from the light to the slice */
+VS_CONSTANT(int, kUnitLightIndirect, 15);  /* light buffer: rgb indirect light reaching the slice (1 = the light's) */
+VS_CONSTANT(int, kUnitPhaseTable, 9);     /* the phase function over cos θ ∈ [-1, 1], texel i at -1 + 2 i / (N - 1) (a 2D texture, one row) */
+VS_CONSTANT(int, kPhaseTableSize, 256);
+VS_CONSTANT(int, kIndirectTaps, 8);       /* blur samples on a ring (+ the centre) per light-buffer texel */
+struct TranslucentParams {
+    VS_MAT4 clipFromWorld;    /* the pass's raster transform: the camera's perspective, or the light buffer's orthographic */
+    VS_MAT4 lightUvFromWorld; /* world -> light-buffer texture coordinates in [0,1]² (xy) */
+    VS_MAT4 indexFromWorld;   /* world -> the volume's index space */
+    VS_IVEC4 dims;            /* xyz: the volume's voxels; w: light-buffer side (texels) */
+    VS_VEC4 eye;              /* xyz: camera position */
+    VS_VEC4 sliceAxis;        /* xyz: unit half-angle axis s; w: slice spacing (world) */
+    VS_VEC4 lightDirection;   /* xyz: unit, toward the light; w: the light's path through one slice, spacing / (l·s) */
+    VS_VEC4 irradiance;       /* rgb: E of the light */
+    VS_VEC4 phase;            /* x: 0 isotropic, 1 Henyey-Greenstein; y: g */
+    VS_VEC4 indirect;         /* x: 1 on; y: blur radius in light-buffer uv (d tan(θ/2), Eq. 9); z: k, σ_i = k σt; w: S (surface shading) */
+    VS_VEC4 transport;        /* rgb: 1 − ln(transport colour): σ_i per channel is k σt times this */
+    VS_IVEC4 options;         /* x: has emission; y: has albedo */
+};
+
 #ifndef VOLSTYLE_GLSL
 }  /* namespace volstyle::core::layout */
 #endif

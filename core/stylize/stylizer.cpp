@@ -20,19 +20,7 @@ namespace volstyle::core {
 
 namespace {
 
-gl::Texture texture2D(GLenum format, int w, int h, const char* label) {
-    gl::Texture t = gl::createTexture(GL_TEXTURE_2D, label);
-    glTextureStorage2D(t.id(), 1, format, w, h);
-    glTextureParameteri(t.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTextureParameteri(t.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    return t;
-}
-
-void checkComplete(const gl::Framebuffer& fb, const char* what) {
-    const GLenum status = glCheckNamedFramebufferStatus(fb.id(), GL_FRAMEBUFFER);
-    if (status != GL_FRAMEBUFFER_COMPLETE)
-        throw GpuError(std::string(what) + " framebuffer is incomplete (status " + std::to_string(status) + ")");
-}
+gl::Texture texture2D(GLenum format, int w, int h, const char* label) { return gl::createTexture2D(format, w, h, GL_NEAREST, label); }
 
 /// An occluder's mesh on the GPU: interleaved position + normal, 32-bit indices.
 struct GpuMesh {
@@ -237,7 +225,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
         glNamedFramebufferTexture(fb.id(), GL_DEPTH_ATTACHMENT, depthTarget.id(), 0);
         if (ids) glNamedFramebufferTexture(fb.id(), GL_COLOR_ATTACHMENT0, ids->id(), 0);
         else glNamedFramebufferDrawBuffer(fb.id(), GL_NONE);
-        checkComplete(fb, "the shadow map's");
+        gl::checkFramebufferComplete(fb, "the shadow map's");
         const float zero[4] = {0, 0, 0, 0}, one = 1;
         if (ids) glClearNamedFramebufferfv(fb.id(), GL_COLOR, 0, zero);
         glClearNamedFramebufferfv(fb.id(), GL_DEPTH, 0, &one);
@@ -309,7 +297,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
         glNamedFramebufferTexture(fb.id(), GL_DEPTH_ATTACHMENT, depth.id(), 0);
         const GLenum buffers[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
         glNamedFramebufferDrawBuffers(fb.id(), 2, buffers);
-        checkComplete(fb, "the G-buffer's");
+        gl::checkFramebufferComplete(fb, "the G-buffer's");
         const float zero[4] = {0, 0, 0, 0}, one = 1;
         glClearNamedFramebufferfv(fb.id(), GL_COLOR, 0, zero);
         glClearNamedFramebufferfv(fb.id(), GL_COLOR, 1, zero);
