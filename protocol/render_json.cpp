@@ -96,6 +96,36 @@ void environmentFromJson(JsonReader& r, const nlohmann::json& e, const std::stri
 
 }  // namespace
 
+core::TranslucentSettings translucentFromJson(const nlohmann::json& j, const std::string& path) {
+    JsonReader r;
+    core::TranslucentSettings s;
+    if (r.object(j, path, {"slice_spacing", "light_buffer", "indirect", "surface_shading"})) {
+        if (j.contains("slice_spacing")) s.sliceSpacing = r.number(j["slice_spacing"], path + "/slice_spacing").value_or(s.sliceSpacing);
+        if (j.contains("light_buffer")) s.lightBufferSize = r.integer(j["light_buffer"], path + "/light_buffer").value_or(s.lightBufferSize);
+        if (j.contains("surface_shading")) s.surfaceShading = r.number(j["surface_shading"], path + "/surface_shading").value_or(s.surfaceShading);
+        const std::string ip = path + "/indirect";
+        if (j.contains("indirect") && r.object(j["indirect"], ip, {"enabled", "blur_angle_deg", "extinction", "transport_color"})) {
+            const auto& in = j["indirect"];
+            core::IndirectLight& d = s.indirect;
+            if (in.contains("enabled")) d.enabled = r.boolean(in["enabled"], ip + "/enabled").value_or(d.enabled);
+            if (in.contains("blur_angle_deg")) d.blurAngleDeg = r.number(in["blur_angle_deg"], ip + "/blur_angle_deg").value_or(d.blurAngleDeg);
+            if (in.contains("extinction")) d.extinction = r.number(in["extinction"], ip + "/extinction").value_or(d.extinction);
+            if (in.contains("transport_color")) d.transportColor = r.vec3(in["transport_color"], ip + "/transport_color").value_or(d.transportColor);
+        }
+        for (const auto& p : s.check()) r.check(path, p.field, p.message);
+    }
+    r.throwIfErrors();
+    return s;
+}
+
+nlohmann::json translucentToJson(const core::TranslucentSettings& s) {
+    return {{"slice_spacing", s.sliceSpacing},
+            {"light_buffer", s.lightBufferSize},
+            {"indirect", {{"enabled", s.indirect.enabled}, {"blur_angle_deg", s.indirect.blurAngleDeg},
+                          {"extinction", s.indirect.extinction}, {"transport_color", toJson(s.indirect.transportColor)}}},
+            {"surface_shading", s.surfaceShading}};
+}
+
 LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& path, bool allowFilePaths) {
     JsonReader r;
     LightingRequest out;

@@ -20,6 +20,7 @@
 #include <string>
 
 #include "core/render/params.h"
+#include "core/translucent/translucent_settings.h"
 #include "protocol/validation.h"
 
 namespace volstyle::protocol {
@@ -50,6 +51,12 @@ struct LightingRequest {
 inline constexpr const char* kSessionMap = "session";
 /// `"background": {"environment": "lobes"}`: the environment light's lobes are the background.
 inline constexpr const char* kLobesBackground = "lobes";
+
+/// The translucent preview's parameters (SPEC §9): {"slice_spacing", "light_buffer",
+/// "indirect": {"enabled", "blur_angle_deg", "extinction", "transport_color"}, "surface_shading"};
+/// absent fields keep their defaults. Throws ValidationError naming every bad field under `path`.
+core::TranslucentSettings translucentFromJson(const nlohmann::json& j, const std::string& path = "");
+nlohmann::json translucentToJson(const core::TranslucentSettings& s);
 
 LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& path = "",
                                  bool allowFilePaths = false);

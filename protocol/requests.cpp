@@ -52,7 +52,7 @@ CreateSessionRequest CreateSessionRequest::fromJson(const nlohmann::json& j, con
 RenderRequest RenderRequest::fromJson(const nlohmann::json& j, const RequestLimits& limits) {
     JsonReader r;
     RenderRequest q;
-    if (r.object(j, "", {"camera", "format", "exposure", "mode"})) {
+    if (r.object(j, "", {"camera", "format", "exposure", "mode", "translucent"})) {
         q.camera = readCamera(r, j, "/camera", limits);
         if (j.contains("format")) {
             auto f = r.string(j["format"], "/format");
@@ -61,8 +61,19 @@ RenderRequest RenderRequest::fromJson(const nlohmann::json& j, const RequestLimi
             else if (f) r.fail("/format", "must be 'png' or 'exr'");
         }
         if (j.contains("exposure")) q.exposure = r.number(j["exposure"], "/exposure").value_or(0);
-        if (j.contains("mode") && r.string(j["mode"], "/mode").value_or("") != "single_scattering")
-            r.fail("/mode", "must be 'single_scattering'");
+        if (j.contains("mode")) {
+            const auto m = r.string(j["mode"], "/mode");
+            if (m == "translucent") q.mode = RenderMode::Translucent;
+            else if (m && *m != "single_scattering") r.fail("/mode", "must be 'single_scattering' or 'translucent'");
+        }
+        if (j.contains("translucent")) {
+            if (q.mode != RenderMode::Translucent) r.fail("/translucent", "needs \"mode\": \"translucent\"");
+            try {
+                q.translucent = translucentFromJson(j["translucent"], "/translucent");
+            } catch (const ValidationError& e) {
+                for (const auto& d : e.details()) r.fail(d.path, d.message);
+            }
+        }
     }
     r.throwIfErrors();
     return q;

@@ -49,10 +49,14 @@ struct CreateSessionRequest {
 };
 
 /// POST /sessions/{sid}/render: {"camera": {…}, "format": "png"|"exr", "exposure": 0, "mode": "single_scattering"}.
+enum class RenderMode { SingleScattering, Translucent };
+
 struct RenderRequest {
     core::Camera camera;
     ImageFormat format = ImageFormat::Png;
     double exposure = 0;  ///< stops, PNG only
+    RenderMode mode = RenderMode::SingleScattering;
+    core::TranslucentSettings translucent;  ///< "translucent": {…} (mode "translucent" only)
     static RenderRequest fromJson(const nlohmann::json& j, const RequestLimits& limits);
 };
 

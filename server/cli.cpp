@@ -139,6 +139,22 @@ std::string defaultWebDir() {
     return "";
 }
 
+std::vector<std::string> split(const std::string& s, char sep) {
+    std::vector<std::string> out;
+    std::stringstream in(s);
+    for (std::string item; std::getline(in, item, sep);)
+        if (!item.empty()) out.push_back(item);
+    return out;
+}
+
+std::vector<double> numbers(const std::string& flag, const std::string& value, size_t count) {
+    std::vector<double> out;
+    for (const auto& part : split(value, ',')) out.push_back(parseNumber(flag, part));
+    if (out.size() != count)
+        throw InvalidArgument("--" + flag + " takes " + std::to_string(count) + " comma-separated numbers, got '" + value + "'");
+    return out;
+}
+
 const char* versionString() { return VOLSTYLE_VERSION; }
 
 nlohmann::json readJsonFile(const std::string& path) {

@@ -69,6 +69,10 @@ const char* versionString();
 
 /// A finite number, or InvalidArgument naming `--flag`.
 double parseNumber(const std::string& flag, const std::string& text);
+/// `s` cut at `sep`, empty parts dropped.
+std::vector<std::string> split(const std::string& s, char sep);
+/// `count` comma-separated numbers of `--flag` (InvalidArgument naming it otherwise).
+std::vector<double> numbers(const std::string& flag, const std::string& value, size_t count);
 
 /// Parses argv (after the subcommand); `flags` are options that take no value. Unknown options
 /// throw InvalidArgument naming them and listing `known`.

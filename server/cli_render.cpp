@@ -1,5 +1,5 @@
-// `volstyle render`: one single-scattering image of a scene, to PNG (sRGB, exposure) or EXR
-// (linear RGBA).
+// `volstyle render`: one image of a scene, single scattering or the translucent preview
+// (--mode translucent), to PNG (sRGB, exposure) or EXR (linear RGBA).
 
 #include <spdlog/spdlog.h>
 
@@ -16,6 +16,7 @@
 #include "core/render/exr_layers.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/renderer.h"
+#include "core/translucent/translucent_renderer.h"
 #include "protocol/render_json.h"
 #include "server/cli.h"
 #include "server/scene_source.h"
@@ -29,9 +30,11 @@ const CommandSpec kRender{
     "render",
     "render a volume to PNG or EXR",
     "--scene builtin:NAME[:RES]|FILE.vdb [options] -o OUT.png|OUT.exr",
-    "Renders one single-scattering image of a volume. PNG is sRGB with --exposure applied; EXR is\n"
-    "linear, premultiplied RGBA without the background, plus layers for the background and the AOVs\n"
-    "(docs/FORMATS.md). Without --camera the camera frames the volume's bounding box.",
+    "Renders one image of a volume: single scattering, or with --mode translucent the translucent\n"
+    "preview (half-angle slicing with indirect light, docs/TRANSLUCENT.md). PNG is sRGB with\n"
+    "--exposure applied; EXR is linear, premultiplied RGBA without the background, plus layers for\n"
+    "the background and the AOVs (docs/FORMATS.md; translucent: the picture as layer 'beauty').\n"
+    "Without --camera the camera frames the volume's bounding box.",
     {
         {"scene", "SRC", "builtin:NAME[:RES] (cloud, plume, sphere, cube; RES 8-256, default 128) or a .vdb file (required)"},
         {"camera", "CAM.json", "camera (eye, target, up, fov_y_deg, width, height); default: frames the volume, 480x480"},
@@ -41,10 +44,37 @@ const CommandSpec kRender{
         {"no-skip", "", "march through empty space too (a check; same image, slower)"},
         {"hw-filter", "", "sample with the texture unit (faster on GPUs, 8-bit weights)"},
         {"exact-traversal", "", "one segment per voxel crossed instead of equal steps"},
+        {"mode", "M", "single_scattering (default) or translucent"},
+        {"translucent", "T.json", "translucent: its parameters as JSON (the API's \"translucent\" object); flags override"},
+        {"slice-spacing", "VOXELS", "translucent: distance between slices; default 1"},
+        {"blur-angle", "DEG", "translucent: the indirect light's cone angle, [0, 90); default 30"},
+        {"indirect-extinction", "K", "translucent: indirect extinction per unit extinction; default 0.35"},
+        {"transport", "R,G,B", "translucent: the transport colour, each in (0, 1]; default 1,0.78,0.55"},
+        {"surface-shading", "S", "translucent: 0 attenuation only .. 1 Blinn-Phong from the gradient; default 0"},
+        {"no-indirect", "", "translucent: direct light only"},
         {"output", "OUT", ".png or .exr; the folder must exist (required)"},
     },
     "  volstyle render --scene builtin:cloud:64 -o cloud.png\n"
-    "  volstyle render --scene builtin:plume:48 --exposure 1 -o plume.exr\n"};
+    "  volstyle render --scene builtin:plume:48 --exposure 1 -o plume.exr\n"
+    "  volstyle render --scene builtin:cloud:64 --mode translucent --transport 1,0.6,0.3 -o glow.png\n"};
+
+/// The translucent preview's parameters: T.json, then the flags; validated (InvalidArgument).
+core::TranslucentSettings translucentSettings(const Arguments& args) {
+    core::TranslucentSettings s;
+    if (args.has("translucent"))
+        s = fromFile(args.get("translucent"), [](const nlohmann::json& j) { return protocol::translucentFromJson(j); });
+    if (args.has("slice-spacing")) s.sliceSpacing = args.number("slice-spacing", s.sliceSpacing);
+    if (args.has("blur-angle")) s.indirect.blurAngleDeg = args.number("blur-angle", s.indirect.blurAngleDeg);
+    if (args.has("indirect-extinction")) s.indirect.extinction = args.number("indirect-extinction", s.indirect.extinction);
+    if (args.has("surface-shading")) s.surfaceShading = args.number("surface-shading", s.surfaceShading);
+    if (args.has("no-indirect")) s.indirect.enabled = false;
+    if (args.has("transport")) {
+        const std::vector<double> rgb = numbers("transport", args.get("transport"), 3);
+        s.indirect.transportColor = {rgb[0], rgb[1], rgb[2]};
+    }
+    s.validate();
+    return s;
+}
 
 }  // namespace
 
@@ -71,6 +101,13 @@ int runRender(const std::vector<std::string>& argv) {
     settings.exactTraversal = args.has("exact-traversal");
     settings.validate();
     const double exposure = args.number("exposure", 0);
+    const std::string mode = args.has("mode") ? args.get("mode") : "single_scattering";
+    if (mode != "single_scattering" && mode != "translucent")
+        throw InvalidArgument("--mode must be single_scattering or translucent, got '" + mode + "'");
+    const bool translucent = mode == "translucent";
+    for (const char* flag : {"translucent", "slice-spacing", "blur-angle", "indirect-extinction", "transport", "surface-shading", "no-indirect"})
+        if (!translucent && args.has(flag)) throw InvalidArgument(std::string("--") + flag + " needs --mode translucent");
+    const core::TranslucentSettings translucentOptions = translucent ? translucentSettings(args) : core::TranslucentSettings{};
 
     auto t0 = Clock::now();
     core::Volume volume = loadScene(args.get("scene"));
@@ -82,6 +119,22 @@ int runRender(const std::vector<std::string>& argv) {
     core::Renderer renderer(*device);
     spdlog::debug("GL device created and volume uploaded in {:.1f} ms", msSince(t0));
     t0 = Clock::now();
+    if (translucent) {
+        core::TranslucentRenderer preview(*device);
+        core::TranslucentStats tstats;
+        core::Image medium;
+        const core::Image image = preview.render(gpuVolume, *camera, lighting, translucentOptions, &tstats, &medium);
+        if (ext == ".exr") {
+            core::saveExrLayers(output, {{"", &medium}, {"beauty", &image}});
+        } else {
+            core::SaveOptions save;
+            save.exposure = exposure;
+            core::saveImage(output, image, save);
+        }
+        spdlog::info("rendered {}x{} translucent, {} slices, in {:.1f} ms on {}", camera->width, camera->height, tstats.slices,
+                     tstats.totalMs, device->capabilities().renderer);
+        return 0;
+    }
     core::RenderStats stats;
     if (ext == ".exr") {
         // Compositing-ready: premultiplied medium without the background, plus its layers.

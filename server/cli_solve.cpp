@@ -71,22 +71,6 @@ const CommandSpec kSolve{
     "  volstyle solve --scene builtin:cloud:32 --views views.json --unknowns emission,albedo -o out.vdb\n"
     "  volstyle solve --scene builtin:cloud:32 --views views.json --unknowns lights --lights 32 -o sky.json\n"};
 
-std::vector<std::string> split(const std::string& s, char sep) {
-    std::vector<std::string> out;
-    std::stringstream in(s);
-    for (std::string item; std::getline(in, item, sep);)
-        if (!item.empty()) out.push_back(item);
-    return out;
-}
-
-std::vector<double> numbers(const std::string& flag, const std::string& value, size_t count) {
-    std::vector<double> out;
-    for (const auto& part : split(value, ',')) out.push_back(parseNumber(flag, part));
-    if (out.size() != count)
-        throw InvalidArgument("--" + flag + " takes " + std::to_string(count) + " comma-separated numbers, got '" + value + "'");
-    return out;
-}
-
 /// The views of VIEWS.json: {"views": [{"name"?, "camera", "target", "weights"?, "background"?}],
 /// "lighting"?}; "background" is the view's plate (SPEC §1), an image of the camera's size.
 std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& lighting) {

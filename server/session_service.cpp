@@ -14,6 +14,7 @@
 #include "core/image/image_io.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/renderer.h"
+#include "core/translucent/translucent_renderer.h"
 #include "core/stylize/stylizer.h"
 #include "core/volume/builtin_scenes.h"
 #include "core/volume/vdb_io.h"
@@ -69,6 +70,7 @@ SessionService::~SessionService() {
         }
         m_renderer.reset();
         m_stylizer.reset();
+        m_translucent.reset();
         m_solveCache.reset();
     });
 }
@@ -422,6 +424,20 @@ core::RenderLayers SessionService::renderBudgeted(core::GpuDevice& device, core:
 
 core::RenderLayers SessionService::render(Session& s, const core::Camera& camera, bool layers) {
     return renderOnGl(s, camera, lighting(s), layers);
+}
+
+core::Image SessionService::renderTranslucent(Session& s, const core::Camera& camera, const core::TranslucentSettings& settings,
+                                              core::Image* medium) {
+    const core::Lighting l = lighting(s);
+    return m_gl.run([&](core::GpuDevice& device) {
+        std::shared_ptr<core::GpuVolume> gpu;
+        {
+            std::lock_guard lock(s.mutex);
+            gpu = sessionGpu(s);
+        }
+        if (!m_translucent) m_translucent = std::make_unique<core::TranslucentRenderer>(device);
+        return m_translucent->render(*gpu, camera, l, settings, nullptr, medium, WorkBudget(m_limits.renderBudgetSeconds));
+    });
 }
 
 core::RenderLayers SessionService::renderView(Session& s, const std::string& viewId, bool layers) {

@@ -29,6 +29,8 @@
 namespace volstyle::core {
 class Stylizer;
 class SolveCache;
+class TranslucentRenderer;
+struct TranslucentSettings;
 struct StylizedFrame;
 }  // namespace volstyle::core
 
@@ -129,6 +131,10 @@ public:
     /// The render (`beauty`), and with `layers` its compositing layers (for EXR answers).
     core::RenderLayers render(Session& s, const core::Camera& camera, bool layers = false);
     core::RenderLayers renderView(Session& s, const std::string& viewId, bool layers = false);
+    /// The translucent preview (SPEC §9) of the session's volume under its lighting; `medium`
+    /// gets the medium alone (premultiplied, for EXR answers). Under the render budget.
+    core::Image renderTranslucent(Session& s, const core::Camera& camera, const core::TranslucentSettings& settings,
+                                  core::Image* medium = nullptr);
     /// A view rendered from a running job's latest iterate; after the job, the session's volume.
     core::Image renderPreview(const std::string& jobId, const std::string& viewId);
 
@@ -219,6 +225,7 @@ private:
     ServiceLimits m_limits;
     std::unique_ptr<core::Renderer> m_renderer;  ///< GL thread only
     std::unique_ptr<core::Stylizer> m_stylizer;  ///< GL thread only
+    std::unique_ptr<core::TranslucentRenderer> m_translucent;  ///< GL thread only; created on first use
     std::unique_ptr<core::SolveCache> m_solveCache;  ///< GL thread only; created by the first solve
     SessionStore m_sessions;
     JobStore m_jobs;

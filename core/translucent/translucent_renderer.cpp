@@ -164,7 +164,8 @@ TranslucentRenderer::TranslucentRenderer(GpuDevice& device) : m_device(device), 
 TranslucentRenderer::~TranslucentRenderer() = default;
 
 Image TranslucentRenderer::render(GpuVolume& volume, const Camera& cam, const Lighting& lighting,
-                                  const TranslucentSettings& settings, TranslucentStats* statsOut) {
+                                  const TranslucentSettings& settings, TranslucentStats* statsOut, Image* medium,
+                                  const WorkBudget& budget) {
     VOLSTYLE_CHECK(m_device.isOwnedByThisThread(), ==, true);
     cam.validate();
     lighting.validate();
@@ -278,6 +279,10 @@ Image TranslucentRenderer::render(GpuVolume& volume, const Camera& cam, const Li
 
     int drawn = 0;
     for (int k = 0; k < slices; ++k) {
+        if (budget.bounded() && k % 16 == 0) {
+            glFinish();  // the time spent is the GPU's
+            budget.check("the translucent slices", double(k) / slices);
+        }
         const double tk = tMin + (k + 0.5) * spacing;
         const std::vector<Vec3d> polygon = slicePolygon(corners, s, tk);
         if (polygon.empty()) continue;
@@ -318,6 +323,7 @@ Image TranslucentRenderer::render(GpuVolume& volume, const Camera& cam, const Li
         lobes = lobeRadiance(lighting.environment);
     }
     Image out(cam.width, cam.height);
+    if (medium) *medium = Image(cam.width, cam.height);
     for (int y = 0; y < cam.height; ++y)
         for (int x = 0; x < cam.width; ++x) {
             const float* src = &pixels[(size_t(cam.height - 1 - y) * cam.width + x) * 4];
@@ -326,6 +332,7 @@ Image TranslucentRenderer::render(GpuVolume& volume, const Camera& cam, const Li
             const double a = std::clamp(double(src[3]), 0.0, 1.0);
             for (int c = 0; c < 3; ++c) dst[c] = float(src[c] + (1 - a) * bg[c]);
             dst[3] = float(a);
+            if (medium) std::copy(src, src + 4, medium->pixel(x, y));
         }
     if (statsOut) {
         statsOut->slices = drawn;

@@ -9,6 +9,7 @@
 
 #include <memory>
 
+#include "core/base/work_budget.h"
 #include "core/gpu/gpu_device.h"
 #include "core/image/image.h"
 #include "core/render/gpu_volume.h"
@@ -27,10 +28,12 @@ public:
     explicit TranslucentRenderer(GpuDevice& device);
     ~TranslucentRenderer();
 
-    /// The picture: RGB radiance over the lighting's background (colour, map or plate), alpha the
-    /// medium's opacity. Throws InvalidArgument on bad camera, lighting or settings.
+    /// The picture: RGB radiance over the lighting's background (colour, map, lobes or plate),
+    /// alpha the medium's opacity; `medium`, if given, gets the medium alone (premultiplied, no
+    /// background: for compositing). `budget` is checked between slices. Throws InvalidArgument on
+    /// a bad camera, lighting or settings.
     Image render(GpuVolume& volume, const Camera& camera, const Lighting& lighting, const TranslucentSettings& settings,
-                 TranslucentStats* stats = nullptr);
+                 TranslucentStats* stats = nullptr, Image* medium = nullptr, const WorkBudget& budget = WorkBudget());
 
 private:
     GpuDevice& m_device;

@@ -1,6 +1,7 @@
 // Sessions, their lighting and renders: POST/GET /sessions, GET/DELETE /sessions/{sid},
 // GET/PUT …/lighting, GET …/lighting/environment.{exr,png}, PUT/DELETE …/environment and
 // GET …/environment.{exr,png} (the uploaded map), POST …/render.
+#include "core/image/image_io.h"
 #include "core/render/environment_lobes.h"
 #include "protocol/render_json.h"
 #include "server/responses.h"
@@ -65,6 +66,14 @@ void addSessionRoutes(RouteContext& c) {
     c.http.Post(kSessionPath + "/render", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);
         auto request = protocol::RenderRequest::fromJson(c.body(req), c.limits);
+        if (request.mode == protocol::RenderMode::Translucent) {  // SPEC §9
+            core::Image medium;
+            const core::Image beauty = c.service.renderTranslucent(*s, request.camera, request.translucent, &medium);
+            if (request.format != protocol::ImageFormat::Exr) return replyImage(res, beauty, request.format, request.exposure);
+            // As single scattering's: the medium premultiplied, and the picture as a layer.
+            res.set_content(core::encodeExrLayers({{"", &medium}, {"beauty", &beauty}}), protocol::imageMimeType(request.format));
+            return;
+        }
         replyImage(res, c.service.render(*s, request.camera, request.format == protocol::ImageFormat::Exr), request.format,
                    request.exposure);
     });

@@ -1,7 +1,9 @@
-// A session's environment map and its views' background plates over HTTP (issue #13, SPEC §1
-// and §8): upload, refusal of bad maps naming the problem, the lighting naming "session", renders
-// that use them, downloads, removal, and both surviving a restart on the data directory.
+// A session's environment map, its views' background plates and the translucent render mode over
+// HTTP (issues #13, #14; SPEC §1, §8, §9): upload, refusal of bad
+// maps naming the problem, the lighting naming "session", renders that use them, downloads, removal,
+// both surviving a restart on the data directory; translucent renders and their refusals.
 #include <filesystem>
+#include <set>
 
 #include "api_fixture.h"
 
@@ -204,4 +206,36 @@ TEST_F(EnvironmentApi, ALightsSolveCanSolveTheBackgroundToo) {
     const json lighting = json::parse(client().Get((base + "/lighting").c_str())->body);
     EXPECT_EQ(lighting["background"]["environment"], "lobes");
     EXPECT_EQ(result["lighting"]["background"]["environment"], "lobes");
+}
+
+TEST_F(EnvironmentApi, TranslucentRendersAndRefusesBadParameters) {
+    // SPEC §9 over the API: "mode": "translucent" answers a picture (PNG, or EXR with the medium
+    // and the picture as a layer); bad parameters answer 400 naming each field.
+    const std::string id = createSession(16), base = "/api/v1/sessions/" + id;
+    const json camera = {{"eye", {0, 0.3, 3}}, {"target", {0, 0, 0}}, {"width", 24}, {"height", 24}};
+    auto r = client().Post((base + "/render").c_str(),
+                           json{{"camera", camera}, {"mode", "translucent"}, {"translucent", {{"slice_spacing", 1.0}, {"indirect", {{"blur_angle_deg", 20}}}}}}.dump(),
+                           "application/json");
+    ASSERT_EQ(r->status, 200) << r->body;
+    const core::Image png = decode(r);
+    EXPECT_EQ(png.width, 24);
+    EXPECT_GT(png.pixel(12, 12)[0], 0.05f);  // the sphere, lit
+    r = client().Post((base + "/render").c_str(), json{{"camera", camera}, {"mode", "translucent"}, {"format", "exr"}}.dump(), "application/json");
+    ASSERT_EQ(r->status, 200) << r->body;
+    EXPECT_GT(decode(r).pixel(12, 12)[3], 0.5f);  // the medium's alpha
+
+    json e = expectError(client().Post((base + "/render").c_str(),
+                                       json{{"camera", camera}, {"mode", "translucent"},
+                                            {"translucent", {{"slice_spacing", -1}, {"indirect", {{"blur_angle_deg", 95}, {"transport_color", {2, 0.5, 0.5}}}}, {"surface_shading", "x"}}}}.dump(),
+                                       "application/json"),
+                         400, "invalid_argument");
+    std::set<std::string> paths;
+    for (const auto& d : e["error"]["details"]) paths.insert(d["path"].get<std::string>());
+    EXPECT_EQ(paths, (std::set<std::string>{"/translucent/slice_spacing", "/translucent/indirect/blur_angle_deg",
+                                            "/translucent/indirect/transport_color", "/translucent/surface_shading"}));
+    e = expectError(client().Post((base + "/render").c_str(), json{{"camera", camera}, {"translucent", json::object()}}.dump(), "application/json"),
+                    400, "invalid_argument");
+    EXPECT_EQ(e["error"]["details"][0]["path"], "/translucent");
+    expectError(client().Post((base + "/render").c_str(), json{{"camera", camera}, {"mode", "path_traced"}}.dump(), "application/json"), 400,
+                "invalid_argument");
 }
