@@ -41,9 +41,9 @@ for f in $(find server bench tests/http tests/cli -name '*.h' -o -name '*.cpp');
     echo "layering: $f includes GL or a kernel's internals; use GpuDevice, GpuVolume, Renderer, Solver"; status=1
   fi
 done
-check "public engine headers are GL-free" 'core/base/|core/math/|core/image/image\.h|core/render/(params|environment_lobes|gpu_volume|render_stats)\.h|core/gl/context\.h|core/gpu/|core/solve/(solve_options|solve_types)\.h|core/shaders/layout\.h|core/volume/volume\.h|core/stylize/(mesh|scene)\.h' \
+check "public engine headers are GL-free" 'core/base/|core/math/|core/image/image\.h|core/render/(params|environment_lobes|gpu_volume|render_stats)\.h|core/gl/context\.h|core/gpu/|core/solve/(solve_options|solve_types)\.h|core/shaders/layout\.h|core/volume/volume\.h|core/stylize/(mesh|scene)\.h|core/translucent/translucent_settings\.h' \
   core/gpu/gpu_device.h core/gpu/resource_cache.h core/render/gpu_volume.h core/render/renderer.h core/render/render_stats.h core/solve/solver.h core/solve/light_solver.h core/solve/combined_solve.h \
-  core/stylize/stylizer.h
+  core/stylize/stylizer.h core/translucent/translucent_renderer.h
 for f in core/gpu/gpu_device.h core/gpu/resource_cache.h core/render/gpu_volume.h core/render/renderer.h core/solve/solver.h core/stylize/stylizer.h core/gl/context.h; do
   if grep -qE '^#include <(epoxy|EGL)/' "$f"; then echo "layering: $f is a public header and includes GL"; status=1; fi
 done
