@@ -58,7 +58,9 @@ async function renderViewport() {
   state.renderBusy = true;
   $('viewport-busy').style.display = 'block';
   try {
-    const blob = await call('POST', `/sessions/${state.sid}/render`, { camera: camera(320), format: 'png' }, { raw: true });
+    const body = { camera: camera(320), format: 'png' };
+    if ($('translucent').checked) Object.assign(body, { mode: 'translucent', translucent: translucentOptions() });
+    const blob = await call('POST', `/sessions/${state.sid}/render`, body, { raw: true });
     $('viewport').src = URL.createObjectURL(blob);
   } catch (e) {
     status(e.message, 'error');
@@ -67,6 +69,16 @@ async function renderViewport() {
     $('viewport-busy').style.display = 'none';
     if (state.renderPending) { state.renderPending = false; renderViewport(); }
   }
+}
+
+// The translucent preview's parameters from the sliders (docs/TRANSLUCENT.md).
+function translucentOptions() {
+  const hex = $('tl-transport').value, rgb = [1, 3, 5].map((i) => Math.max(0.01, parseInt(hex.slice(i, i + 2), 16) / 255));
+  return {
+    slice_spacing: Number($('tl-spacing').value),
+    surface_shading: Number($('tl-surface').value),
+    indirect: { blur_angle_deg: Number($('tl-blur').value), extinction: Number($('tl-extinction').value), transport_color: rgb },
+  };
 }
 
 function showSession(s) {
@@ -350,6 +362,13 @@ $('env-lobes').onchange = changeEnvironment;
 $('env-background').onchange = changeEnvironment;
 $('plate-file').onchange = (e) => e.target.files[0] && uploadPlate(e.target.files[0]);
 
+$('translucent').onchange = () => { $('translucent-controls').hidden = !$('translucent').checked; renderViewport(); };
+for (const id of ['tl-blur', 'tl-extinction', 'tl-surface', 'tl-spacing']) {
+  const show = () => { document.querySelector(`output[for="${id}"]`).textContent = $(id).value; };
+  show();
+  $(id).addEventListener('input', () => { show(); renderViewport(); });
+}
+$('tl-transport').addEventListener('input', () => renderViewport());
 $('new-session').onclick = newSession;
 $('vdb-file').onchange = (e) => e.target.files[0] && uploadVdb(e.target.files[0]);
 $('add-view').onclick = addView;

@@ -123,6 +123,19 @@ try {
   console.log(`[ measured ] v1's corner over the plate #20a040: ${corner.slice(0, 3)}`);
   if (Math.abs(corner[0] - 0x20) > 3 || Math.abs(corner[1] - 0xa0) > 3 || Math.abs(corner[2] - 0x40) > 3) await fail(`v1's corner is not the plate's colour: ${corner}`);
   if (!(await page.evaluate(() => document.getElementById('views').textContent.includes('plate')))) await fail('the view list does not mark the plate');
+
+  // The translucent preview (issue #14): the toggle shows its sliders and the viewport re-renders
+  // in that mode; a slider re-renders it again.
+  const shown = await page.evaluate(() => document.getElementById('viewport').src);
+  await page.check('#translucent');
+  await page.waitForFunction((b) => document.getElementById('viewport').src !== b, shown, { timeout: 60000 });
+  if (await page.evaluate(() => document.getElementById('translucent-controls').hidden)) await fail('the translucent sliders are not shown');
+  const translucentSrc = await page.evaluate(() => document.getElementById('viewport').src);
+  await page.$eval('#tl-blur', (el) => { el.value = '60'; el.dispatchEvent(new Event('input', { bubbles: true })); });
+  await page.waitForFunction((b) => document.getElementById('viewport').src !== b, translucentSrc, { timeout: 60000 });
+  if ((await page.evaluate(() => document.getElementById('status').className)) === 'error')
+    await fail(`the translucent render failed: ${await page.evaluate(() => document.getElementById('status').textContent)}`);
+  console.log('[ measured ] translucent viewport renders and follows its sliders');
   console.log('1 passed, 0 failed');
 } catch (e) {
   await fail(e.message);
