@@ -99,7 +99,7 @@ void environmentFromJson(JsonReader& r, const nlohmann::json& e, const std::stri
 core::TranslucentSettings translucentFromJson(const nlohmann::json& j, const std::string& path) {
     JsonReader r;
     core::TranslucentSettings s;
-    if (r.object(j, path, {"slice_spacing", "light_buffer", "indirect", "surface_shading"})) {
+    if (r.object(j, path, {"slice_spacing", "light_buffer", "indirect", "surface_shading", "perturbation"})) {
         if (j.contains("slice_spacing")) s.sliceSpacing = r.number(j["slice_spacing"], path + "/slice_spacing").value_or(s.sliceSpacing);
         if (j.contains("light_buffer")) s.lightBufferSize = r.integer(j["light_buffer"], path + "/light_buffer").value_or(s.lightBufferSize);
         if (j.contains("surface_shading")) s.surfaceShading = r.number(j["surface_shading"], path + "/surface_shading").value_or(s.surfaceShading);
@@ -112,6 +112,23 @@ core::TranslucentSettings translucentFromJson(const nlohmann::json& j, const std
             if (in.contains("extinction")) d.extinction = r.number(in["extinction"], ip + "/extinction").value_or(d.extinction);
             if (in.contains("transport_color")) d.transportColor = r.vec3(in["transport_color"], ip + "/transport_color").value_or(d.transportColor);
         }
+        const std::string pp = path + "/perturbation";
+        if (j.contains("perturbation") &&
+            r.object(j["perturbation"], pp, {"amplitude", "frequency", "octaves", "property_amplitude", "seed", "time"})) {
+            const auto& in = j["perturbation"];
+            core::Perturbation& d = s.perturbation;
+            if (in.contains("amplitude")) d.amplitude = r.number(in["amplitude"], pp + "/amplitude").value_or(d.amplitude);
+            if (in.contains("frequency")) d.frequency = r.number(in["frequency"], pp + "/frequency").value_or(d.frequency);
+            if (in.contains("octaves")) d.octaves = r.integer(in["octaves"], pp + "/octaves").value_or(d.octaves);
+            if (in.contains("property_amplitude"))
+                d.propertyAmplitude = r.number(in["property_amplitude"], pp + "/property_amplitude").value_or(d.propertyAmplitude);
+            if (in.contains("seed")) {
+                const auto seed = r.integer(in["seed"], pp + "/seed");
+                if (seed && *seed < 0) r.fail(pp + "/seed", "must be >= 0");
+                else if (seed) d.seed = uint32_t(*seed);
+            }
+            if (in.contains("time")) d.time = r.number(in["time"], pp + "/time").value_or(d.time);
+        }
         for (const auto& p : s.check()) r.check(path, p.field, p.message);
     }
     r.throwIfErrors();
@@ -123,7 +140,10 @@ nlohmann::json translucentToJson(const core::TranslucentSettings& s) {
             {"light_buffer", s.lightBufferSize},
             {"indirect", {{"enabled", s.indirect.enabled}, {"blur_angle_deg", s.indirect.blurAngleDeg},
                           {"extinction", s.indirect.extinction}, {"transport_color", toJson(s.indirect.transportColor)}}},
-            {"surface_shading", s.surfaceShading}};
+            {"surface_shading", s.surfaceShading},
+            {"perturbation", {{"amplitude", s.perturbation.amplitude}, {"frequency", s.perturbation.frequency},
+                              {"octaves", s.perturbation.octaves}, {"property_amplitude", s.perturbation.propertyAmplitude},
+                              {"seed", s.perturbation.seed}, {"time", s.perturbation.time}}}};
 }
 
 LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& path, bool allowFilePaths) {

@@ -52,6 +52,10 @@ const CommandSpec kRender{
         {"transport", "R,G,B", "translucent: the transport colour, each in (0, 1]; default 1,0.78,0.55"},
         {"surface-shading", "S", "translucent: 0 attenuation only .. 1 Blinn-Phong from the gradient; default 0"},
         {"no-indirect", "", "translucent: direct light only"},
+        {"perturb", "AMP[,FREQ]", "translucent: noise displacing the lookups by up to AMP voxels, FREQ features across (default 8)"},
+        {"perturb-extinction", "A", "translucent: noise scaling the extinction by 1 +- A, [0, 1]"},
+        {"seed", "N", "translucent: the perturbation's noise; default 1"},
+        {"time", "T", "translucent: the perturbation's animation time; default 0"},
         {"output", "OUT", ".png or .exr; the folder must exist (required)"},
     },
     "  volstyle render --scene builtin:cloud:64 -o cloud.png\n"
@@ -68,6 +72,15 @@ core::TranslucentSettings translucentSettings(const Arguments& args) {
     if (args.has("indirect-extinction")) s.indirect.extinction = args.number("indirect-extinction", s.indirect.extinction);
     if (args.has("surface-shading")) s.surfaceShading = args.number("surface-shading", s.surfaceShading);
     if (args.has("no-indirect")) s.indirect.enabled = false;
+    if (args.has("perturb")) {
+        const auto parts = split(args.get("perturb"), ',');
+        if (parts.empty() || parts.size() > 2) throw InvalidArgument("--perturb takes AMP or AMP,FREQ, got '" + args.get("perturb") + "'");
+        s.perturbation.amplitude = parseNumber("perturb", parts[0]);
+        if (parts.size() == 2) s.perturbation.frequency = parseNumber("perturb", parts[1]);
+    }
+    if (args.has("perturb-extinction")) s.perturbation.propertyAmplitude = args.number("perturb-extinction", 0);
+    if (args.has("seed")) s.perturbation.seed = uint32_t(args.number("seed", 1));
+    if (args.has("time")) s.perturbation.time = args.number("time", 0);
     if (args.has("transport")) {
         const std::vector<double> rgb = numbers("transport", args.get("transport"), 3);
         s.indirect.transportColor = {rgb[0], rgb[1], rgb[2]};
@@ -105,7 +118,8 @@ int runRender(const std::vector<std::string>& argv) {
     if (mode != "single_scattering" && mode != "translucent")
         throw InvalidArgument("--mode must be single_scattering or translucent, got '" + mode + "'");
     const bool translucent = mode == "translucent";
-    for (const char* flag : {"translucent", "slice-spacing", "blur-angle", "indirect-extinction", "transport", "surface-shading", "no-indirect"})
+    for (const char* flag : {"translucent", "slice-spacing", "blur-angle", "indirect-extinction", "transport", "surface-shading", "no-indirect",
+                             "perturb", "perturb-extinction", "seed", "time"})
         if (!translucent && args.has(flag)) throw InvalidArgument(std::string("--") + flag + " needs --mode translucent");
     const core::TranslucentSettings translucentOptions = translucent ? translucentSettings(args) : core::TranslucentSettings{};
 

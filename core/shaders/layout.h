@@ -215,6 +215,8 @@ VS_CONSTANT(int, kUnitLightDirect, 14);   /* light buffer: rgb transmittance fro
 VS_CONSTANT(int, kUnitLightIndirect, 15);  /* light buffer: rgb indirect light reaching the slice (1 = the light's) */
 VS_CONSTANT(int, kUnitPhaseTable, 9);     /* the phase function over cos θ ∈ [-1, 1], texel i at -1 + 2 i / (N - 1) (a 2D texture, one row) */
 VS_CONSTANT(int, kPhaseTableSize, 256);
+VS_CONSTANT(int, kNoiseSize, 32);         /* the perturbation's noise volume: kNoiseSize³ texels */
+VS_CONSTANT(int, kUnitNoise, 10);         /* the perturbation's noise: kNoiseSize³ RGBA, repeating (core/translucent/perturbation.h) */
 VS_CONSTANT(int, kIndirectTaps, 8);       /* blur samples on a ring (+ the centre) per light-buffer texel */
 struct TranslucentParams {
     VS_MAT4 clipFromWorld;    /* the pass's raster transform: the camera's perspective, or the light buffer's orthographic */
@@ -229,6 +231,8 @@ struct TranslucentParams {
     VS_VEC4 indirect;         /* x: 1 on; y: blur radius in light-buffer uv (d tan(θ/2), Eq. 9); z: k, σ_i = k σt; w: S (surface shading) */
     VS_VEC4 transport;        /* rgb: 1 − ln(transport colour): σ_i per channel is k σt times this */
     VS_IVEC4 options;         /* x: has emission; y: has albedo */
+    VS_VEC4 perturb;          /* x: displacement amplitude (voxels); y: extinction modulation; z: noise texels per voxel (octave 0); w: octaves */
+    VS_VEC4 perturbTime;      /* x: animation time */
 };
 
 #ifndef VOLSTYLE_GLSL

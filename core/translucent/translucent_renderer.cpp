@@ -15,6 +15,7 @@
 #include "core/render/gl_convert.h"
 #include "core/shaders/layout.h"
 #include "core/stylize/light_map.h"
+#include "core/translucent/perturbation.h"
 
 namespace volstyle::core {
 namespace {
@@ -148,6 +149,9 @@ struct TranslucentRenderer::Targets {
     gl::Buffer vertices;
     gl::VertexArray vao;
     gl::Texture phase;
+    gl::Texture noise;  ///< the perturbation's, for `noiseSeed`
+    uint32_t noiseSeed = 0;
+    bool hasNoise = false;
 };
 
 TranslucentRenderer::TranslucentRenderer(GpuDevice& device) : m_device(device), m_targets(std::make_unique<Targets>()) {
@@ -251,6 +255,23 @@ Image TranslucentRenderer::render(GpuVolume& volume, const Camera& cam, const Li
     p.indirect = {ind.enabled ? 1.0f : 0.0f, float(blur / frame.extent), float(ind.extinction), float(settings.surfaceShading)};
     p.transport = f4(Vec3d(1 - std::log(ind.transportColor.x), 1 - std::log(ind.transportColor.y), 1 - std::log(ind.transportColor.z)));
     p.options = {volume.hasEmission() ? 1 : 0, volume.hasAlbedo() ? 1 : 0, 0, 0};
+    const Perturbation& pert = settings.perturbation;
+    if (pert.active()) {
+        if (!t.hasNoise || t.noiseSeed != pert.seed) {
+            const std::vector<float> texels = noiseTexels(pert.seed);
+            t.noise = gl::createTexture(GL_TEXTURE_3D, "perturbation-noise");
+            glTextureStorage3D(t.noise.id(), 1, GL_RGBA32F, kNoiseSize, kNoiseSize, kNoiseSize);
+            glTextureSubImage3D(t.noise.id(), 0, 0, 0, 0, kNoiseSize, kNoiseSize, kNoiseSize, GL_RGBA, GL_FLOAT, texels.data());
+            for (GLenum wrap : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R}) glTextureParameteri(t.noise.id(), wrap, GL_REPEAT);
+            glTextureParameteri(t.noise.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+            glTextureParameteri(t.noise.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+            t.noiseSeed = pert.seed, t.hasNoise = true;
+        }
+        const PerturbationField field(pert, volume.dims());
+        p.perturb = {float(pert.amplitude), float(pert.propertyAmplitude), float(field.texelsPerVoxel()), float(pert.octaves)};
+        p.perturbTime = {float(pert.time), 0, 0, 0};
+        glBindTextureUnit(layout::kUnitNoise, t.noise.id());
+    }
     const Mat4 eyeClip = cameraClipFromWorld(cam, std::max(1e-4 * far, 0.99 * nearest), 1.01 * far + 1e-6);
     const Mat4 lightClip = frame.clipFromWorld();
 

@@ -8,6 +8,7 @@
 
 #include "core/math/vec.h"
 #include "core/render/params.h"
+#include "core/translucent/perturbation.h"
 
 namespace volstyle::core {
 
@@ -36,6 +37,8 @@ struct TranslucentSettings {
     /// S (Eq. 11): 0 shades by light attenuation only, 1 fully Blinn–Phong from the extinction's
     /// gradient (surface-like media). [0, 1].
     double surfaceShading = 0;
+    /// Noise detail at render time (Sec. 3.4; perturbation.h); inactive by default.
+    Perturbation perturbation;
 
     std::vector<FieldProblem> check() const;
     void validate() const;  ///< throws InvalidArgument listing check()'s problems

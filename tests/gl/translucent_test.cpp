@@ -190,3 +190,67 @@ TEST(Translucent, BadSettingsNameTheirField) {
     EXPECT_EQ(fields, (std::vector<std::string>{"slice_spacing", "indirect/blur_angle_deg", "indirect/transport_color", "surface_shading"}));
     EXPECT_THROW(s.validate(), InvalidArgument);
 }
+
+// Volume perturbation (Sec. 3.4): amplitude 0 is the identity exactly, the same seed and time give
+// the same frame, a small step in time a small change (no popping), and the render-time field
+// matches the same field baked into the volume (perturbVolume) up to resampling.
+TEST(Translucent, PerturbationIsExactWhenOffRepeatableAndMatchesItsBakedVolume) {
+    VOLSTYLE_REQUIRE_GL();
+    const Volume cloud = test::thinCloud(24);
+    GpuVolume gpu(cloud);
+    Lighting l;
+    l.lights = {{{0.5, 0.7, 0.4}, {3, 3, 3}}};
+    l.background.color = {0, 0, 0};
+    Camera cam;
+    cam.eye = {0.4, 0.5, 3.0};
+    cam.target = {0, 0, 0};
+    cam.fovYDeg = 36;
+    cam.width = cam.height = 40;
+    TranslucentSettings s;
+    s.indirect.enabled = false;
+    const Image plain = translucent().render(gpu, cam, l, s);
+    s.perturbation.frequency = 6;  // off: amplitudes 0
+    const Image off = translucent().render(gpu, cam, l, s);
+    EXPECT_EQ(off.rgba, plain.rgba);
+
+    s.perturbation.amplitude = 1.5;
+    s.perturbation.propertyAmplitude = 0.3;
+    s.perturbation.seed = 7;
+    s.perturbation.time = 2.0;
+    const Image a = translucent().render(gpu, cam, l, s), b = translucent().render(gpu, cam, l, s);
+    EXPECT_EQ(a.rgba, b.rgba);
+    const double changed = relativeRms(a, plain);
+    s.perturbation.time = 2.02;
+    const double step = relativeRms(translucent().render(gpu, cam, l, s), a);
+    s.perturbation.time = 2.0;
+    s.perturbation.seed = 8;
+    const double otherSeed = relativeRms(translucent().render(gpu, cam, l, s), a);
+    s.perturbation.seed = 7;
+    // Baked: the same field on the host, rendered without perturbation. Baking resamples the grid
+    // once more (which blurs voxel-sized detail) and keeps only what the grid can hold, so compare
+    // on a smooth blob with one smooth octave.
+    Volume blob = test::constantCube(24, 0.0f);
+    for (int k = 0; k < 24; ++k)
+        for (int j = 0; j < 24; ++j)
+            for (int i = 0; i < 24; ++i) {
+                const double x = (i - 11.5) / 12, y = (j - 11.5) / 12, z = (k - 11.5) / 12;
+                const float sigma = float(4 * std::exp(-(x * x + 2 * y * y + z * z) / 0.15));
+                for (int c = 0; c < 3; ++c) blob.extinction()[3 * blob.index(i, j, k) + size_t(c)] = sigma;
+            }
+    GpuVolume blobGpu(blob);
+    s.perturbation.octaves = 1;
+    s.perturbation.frequency = 3;
+    s.perturbation.amplitude = 2.5;
+    const Image smooth = translucent().render(blobGpu, cam, l, s);
+    GpuVolume bakedGpu(perturbVolume(blob, s.perturbation));
+    TranslucentSettings plainSettings = s;
+    plainSettings.perturbation = Perturbation{};
+    const double smoothChange = relativeRms(smooth, translucent().render(blobGpu, cam, l, plainSettings));
+    const double baked = relativeRms(translucent().render(bakedGpu, cam, l, plainSettings), smooth);
+    std::printf("[ measured ] perturbation: %.4f from the plain frame, %.4f after a time step of 0.02, %.4f with another seed, "
+                "a smooth blob, one octave: %.4f from the plain frame and %.4f from its baked volume\n", changed, step, otherSeed, smoothChange, baked);
+    EXPECT_GT(changed, 0.02);            // it does something
+    EXPECT_LT(step, 0.1 * changed);      // and moves continuously with time
+    EXPECT_GT(otherSeed, 0.5 * changed); // another seed is another noise
+    EXPECT_LT(baked, 0.25 * smoothChange);  // the baked volume is the same field (resampled once more)
+}

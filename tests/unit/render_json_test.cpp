@@ -250,3 +250,21 @@ TEST(LightingJson, TheLobesAsTheBackground) {
     for (const auto& e : errorsOf([&] { protocol::lightingFromJson({{"background", {{"environment", "lobes"}}}}); })) paths.insert(e.path);
     EXPECT_EQ(paths, (std::set<std::string>{"/background/environment"}));
 }
+
+TEST(TranslucentJson, PerturbationRoundTripsAndNamesBadFields) {
+    const json j = {{"slice_spacing", 0.5},
+                    {"perturbation", {{"amplitude", 2}, {"frequency", 12}, {"octaves", 4}, {"property_amplitude", 0.25}, {"seed", 9}, {"time", 1.5}}}};
+    const core::TranslucentSettings s = protocol::translucentFromJson(j);
+    EXPECT_EQ(s.perturbation.octaves, 4);
+    EXPECT_EQ(s.perturbation.seed, 9u);
+    const core::TranslucentSettings back = protocol::translucentFromJson(protocol::translucentToJson(s));
+    EXPECT_EQ(back.perturbation.amplitude, 2);
+    EXPECT_EQ(back.perturbation.time, 1.5);
+    EXPECT_EQ(back.sliceSpacing, 0.5);
+    std::set<std::string> paths;
+    for (const auto& e : errorsOf([&] {
+             protocol::translucentFromJson({{"perturbation", {{"amplitude", -1}, {"octaves", 9}, {"seed", -3}, {"colour", 1}}}});
+         }))
+        paths.insert(e.path);
+    EXPECT_EQ(paths, (std::set<std::string>{"/perturbation/amplitude", "/perturbation/octaves", "/perturbation/seed", "/perturbation/colour"}));
+}
