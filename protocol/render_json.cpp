@@ -135,6 +135,18 @@ core::TranslucentSettings translucentFromJson(const nlohmann::json& j, const std
     return s;
 }
 
+core::Perturbation perturbationFromJson(const nlohmann::json& j) {
+    // The translucent parser's "perturbation" object, its paths made top-level.
+    try {
+        return translucentFromJson({{"perturbation", j}}).perturbation;
+    } catch (const ValidationError& e) {
+        JsonReader r;
+        for (const auto& d : e.details()) r.fail(d.path.rfind("/perturbation", 0) == 0 ? d.path.substr(13) : d.path, d.message);
+        r.throwIfErrors();
+        throw;
+    }
+}
+
 nlohmann::json translucentToJson(const core::TranslucentSettings& s) {
     return {{"slice_spacing", s.sliceSpacing},
             {"light_buffer", s.lightBufferSize},

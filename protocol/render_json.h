@@ -57,6 +57,9 @@ inline constexpr const char* kLobesBackground = "lobes";
 /// absent fields keep their defaults. Throws ValidationError naming every bad field under `path`.
 core::TranslucentSettings translucentFromJson(const nlohmann::json& j, const std::string& path = "");
 nlohmann::json translucentToJson(const core::TranslucentSettings& s);
+/// POST /sessions/{sid}/perturb: {"amplitude", "frequency", "octaves", "property_amplitude",
+/// "seed", "time"} (core/translucent/perturbation.h), baked into a new version.
+core::Perturbation perturbationFromJson(const nlohmann::json& j);
 
 LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& path = "",
                                  bool allowFilePaths = false);

@@ -14,6 +14,7 @@
 #include "core/image/image_io.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/renderer.h"
+#include "core/translucent/perturbation.h"
 #include "core/translucent/translucent_renderer.h"
 #include "core/stylize/stylizer.h"
 #include "core/volume/builtin_scenes.h"
@@ -322,6 +323,24 @@ int SessionService::revert(Session& s, int version) {
     {
         std::lock_guard lock(s.mutex);
         stale = commitVersion(s, std::move(old));  // undo is a new version with the old content: nothing is lost
+        now = s.version;
+    }
+    release(std::move(stale));
+    return now;
+}
+
+int SessionService::perturb(Session& s, const core::Perturbation& perturbation) {
+    core::Volume volume;
+    {
+        std::lock_guard lock(s.mutex);
+        volume = s.volume;
+    }
+    volume = core::perturbVolume(volume, perturbation);  // off the lock: O(voxels · octaves)
+    std::shared_ptr<core::GpuVolume> stale;
+    int now = 0;
+    {
+        std::lock_guard lock(s.mutex);
+        stale = commitVersion(s, std::move(volume));
         now = s.version;
     }
     release(std::move(stale));

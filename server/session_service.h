@@ -120,6 +120,8 @@ public:
 
     // Volume versions.
     int revert(Session& s, int version);                          ///< the new version number
+    /// Bakes the perturbation (core/translucent/perturbation.h) into a new version; its number.
+    int perturb(Session& s, const core::Perturbation& perturbation);
     void uploadVdb(Session& s, const std::string& bytes);          ///< a new version
     /// The VDB of a version (the current one by default): a stored version's file is sent as it
     /// was written (its size checked). A damaged version answers io_error (422).

@@ -78,8 +78,22 @@ function translucentOptions() {
     slice_spacing: Number($('tl-spacing').value),
     surface_shading: Number($('tl-surface').value),
     indirect: { blur_angle_deg: Number($('tl-blur').value), extinction: Number($('tl-extinction').value), transport_color: rgb },
+    perturbation: perturbationOptions(),
   };
 }
+
+function perturbationOptions() {
+  return { amplitude: Number($('tl-amplitude').value), frequency: Number($('tl-frequency').value), time: Number($('tl-time').value) };
+}
+
+// Bakes the noise detail into the volume (a new version; Undo takes it back).
+const bakeDetail = guard(async () => {
+  if (Number($('tl-amplitude').value) <= 0) throw new Error('set some detail first');
+  const s = await call('POST', `/sessions/${state.sid}/perturb`, perturbationOptions());
+  showSession(s);
+  $('tl-amplitude').value = 0; $('tl-amplitude').dispatchEvent(new Event('input'));
+  status(`detail baked into version ${s.volume.version}`, 'ok');
+});
 
 function showSession(s) {
   state.sid = s.id;
@@ -363,7 +377,8 @@ $('env-background').onchange = changeEnvironment;
 $('plate-file').onchange = (e) => e.target.files[0] && uploadPlate(e.target.files[0]);
 
 $('translucent').onchange = () => { $('translucent-controls').hidden = !$('translucent').checked; renderViewport(); };
-for (const id of ['tl-blur', 'tl-extinction', 'tl-surface', 'tl-spacing']) {
+$('tl-bake').onclick = bakeDetail;
+for (const id of ['tl-blur', 'tl-extinction', 'tl-surface', 'tl-spacing', 'tl-amplitude', 'tl-frequency', 'tl-time']) {
   const show = () => { document.querySelector(`output[for="${id}"]`).textContent = $(id).value; };
   show();
   $(id).addEventListener('input', () => { show(); renderViewport(); });

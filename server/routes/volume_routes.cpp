@@ -1,5 +1,5 @@
 // A session's volume versions: PUT …/volume (upload a VDB), GET …/volume.vdb[?version=N],
-// POST …/revert.
+// POST …/revert, POST …/perturb (bake a perturbation into a new version).
 #include "server/responses.h"
 #include "server/routes/route_context.h"
 
@@ -15,6 +15,13 @@ void addVolumeRoutes(RouteContext& c) {
         auto s = c.service.find(req.matches[1]);
         auto query = protocol::VolumeQuery::fromQuery(req.params);
         res.set_content(c.service.downloadVdb(*s, query.version), "application/octet-stream");
+    });
+    // Volume perturbation baked into a new version (SPEC §9; docs/TRANSLUCENT.md).
+    c.http.Post(kSessionPath + "/perturb", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        const core::Perturbation p = protocol::perturbationFromJson(c.body(req));
+        c.service.perturb(*s, p);
+        reply(res, 200, sessionJson(*s));
     });
     c.http.Post(kSessionPath + "/revert", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);

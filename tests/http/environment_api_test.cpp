@@ -239,3 +239,16 @@ TEST_F(EnvironmentApi, TranslucentRendersAndRefusesBadParameters) {
     expectError(client().Post((base + "/render").c_str(), json{{"camera", camera}, {"mode", "path_traced"}}.dump(), "application/json"), 400,
                 "invalid_argument");
 }
+
+TEST_F(EnvironmentApi, APerturbationBakesIntoANewVersion) {
+    const std::string id = createSession(16), base = "/api/v1/sessions/" + id;
+    json e = expectError(client().Post((base + "/perturb").c_str(), R"({"amplitude": -1, "octaves": 0})", "application/json"), 400, "invalid_argument");
+    std::set<std::string> paths;
+    for (const auto& d : e["error"]["details"]) paths.insert(d["path"].get<std::string>());
+    EXPECT_EQ(paths, (std::set<std::string>{"/amplitude", "/octaves"}));
+    auto r = client().Post((base + "/perturb").c_str(), R"({"amplitude": 1.5, "frequency": 6, "seed": 3})", "application/json");
+    ASSERT_EQ(r->status, 200) << r->body;
+    EXPECT_EQ(json::parse(r->body)["volume"]["version"], 2);
+    // The old content is still there to revert to.
+    EXPECT_EQ(client().Post((base + "/revert").c_str(), R"({"version": 1})", "application/json")->status, 200);
+}
