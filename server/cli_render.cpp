@@ -53,7 +53,7 @@ const CommandSpec kRender{
         {"surface-shading", "S", "translucent: 0 attenuation only .. 1 Blinn-Phong from the gradient; default 0"},
         {"no-indirect", "", "translucent: direct light only"},
         {"perturb", "AMP[,FREQ]", "translucent: noise displacing the lookups by up to AMP voxels, FREQ features across (default 8)"},
-        {"perturb-extinction", "A", "translucent: noise scaling the extinction by 1 +- A, [0, 1]"},
+        {"perturb-extinction", "A", "translucent: noise scaling the extinction by 1 +- A, [0, 1]; default 0"},
         {"seed", "N", "translucent: the perturbation's noise; default 1"},
         {"time", "T", "translucent: the perturbation's animation time; default 0"},
         {"output", "OUT", ".png or .exr; the folder must exist (required)"},

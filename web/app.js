@@ -76,6 +76,7 @@ function translucentOptions() {
   const hex = $('tl-transport').value, rgb = [1, 3, 5].map((i) => Math.max(0.01, parseInt(hex.slice(i, i + 2), 16) / 255));
   return {
     slice_spacing: Number($('tl-spacing').value),
+    light_buffer: 256,  // interactive: a quarter of the default's light texels (≈ 0.7 s a frame at 320² here)
     surface_shading: Number($('tl-surface').value),
     indirect: { blur_angle_deg: Number($('tl-blur').value), extinction: Number($('tl-extinction').value), transport_color: rgb },
     perturbation: perturbationOptions(),

@@ -254,3 +254,43 @@ TEST(Translucent, PerturbationIsExactWhenOffRepeatableAndMatchesItsBakedVolume) 
     EXPECT_GT(otherSeed, 0.5 * changed); // another seed is another noise
     EXPECT_LT(baked, 0.25 * smoothChange);  // the baked volume is the same field (resampled once more)
 }
+
+// Surface shading S (Eq. 11): 0 shades by attenuation only; 1 blends in Blinn–Phong from the
+// extinction's gradient, which darkens the sides of a blob that face away from the light.
+TEST(Translucent, SurfaceShadingDarkensTheSidesFacingAway) {
+    VOLSTYLE_REQUIRE_GL();
+    Volume blob = test::constantCube(20, 0.0f);
+    for (int k = 0; k < 20; ++k)
+        for (int j = 0; j < 20; ++j)
+            for (int i = 0; i < 20; ++i) {
+                const double x = (i - 9.5) / 10, y = (j - 9.5) / 10, z = (k - 9.5) / 10;
+                const float sigma = float(20 * std::exp(-(x * x + y * y + z * z) / 0.12));
+                for (int c = 0; c < 3; ++c) blob.extinction()[3 * blob.index(i, j, k) + size_t(c)] = sigma;
+            }
+    GpuVolume gpu(blob);
+    Lighting l;
+    l.lights = {{{1, 0, 0.3}, {5, 5, 5}}};  // from the right
+    l.background.color = {0, 0, 0};
+    Camera cam;
+    cam.eye = {0, 0, 5};
+    cam.target = {0, 0, 0};
+    cam.fovYDeg = 30;
+    cam.width = cam.height = 32;
+    TranslucentSettings s;
+    s.indirect.enabled = false;
+    const Image flat = translucent().render(gpu, cam, l, s);
+    s.surfaceShading = 1;
+    const Image shaded = translucent().render(gpu, cam, l, s);
+    auto side = [](const Image& img, int x0, int x1) {
+        double sum = 0;
+        for (int y = 12; y < 20; ++y)
+            for (int x = x0; x < x1; ++x) sum += img.pixel(x, y)[0];
+        return sum;
+    };
+    const double litFlat = side(flat, 18, 22), litShaded = side(shaded, 18, 22);
+    const double awayFlat = side(flat, 10, 14), awayShaded = side(shaded, 10, 14);
+    std::printf("[ measured ] surface shading: lit side %.4f -> %.4f, far side %.4f -> %.4f (S 0 -> 1)\n", litFlat, litShaded, awayFlat,
+                awayShaded);
+    for (float v : shaded.rgba) ASSERT_TRUE(std::isfinite(v));
+    EXPECT_LT(awayShaded / awayFlat, 0.8 * (litShaded / litFlat));  // the far side loses more
+}
