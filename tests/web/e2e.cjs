@@ -136,6 +136,7 @@ try {
   if ((await page.evaluate(() => document.getElementById('status').className)) === 'error')
     await fail(`the translucent render failed: ${await page.evaluate(() => document.getElementById('status').textContent)}`);
   console.log('[ measured ] translucent viewport renders and follows its sliders');
+  await page.screenshot({ path: screenshot.replace(/\.png$/, '_translucent.png') });
   console.log('1 passed, 0 failed');
 } catch (e) {
   await fail(e.message);
