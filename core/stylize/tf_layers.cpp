@@ -1,6 +1,7 @@
 #include "core/stylize/tf_layers.h"
 
 #include <algorithm>
+#include <memory>
 #include <cmath>
 #include <string>
 
@@ -38,6 +39,91 @@ void sampleImage(const Image& img, double u, double v, double out[4]) {
         out[c] = (1 - fy) * top + fy * bottom;
     }
 }
+
+/// A multigrid V-cycle for the graph Laplacian over a grid's free texels (pinned ones eliminated),
+/// as CG's preconditioner: forward Gauss–Seidel before the coarse correction and backward after it
+/// (so the cycle is symmetric), coarse grids of half the side where a texel is pinned if any child
+/// is, piecewise-constant prolongation and its transpose (the children's sum) as restriction.
+class Multigrid {
+public:
+    Multigrid(int w, int h, const std::vector<char>& pinned) {
+        m_levels.push_back(makeLevel(w, h, pinned));
+        while (m_levels.back().w > 4 && m_levels.back().h > 4) {
+            const Level& f = m_levels.back();
+            const int cw = (f.w + 1) / 2, ch = (f.h + 1) / 2;
+            std::vector<char> coarse(size_t(cw) * size_t(ch), 0);
+            for (int y = 0; y < f.h; ++y)
+                for (int x = 0; x < f.w; ++x)
+                    if (f.pinned[size_t(y) * size_t(f.w) + size_t(x)]) coarse[size_t(y / 2) * size_t(cw) + size_t(x / 2)] = 1;
+            m_levels.push_back(makeLevel(cw, ch, coarse));
+        }
+    }
+    /// z ≈ A⁻¹ r, both over the finest grid's texels (pinned entries 0).
+    void apply(const std::vector<double>& r, std::vector<double>& z) {
+        m_levels[0].b = r;
+        cycle(0);
+        z = m_levels[0].x;
+    }
+
+private:
+    struct Level {
+        int w = 0, h = 0;
+        std::vector<char> pinned;
+        std::vector<double> diag, x, b, r;
+    };
+    static Level makeLevel(int w, int h, const std::vector<char>& pinned) {
+        Level l{w, h, pinned, std::vector<double>(pinned.size(), 0.0), {}, {}, {}};
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) l.diag[size_t(y) * size_t(w) + size_t(x)] = (x > 0) + (x < w - 1) + (y > 0) + (y < h - 1);
+        l.x.assign(pinned.size(), 0.0), l.b.assign(pinned.size(), 0.0), l.r.assign(pinned.size(), 0.0);
+        return l;
+    }
+    /// Σ x over t's free neighbours.
+    static double neighbourSum(const Level& l, int x, int y) {
+        double s = 0;
+        const size_t t = size_t(y) * size_t(l.w) + size_t(x);
+        if (x > 0 && !l.pinned[t - 1]) s += l.x[t - 1];
+        if (x < l.w - 1 && !l.pinned[t + 1]) s += l.x[t + 1];
+        if (y > 0 && !l.pinned[t - size_t(l.w)]) s += l.x[t - size_t(l.w)];
+        if (y < l.h - 1 && !l.pinned[t + size_t(l.w)]) s += l.x[t + size_t(l.w)];
+        return s;
+    }
+    static void sweep(Level& l, bool forward) {
+        const int n = l.w * l.h;
+        for (int k = 0; k < n; ++k) {
+            const int t = forward ? k : n - 1 - k;
+            if (l.pinned[size_t(t)]) continue;
+            l.x[size_t(t)] = (l.b[size_t(t)] + neighbourSum(l, t % l.w, t / l.w)) / l.diag[size_t(t)];
+        }
+    }
+    void cycle(size_t level) {
+        Level& l = m_levels[level];
+        std::fill(l.x.begin(), l.x.end(), 0.0);
+        if (level + 1 == m_levels.size()) {  // coarsest: sweep it to (near) convergence, symmetrically
+            for (int i = 0; i < 30; ++i) sweep(l, true), sweep(l, false);
+            return;
+        }
+        for (int i = 0; i < 2; ++i) sweep(l, true);
+        Level& c = m_levels[level + 1];
+        std::fill(c.b.begin(), c.b.end(), 0.0);
+        for (int y = 0; y < l.h; ++y)
+            for (int x = 0; x < l.w; ++x) {
+                const size_t t = size_t(y) * size_t(l.w) + size_t(x);
+                if (l.pinned[t]) continue;
+                const double residual = l.b[t] - (l.diag[t] * l.x[t] - neighbourSum(l, x, y));
+                const size_t parent = size_t(y / 2) * size_t(c.w) + size_t(x / 2);
+                if (!c.pinned[parent]) c.b[parent] += residual;
+            }
+        cycle(level + 1);
+        for (int y = 0; y < l.h; ++y)
+            for (int x = 0; x < l.w; ++x) {
+                const size_t t = size_t(y) * size_t(l.w) + size_t(x);
+                if (!l.pinned[t]) l.x[t] += c.x[size_t(y / 2) * size_t(c.w) + size_t(x / 2)];
+            }
+        for (int i = 0; i < 2; ++i) sweep(l, false);
+    }
+    std::vector<Level> m_levels;
+};
 
 }  // namespace
 
@@ -89,6 +175,25 @@ std::vector<Vec3d> diffuseConstraints(const std::vector<TfConstraint>& constrain
             y[i] = s;
         }
     };
+    // Preconditioner: a multigrid V-cycle on grids big enough for it (CG alone needs iterations in
+    // proportion to the side), else Jacobi.
+    std::unique_ptr<Multigrid> mg;
+    std::vector<double> gridR, gridZ;
+    if (w >= 16 && h >= 16) {
+        std::vector<char> pinnedMask(n, 0);
+        for (size_t t = 0; t < n; ++t) pinnedMask[t] = count[t] ? 1 : 0;
+        mg = std::make_unique<Multigrid>(w, h, pinnedMask);
+        gridR.assign(n, 0.0);
+    }
+    auto precondition = [&](const std::vector<double>& r, std::vector<double>& z) {
+        if (!mg) {
+            for (size_t i = 0; i < m; ++i) z[i] = r[i] / diag[i];
+            return;
+        }
+        for (size_t i = 0; i < m; ++i) gridR[freeTexels[i]] = r[i];
+        mg->apply(gridR, gridZ);
+        for (size_t i = 0; i < m; ++i) z[i] = gridZ[freeTexels[i]];
+    };
     std::vector<double> result[4];
     for (int ch = 0; ch < 4; ++ch) {
         std::vector<double> b(m, 0.0), x(m), r(m), z(m), p(m), q(m);
@@ -103,13 +208,9 @@ std::vector<Vec3d> diffuseConstraints(const std::vector<TfConstraint>& constrain
         }
         apply(x, q);
         double bNorm = 0, rz = 0;
-        for (size_t i = 0; i < m; ++i) {
-            r[i] = b[i] - q[i];
-            z[i] = r[i] / diag[i];
-            p[i] = z[i];
-            rz += r[i] * z[i];
-            bNorm += b[i] * b[i];
-        }
+        for (size_t i = 0; i < m; ++i) r[i] = b[i] - q[i], bNorm += b[i] * b[i];
+        precondition(r, z);
+        for (size_t i = 0; i < m; ++i) p[i] = z[i], rz += r[i] * z[i];
         bNorm = std::max(std::sqrt(bNorm), 1e-300);
         double rNorm = 0;
         for (double v : r) rNorm += v * v;
@@ -127,10 +228,10 @@ std::vector<Vec3d> diffuseConstraints(const std::vector<TfConstraint>& constrain
             for (size_t i = 0; i < m; ++i) {
                 x[i] += a * p[i];
                 r[i] -= a * q[i];
-                z[i] = r[i] / diag[i];
-                rzNew += r[i] * z[i];
                 rNorm += r[i] * r[i];
             }
+            precondition(r, z);
+            for (size_t i = 0; i < m; ++i) rzNew += r[i] * z[i];
             rNorm = std::sqrt(rNorm);
             const double beta = rzNew / rz;
             rz = rzNew;
