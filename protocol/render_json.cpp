@@ -96,6 +96,26 @@ void environmentFromJson(JsonReader& r, const nlohmann::json& e, const std::stri
 
 }  // namespace
 
+namespace {
+
+/// The fields of core::Perturbation at `path` (unknown ones refused); the caller checks the values.
+void readPerturbation(JsonReader& r, const nlohmann::json& in, const std::string& pp, core::Perturbation& d) {
+    if (!r.object(in, pp, {"amplitude", "frequency", "octaves", "property_amplitude", "seed", "time"})) return;
+    if (in.contains("amplitude")) d.amplitude = r.number(in["amplitude"], pp + "/amplitude").value_or(d.amplitude);
+    if (in.contains("frequency")) d.frequency = r.number(in["frequency"], pp + "/frequency").value_or(d.frequency);
+    if (in.contains("octaves")) d.octaves = r.integer(in["octaves"], pp + "/octaves").value_or(d.octaves);
+    if (in.contains("property_amplitude"))
+        d.propertyAmplitude = r.number(in["property_amplitude"], pp + "/property_amplitude").value_or(d.propertyAmplitude);
+    if (in.contains("seed")) {
+        const auto seed = r.integer(in["seed"], pp + "/seed");
+        if (seed && *seed < 0) r.fail(pp + "/seed", "must be >= 0");
+        else if (seed) d.seed = uint32_t(*seed);
+    }
+    if (in.contains("time")) d.time = r.number(in["time"], pp + "/time").value_or(d.time);
+}
+
+}  // namespace
+
 core::TranslucentSettings translucentFromJson(const nlohmann::json& j, const std::string& path) {
     JsonReader r;
     core::TranslucentSettings s;
@@ -112,23 +132,7 @@ core::TranslucentSettings translucentFromJson(const nlohmann::json& j, const std
             if (in.contains("extinction")) d.extinction = r.number(in["extinction"], ip + "/extinction").value_or(d.extinction);
             if (in.contains("transport_color")) d.transportColor = r.vec3(in["transport_color"], ip + "/transport_color").value_or(d.transportColor);
         }
-        const std::string pp = path + "/perturbation";
-        if (j.contains("perturbation") &&
-            r.object(j["perturbation"], pp, {"amplitude", "frequency", "octaves", "property_amplitude", "seed", "time"})) {
-            const auto& in = j["perturbation"];
-            core::Perturbation& d = s.perturbation;
-            if (in.contains("amplitude")) d.amplitude = r.number(in["amplitude"], pp + "/amplitude").value_or(d.amplitude);
-            if (in.contains("frequency")) d.frequency = r.number(in["frequency"], pp + "/frequency").value_or(d.frequency);
-            if (in.contains("octaves")) d.octaves = r.integer(in["octaves"], pp + "/octaves").value_or(d.octaves);
-            if (in.contains("property_amplitude"))
-                d.propertyAmplitude = r.number(in["property_amplitude"], pp + "/property_amplitude").value_or(d.propertyAmplitude);
-            if (in.contains("seed")) {
-                const auto seed = r.integer(in["seed"], pp + "/seed");
-                if (seed && *seed < 0) r.fail(pp + "/seed", "must be >= 0");
-                else if (seed) d.seed = uint32_t(*seed);
-            }
-            if (in.contains("time")) d.time = r.number(in["time"], pp + "/time").value_or(d.time);
-        }
+        if (j.contains("perturbation")) readPerturbation(r, j["perturbation"], path + "/perturbation", s.perturbation);
         for (const auto& p : s.check()) r.check(path, p.field, p.message);
     }
     r.throwIfErrors();
@@ -136,15 +140,12 @@ core::TranslucentSettings translucentFromJson(const nlohmann::json& j, const std
 }
 
 core::Perturbation perturbationFromJson(const nlohmann::json& j) {
-    // The translucent parser's "perturbation" object, its paths made top-level.
-    try {
-        return translucentFromJson({{"perturbation", j}}).perturbation;
-    } catch (const ValidationError& e) {
-        JsonReader r;
-        for (const auto& d : e.details()) r.fail(d.path.rfind("/perturbation", 0) == 0 ? d.path.substr(13) : d.path, d.message);
-        r.throwIfErrors();
-        throw;
-    }
+    JsonReader r;
+    core::Perturbation p;
+    readPerturbation(r, j, "", p);
+    for (const auto& problem : p.check()) r.check("", problem.field, problem.message);
+    r.throwIfErrors();
+    return p;
 }
 
 nlohmann::json translucentToJson(const core::TranslucentSettings& s) {

@@ -396,17 +396,6 @@ std::string SessionService::downloadVdb(Session& s, std::optional<int> version) 
     return bytes.str();
 }
 
-core::Renderer& SessionService::renderer(core::GpuDevice& device) {
-    if (!m_renderer) m_renderer = std::make_unique<core::Renderer>(device);
-    return *m_renderer;
-}
-
-std::shared_ptr<core::GpuVolume> SessionService::sessionGpu(Session& s) {
-    if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
-    if (!s.gpu) s.gpu = std::make_shared<core::GpuVolume>(s.volume);
-    return s.gpu;
-}
-
 void SessionService::dropPreviews(const Session& s) {
     for (const auto& jid : s.jobs) {
         auto j = m_jobs.find(jid);
@@ -414,77 +403,6 @@ void SessionService::dropPreviews(const Session& s) {
         std::lock_guard lock(j->mutex);
         if (j->isFinished()) j->preview.reset();
     }
-}
-
-core::RenderLayers SessionService::renderOnGl(Session& s, const core::Camera& camera, const core::Lighting& lighting,
-                                              bool layers) {
-    return m_gl.run([&](core::GpuDevice& device) {
-        // The lock covers only finding (or uploading) the GPU copy, not the render: reads of the
-        // session (a VDB download, its JSON) never wait for GL work. Locking on the GL thread is
-        // safe even between a solve's iterations: the solve holds no session lock then.
-        std::shared_ptr<core::GpuVolume> gpu;
-        {
-            std::lock_guard lock(s.mutex);
-            gpu = sessionGpu(s);
-        }
-        return renderBudgeted(device, *gpu, camera, lighting, layers);  // a commit meanwhile frees it after us
-    });
-}
-
-core::RenderLayers SessionService::renderBudgeted(core::GpuDevice& device, core::GpuVolume& gpu, const core::Camera& camera,
-                                                  const core::Lighting& lighting, bool layers) {
-    // Other sessions' renders and a solve's next iteration wait behind this one: bound it.
-    const WorkBudget budget(m_limits.renderBudgetSeconds);
-    if (layers) return renderer(device).renderLayers(gpu, camera, lighting, {}, nullptr, budget);
-    core::RenderLayers out;
-    out.beauty = renderer(device).render(gpu, camera, lighting, {}, nullptr, budget);
-    return out;
-}
-
-core::RenderLayers SessionService::render(Session& s, const core::Camera& camera, bool layers) {
-    return renderOnGl(s, camera, lighting(s), layers);
-}
-
-core::Image SessionService::renderTranslucent(Session& s, const core::Camera& camera, const core::TranslucentSettings& settings,
-                                              core::Image* medium) {
-    const core::Lighting l = lighting(s);
-    return m_gl.run([&](core::GpuDevice& device) {
-        std::shared_ptr<core::GpuVolume> gpu;
-        {
-            std::lock_guard lock(s.mutex);
-            gpu = sessionGpu(s);
-        }
-        if (!m_translucent) m_translucent = std::make_unique<core::TranslucentRenderer>(device);
-        return m_translucent->render(*gpu, camera, l, settings, nullptr, medium, WorkBudget(m_limits.renderBudgetSeconds));
-    });
-}
-
-core::RenderLayers SessionService::renderView(Session& s, const std::string& viewId, bool layers) {
-    const SessionView v = view(s, viewId);
-    core::Lighting l = lighting(s);
-    if (v.background) l.background.plate = v.background;  // the view's plate
-    return renderOnGl(s, v.camera, l, layers);
-}
-
-core::Image SessionService::renderPreview(const std::string& jobId, const std::string& viewId) {
-    auto j = job(jobId);
-    auto s = find(j->session);
-    const SessionView v = view(*s, viewId);
-    const core::Camera camera = v.camera;
-    core::Lighting light = lighting(*s);
-    if (v.background) light.background.plate = v.background;
-    return m_gl.run([&](core::GpuDevice& device) {
-        std::shared_ptr<core::GpuVolume> preview;
-        {
-            std::lock_guard lock(j->mutex);
-            preview = j->preview;
-        }
-        if (!preview) {
-            std::lock_guard lock(s->mutex);
-            preview = sessionGpu(*s);
-        }
-        return renderBudgeted(device, *preview, camera, light, /*layers=*/false).beauty;
-    });
 }
 
 std::shared_ptr<Job> SessionService::job(const std::string& id) const {

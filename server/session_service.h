@@ -189,6 +189,10 @@ private:
     /// On the GL thread, with the session's lock held: the session's GPU copy, uploaded if there
     /// is none (not_found once removed). Shared, so a render can drop the lock and keep it alive.
     std::shared_ptr<core::GpuVolume> sessionGpu(Session& s);
+    /// On the GL thread: sessionGpu() under the session's lock, released before any GL work.
+    std::shared_ptr<core::GpuVolume> lockedSessionGpu(Session& s);
+    /// The session's lighting with the view's plate, if it has one.
+    core::Lighting viewLighting(Session& s, const SessionView& v);
     /// On the GL thread: the one renderer of the service (created on first use).
     core::Renderer& renderer(core::GpuDevice& device);
     /// On the GL thread: frees the preview copies of the session's finished jobs.

@@ -10,11 +10,11 @@ namespace volstyle::core {
 
 std::vector<FieldProblem> Perturbation::check() const {
     std::vector<FieldProblem> out;
-    if (!(std::isfinite(amplitude) && amplitude >= 0 && amplitude <= 64)) out.push_back({"perturbation/amplitude", "must be in [0, 64] voxels"});
-    if (!(std::isfinite(frequency) && frequency > 0 && frequency <= 256)) out.push_back({"perturbation/frequency", "must be in (0, 256]"});
-    if (octaves < 1 || octaves > 6) out.push_back({"perturbation/octaves", "must be in [1, 6]"});
-    if (!(propertyAmplitude >= 0 && propertyAmplitude <= 1)) out.push_back({"perturbation/property_amplitude", "must be in [0, 1]"});
-    if (!std::isfinite(time)) out.push_back({"perturbation/time", "must be finite"});
+    if (!(std::isfinite(amplitude) && amplitude >= 0 && amplitude <= 64)) out.push_back({"amplitude", "must be in [0, 64] voxels"});
+    if (!(std::isfinite(frequency) && frequency > 0 && frequency <= 256)) out.push_back({"frequency", "must be in (0, 256]"});
+    if (octaves < 1 || octaves > 6) out.push_back({"octaves", "must be in [1, 6]"});
+    if (!(propertyAmplitude >= 0 && propertyAmplitude <= 1)) out.push_back({"property_amplitude", "must be in [0, 1]"});
+    if (!std::isfinite(time)) out.push_back({"time", "must be finite"});
     return out;
 }
 

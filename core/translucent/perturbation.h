@@ -28,7 +28,7 @@ struct Perturbation {
     double time = 0;               ///< animation time (any finite value)
 
     bool active() const { return amplitude > 0 || propertyAmplitude > 0; }
-    std::vector<FieldProblem> check() const;
+    std::vector<FieldProblem> check() const;  ///< fields as in JSON: "amplitude", "octaves", …
 };
 
 /// The noise volume of `seed`: kNoiseSize³ texels × 4 channels (RGBA, x fastest) in [0, 1],

@@ -19,7 +19,7 @@ std::vector<FieldProblem> TranslucentSettings::check() const {
             break;
         }
     if (!(surfaceShading >= 0 && surfaceShading <= 1)) out.push_back({"surface_shading", "must be in [0, 1]"});
-    for (auto& p : perturbation.check()) out.push_back(std::move(p));
+    for (auto& p : perturbation.check()) out.push_back({"perturbation/" + p.field, std::move(p.message)});
     return out;
 }
 

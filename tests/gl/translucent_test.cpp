@@ -44,6 +44,19 @@ Vec3d meanOver(const Image& img, const Image& mask) {
     return n ? sum / double(n) : Vec3d();
 }
 
+/// The cube [-1,1]³ at n³ holding a smooth blob, σ = peak · exp(-(x² + yScale·y² + z²) / width).
+Volume gaussianBlob(int n, double peak, double yScale, double width) {
+    Volume blob = test::constantCube(n, 0.0f);
+    for (int k = 0; k < n; ++k)
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const double h = 0.5 * n, x = (i + 0.5 - h) / h, y = (j + 0.5 - h) / h, z = (k + 0.5 - h) / h;
+                const float sigma = float(peak * std::exp(-(x * x + yScale * y * y + z * z) / width));
+                for (int c = 0; c < 3; ++c) blob.extinction()[3 * blob.index(i, j, k) + size_t(c)] = sigma;
+            }
+    return blob;
+}
+
 /// Mean red over the covered pixels within `band` pixels of an uncovered one: where the blur
 /// brings in the light that passed beside the block.
 double rimMean(const Image& img, const Image& mask, int band) {
@@ -229,14 +242,7 @@ TEST(Translucent, PerturbationIsExactWhenOffRepeatableAndMatchesItsBakedVolume) 
     // Baked: the same field on the host, rendered without perturbation. Baking resamples the grid
     // once more (which blurs voxel-sized detail) and keeps only what the grid can hold, so compare
     // on a smooth blob with one smooth octave.
-    Volume blob = test::constantCube(24, 0.0f);
-    for (int k = 0; k < 24; ++k)
-        for (int j = 0; j < 24; ++j)
-            for (int i = 0; i < 24; ++i) {
-                const double x = (i - 11.5) / 12, y = (j - 11.5) / 12, z = (k - 11.5) / 12;
-                const float sigma = float(4 * std::exp(-(x * x + 2 * y * y + z * z) / 0.15));
-                for (int c = 0; c < 3; ++c) blob.extinction()[3 * blob.index(i, j, k) + size_t(c)] = sigma;
-            }
+    const Volume blob = gaussianBlob(24, 4, 2, 0.15);
     GpuVolume blobGpu(blob);
     s.perturbation.octaves = 1;
     s.perturbation.frequency = 3;
@@ -259,14 +265,7 @@ TEST(Translucent, PerturbationIsExactWhenOffRepeatableAndMatchesItsBakedVolume) 
 // extinction's gradient, which darkens the sides of a blob that face away from the light.
 TEST(Translucent, SurfaceShadingDarkensTheSidesFacingAway) {
     VOLSTYLE_REQUIRE_GL();
-    Volume blob = test::constantCube(20, 0.0f);
-    for (int k = 0; k < 20; ++k)
-        for (int j = 0; j < 20; ++j)
-            for (int i = 0; i < 20; ++i) {
-                const double x = (i - 9.5) / 10, y = (j - 9.5) / 10, z = (k - 9.5) / 10;
-                const float sigma = float(20 * std::exp(-(x * x + y * y + z * z) / 0.12));
-                for (int c = 0; c < 3; ++c) blob.extinction()[3 * blob.index(i, j, k) + size_t(c)] = sigma;
-            }
+    const Volume blob = gaussianBlob(20, 20, 1, 0.12);
     GpuVolume gpu(blob);
     Lighting l;
     l.lights = {{{1, 0, 0.3}, {5, 5, 5}}};  // from the right
