@@ -144,6 +144,8 @@ core::Perturbation perturbationFromJson(const nlohmann::json& j) {
     core::Perturbation p;
     readPerturbation(r, j, "", p);
     for (const auto& problem : p.check()) r.check("", problem.field, problem.message);
+    if (r.ok() && !p.active())  // an empty body would commit a copy of the volume as a new version
+        r.fail("/amplitude", "amplitude and property_amplitude are both 0: there is nothing to bake");
     r.throwIfErrors();
     return p;
 }

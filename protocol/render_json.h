@@ -58,7 +58,8 @@ inline constexpr const char* kLobesBackground = "lobes";
 core::TranslucentSettings translucentFromJson(const nlohmann::json& j, const std::string& path = "");
 nlohmann::json translucentToJson(const core::TranslucentSettings& s);
 /// POST /sessions/{sid}/perturb: {"amplitude", "frequency", "octaves", "property_amplitude",
-/// "seed", "time"} (core/translucent/perturbation.h), baked into a new version.
+/// "seed", "time"} (core/translucent/perturbation.h), baked into a new version; one that changes
+/// nothing (both amplitudes 0, an empty body) is refused.
 core::Perturbation perturbationFromJson(const nlohmann::json& j);
 
 LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& path = "",

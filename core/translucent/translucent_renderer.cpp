@@ -127,13 +127,13 @@ Vec3d backgroundAt(const Lighting& l, const Camera& cam, int x, int y, const std
         const float* p = bg.plate->pixel(x, y);
         return {p[0], p[1], p[2]};
     }
+    if (!basis && !bg.environment) return bg.color;  // no direction needed
     const Vec3d dir = cam.rayDirection(x, y);
     if (basis) {
         const int cell = basis->cellOf(dir);
         if (cell >= 0) return lobeRadiance[size_t(cell)];
     }
-    if (bg.environment) return sampleLatLong(*bg.environment, dir);
-    return bg.color;
+    return bg.environment ? sampleLatLong(*bg.environment, dir) : bg.color;
 }
 
 }  // namespace

@@ -246,6 +246,8 @@ TEST_F(EnvironmentApi, APerturbationBakesIntoANewVersion) {
     std::set<std::string> paths;
     for (const auto& d : e["error"]["details"]) paths.insert(d["path"].get<std::string>());
     EXPECT_EQ(paths, (std::set<std::string>{"/amplitude", "/octaves"}));
+    e = expectError(client().Post((base + "/perturb").c_str(), "{}", "application/json"), 400, "invalid_argument");  // nothing to bake
+    EXPECT_EQ(e["error"]["details"][0]["path"], "/amplitude");
     auto r = client().Post((base + "/perturb").c_str(), R"({"amplitude": 1.5, "frequency": 6, "seed": 3})", "application/json");
     ASSERT_EQ(r->status, 200) << r->body;
     EXPECT_EQ(json::parse(r->body)["volume"]["version"], 2);
