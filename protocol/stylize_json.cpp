@@ -125,35 +125,8 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
     StylizerSceneRequest out;
     core::StylizerScene& s = out.scene;
     if (r.object(j, path, {"occluders", "light", "medium", "camera", "background", "time", "transfer_function", "volume"})) {
-        if (j.contains("transfer_function")) {
-            const auto& t = j["transfer_function"];
-            const std::string tp = path + "/transfer_function";
-            if (r.object(t, tp, {"image", "mode", "depth_range"})) {
-                core::TransferFunction tf;
-                if (source == SceneSource::Api) {
-                    if (t.contains("image"))
-                        r.fail(tp + "/image", "the API takes no file paths: upload the image with PUT …/stylizer/tf and leave this out");
-                } else if (!t.contains("image")) {
-                    r.fail(tp + "/image", "is required");
-                } else {
-                    out.transferImageRef = r.string(t["image"], tp + "/image");
-                }
-                const std::string mode = t.contains("mode") ? r.string(t["mode"], tp + "/mode").value_or("") : "multiply";
-                if (mode == "replace") tf.mode = core::TransferFunction::Mode::Replace;
-                else if (mode != "multiply" && !mode.empty()) r.fail(tp + "/mode", "must be 'multiply' or 'replace', got '" + mode + "'");
-                if (t.contains("depth_range")) {
-                    const auto& d = t["depth_range"];
-                    if (!d.is_array() || d.size() != 2) {
-                        r.fail(tp + "/depth_range", "must be [near, far]");
-                    } else {
-                        auto a = r.number(d[0], tp + "/depth_range/0"), b = r.number(d[1], tp + "/depth_range/1");
-                        if (a && b && !(*b > *a)) r.fail(tp + "/depth_range", "far must be larger than near");
-                        if (a && b) tf.depthNear = *a, tf.depthFar = *b;
-                    }
-                }
-                s.transferFunction = tf;
-            }
-        }
+        if (j.contains("transfer_function"))
+            s.transferFunction = transferFunctionFromJson(r, j["transfer_function"], path + "/transfer_function", source, out.tfImages);
         notYet(r, j, path, "volume", "a heterogeneous medium");
         if (j.contains("occluders")) {
             const auto& list = j["occluders"];
@@ -292,12 +265,13 @@ nlohmann::json stylizerSceneToJson(const core::StylizerScene& scene, const std::
                         {"camera", cameraToJson(scene.camera)},
                         {"background", vec3Json(scene.background)},
                         {"time", scene.time}};
-    if (const auto& tf = scene.transferFunction) {
-        j["transfer_function"] = {{"mode", tf->mode == core::TransferFunction::Mode::Replace ? "replace" : "multiply"},
-                                  {"depth_range", {tf->depthNear, tf->depthFar}}};
-        if (transferImageRef) j["transfer_function"]["image"] = *transferImageRef;
-    }
+    if (const auto& tf = scene.transferFunction) j["transfer_function"] = transferFunctionToJson(*tf, transferImageRef);
     return j;
+}
+
+void attachTfImage(core::TransferFunction& tf, const TfImageRef& ref, std::shared_ptr<const core::Image> image) {
+    if (ref.layer < 0) tf.image = std::move(image);
+    else tf.layers.at(size_t(ref.layer)).image = std::move(image);
 }
 
 const char* const kStylizerAovNames = "average_visibility, linear_depth, shadow_map, modified_shadow_map, scattering";
@@ -345,6 +319,37 @@ StylizerFrameRequest StylizerFrameRequest::fromJson(const nlohmann::json& j, con
             if (q.settings.steps < 1 || q.settings.steps > 4096) r.check("", "steps", "must be in [1, 4096]");
         }
         if (j.contains("exposure")) q.exposure = boundedNumber(r, j["exposure"], "/exposure", -64, 64, 0);
+    }
+    r.throwIfErrors();
+    return q;
+}
+
+StylizerPickRequest StylizerPickRequest::fromJson(const nlohmann::json& j, const RequestLimits& limits, bool constraint) {
+    JsonReader r;
+    StylizerPickRequest q;
+    const bool ok = constraint ? r.object(j, "", {"x", "y", "camera", "time", "colour", "alpha", "layer", "anchor"})
+                               : r.object(j, "", {"x", "y", "camera", "time"});
+    if (ok) {
+        for (auto [field, into] : {std::pair{"x", &q.x}, std::pair{"y", &q.y}}) {
+            if (!j.contains(field)) r.fail(std::string("/") + field, "is required (the pixel, 0 at the top left)");
+            else *into = r.integer(j[field], std::string("/") + field).value_or(0);
+        }
+        if (j.contains("camera")) q.camera = readCamera(r, j, "/camera", limits);
+        if (j.contains("time")) q.time = boundedNumber(r, j["time"], "/time", -1e9, 1e9, 0);
+        if (j.contains("colour")) {
+            if (auto c = r.vec3(j["colour"], "/colour")) {
+                if (c->x >= 0 && c->x <= 1 && c->y >= 0 && c->y <= 1 && c->z >= 0 && c->z <= 1) q.colour = *c;
+                else r.fail("/colour", "each component must be in [0, 1] (linear)");
+            }
+        }
+        if (j.contains("alpha")) q.alpha = boundedNumber(r, j["alpha"], "/alpha", 0, 1, 1);
+        if (j.contains("layer")) q.layer = r.integer(j["layer"], "/layer");
+        if (j.contains("anchor")) {
+            const auto a = r.string(j["anchor"], "/anchor");
+            if (a == "world") q.anchor = Anchor::World;
+            else if (a == "object") q.anchor = Anchor::Object;
+            else if (a && *a != "none") r.fail("/anchor", "must be 'none', 'world' or 'object', got '" + *a + "'");
+        }
     }
     r.throwIfErrors();
     return q;

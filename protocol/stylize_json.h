@@ -22,6 +22,7 @@
 
 #include "core/stylize/scene.h"
 #include "protocol/requests.h"
+#include "protocol/tf_json.h"
 #include "protocol/validation.h"
 
 namespace volstyle::protocol {
@@ -29,14 +30,10 @@ namespace volstyle::protocol {
 struct StylizerSceneRequest {
     core::StylizerScene scene;          ///< occluders with empty meshes, in file order
     std::vector<std::string> meshRefs;  ///< each occluder's `mesh`
-    /// `transfer_function.image` when there is one: scene.transferFunction is then set, its image
-    /// left for the caller to load.
-    std::optional<std::string> transferImageRef;
+    /// The images the transfer function needs (its own, or its image layers'), left for the caller
+    /// to load and attach (attachTfImage).
+    std::vector<TfImageRef> tfImages;
 };
-
-/// Where a scene comes from: a SCENE.json file (the TF image is a path) or the API (no file paths:
-/// `transfer_function` uses the image uploaded to …/stylizer/tf, and `image` is refused).
-enum class SceneSource { File, Api };
 
 /// Throws ValidationError listing every invalid field (paths below `path`).
 StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::string& path = "",
@@ -44,6 +41,9 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
 
 /// The outputs' names (SPEC §7): "frame", "average_visibility", "linear_depth", "shadow_map",
 /// "modified_shadow_map", "scattering"; nullopt for any other.
+/// Gives the TF (ref.layer −1) or its image layer `ref.layer` the image `image`.
+void attachTfImage(core::TransferFunction& tf, const TfImageRef& ref, std::shared_ptr<const core::Image> image);
+
 std::optional<core::StylizerOutput> stylizerOutputFromName(const std::string& name);
 /// The AOVs' names, for messages: "average_visibility, linear_depth, …".
 extern const char* const kStylizerAovNames;
@@ -61,9 +61,25 @@ struct StylizerFrameRequest {
     static StylizerFrameRequest fromJson(const nlohmann::json& j, const RequestLimits& limits);
 };
 
+/// POST …/stylizer/pick (x, y, camera, time) and POST …/stylizer/constraints (the same, and
+/// "colour": [r,g,b] in [0, 1], "alpha", "layer": the index of a diffusion layer (default: the
+/// topmost, one is added when there is none), "anchor": "none" (default: the constraint keeps its
+/// TF position) | "world" (it follows the point clicked) | "object" (it follows the occluder clicked)).
+struct StylizerPickRequest {
+    enum class Anchor { None, World, Object };
+    int x = 0, y = 0;  ///< pixel, (0, 0) top left
+    std::optional<core::Camera> camera;
+    std::optional<double> time;
+    Vec3d colour{1, 1, 1};
+    double alpha = 1;
+    std::optional<int> layer;
+    Anchor anchor = Anchor::None;
+    static StylizerPickRequest fromJson(const nlohmann::json& j, const RequestLimits& limits, bool constraint);
+};
+
 /// The scene as JSON, every field written (defaults included), so that reading it back gives the
 /// same scene: `meshRefs` name each occluder's mesh; `transferImageRef`, when given, is written
-/// as `transfer_function.image`.
+/// as `transfer_function.image` (an image TF of a file).
 nlohmann::json stylizerSceneToJson(const core::StylizerScene& scene, const std::vector<std::string>& meshRefs,
                                    const std::optional<std::string>& transferImageRef = std::nullopt);
 

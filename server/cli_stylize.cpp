@@ -67,12 +67,13 @@ core::StylizerScene loadStylizerScene(const std::string& spec) {
             throw InvalidArgument(where + e.what());
         }
     }
-    if (request.transferImageRef) {
-        const std::string path = (folder / *request.transferImageRef).string();
+    for (const protocol::TfImageRef& ref : request.tfImages) {
+        const std::string path = (folder / ref.ref).string();
         try {
-            request.scene.transferFunction->image = std::make_shared<core::Image>(core::loadImage(path, 4096).image);
+            protocol::attachTfImage(*request.scene.transferFunction, ref, std::make_shared<core::Image>(core::loadImage(path, 4096).image));
         } catch (const Error& e) {
-            throw InvalidArgument("'" + spec + "': /transfer_function/image: " + e.what());
+            throw InvalidArgument("'" + spec + "': /transfer_function/" + (ref.layer < 0 ? "" : "layers/" + std::to_string(ref.layer) + "/") +
+                                  "image: " + e.what());
         }
     }
     return request.scene;

@@ -250,9 +250,10 @@ std::shared_ptr<Session> Persistence::loadSession(const fs::path& dir) {
     return s;
 }
 
-void Persistence::saveStylizerScene(const std::string& session, const json& scene, uint64_t revision) {
+void Persistence::saveStylizerScene(const std::string& session, const json& scene, uint64_t revision, const json& undo, const json& redo) {
     fs::create_directories(sessionDir(session) / "stylizer");
-    atomicWrite(sessionDir(session) / "stylizer" / "scene.json", protocol::toText({{"revision", revision}, {"scene", scene}}, 2));
+    atomicWrite(sessionDir(session) / "stylizer" / "scene.json",
+                protocol::toText({{"revision", revision}, {"scene", scene}, {"undo", undo}, {"redo", redo}}, 2));
 }
 
 void Persistence::saveSessionFile(const std::string& session, const std::string& file, const std::string& bytes) {
@@ -319,6 +320,10 @@ void Persistence::restoreStylizer(Session& s, const fs::path& dir) {
         const json j = json::parse(readFile(dir / "stylizer" / "scene.json"));
         request = protocol::stylizerSceneFromJson(j.at("scene"), "", protocol::SceneSource::Api);
         s.stylizer.revision = j.at("revision").get<uint64_t>();
+        // The undo history is a convenience: an unreadable one is dropped, not the scene.
+        for (const char* stack : {"undo", "redo"})
+            if (j.contains(stack) && j[stack].is_array())
+                for (const json& scene : j[stack]) (stack[0] == 'u' ? s.stylizer.undo : s.stylizer.redo).push_back(scene);
     } catch (const std::exception& e) {
         damage("stylizer/scene.json", std::string("the stylizer's scene is unreadable (it is builtin:forest again): ") + e.what());
         return;
@@ -331,7 +336,7 @@ void Persistence::restoreStylizer(Session& s, const fs::path& dir) {
             request.meshRefs.erase(request.meshRefs.begin() + std::ptrdiff_t(i));
             request.scene.occluders.erase(request.scene.occluders.begin() + std::ptrdiff_t(i));
         }
-    if (request.scene.transferFunction && !s.stylizer.transferImage) {
+    if (!request.tfImages.empty() && !s.stylizer.transferImage) {
         lost.push_back("the transfer function");
         request.scene.transferFunction.reset();
     }
@@ -347,7 +352,8 @@ void Persistence::restoreStylizer(Session& s, const fs::path& dir) {
         for (const auto& l : lost) what += (what.empty() ? "" : ", ") + l;
         s.damaged.push_back({"stylizer/scene.json", "its uploads were damaged; the scene lost " + what});
         spdlog::error("session {}'s stylizer scene lost {}", s.id, what);
-        saveStylizerScene(s.id, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), ++s.stylizer.revision);
+        saveStylizerScene(s.id, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), ++s.stylizer.revision,
+                          s.stylizer.undo, s.stylizer.redo);
     }
 }
 

@@ -47,7 +47,9 @@ public:
     void removeSession(const std::string& session);
     /// The stylizer (stylizer/scene.json, stylizer/occluders/NAME.EXT, stylizer/tf.image): the
     /// scene as JSON; uploaded files as they were sent.
-    void saveStylizerScene(const std::string& session, const nlohmann::json& scene, uint64_t revision);
+    /// The stylizer's scene with its revision and its undo and redo stacks (arrays of scenes).
+    void saveStylizerScene(const std::string& session, const nlohmann::json& scene, uint64_t revision,
+                           const nlohmann::json& undo = nlohmann::json::array(), const nlohmann::json& redo = nlohmann::json::array());
     /// An uploaded file as it was sent (the stylizer's, environment.image), atomically.
     void saveSessionFile(const std::string& session, const std::string& file, const std::string& bytes);
     void removeSessionFile(const std::string& session, const std::string& file);

@@ -68,6 +68,25 @@ struct StylizerSnapshot {
     uint64_t revision = 0;
 };
 
+/// What a click at a pixel of the stylizer's frame finds (POST …/stylizer/pick): the pixel's TF
+/// position (V̄ and linear depth d), its distance, the occluder seen there and the point.
+struct StylizerPick {
+    int x = 0, y = 0;
+    double vBar = 0, depth = 0, distance = 0;
+    int occluder = -1;         ///< index in the scene; −1: the sky (no surface)
+    std::string occluderName;  ///< empty for the sky
+    Vec3d position;            ///< the world point at `distance` along the pixel's ray
+    core::TfAnchor anchor;     ///< what the request's `anchor` asked for (position empty for "none")
+};
+
+/// A constraint clicked into the scene (POST …/stylizer/constraints).
+struct AddedTfConstraint {
+    StylizerPick pick;
+    int layer = 0, index = 0;  ///< where it went: transfer_function/layers/{layer}/constraints/{index}
+    core::TfConstraint constraint;
+    uint64_t revision = 0;
+};
+
 struct OccluderMeshInfo {
     std::string name, format;
     size_t vertices = 0, triangles = 0, fileBytes = 0;
@@ -146,6 +165,15 @@ public:
     /// Replaces the scene: its meshes and TF resolved against the uploads (ValidationError naming
     /// the fields), its camera within the image-side limit (413).
     StylizerSnapshot setStylizerScene(Session& s, const protocol::StylizerSceneRequest& request);
+    /// The scene before the last change (redo: the one undone last); conflict (409) when there is
+    /// none or it no longer resolves (a mesh it used was deleted).
+    StylizerSnapshot undoStylizer(Session& s, bool redo);
+    /// Renders the frame the request's camera sees and reads the pixel's AOVs and occluder.
+    StylizerPick pickStylizer(Session& s, const protocol::StylizerPickRequest& request);
+    /// Picks the pixel and adds a constraint there with the request's colour to a diffusion layer
+    /// of the scene's TF (a TF of layers is made when there is none; an image TF becomes its
+    /// first, image layer); an undoable scene change.
+    AddedTfConstraint addTfConstraint(Session& s, const protocol::StylizerPickRequest& request);
     std::vector<OccluderMeshInfo> occluderMeshes(Session& s) const;
     /// Reads and stores a mesh file under `name` (422 unreadable, empty or non-finite; 413 over
     /// the upload, vertex or per-session limits); the scene re-renders if it uses `name`.

@@ -8,6 +8,7 @@
 #include "core/image/image_io.h"
 #include "core/stylize/mesh_io.h"
 #include "core/stylize/stylizer.h"
+#include "core/stylize/tf_anchors.h"
 #include "server/session_service.h"
 
 namespace volstyle::server {
@@ -26,6 +27,12 @@ constexpr double kLookupsPerSecond = 1.0e8;
 std::string meshFile(const std::string& name, const std::string& format) { return "stylizer/occluders/" + name + "." + format; }
 const std::string kTransferFile = "stylizer/tf.image";
 
+/// Pushes a scene onto an undo or redo stack, dropping the oldest beyond its depth.
+void remember(std::vector<nlohmann::json>& stack, nlohmann::json scene) {
+    stack.push_back(std::move(scene));
+    if (stack.size() > kStylizerUndoDepth) stack.erase(stack.begin());
+}
+
 }  // namespace
 
 StylizerSnapshot SessionService::stylizer(Session& s) const {
@@ -35,7 +42,9 @@ StylizerSnapshot SessionService::stylizer(Session& s) const {
 
 void SessionService::stylizerChanged(Session& s) {
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
-    if (m_persist) m_persist->saveStylizerScene(s.id, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), s.stylizer.revision + 1);
+    if (m_persist)
+        m_persist->saveStylizerScene(s.id, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), s.stylizer.revision + 1,
+                                     s.stylizer.undo, s.stylizer.redo);
     ++s.stylizer.revision;
     s.stylizerChanged.notify_all();
 }
@@ -53,6 +62,30 @@ StylizerSnapshot SessionService::setStylizerScene(Session& s, const protocol::St
     } catch (const InvalidArgument& e) {
         throw ApiError(ErrorCode::InvalidArgument, e.what());
     }
+    remember(s.stylizer.undo, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs));
+    s.stylizer.redo.clear();
+    s.stylizer.scene = std::move(scene);
+    s.stylizer.meshRefs = request.meshRefs;
+    stylizerChanged(s);
+    return {s.stylizer.scene, s.stylizer.meshRefs, s.stylizer.revision};
+}
+
+StylizerSnapshot SessionService::undoStylizer(Session& s, bool redo) {
+    std::lock_guard lock(s.mutex);
+    auto& from = redo ? s.stylizer.redo : s.stylizer.undo;
+    auto& to = redo ? s.stylizer.undo : s.stylizer.redo;
+    if (from.empty()) throw ApiError(ErrorCode::Busy, redo ? "nothing to redo" : "nothing to undo");
+    core::StylizerScene scene;
+    protocol::StylizerSceneRequest request;
+    try {
+        request = protocol::stylizerSceneFromJson(from.back(), "", protocol::SceneSource::Api);
+        scene = resolveStylizerScene(s.stylizer, request);
+        scene.validate();
+    } catch (const std::exception& e) {  // a mesh or the TF image it used was deleted since
+        throw ApiError(ErrorCode::Busy, std::string("the ") + (redo ? "next" : "previous") + " scene no longer resolves: " + e.what());
+    }
+    remember(to, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs));
+    from.pop_back();
     s.stylizer.scene = std::move(scene);
     s.stylizer.meshRefs = request.meshRefs;
     stylizerChanged(s);
@@ -152,9 +185,9 @@ TransferImageInfo SessionService::setTransferImage(Session& s, const std::string
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
     if (m_persist) m_persist->saveSessionFile(s.id, kTransferFile, bytes);
     s.stylizer.transferImage = image;
-    const bool used = s.stylizer.scene.transferFunction.has_value();
+    const bool used = s.stylizer.usesTransferImage();
     if (used) {
-        s.stylizer.scene.transferFunction->image = image;
+        s.stylizer.attachTransferImage(image);
         stylizerChanged(s);
     }
     return {image->width, image->height, loaded.channels, used};
@@ -169,8 +202,8 @@ core::Image SessionService::transferImage(Session& s) const {
 void SessionService::removeTransferImage(Session& s) {
     std::lock_guard lock(s.mutex);
     if (!s.stylizer.transferImage) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no transfer function uploaded");
-    if (s.stylizer.scene.transferFunction)
-        throw ApiError(ErrorCode::Busy, "the stylizer's scene uses the transfer function; PUT a scene without transfer_function first");
+    if (s.stylizer.usesTransferImage())
+        throw ApiError(ErrorCode::Busy, "the stylizer's scene shows the transfer-function image; PUT a scene without it (no image TF, no image layer) first");
     if (m_persist) m_persist->removeSessionFile(s.id, kTransferFile);
     s.stylizer.transferImage.reset();
 }
@@ -200,6 +233,76 @@ core::StylizedFrame SessionService::stylize(Session& s, const protocol::Stylizer
     settings.readShadowMaps =
         request.output == core::StylizerOutput::ShadowMap || request.output == core::StylizerOutput::ModifiedShadowMap;
     return stylizeOnGl(scene, settings);
+}
+
+StylizerPick SessionService::pickStylizer(Session& s, const protocol::StylizerPickRequest& q) {
+    core::StylizerScene scene = stylizer(s).scene;
+    if (q.camera) scene.camera = *q.camera;
+    if (q.time) scene.time = *q.time;
+    const core::Camera& cam = scene.camera;
+    if (!(q.x >= 0 && q.y >= 0 && q.x < cam.width && q.y < cam.height)) {
+        const std::string message = "the pixel must be inside the " + std::to_string(cam.width) + "×" + std::to_string(cam.height) + " frame";
+        throw ApiError(ErrorCode::InvalidArgument, message, {{"/x", message}, {"/y", message}});
+    }
+    core::StylizeSettings settings;
+    settings.readShadowMaps = false;
+    settings.pick = core::StylizeSettings::Pixel{q.x, q.y};
+    const core::StylizedFrame f = stylizeOnGl(scene, settings);
+    const core::TransferFunction tf = scene.transferFunction.value_or(core::TransferFunction{});
+    const core::TfPosition at = core::tfPositionAt(tf, f, q.x, q.y);
+    StylizerPick pick;
+    pick.x = q.x, pick.y = q.y;
+    pick.vBar = at.vBar, pick.depth = at.depth;
+    pick.distance = f.linearDepth.pixel(q.x, q.y)[0];
+    pick.occluder = f.pickedOccluder;
+    if (pick.occluder >= 0) pick.occluderName = scene.occluders[size_t(pick.occluder)].name;
+    pick.position = cam.eye + cam.rayDirection(q.x + 0.5, q.y + 0.5) * pick.distance;
+    if (q.anchor == protocol::StylizerPickRequest::Anchor::Object && pick.occluder < 0)
+        throw ApiError(ErrorCode::InvalidArgument, "no occluder at pixel (" + std::to_string(q.x) + ", " + std::to_string(q.y) +
+                                                       ") to follow; click on one or anchor to the world",
+                       {{"/anchor", "no occluder at this pixel"}});
+    if (q.anchor == protocol::StylizerPickRequest::Anchor::Object && pick.occluderName.empty())
+        throw ApiError(ErrorCode::InvalidArgument, "the occluder at this pixel has no name to follow; name it in the scene",
+                       {{"/anchor", "the occluder has no name"}});
+    if (q.anchor != protocol::StylizerPickRequest::Anchor::None)
+        pick.anchor = core::anchorAtPixel(scene, q.x, q.y, pick.distance,
+                                          q.anchor == protocol::StylizerPickRequest::Anchor::Object ? pick.occluder : -1);
+    return pick;
+}
+
+AddedTfConstraint SessionService::addTfConstraint(Session& s, const protocol::StylizerPickRequest& q) {
+    AddedTfConstraint out;
+    out.pick = pickStylizer(s, q);
+    out.constraint = {out.pick.vBar, out.pick.depth, q.colour, q.alpha};
+    if (q.anchor != protocol::StylizerPickRequest::Anchor::None) out.constraint.anchor = out.pick.anchor;
+    // The change goes through the scene's JSON and setStylizerScene: validated, undoable, saved.
+    const StylizerSnapshot now = stylizer(s);
+    nlohmann::json j = protocol::stylizerSceneToJson(now.scene, now.meshRefs);
+    nlohmann::json& tf = j["transfer_function"];
+    if (tf.is_null()) tf = protocol::transferFunctionToJson(core::TransferFunction{});
+    if (!tf.contains("layers")) tf["layers"] = now.scene.transferFunction ? nlohmann::json::array({{{"type", "image"}}}) : nlohmann::json::array();
+    nlohmann::json& layers = tf["layers"];
+    int layer = -1;
+    if (q.layer) {
+        if (*q.layer < 0 || *q.layer >= int(layers.size()) || layers[size_t(*q.layer)].value("type", "") != "diffusion")
+            throw ApiError(ErrorCode::InvalidArgument, "layer " + std::to_string(*q.layer) + " is not a diffusion layer of the TF",
+                           {{"/layer", "must name a diffusion layer (GET …/stylizer lists them)"}});
+        layer = *q.layer;
+    } else {
+        for (int i = int(layers.size()); i-- > 0 && layer < 0;)
+            if (layers[size_t(i)].value("type", "") == "diffusion") layer = i;
+        if (layer < 0) {
+            layers.push_back({{"type", "diffusion"}, {"constraints", nlohmann::json::array()}});
+            layer = int(layers.size()) - 1;
+        }
+    }
+    nlohmann::json& constraints = layers[size_t(layer)]["constraints"];
+    if (!constraints.is_array()) constraints = nlohmann::json::array();
+    constraints.push_back(protocol::tfConstraintToJson(out.constraint));
+    out.layer = layer;
+    out.index = int(constraints.size()) - 1;
+    out.revision = setStylizerScene(s, protocol::stylizerSceneFromJson(j, "", protocol::SceneSource::Api)).revision;
+    return out;
 }
 
 std::optional<LiveFrame> SessionService::nextLiveFrame(Session& s, uint64_t after, std::chrono::milliseconds wait) {

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 
+#include "core/base/errors.h"
+#include "core/stylize/tf_anchors.h"
+
 namespace volstyle::server {
 
 bool StylizerState::uses(const std::string& name) const { return std::find(meshRefs.begin(), meshRefs.end(), name) != meshRefs.end(); }
@@ -10,6 +13,25 @@ size_t StylizerState::uploadedVertices() const {
     size_t n = 0;
     for (const auto& [name, m] : meshes) n += m.mesh->positions.size();
     return n;
+}
+
+bool StylizerState::usesTransferImage() const {
+    const auto& tf = scene.transferFunction;
+    if (!tf) return false;
+    if (tf->layers.empty()) return true;
+    return std::any_of(tf->layers.begin(), tf->layers.end(), [](const core::TfLayer& l) { return l.kind == core::TfLayerKind::Image; });
+}
+
+void StylizerState::attachTransferImage(std::shared_ptr<const core::Image> image) {
+    auto& tf = scene.transferFunction;
+    if (!tf) return;
+    if (tf->layers.empty()) {
+        tf->image = std::move(image);
+        return;
+    }
+    for (core::TfLayer& l : tf->layers)
+        if (l.kind == core::TfLayerKind::Image) l.image = image;
+    core::compileTransferFunction(*tf);
 }
 
 StylizerState defaultStylizer() {
@@ -51,11 +73,17 @@ core::StylizerScene resolveStylizerScene(const StylizerState& state, const proto
                                           (isMeshName(ref) ? ref : "NAME") + ") or use builtin:forest/trees"});
         }
     }
-    if (scene.transferFunction) {
-        if (state.transferImage) scene.transferFunction->image = state.transferImage;
-        else problems.push_back({"/transfer_function", "no transfer-function image uploaded: PUT it to …/stylizer/tf first"});
+    for (const protocol::TfImageRef& ref : request.tfImages) {
+        if (state.transferImage) protocol::attachTfImage(*scene.transferFunction, ref, state.transferImage);
+        else problems.push_back({ref.layer < 0 ? "/transfer_function" : "/transfer_function/layers/" + std::to_string(ref.layer),
+                                 "no transfer-function image uploaded: PUT it to …/stylizer/tf first"});
     }
     if (!problems.empty()) throw protocol::ValidationError(problems);
+    if (scene.transferFunction) try {
+            core::compileTransferFunction(*scene.transferFunction);  // anchored ones again for each frame
+        } catch (const InvalidArgument& e) {
+            throw protocol::ValidationError(std::vector<protocol::FieldError>{{"/transfer_function/layers", e.what()}});
+        }
     return scene;
 }
 

@@ -39,12 +39,21 @@ struct StylizerState {
     std::shared_ptr<const core::Image> transferImage;  ///< PUT …/stylizer/tf; null: none
     uint64_t revision = 1;
     LiveFrame live;  ///< revision 0: none yet
+    /// Earlier scenes (as their JSON, oldest first) for POST …/stylizer/undo, and the ones undone
+    /// for …/redo; a new scene clears the redo stack. At most kStylizerUndoDepth each.
+    std::vector<nlohmann::json> undo, redo;
 
     /// Whether the scene's occluders use the uploaded mesh `name` (it cannot be deleted then).
     bool uses(const std::string& name) const;
+    /// Whether the scene's TF shows the uploaded TF image (an image TF or an image layer).
+    bool usesTransferImage() const;
+    /// Puts a new uploaded TF image into the scene's TF where it shows it (compiling its layers again).
+    void attachTransferImage(std::shared_ptr<const core::Image> image);
     /// Vertices of every uploaded mesh together (bounded per session).
     size_t uploadedVertices() const;
 };
+
+inline constexpr size_t kStylizerUndoDepth = 64;
 
 /// Where a mesh reference points: the built-in meshes are builtin:forest/ground and
 /// builtin:forest/trees; any other reference names an uploaded mesh.
@@ -60,8 +69,9 @@ std::shared_ptr<const core::Mesh> builtinMesh(const std::string& ref);
 bool isMeshName(const std::string& name);
 
 /// The scene `request` describes, its meshes looked up in `state`'s uploads and the built-in ones
-/// and its transfer function given the uploaded image. Throws protocol::ValidationError naming
-/// /occluders/i/mesh (no such mesh) and /transfer_function (no image uploaded).
+/// and its transfer function given the uploaded image and compiled when it is layers. Throws
+/// protocol::ValidationError naming /occluders/i/mesh (no such mesh), /transfer_function (no image
+/// uploaded) and the problems of the TF's layers.
 core::StylizerScene resolveStylizerScene(const StylizerState& state, const protocol::StylizerSceneRequest& request);
 
 }  // namespace volstyle::server

@@ -1,5 +1,6 @@
 #include "core/stylize/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -54,13 +55,30 @@ void StylizerScene::validate() const {
     camera.validate();
     if (transferFunction) {
         const TransferFunction& tf = *transferFunction;
-        if (!tf.image || tf.image->empty()) throw InvalidArgument("/transfer_function/image: the image is empty");
-        if (tf.image->width > 4096 || tf.image->height > 4096)
+        if (!tf.layers.empty()) {
+            if (tf.width < 1 || tf.width > 1024 || tf.height < 1 || tf.height > 1024)
+                throw InvalidArgument("/transfer_function/size: must be 1–1024 texels a side");
+            for (size_t l = 0; l < tf.layers.size(); ++l)
+                for (size_t c = 0; c < tf.layers[l].constraints.size(); ++c) {
+                    const auto& anchor = tf.layers[l].constraints[c].anchor;
+                    if (!anchor) continue;
+                    const std::string at = "/transfer_function/layers/" + std::to_string(l) + "/constraints/" + std::to_string(c) + "/anchor";
+                    for (int k = 0; k < 3; ++k)
+                        if (!(std::abs(anchor->position[k]) <= 1e9)) throw InvalidArgument(at + "/position: must be finite (|x| <= 1e9)");
+                    if (!anchor->follow.empty() &&
+                        std::none_of(occluders.begin(), occluders.end(), [&](const Occluder& o) { return o.name == anchor->follow; }))
+                        throw InvalidArgument(at + "/follow: no occluder is named '" + anchor->follow + "'");
+                }
+        } else if (!tf.image || tf.image->empty()) {
+            throw InvalidArgument("/transfer_function/image: the image is empty");
+        }
+        if (tf.image && (tf.image->width > 4096 || tf.image->height > 4096))
             throw InvalidArgument("/transfer_function/image: at most 4096 texels a side");
         if (!(tf.depthFar > tf.depthNear) || !std::isfinite(tf.depthNear) || !std::isfinite(tf.depthFar))
             throw InvalidArgument("/transfer_function/depth_range: must be two finite numbers, the second larger");
-        for (float v : tf.image->rgba)
-            if (!std::isfinite(v) || v < 0) throw InvalidArgument("/transfer_function/image: values must be finite and >= 0");
+        if (tf.image)
+            for (float v : tf.image->rgba)
+                if (!std::isfinite(v) || v < 0) throw InvalidArgument("/transfer_function/image: values must be finite and >= 0");
     }
 }
 

@@ -15,6 +15,7 @@
 #include "core/math/vec.h"
 #include "core/render/params.h"
 #include "core/stylize/mesh.h"
+#include "core/stylize/tf_layers.h"
 
 namespace volstyle::core {
 
@@ -69,11 +70,17 @@ struct HomogeneousMedium {
 /// The transfer function F (SPEC §7): an RGBA image over (V̄ ∈ [0, 1] left to right, linear
 /// depth d = (s − depthRange₀)/(depthRange₁ − depthRange₀) ∈ [0, 1] bottom to top), sampled
 /// bilinearly between texel centres and clamped at the edges.
+/// Either an image, or a stack of layers (core/stylize/tf_layers.h) compiled into `image` at
+/// width × height (compileTransferFunction); constraints anchored in the scene move with it, so
+/// their stack is compiled again for each frame (core/stylize/tf_anchors.h).
 struct TransferFunction {
     enum class Mode { Multiply, Replace };
     std::shared_ptr<const Image> image;
     Mode mode = Mode::Multiply;  ///< multiply: F.rgb scales L_scat; replace: F.rgb·F.a is L_scat
     double depthNear = 0, depthFar = 50;
+    std::vector<TfLayer> layers = {};  ///< non-empty: `image` is compiled from these
+    int width = 128, height = 128;     ///< the compiled image's size, 1–1024
+    bool hasAnchors() const;
 };
 
 struct StylizerScene {
@@ -101,6 +108,11 @@ struct StylizeSettings {
     /// Read the shadow maps back (their AOVs); off, StylizedFrame::shadowMap and
     /// modifiedShadowMap stay empty and a frame saves two n×n read-backs (live previews).
     bool readShadowMaps = true;
+    /// A pixel whose occluder StylizedFrame::pickedOccluder names (a click in the scene).
+    struct Pixel {
+        int x = 0, y = 0;
+    };
+    std::optional<Pixel> pick = std::nullopt;
     void validate() const;
 };
 

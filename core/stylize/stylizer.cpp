@@ -15,6 +15,7 @@
 #include "core/shaders/layout.h"
 #include "core/stylize/light_map.h"
 #include "core/stylize/morphology_gpu.h"
+#include "core/stylize/tf_anchors.h"
 
 namespace volstyle::core {
 
@@ -157,9 +158,42 @@ double Stylizer::estimatedLookups(const StylizerScene& scene, const StylizeSetti
 }
 
 StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings& settings) {
+    scene.validate();
+    const auto& tf = scene.transferFunction;
+    if (!tf || tf->layers.empty() || (tf->image && !tf->hasAnchors())) {
+        StylizedFrame f = renderPass(scene, settings);
+        f.transferFunction = tf;
+        return f;
+    }
+    StylizerScene s = scene;
+    if (!tf->hasAnchors()) {
+        compileTransferFunction(*s.transferFunction);
+        StylizedFrame f = renderPass(s, settings);
+        f.transferFunction = s.transferFunction;
+        return f;
+    }
+    // Anchored constraints: where they are depends on this frame's V̄ and depths.
+    s.transferFunction.reset();
+    StylizedFrame f = renderPass(s, settings);
+    const auto t = Clock::now();
+    TransferFunction resolved = *tf;
+    resolveAnchors(resolved, scene, f);
+    compileTransferFunction(resolved);
+    applyTransferFunction(resolved, f);
+    f.transferFunction = std::move(resolved);
+    const double ms = msSince(t);
+    f.shadeMs += ms, f.totalMs += ms;
+    return f;
+}
+
+StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSettings& settings) {
     VOLSTYLE_CHECK(m_device.isOwnedByThisThread(), ==, true);
     scene.validate();
     settings.validate();
+    if (settings.pick && !(settings.pick->x >= 0 && settings.pick->y >= 0 && settings.pick->x < scene.camera.width &&
+                           settings.pick->y < scene.camera.height))
+        throw InvalidArgument("/x, /y: the pixel must be inside the " + std::to_string(scene.camera.width) + "×" +
+                              std::to_string(scene.camera.height) + " image");
     const auto t0 = Clock::now();
     StylizedFrame out;
     const Camera& cam = scene.camera;
@@ -316,6 +350,12 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
     }
     glDisable(GL_DEPTH_TEST);
+    if (settings.pick) {  // the object id in the G-buffer's colour (0: nothing)
+        float texel[4] = {0, 0, 0, 0};
+        glGetTextureSubImage(colour.id(), 0, settings.pick->x, cam.height - 1 - settings.pick->y, 0, 1, 1, 1, GL_RGBA, GL_FLOAT,
+                             sizeof texel, texel);
+        out.pickedOccluder = int(std::lround(texel[3])) - 1;
+    }
     m_device.finish();
     out.gbufferMs = msSince(t);
 

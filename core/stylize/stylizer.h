@@ -9,6 +9,7 @@
 /// lines (Eq. 3) and given noise holes (Eq. 4–5). GL-free header; GL thread only.
 
 #include <memory>
+#include <optional>
 
 #include "core/gpu/gpu_device.h"
 #include "core/image/image.h"
@@ -24,6 +25,10 @@ struct StylizedFrame {
     Image linearDepth;        ///< s: distance to the first surface (or the camera's far), rgb
     Image shadowMap;          ///< the light's depth in [0, 1] (1: nothing), side shadow_map_size
     Image modifiedShadowMap;  ///< the same after the occluders' manipulations (what V̄ reads)
+    int pickedOccluder = -1;  ///< StylizeSettings::pick: the index of the occluder seen there, −1: none
+    /// The transfer function the frame used, its anchored constraints moved to where they are
+    /// now and compiled (empty without a TF).
+    std::optional<TransferFunction> transferFunction;
     double shadowMs = 0;   ///< the shadow maps and the manipulations
     double mipmapMs = 0;   ///< the min-max mipmap (accelerated method)
     double gbufferMs = 0;
@@ -51,7 +56,9 @@ public:
     Stylizer(const Stylizer&) = delete;
     Stylizer& operator=(const Stylizer&) = delete;
 
-    /// Renders `scene` (validated first; InvalidArgument names the problem).
+    /// Renders `scene` (validated first; InvalidArgument names the problem). A TF of layers is
+    /// compiled first; with constraints anchored in the scene the frame is rendered without it,
+    /// the anchors are found in its AOVs and the compiled TF is applied on the CPU.
     StylizedFrame render(const StylizerScene& scene, const StylizeSettings& settings = {});
 
     /// About how many shadow-map lookups (or texel operations) a frame costs: the per-pixel pass
@@ -62,6 +69,7 @@ public:
     static constexpr double kAcceleratedLookupsPerRay = 300;
 
 private:
+    StylizedFrame renderPass(const StylizerScene& scene, const StylizeSettings& settings);
     struct Gpu;
     GpuDevice& m_device;
     std::unique_ptr<Gpu> m_gpu;

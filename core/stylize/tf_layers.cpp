@@ -20,11 +20,19 @@ void checkConstraint(const TfConstraint& c, const std::string& what) {
         throw InvalidArgument(what + ": colour and alpha must be in [0, 1]");
 }
 
-/// Texel of the TF square nearest to (V̄, d): x from V̄, row 0 at d = 1.
-int texelOf(const TfConstraint& c, int w, int h) {
-    const int x = std::clamp(int(std::lround(c.vBar * w - 0.5)), 0, w - 1);
-    const int y = std::clamp(int(std::lround((1 - c.depth) * h - 0.5)), 0, h - 1);
-    return y * w + x;
+/// The texels a bilinear lookup at (V̄, d) reads with a nonzero weight (1, 2 or 4; x from V̄,
+/// row 0 at d = 1), as stylize.comp's transferFunction() reads them.
+std::vector<size_t> footprintOf(const TfConstraint& c, int w, int h) {
+    const double fx = std::clamp(c.vBar * w - 0.5, 0.0, double(w - 1)), fy = std::clamp((1 - c.depth) * h - 0.5, 0.0, double(h - 1));
+    const int x0 = int(fx), y0 = int(fy);
+    const int x1 = fx > x0 ? std::min(x0 + 1, w - 1) : x0, y1 = fy > y0 ? std::min(y0 + 1, h - 1) : y0;
+    std::vector<size_t> out;
+    for (int y : {y0, y1})
+        for (int x : {x0, x1}) {
+            const size_t t = size_t(y) * size_t(w) + size_t(x);
+            if (std::find(out.begin(), out.end(), t) == out.end()) out.push_back(t);
+        }
+    return out;
 }
 
 /// Bilinear, clamped, between texel centres; (u, v) in [0, 1]² with v = 0 at the top row.
@@ -127,6 +135,12 @@ private:
 
 }  // namespace
 
+std::array<double, 4> sampleTransferFunction(const Image& tf, double vBar, double depth) {
+    std::array<double, 4> out{};
+    sampleImage(tf, std::clamp(vBar, 0.0, 1.0), 1 - std::clamp(depth, 0.0, 1.0), out.data());
+    return out;
+}
+
 std::vector<Vec3d> diffuseConstraints(const std::vector<TfConstraint>& constraints, int w, int h, std::vector<double>& alpha,
                                       int* iterations, double* residual, double tolerance) {
     const size_t n = size_t(w) * h;
@@ -139,12 +153,12 @@ std::vector<Vec3d> diffuseConstraints(const std::vector<TfConstraint>& constrain
     std::vector<double> pinned[4];
     std::vector<int> count(n, 0);
     for (auto& p : pinned) p.assign(n, 0.0);
-    for (const TfConstraint& c : constraints) {
-        const int t = texelOf(c, w, h);
-        ++count[size_t(t)];
-        const double v[4] = {c.colour.x, c.colour.y, c.colour.z, c.alpha};
-        for (int ch = 0; ch < 4; ++ch) pinned[ch][size_t(t)] += v[ch];
-    }
+    for (const TfConstraint& c : constraints)
+        for (size_t t : footprintOf(c, w, h)) {
+            ++count[t];
+            const double v[4] = {c.colour.x, c.colour.y, c.colour.z, c.alpha};
+            for (int ch = 0; ch < 4; ++ch) pinned[ch][t] += v[ch];
+        }
     std::vector<int> freeIndex(n, -1);
     std::vector<size_t> freeTexels;
     for (size_t t = 0; t < n; ++t) {
@@ -322,10 +336,13 @@ Image compileTfLayers(const std::vector<TfLayer>& layers, int w, int h, TfCompil
             }
         }
     }
+    // The blend keeps colour premultiplied by alpha; the TF stores it straight (as a PNG does, and
+    // as `replace` reads it: F.rgb·F.a).
     Image out(w, h);
     for (size_t i = 0; i < n; ++i) {
         float* p = &out.rgba[4 * i];
-        p[0] = float(c[i].x), p[1] = float(c[i].y), p[2] = float(c[i].z), p[3] = float(a[i]);
+        const Vec3d straight = a[i] > 0 ? c[i] / a[i] : c[i];
+        p[0] = float(straight.x), p[1] = float(straight.y), p[2] = float(straight.z), p[3] = float(a[i]);
     }
     return out;
 }

@@ -6,7 +6,10 @@
 /// A diffusion layer spreads a few constraints over the square by a membrane (Laplace) solve, so one
 /// constraint gives a uniform layer, two a gradient, more a smooth interpolation. GL-free.
 
+#include <array>
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "core/image/image.h"
@@ -14,12 +17,21 @@
 
 namespace volstyle::core {
 
-/// A colour and alpha pinned at a point of the TF square.
+/// Where a constraint clicked into the scene sits (issue #15): its TF position is recomputed for
+/// each frame from the pixel this point projects to (core/stylize/tf_anchors.h).
+struct TfAnchor {
+    Vec3d position;      ///< world space, or the followed occluder's object space
+    std::string follow;  ///< an occluder's name: the anchor moves with it; empty: fixed in the world
+};
+
+/// A colour and alpha pinned at a point of the TF square: the texels of its bilinear footprint are
+/// pinned, so the TF looked up at exactly (V̄, d) is the constraint's colour.
 struct TfConstraint {
     double vBar = 0;   ///< [0, 1]
     double depth = 0;  ///< [0, 1]
     Vec3d colour{1, 1, 1};
     double alpha = 1;
+    std::optional<TfAnchor> anchor = std::nullopt;  ///< set: (vBar, depth) follow the scene
 };
 
 enum class TfLayerKind { Solid, Gradient, Image, Diffusion };
@@ -44,8 +56,12 @@ struct TfCompileStats {
 /// Throws InvalidArgument on a bad size, an Image layer without an image or values outside [0, 1].
 Image compileTfLayers(const std::vector<TfLayer>& layers, int width, int height, TfCompileStats* stats = nullptr);
 
+/// F(V̄, d) as the stylizer's shader reads it (stylize.comp's transferFunction): bilinear between
+/// texel centres, clamped, row 0 at d = 1. RGBA.
+std::array<double, 4> sampleTransferFunction(const Image& tf, double vBar, double depth);
+
 /// The membrane interpolation of `constraints` on a w×h grid of texel centres: each constraint fixes
-/// the texel nearest to it (several on one texel: their mean); every other texel is the mean of its
+/// the texels its bilinear lookup reads (several on one texel: their mean); every other texel is the mean of its
 /// neighbours (Δu = 0, mirrored at the edges), solved by Jacobi-preconditioned CG in double to
 /// `tolerance` relative residual. RGBA per texel; no constraint: transparent black.
 std::vector<Vec3d> diffuseConstraints(const std::vector<TfConstraint>& constraints, int width, int height,

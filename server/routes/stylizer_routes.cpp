@@ -1,6 +1,8 @@
 // A session's light-shaft stylizer (SPEC §7 "API"): GET/PUT …/stylizer (the scene),
 // GET …/stylizer/occluders, PUT/DELETE …/stylizer/occluders/{name} (mesh files),
-// PUT/DELETE …/stylizer/tf and GET …/stylizer/tf.png (the transfer function), POST …/stylizer/frame
+// PUT/DELETE …/stylizer/tf and GET …/stylizer/tf.png (the transfer function), POST …/stylizer/undo
+// and …/redo, POST …/stylizer/pick (a pixel's TF position) and …/constraints (a TF constraint
+// clicked into the scene), POST …/stylizer/frame
 // (a frame or AOV), GET …/stylizer/events (the live stream: SSE `frame` events whose URLs,
 // GET …/stylizer/frames/{revision}.jpeg, hold each new revision's frame).
 #include <fmt/format.h>
@@ -38,6 +40,12 @@ nlohmann::json meshJson(const OccluderMeshInfo& m) {
 void replyScene(httplib::Response& res, const StylizerSnapshot& s) {
     res.set_header("ETag", fmt::format("\"r{}\"", s.revision));
     reply(res, 200, protocol::stylizerSceneToJson(s.scene, s.meshRefs));
+}
+
+nlohmann::json pickJson(const StylizerPick& p) {
+    return {{"x", p.x}, {"y", p.y}, {"v_bar", p.vBar}, {"depth", p.depth}, {"distance", p.distance},
+            {"occluder", p.occluderName.empty() ? nlohmann::json() : nlohmann::json(p.occluderName)},
+            {"position", {p.position.x, p.position.y, p.position.z}}};
 }
 
 std::string frameUrl(const std::string& session, uint64_t revision) {
@@ -96,6 +104,21 @@ void addStylizerRoutes(RouteContext& c) {
             throw ApiError(ErrorCode::InvalidArgument, "the body is empty; send the scene (GET …/stylizer gives the current one)");
         auto request = protocol::stylizerSceneFromJson(c.body(req), "", protocol::SceneSource::Api);
         replyScene(res, c.service.setStylizerScene(*s, request));
+    });
+    for (auto [route, redo] : {std::pair{"/undo", false}, std::pair{"/redo", true}})
+        c.http.Post(kStylizerPath + route, [&c, redo](const httplib::Request& req, httplib::Response& res) {
+            replyScene(res, c.service.undoStylizer(*c.service.find(req.matches[1]), redo));
+        });
+    c.http.Post(kStylizerPath + "/pick", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        reply(res, 200, pickJson(c.service.pickStylizer(*s, protocol::StylizerPickRequest::fromJson(c.body(req), c.limits, false))));
+    });
+    c.http.Post(kStylizerPath + "/constraints", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        const AddedTfConstraint a = c.service.addTfConstraint(*s, protocol::StylizerPickRequest::fromJson(c.body(req), c.limits, true));
+        res.set_header("ETag", fmt::format("\"r{}\"", a.revision));
+        reply(res, 200, {{"revision", a.revision}, {"layer", a.layer}, {"index", a.index},
+                         {"constraint", protocol::tfConstraintToJson(a.constraint)}, {"pick", pickJson(a.pick)}});
     });
     c.http.Get(kStylizerPath + "/occluders", [&c](const httplib::Request& req, httplib::Response& res) {
         nlohmann::json list = nlohmann::json::array();

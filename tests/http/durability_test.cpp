@@ -210,7 +210,14 @@ TEST(Durability, TheStylizerSurvivesARestart) {
         scene["occluders"][1]["mesh"] = "board";
         scene["occluders"][1]["manipulation"] = {{"closing", {{"radius_px", 2}}}};
         scene["light"]["shadow_map_size"] = 512;
-        scene["transfer_function"] = {{"mode", "multiply"}, {"depth_range", {0, 30}}};
+        // Issue #15: a TF of layers (the uploaded image, a diffusion with an anchored constraint).
+        scene["transfer_function"] = {
+            {"mode", "multiply"},
+            {"depth_range", {0, 30}},
+            {"layers", {{{"type", "image"}},
+                        {{"type", "diffusion"}, {"blend", "multiply"},
+                         {"constraints", {{{"v_bar", 0.3}, {"depth", 0.5}, {"colour", {1, 0, 0}},
+                                           {"anchor", {{"position", {0, 0, 0}}, {"follow", "ground"}}}}}}}}}};
         r = c.Put(base.c_str(), scene.dump(), "application/json");
         ASSERT_EQ(r->status, 200) << r->body;
         sceneBefore = c.Get(base.c_str())->body;
@@ -229,6 +236,11 @@ TEST(Durability, TheStylizerSurvivesARestart) {
     const std::string frameAfter = c.Post((base + "/frame").c_str(), frameRequest, "application/json")->body;
     auto pixels = [](const std::string& exr) { return volstyle::core::loadImageFromMemory(exr.data(), exr.size(), "frame").image.rgba; };
     EXPECT_TRUE(pixels(frameAfter) == pixels(frameBefore)) << "the same frame";  // (the files differ in their date)
+    auto undone = c.Post((base + "/undo").c_str(), "", "application/json");
+    ASSERT_EQ(undone->status, 200) << "the undo history survives a restart: " << undone->body;
+    EXPECT_FALSE(json::parse(undone->body).contains("transfer_function"));
+    ASSERT_EQ(c.Post((base + "/redo").c_str(), "", "application/json")->status, 200);
+    EXPECT_EQ(json::parse(c.Get(base.c_str())->body), json::parse(sceneBefore));
     server.stop(SIGTERM);
 
     // A damaged mesh costs its occluder only: the rest of the scene (and the TF) stays.

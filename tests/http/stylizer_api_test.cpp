@@ -4,7 +4,7 @@
 #include <atomic>
 #include <cmath>
 
-#include "api_fixture.h"
+#include "stylizer_fixture.h"
 
 namespace volstyle::test {
 namespace {
@@ -16,35 +16,6 @@ const char kGreyPng[] =
     "\xe3\x68\x6f\xff\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42\x60\x82";
 
 const std::string kQuadObj = "v -4 0 -4\nv 4 0 -4\nv 4 0 4\nv -4 0 4\nf 1 2 3\nf 1 3 4\n";
-
-class StylizerApi : public Api {
-protected:
-    void SetUp() override {
-        Api::SetUp();
-        if (!m_server) return;
-        base = "/api/v1/sessions/" + createSession() + "/stylizer";
-    }
-    json scene() {
-        auto r = client().Get(base.c_str());
-        EXPECT_EQ(r->status, 200) << r->body;
-        return json::parse(r->body);
-    }
-    /// The built-in forest at 64×36 (the fixture's image limit is 64).
-    json smallForest() {
-        json s = scene();
-        s["camera"]["width"] = 64;
-        s["camera"]["height"] = 36;
-        s["light"]["shadow_map_size"] = 512;
-        return s;
-    }
-    httplib::Result putScene(const json& s) { return client().Put(base.c_str(), s.dump(), "application/json"); }
-    core::Image frame(const json& request = {{"format", "exr"}}) {
-        auto r = client().Post((base + "/frame").c_str(), request.dump(), "application/json");
-        EXPECT_EQ(r->status, 200) << r->body;
-        return core::loadImageFromMemory(r->body.data(), r->body.size(), "frame").image;
-    }
-    std::string base;
-};
 
 TEST_F(StylizerApi, ASessionOpensOnTheForestAndItsSceneRoundTrips) {
     json s = scene();

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <random>
+#include <set>
 #include <tuple>
 
 #include "core/base/errors.h"
@@ -22,10 +23,13 @@ std::vector<double> denseSolve(const std::vector<TfConstraint>& cs, int w, int h
     std::vector<std::vector<double>> A(size_t(n), std::vector<double>(size_t(n) + 1, 0.0));
     std::vector<double> sum(size_t(n), 0.0);
     std::vector<int> count(size_t(n), 0);
-    for (const auto& c : cs) {
-        const int x = std::clamp(int(std::lround(c.vBar * w - 0.5)), 0, w - 1), y = std::clamp(int(std::lround((1 - c.depth) * h - 0.5)), 0, h - 1);
+    for (const auto& c : cs) {  // the texels a bilinear lookup at the constraint reads with weight > 0
+        const double fx = std::clamp(c.vBar * w - 0.5, 0.0, w - 1.0), fy = std::clamp((1 - c.depth) * h - 0.5, 0.0, h - 1.0);
+        std::set<int> texels;
+        for (int y : {int(std::floor(fy)), int(std::ceil(fy))})
+            for (int x : {int(std::floor(fx)), int(std::ceil(fx))}) texels.insert(y * w + x);
         const double v = channel == 0 ? c.colour.x : channel == 1 ? c.colour.y : channel == 2 ? c.colour.z : c.alpha;
-        sum[size_t(y * w + x)] += v, ++count[size_t(y * w + x)];
+        for (int t : texels) sum[size_t(t)] += v, ++count[size_t(t)];
     }
     for (int t = 0; t < n; ++t) {
         auto& row = A[size_t(t)];
@@ -123,4 +127,18 @@ TEST(TfLayers, TheStackBlendsBottomToTop) {
     TfLayer bad;
     bad.solid.colour = {2, 0, 0};
     EXPECT_THROW(compileTfLayers({bad}, 8, 4), InvalidArgument);
+}
+
+TEST(TfLayers, TheTfAtAConstraintIsItsColour) {
+    // Constraints between texel centres pin their bilinear footprint, so the lookup the stylizer
+    // makes at exactly (V̄, d) reads their colour and alpha (straight, not premultiplied).
+    TfLayer layer;
+    layer.kind = TfLayerKind::Diffusion;
+    layer.constraints = {{0.137, 0.81, {0.9, 0.2, 0.1}, 1}, {0.71, 0.23, {0.1, 0.7, 0.3}, 0.8}, {0.45, 0.52, {0.5, 0.5, 0.9}, 0.6}};
+    const Image tf = compileTfLayers({layer}, 37, 23);
+    for (const TfConstraint& c : layer.constraints) {
+        const auto F = sampleTransferFunction(tf, c.vBar, c.depth);
+        for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(F[size_t(ch)], c.colour[ch], 1e-5) << c.vBar;
+        EXPECT_NEAR(F[3], c.alpha, 1e-5);
+    }
 }

@@ -65,6 +65,18 @@ const Ajv = require('ajv');
   check('stylizer_frame_request', frameRequest, 'a frame request');
   await call('POST', `${st}/frame`, frameRequest, 200);
   check('error', await json('PUT', `${st}/occluders/quad`, '', 422), 'empty mesh');
+  // TF authoring (issue #15): a scene with layers, a pick and a clicked constraint, undo.
+  scene.transfer_function = { mode: 'multiply', depth_range: [0, 40], size: [32, 32],
+    layers: [{ type: 'solid', colour: [1, 1, 1] }, { type: 'diffusion', blend: 'multiply', constraints: [{ v_bar: 0.5, depth: 0.5, colour: [1, 0.5, 0] }] }] };
+  check('stylizer_scene', scene, 'a scene with TF layers');
+  check('stylizer_scene', await json('PUT', st, scene, 200), 'PUT stylizer with layers');
+  const pick = { x: 10, y: 20 };
+  check('stylizer_pick_request', pick, 'a pick');
+  check('stylizer_pick', await json('POST', `${st}/pick`, pick, 200), 'POST pick');
+  const constraint = { x: 24, y: 20, colour: [0.2, 0.4, 1], alpha: 1, anchor: 'world' };
+  check('stylizer_constraint_request', constraint, 'a constraint request');
+  check('stylizer_constraint', await json('POST', `${st}/constraints`, constraint, 200), 'POST constraints');
+  check('stylizer_scene', await json('POST', `${st}/undo`, undefined, 200), 'POST undo');
   console.log(`${checked - failed} passed, ${failed} failed`);
   process.exit(failed ? 1 : 0);
 })().catch((e) => { console.error('FAIL:', e.message); process.exit(1); });

@@ -1,0 +1,139 @@
+// Authoring the stylizer's transfer function in the scene (issue #15): a TF of layers in the scene
+// resource, constraints clicked into the frame (their TF position is the pixel's AOVs and the
+// pixel then shows their colour), anchors that follow an occluder as it and the camera move, and
+// undo/redo of scene changes. Frames are 64×36 (the fixture's image limit is 64 a side).
+#include <cmath>
+#include <set>
+
+#include "core/stylize/tf_anchors.h"
+#include "protocol/stylize_json.h"
+#include "stylizer_fixture.h"
+
+namespace volstyle::test {
+namespace {
+
+class TfAuthoringApi : public StylizerApi {
+protected:
+    core::Image aov(const char* name) { return frame({{"format", "exr"}, {"aov", name}}); }
+    json postConstraint(const json& body) {
+        auto r = client().Post((base + "/constraints").c_str(), body.dump(), "application/json");
+        EXPECT_EQ(r->status, 200) << r->body;
+        return json::parse(r->body);
+    }
+    /// The TF's part of a pixel of `styledFrame`: the frame less its physical surfaces.
+    static double styledPart(const core::Image& styledFrame, const core::Image& physical, const core::Image& scattering, int x, int y, int c) {
+        return double(styledFrame.pixel(x, y)[c]) - physical.pixel(x, y)[c] + scattering.pixel(x, y)[c];
+    }
+};
+
+/// The pixel whose (V̄, d) is farthest from pixel `a`'s.
+std::pair<int, int> farthestInTf(const core::Image& vBar, const core::Image& depth, int ax, int ay) {
+    std::pair<int, int> best{ax, ay};
+    double most = -1;
+    for (int y = 0; y < vBar.height; ++y)
+        for (int x = 0; x < vBar.width; ++x) {
+            const double dv = vBar.pixel(x, y)[0] - vBar.pixel(ax, ay)[0], dd = (depth.pixel(x, y)[0] - depth.pixel(ax, ay)[0]) / 40;
+            if (dv * dv + dd * dd > most) most = dv * dv + dd * dd, best = {x, y};
+        }
+    return best;
+}
+
+TEST_F(TfAuthoringApi, AClickedConstraintSitsAtThePixelsAovsAndGivesThePixelItsColour) {
+    for (const char* mode : {"replace", "multiply"}) {
+        SCOPED_TRACE(mode);
+        json s = smallForest();
+        s.erase("transfer_function");
+        ASSERT_EQ(putScene(s)->status, 200);
+        const core::Image physical = frame(), vBar = aov("average_visibility"), depth = aov("linear_depth");
+        const core::Image scattering = aov("scattering");
+        s["transfer_function"] = {{"mode", mode}, {"depth_range", {0, 40}}, {"layers", {{{"type", "diffusion"}}}}};
+        ASSERT_EQ(putScene(s)->status, 200);
+        const int ax = 20, ay = 30;
+        const auto [bx, by] = farthestInTf(vBar, depth, ax, ay);
+        const Vec3d red{0.9, 0.2, 0.1}, green{0.1, 0.7, 0.3};
+        for (auto [x, y, colour, alpha] : {std::tuple{ax, ay, red, 1.0}, std::tuple{bx, by, green, 0.8}}) {
+            const json added = postConstraint({{"x", x}, {"y", y}, {"colour", {colour.x, colour.y, colour.z}}, {"alpha", alpha}});
+            EXPECT_EQ(added["layer"], 0);
+            EXPECT_NEAR(added["constraint"]["v_bar"].get<double>(), vBar.pixel(x, y)[0], 1e-6);
+            EXPECT_NEAR(added["constraint"]["depth"].get<double>(), std::clamp(depth.pixel(x, y)[0] / 40.0, 0.0, 1.0), 1e-6);
+        }
+        const core::Image styled = frame();
+        for (auto [x, y, colour, alpha] : {std::tuple{ax, ay, red, 1.0}, std::tuple{bx, by, green, 0.8}})
+            for (int c = 0; c < 3; ++c) {
+                const double want = std::string(mode) == "replace" ? colour[c] * alpha : colour[c] * scattering.pixel(x, y)[c];
+                EXPECT_NEAR(styledPart(styled, physical, scattering, x, y, c), want, 1.0 / 255) << x << "," << y << " channel " << c;
+            }
+        std::printf("[ measured ] %s: constraints at (%d, %d) and (%d, %d), V̄ %.3f and %.3f\n", mode, ax, ay, bx, by,
+                    vBar.pixel(ax, ay)[0], vBar.pixel(bx, by)[0]);
+    }
+}
+
+TEST_F(TfAuthoringApi, AnAnchoredConstraintFollowsItsOccluderAndTheCamera) {
+    json s = smallForest();
+    s["transfer_function"] = {{"mode", "replace"}, {"depth_range", {0, 40}},
+                              {"layers", {{{"type", "diffusion"}, {"constraints", {{{"v_bar", 0.9}, {"depth", 0.9}, {"colour", {0, 0, 1}}}}}}}}};
+    ASSERT_EQ(putScene(s)->status, 200);
+    const json added = postConstraint({{"x", 32}, {"y", 30}, {"colour", {1, 0.5, 0}}, {"anchor", "object"}});
+    ASSERT_TRUE(added["pick"]["occluder"].is_string()) << added;
+    const std::string followed = added["pick"]["occluder"];
+    EXPECT_EQ(added["constraint"]["anchor"]["follow"], followed);
+
+    // Move the camera and the followed occluder; the anchored point's new pixel shows the colour.
+    s = scene();
+    s["camera"]["eye"][0] = s["camera"]["eye"][0].get<double>() + 1.5;
+    for (auto& o : s["occluders"])
+        if (o["name"] == followed) o["transform"][13] = o["transform"][13].get<double>() + 0.5;  // up by 0.5 (column-major ty)
+    ASSERT_EQ(putScene(s)->status, 200) << s;
+    const core::StylizerScene moved = protocol::stylizerSceneFromJson(s, "", protocol::SceneSource::Api).scene;
+    core::TfAnchor anchor{Vec3d(added["constraint"]["anchor"]["position"][0], added["constraint"]["anchor"]["position"][1],
+                                added["constraint"]["anchor"]["position"][2]),
+                          followed};
+    const auto pixel = moved.camera.project(core::anchorWorldPosition(moved, anchor));
+    ASSERT_TRUE(pixel.has_value());
+    json bare = s;
+    bare.erase("transfer_function");
+    ASSERT_EQ(putScene(bare)->status, 200);
+    const core::Image physical = frame(), scattering = aov("scattering");
+    ASSERT_EQ(client().Post((base + "/undo").c_str(), "", "application/json")->status, 200);
+    const core::Image styled = frame();
+    const double want[3] = {1, 0.5, 0};
+    for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(styledPart(styled, physical, scattering, pixel->x, pixel->y, c), want[c], 1.0 / 255)
+            << "pixel " << pixel->x << "," << pixel->y << " channel " << c;
+    std::printf("[ measured ] the anchor on '%s' moved from (32, 30) to (%d, %d)\n", followed.c_str(), pixel->x, pixel->y);
+}
+
+TEST_F(TfAuthoringApi, SceneChangesUndoAndRedo) {
+    expectError(client().Post((base + "/undo").c_str(), "", "application/json"), 409, "busy");
+    json s = smallForest();
+    ASSERT_EQ(putScene(s)->status, 200);
+    s["transfer_function"] = {{"layers", {{{"type", "solid"}, {"colour", {0.5, 0.5, 0.5}}}}}, {"size", {16, 8}}};
+    auto put = putScene(s);
+    ASSERT_EQ(put->status, 200) << put->body;
+    EXPECT_EQ(scene()["transfer_function"]["size"], json({16, 8}));
+    auto r = client().Post((base + "/undo").c_str(), "", "application/json");
+    ASSERT_EQ(r->status, 200) << r->body;
+    EXPECT_FALSE(json::parse(r->body).contains("transfer_function"));
+    r = client().Post((base + "/redo").c_str(), "", "application/json");
+    ASSERT_EQ(r->status, 200) << r->body;
+    EXPECT_EQ(json::parse(r->body)["transfer_function"]["layers"][0]["type"], "solid");
+    expectError(client().Post((base + "/redo").c_str(), "", "application/json"), 409, "busy");
+
+    // Bad layers name their field and change nothing.
+    json bad = s;
+    bad["transfer_function"]["layers"][0]["colour"] = {2, 0, 0};
+    bad["transfer_function"]["layers"].push_back({{"type", "gradient"}});
+    json e = expectError(putScene(bad), 400, "invalid_argument");
+    std::set<std::string> fields;
+    for (const auto& d : e["error"]["details"]) fields.insert(d["path"].get<std::string>());
+    EXPECT_TRUE(fields.count("/transfer_function/layers/0/colour")) << e;
+    EXPECT_TRUE(fields.count("/transfer_function/layers/1/from")) << e;
+    json noImage = s;
+    noImage["transfer_function"]["layers"] = {{{"type", "image"}}};
+    e = expectError(putScene(noImage), 400, "invalid_argument");
+    EXPECT_EQ(e["error"]["details"][0]["path"], "/transfer_function/layers/0") << e;
+    EXPECT_EQ(scene()["transfer_function"]["layers"][0]["type"], "solid");
+}
+
+}  // namespace
+}  // namespace volstyle::test
