@@ -124,9 +124,38 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
     JsonReader r;
     StylizerSceneRequest out;
     core::StylizerScene& s = out.scene;
-    if (r.object(j, path, {"occluders", "light", "medium", "camera", "background", "time", "transfer_function", "volume"})) {
+    if (r.object(j, path, {"occluders", "light", "medium", "camera", "background", "time", "transfer_function", "keyframes", "volume"})) {
         if (j.contains("transfer_function"))
             s.transferFunction = transferFunctionFromJson(r, j["transfer_function"], path + "/transfer_function", source, out.tfImages);
+        if (j.contains("keyframes")) {
+            const auto& list = j["keyframes"];
+            if (!list.is_array()) r.fail(path + "/keyframes", "must be an array of keys");
+            else if (list.size() > core::kMaxKeyframes) r.fail(path + "/keyframes", "at most " + std::to_string(core::kMaxKeyframes) + " keys");
+            else
+                for (size_t i = 0; i < list.size(); ++i) {
+                    const std::string kp = path + "/keyframes/" + std::to_string(i);
+                    core::StylizerKeyframe key;
+                    if (r.object(list[i], kp, {"time", "camera", "transfer_function"})) {
+                        const auto& k = list[i];
+                        if (!k.contains("time")) r.fail(kp + "/time", "is required");
+                        else key.time = boundedNumber(r, k["time"], kp + "/time", -1e9, 1e9, 0);
+                        if (!k.contains("camera")) r.fail(kp + "/camera", "is required");
+                        else try {
+                                key.camera = cameraFromJson(k["camera"], kp + "/camera");
+                            } catch (const ValidationError& e) {
+                                for (const FieldError& f : e.details()) r.fail(f.path, f.message);
+                            }
+                        if (k.contains("transfer_function")) {
+                            std::vector<TfImageRef> refs;
+                            key.transferFunction = transferFunctionFromJson(r, k["transfer_function"], kp + "/transfer_function", source, refs);
+                            for (TfImageRef& ref : refs) ref.key = int(i), out.tfImages.push_back(ref);
+                        }
+                    }
+                    if (i > 0 && !(key.time > s.keyframes.back().time) && !r.failed(kp + "/time"))
+                        r.fail(kp + "/time", "keys go by increasing time");
+                    s.keyframes.push_back(std::move(key));
+                }
+        }
         notYet(r, j, path, "volume", "a heterogeneous medium");
         if (j.contains("occluders")) {
             const auto& list = j["occluders"];
@@ -266,10 +295,19 @@ nlohmann::json stylizerSceneToJson(const core::StylizerScene& scene, const std::
                         {"background", vec3Json(scene.background)},
                         {"time", scene.time}};
     if (const auto& tf = scene.transferFunction) j["transfer_function"] = transferFunctionToJson(*tf, transferImageRef);
+    if (!scene.keyframes.empty()) {
+        nlohmann::json keys = nlohmann::json::array();
+        for (const core::StylizerKeyframe& k : scene.keyframes) {
+            keys.push_back({{"time", k.time}, {"camera", cameraToJson(k.camera)}});
+            if (k.transferFunction) keys.back()["transfer_function"] = transferFunctionToJson(*k.transferFunction);
+        }
+        j["keyframes"] = keys;
+    }
     return j;
 }
 
-void attachTfImage(core::TransferFunction& tf, const TfImageRef& ref, std::shared_ptr<const core::Image> image) {
+void attachTfImage(core::StylizerScene& scene, const TfImageRef& ref, std::shared_ptr<const core::Image> image) {
+    core::TransferFunction& tf = ref.key < 0 ? *scene.transferFunction : *scene.keyframes.at(size_t(ref.key)).transferFunction;
     if (ref.layer < 0) tf.image = std::move(image);
     else tf.layers.at(size_t(ref.layer)).image = std::move(image);
 }
@@ -289,6 +327,30 @@ std::optional<core::StylizerOutput> stylizerOutputFromName(const std::string& na
     return it->second;
 }
 
+namespace {
+
+/// "aov", "exposure", "method" and "steps" of a frame or sequence request.
+void readFrameOptions(JsonReader& r, const nlohmann::json& j, core::StylizerOutput& output, core::StylizeSettings& settings, double& exposure) {
+    if (j.contains("aov")) {
+        if (auto name = r.string(j["aov"], "/aov")) {
+            if (auto o = stylizerOutputFromName(*name)) output = *o;
+            else r.fail("/aov", "must be one of frame, " + std::string(kStylizerAovNames) + "; got '" + *name + "'");
+        }
+    }
+    if (j.contains("exposure")) exposure = boundedNumber(r, j["exposure"], "/exposure", -64, 64, 0);
+    if (j.contains("method")) {
+        auto m = r.string(j["method"], "/method");
+        if (m == "naive") settings.method = core::VisibilityMethod::Naive;
+        else if (m && *m != "accelerated") r.fail("/method", "must be 'accelerated' or 'naive', got '" + *m + "'");
+    }
+    if (j.contains("steps")) {
+        settings.steps = r.integer(j["steps"], "/steps").value_or(settings.steps);
+        if (settings.steps < 1 || settings.steps > 4096) r.check("", "steps", "must be in [1, 4096]");
+    }
+}
+
+}  // namespace
+
 StylizerFrameRequest StylizerFrameRequest::fromJson(const nlohmann::json& j, const RequestLimits& limits) {
     JsonReader r;
     StylizerFrameRequest q;
@@ -301,24 +363,8 @@ StylizerFrameRequest StylizerFrameRequest::fromJson(const nlohmann::json& j, con
             else if (f == "exr") q.format = ImageFormat::Exr;
             else if (f) r.fail("/format", "must be 'png', 'jpeg' or 'exr', got '" + *f + "'");
         }
-        if (j.contains("aov")) {
-            auto name = r.string(j["aov"], "/aov");
-            if (name) {
-                if (auto o = stylizerOutputFromName(*name)) q.output = *o;
-                else r.fail("/aov", "must be one of frame, " + std::string(kStylizerAovNames) + "; got '" + *name + "'");
-            }
-        }
         if (j.contains("time")) q.time = boundedNumber(r, j["time"], "/time", -1e9, 1e9, 0);
-        if (j.contains("method")) {
-            auto m = r.string(j["method"], "/method");
-            if (m == "naive") q.settings.method = core::VisibilityMethod::Naive;
-            else if (m && *m != "accelerated") r.fail("/method", "must be 'accelerated' or 'naive', got '" + *m + "'");
-        }
-        if (j.contains("steps")) {
-            q.settings.steps = r.integer(j["steps"], "/steps").value_or(q.settings.steps);
-            if (q.settings.steps < 1 || q.settings.steps > 4096) r.check("", "steps", "must be in [1, 4096]");
-        }
-        if (j.contains("exposure")) q.exposure = boundedNumber(r, j["exposure"], "/exposure", -64, 64, 0);
+        readFrameOptions(r, j, q.output, q.settings, q.exposure);
     }
     r.throwIfErrors();
     return q;
@@ -350,6 +396,23 @@ StylizerPickRequest StylizerPickRequest::fromJson(const nlohmann::json& j, const
             else if (a == "object") q.anchor = Anchor::Object;
             else if (a && *a != "none") r.fail("/anchor", "must be 'none', 'world' or 'object', got '" + *a + "'");
         }
+    }
+    r.throwIfErrors();
+    return q;
+}
+
+StylizerSequenceRequest StylizerSequenceRequest::fromJson(const nlohmann::json& j) {
+    JsonReader r;
+    StylizerSequenceRequest q;
+    if (r.object(j, "", {"fps", "start", "end", "video", "aov", "exposure", "method", "steps"})) {
+        if (j.contains("fps")) {
+            q.fps = r.number(j["fps"], "/fps").value_or(q.fps);
+            if (!(q.fps > 0 && q.fps <= 240)) r.check("", "fps", "must be in (0, 240]");
+        }
+        if (j.contains("start")) q.start = boundedNumber(r, j["start"], "/start", -1e9, 1e9, 0);
+        if (j.contains("end")) q.end = boundedNumber(r, j["end"], "/end", -1e9, 1e9, 0);
+        if (j.contains("video")) q.video = r.boolean(j["video"], "/video").value_or(false);
+        readFrameOptions(r, j, q.output, q.settings, q.exposure);
     }
     r.throwIfErrors();
     return q;

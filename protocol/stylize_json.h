@@ -9,7 +9,8 @@
 ///              "shadow_map_size": 2048},
 ///    "medium": {"extinction": 0.05, "albedo": 0.9, "phase": {"type": "henyey_greenstein", "g": 0.4}},
 ///    "transfer_function": {"image": "tf.png", "mode": "multiply"|"replace", "depth_range": [0, 50]},
-///    "camera": {…SPEC §1…}, "background": [r,g,b], "time": 0}
+///    "camera": {…SPEC §1…}, "background": [r,g,b], "time": 0,
+///    "keyframes": [{"time": 0, "camera": {…}, "transfer_function": {…}}, …]}  (issue #15: a camera path)
 /// Meshes are references the caller resolves (the CLI: paths relative to the file; the API: the
 /// names of uploaded occluder meshes or builtin:forest/NAME). `volume` (a heterogeneous medium)
 /// is not rendered yet and is refused by name rather than ignored.
@@ -41,8 +42,9 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
 
 /// The outputs' names (SPEC §7): "frame", "average_visibility", "linear_depth", "shadow_map",
 /// "modified_shadow_map", "scattering"; nullopt for any other.
-/// Gives the TF (ref.layer −1) or its image layer `ref.layer` the image `image`.
-void attachTfImage(core::TransferFunction& tf, const TfImageRef& ref, std::shared_ptr<const core::Image> image);
+/// Gives the TF `ref` names (the scene's or key ref.key's) the image `image`: the TF's own
+/// (ref.layer −1) or its image layer's.
+void attachTfImage(core::StylizerScene& scene, const TfImageRef& ref, std::shared_ptr<const core::Image> image);
 
 std::optional<core::StylizerOutput> stylizerOutputFromName(const std::string& name);
 /// The AOVs' names, for messages: "average_visibility, linear_depth, …".
@@ -75,6 +77,19 @@ struct StylizerPickRequest {
     std::optional<int> layer;
     Anchor anchor = Anchor::None;
     static StylizerPickRequest fromJson(const nlohmann::json& j, const RequestLimits& limits, bool constraint);
+};
+
+/// POST …/stylizer/sequence: {"fps": 24, "start": T, "end": T (default: the key frames' span;
+/// required without keys), "video": true (also an MP4), "aov": NAME, "exposure": STOPS, "method",
+/// "steps"}, all optional but as said.
+struct StylizerSequenceRequest {
+    double fps = 24;
+    std::optional<double> start, end;
+    bool video = false;
+    core::StylizerOutput output = core::StylizerOutput::Frame;
+    double exposure = 0;
+    core::StylizeSettings settings;
+    static StylizerSequenceRequest fromJson(const nlohmann::json& j);
 };
 
 /// The scene as JSON, every field written (defaults included), so that reading it back gives the

@@ -30,6 +30,7 @@ enum class SceneSource { File, Api };
 struct TfImageRef {
     int layer = -1;
     std::string ref;
+    int key = -1;  ///< the TF of key frame `key`; −1: the scene's own
 };
 
 /// Records every problem below `path`; the images are left for the caller (`refs`).

@@ -12,6 +12,7 @@ packages=(
   libspdlog-dev libfmt-dev nlohmann-json3-dev libcpp-httplib-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium                                                 # the browser end-to-end test
+  ffmpeg                                                   # stylizer sequences as video files
 )
 packages+=("$@")  # extra packages a script needs (scripts/fuzz.sh: clang)
 # Node and npm for the browser test: the machine's own if present (Debian's would clash with it).

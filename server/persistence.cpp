@@ -191,6 +191,7 @@ void Persistence::removeSession(const std::string& session) {
 void Persistence::removeJob(const std::string& job) {
     std::error_code ec;
     fs::remove(m_dir / "jobs" / (job + ".json"), ec);
+    fs::remove_all(jobFilesDir(job), ec);
 }
 
 void Persistence::saveJob(const Job& job) { atomicWrite(m_dir / "jobs" / (job.id + ".json"), protocol::toText(job.toJson(), 2)); }

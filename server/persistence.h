@@ -54,7 +54,9 @@ public:
     void saveSessionFile(const std::string& session, const std::string& file, const std::string& bytes);
     void removeSessionFile(const std::string& session, const std::string& file);
     void saveJob(const Job& job);
-    void removeJob(const std::string& job);
+    void removeJob(const std::string& job);  ///< its record and its files
+    /// The folder of a job's files (a sequence's frames and video).
+    std::filesystem::path jobFilesDir(const std::string& job) const { return m_dir / "jobs" / job; }
 
     /// The bytes of a stored version's file, unchanged (IoError if missing or not the size it
     /// was written with).

@@ -52,6 +52,8 @@ SessionService::SessionService(ServiceLimits limits, const std::string& dataDir)
         for (auto& j : m_persist->loadJobs()) m_jobs.restore(j);
         pruneJobs();
         spdlog::info("restored {} session(s) from '{}'", m_sessions.size(), dataDir);
+    } else {
+        m_scratch = std::filesystem::temp_directory_path() / ("volstyle-jobs-" + SessionStore::newId());
     }
 }
 
@@ -74,6 +76,8 @@ SessionService::~SessionService() {
         m_translucent.reset();
         m_solveCache.reset();
     });
+    std::error_code ec;
+    if (!m_scratch.empty()) std::filesystem::remove_all(m_scratch, ec);
 }
 
 void SessionService::saved(Session& s) {
@@ -87,11 +91,13 @@ void SessionService::saved(const Job& j) {
 }
 
 void SessionService::pruneJobs() {
+    std::error_code ec;
     for (const auto& j : m_jobs.prune(m_limits.finishedJobsKept)) {
         {
             std::lock_guard lock(m_jobRecords);
             j->forgotten = true;
             if (m_persist) m_persist->removeJob(j->id);
+            else std::filesystem::remove_all(jobFilesDir(j->id), ec);
         }
         if (auto s = m_sessions.find(j->session)) {
             std::lock_guard lock(s->mutex);
@@ -411,11 +417,42 @@ std::shared_ptr<Job> SessionService::job(const std::string& id) const {
     return j;
 }
 
-std::shared_ptr<Job> SessionService::startSolve(const std::shared_ptr<Session>& session, const core::SolveOptions& options) {
-    Session& s = *session;
+std::shared_ptr<Job> SessionService::queueJob(Session& s) {
+    checkJobQueue(s);
+    pruneJobs();
+    auto job = m_jobs.add(s.id);
+    saved(*job);
+    {
+        std::lock_guard lock(s.mutex);
+        s.jobs.push_back(job->id);
+        saved(s);
+    }
+    spdlog::info("job {} queued (session {})", job->id, s.id);
+    return job;
+}
+
+void SessionService::checkJobQueue(const Session& s) const {
     if (m_jobs.pending(s.id) >= m_limits.maxQueuedJobs)
         throw ApiError(ErrorCode::TooManyJobs, "session '" + s.id + "' already has " + std::to_string(m_limits.maxQueuedJobs) +
                                                    " queued jobs (the limit); wait or cancel one");
+}
+
+std::filesystem::path SessionService::jobFilesDir(const std::string& jobId) const {
+    return m_persist ? m_persist->jobFilesDir(jobId) : m_scratch / jobId;
+}
+
+std::filesystem::path SessionService::jobFile(const std::string& jobId, const std::string& name) const {
+    job(jobId);  // not_found for no such job
+    const std::filesystem::path path = jobFilesDir(jobId) / name;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec))
+        throw ApiError(ErrorCode::NotFound, "job '" + jobId + "' has no file '" + name + "' (yet)");
+    return path;
+}
+
+std::shared_ptr<Job> SessionService::startSolve(const std::shared_ptr<Session>& session, const core::SolveOptions& options) {
+    Session& s = *session;
+    checkJobQueue(s);
     {
         std::lock_guard lock(s.mutex);
         bool anyTarget = false;
@@ -430,15 +467,7 @@ std::shared_ptr<Job> SessionService::startSolve(const std::shared_ptr<Session>& 
         }
         if (!problems.empty()) throw protocol::ValidationError(problems);
     }
-    pruneJobs();
-    auto job = m_jobs.add(s.id);
-    saved(*job);
-    {
-        std::lock_guard lock(s.mutex);
-        s.jobs.push_back(job->id);
-        saved(s);
-    }
-    spdlog::info("job {} queued (session {})", job->id, s.id);
+    auto job = queueJob(s);
     m_gl.submit([this, job, session, options](core::GpuDevice& device) { runSolve(job, session, options, device); });
     return job;
 }

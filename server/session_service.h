@@ -6,6 +6,7 @@
 /// lock is never held while waiting for the GL thread (a finishing solve needs it).
 
 #include <chrono>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <semaphore>
@@ -195,6 +196,12 @@ public:
     // Solve jobs.
     std::shared_ptr<Job> startSolve(const std::shared_ptr<Session>& s, const core::SolveOptions& options);
     std::shared_ptr<Job> job(const std::string& id) const;  ///< ApiError not_found
+    /// Renders the stylizer's camera path (or a span of its scene time) as PNG frames, and an MP4
+    /// when asked, in a job on the GL thread: a progress event per frame, the files after
+    /// (jobFile). Checked before it is queued: the span, the frame count, the per-frame budget.
+    std::shared_ptr<Job> startSequence(const std::shared_ptr<Session>& s, const protocol::StylizerSequenceRequest& request);
+    /// The path of a file job `jobId` wrote (frame_00000.png, video.mp4); not_found without it.
+    std::filesystem::path jobFile(const std::string& jobId, const std::string& name) const;
     void cancel(Job& job) { job.cancel = true; }
 
 private:
@@ -240,6 +247,14 @@ private:
     /// session's lighting gets the solved radiances (and the volume a new version).
     void solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options, core::GpuDevice& device);
     void finishJob(Job& job);
+    /// A new job of session `s` (too_many_jobs at its queue limit), recorded and listed.
+    std::shared_ptr<Job> queueJob(Session& s);
+    void checkJobQueue(const Session& s) const;  ///< too_many_jobs at the session's queue limit
+    /// Where a job's files go: its folder in the data directory, or in m_scratch.
+    std::filesystem::path jobFilesDir(const std::string& jobId) const;
+    /// The sequence job on the GL thread (stylizer_sequence.cpp).
+    void runSequence(Job& job, const core::StylizerScene& scene, const std::vector<double>& times,
+                     const protocol::StylizerSequenceRequest& request, core::GpuDevice& device);
 
     /// Writes the stylizer's scene, moves its revision and wakes its streams (the lock held).
     void stylizerChanged(Session& s);
@@ -265,6 +280,7 @@ private:
     JobStore m_jobs;
     std::mutex m_jobRecords;  ///< orders writing a job's record against forgetting it
     std::unique_ptr<Persistence> m_persist;  ///< null: in memory only
+    std::filesystem::path m_scratch;          ///< job files without a data directory (removed at exit)
     GlWorker m_gl;
 };
 

@@ -7,6 +7,7 @@
 #include "core/base/errors.h"
 #include "core/image/image_io.h"
 #include "core/stylize/mesh_io.h"
+#include "core/stylize/keyframes.h"
 #include "core/stylize/stylizer.h"
 #include "core/stylize/tf_anchors.h"
 #include "server/session_service.h"
@@ -19,13 +20,16 @@ using protocol::ErrorCode;
 
 using Clock = std::chrono::steady_clock;
 
-/// Shadow-map lookups per second on llvmpipe's two cores (1920×1080 × 1024 naive steps took
-/// 6.4–20 s on two machines of this kind, bench/stylizer: the slower one), for the estimate that
-/// keeps a frame within the render budget before it holds the GL thread.
-constexpr double kLookupsPerSecond = 1.0e8;
-
 std::string meshFile(const std::string& name, const std::string& format) { return "stylizer/occluders/" + name + "." + format; }
 const std::string kTransferFile = "stylizer/tf.image";
+
+/// The scene a request renders: at its time (on a path: the path's camera there), then from its
+/// camera when it names one.
+core::StylizerScene sceneFor(const core::StylizerScene& scene, const std::optional<core::Camera>& camera, std::optional<double> time) {
+    core::StylizerScene out = core::sceneAtTime(scene, time.value_or(scene.time));
+    if (camera) out.camera = *camera;
+    return out;
+}
 
 /// Pushes a scene onto an undo or redo stack, dropping the oldest beyond its depth.
 void remember(std::vector<nlohmann::json>& stack, nlohmann::json scene) {
@@ -215,7 +219,7 @@ core::Stylizer& SessionService::stylizerEngine(core::GpuDevice& device) {
 
 core::StylizedFrame SessionService::stylizeOnGl(const core::StylizerScene& scene, const core::StylizeSettings& settings) {
     // Other sessions' frames and a solve's next iteration wait behind this one: estimate it first.
-    const double seconds = core::Stylizer::estimatedLookups(scene, settings) / kLookupsPerSecond;
+    const double seconds = core::Stylizer::estimatedLookups(scene, settings) / kStylizerLookupsPerSecond;
     if (m_limits.renderBudgetSeconds > 0 && seconds > m_limits.renderBudgetSeconds)
         throw ApiError(ErrorCode::OverBudget,
                        fmt::format("this frame would take about {:.0f} s, over the render budget of {:g} s (volstyle serve --render-budget); "
@@ -226,9 +230,7 @@ core::StylizedFrame SessionService::stylizeOnGl(const core::StylizerScene& scene
 }
 
 core::StylizedFrame SessionService::stylize(Session& s, const protocol::StylizerFrameRequest& request) {
-    core::StylizerScene scene = stylizer(s).scene;
-    if (request.camera) scene.camera = *request.camera;
-    if (request.time) scene.time = *request.time;
+    core::StylizerScene scene = sceneFor(stylizer(s).scene, request.camera, request.time);
     core::StylizeSettings settings = request.settings;
     settings.readShadowMaps =
         request.output == core::StylizerOutput::ShadowMap || request.output == core::StylizerOutput::ModifiedShadowMap;
@@ -236,9 +238,7 @@ core::StylizedFrame SessionService::stylize(Session& s, const protocol::Stylizer
 }
 
 StylizerPick SessionService::pickStylizer(Session& s, const protocol::StylizerPickRequest& q) {
-    core::StylizerScene scene = stylizer(s).scene;
-    if (q.camera) scene.camera = *q.camera;
-    if (q.time) scene.time = *q.time;
+    const core::StylizerScene scene = sceneFor(stylizer(s).scene, q.camera, q.time);
     const core::Camera& cam = scene.camera;
     if (!(q.x >= 0 && q.y >= 0 && q.x < cam.width && q.y < cam.height)) {
         const std::string message = "the pixel must be inside the " + std::to_string(cam.width) + "×" + std::to_string(cam.height) + " frame";
@@ -317,7 +317,7 @@ std::optional<LiveFrame> SessionService::nextLiveFrame(Session& s, uint64_t afte
     core::StylizeSettings settings;
     settings.readShadowMaps = false;
     const auto t0 = Clock::now();
-    const core::StylizedFrame f = stylizeOnGl(snapshot.scene, settings);
+    const core::StylizedFrame f = stylizeOnGl(core::sceneAtTime(snapshot.scene, snapshot.scene.time), settings);
     LiveFrame live{snapshot.revision, core::encodeImage(f.frame, "jpeg"), f.frame.width, f.frame.height,
                    std::chrono::duration<double, std::milli>(Clock::now() - t0).count()};
     std::lock_guard lock(s.mutex);

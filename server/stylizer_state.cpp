@@ -15,23 +15,31 @@ size_t StylizerState::uploadedVertices() const {
     return n;
 }
 
+namespace {
+
+bool showsImage(const core::TransferFunction& tf) {
+    return tf.layers.empty() ||
+           std::any_of(tf.layers.begin(), tf.layers.end(), [](const core::TfLayer& l) { return l.kind == core::TfLayerKind::Image; });
+}
+
+}  // namespace
+
 bool StylizerState::usesTransferImage() const {
-    const auto& tf = scene.transferFunction;
-    if (!tf) return false;
-    if (tf->layers.empty()) return true;
-    return std::any_of(tf->layers.begin(), tf->layers.end(), [](const core::TfLayer& l) { return l.kind == core::TfLayerKind::Image; });
+    const auto tfs = scene.transferFunctions();
+    return std::any_of(tfs.begin(), tfs.end(), [](const core::TransferFunction* tf) { return showsImage(*tf); });
 }
 
 void StylizerState::attachTransferImage(std::shared_ptr<const core::Image> image) {
-    auto& tf = scene.transferFunction;
-    if (!tf) return;
-    if (tf->layers.empty()) {
-        tf->image = std::move(image);
-        return;
+    for (core::TransferFunction* tf : scene.transferFunctions()) {
+        if (tf->layers.empty()) {
+            tf->image = image;
+            continue;
+        }
+        bool shown = false;
+        for (core::TfLayer& l : tf->layers)
+            if (l.kind == core::TfLayerKind::Image) l.image = image, shown = true;
+        if (shown) core::compileTransferFunction(*tf);
     }
-    for (core::TfLayer& l : tf->layers)
-        if (l.kind == core::TfLayerKind::Image) l.image = image;
-    core::compileTransferFunction(*tf);
 }
 
 StylizerState defaultStylizer() {
@@ -74,13 +82,14 @@ core::StylizerScene resolveStylizerScene(const StylizerState& state, const proto
         }
     }
     for (const protocol::TfImageRef& ref : request.tfImages) {
-        if (state.transferImage) protocol::attachTfImage(*scene.transferFunction, ref, state.transferImage);
-        else problems.push_back({ref.layer < 0 ? "/transfer_function" : "/transfer_function/layers/" + std::to_string(ref.layer),
+        if (state.transferImage) protocol::attachTfImage(scene, ref, state.transferImage);
+        else problems.push_back({(ref.key < 0 ? "" : "/keyframes/" + std::to_string(ref.key)) + "/transfer_function" +
+                                     (ref.layer < 0 ? "" : "/layers/" + std::to_string(ref.layer)),
                                  "no transfer-function image uploaded: PUT it to …/stylizer/tf first"});
     }
     if (!problems.empty()) throw protocol::ValidationError(problems);
-    if (scene.transferFunction) try {
-            core::compileTransferFunction(*scene.transferFunction);  // anchored ones again for each frame
+    for (core::TransferFunction* tf : scene.transferFunctions()) try {
+            core::compileTransferFunction(*tf);  // anchored ones again for each frame
         } catch (const InvalidArgument& e) {
             throw protocol::ValidationError(std::vector<protocol::FieldError>{{"/transfer_function/layers", e.what()}});
         }

@@ -55,6 +55,11 @@ struct StylizerState {
 
 inline constexpr size_t kStylizerUndoDepth = 64;
 
+/// Shadow-map lookups per second on llvmpipe's two cores (1920×1080 × 1024 naive steps took
+/// 6.4–20 s on two machines of this kind, bench/stylizer: the slower one), for the estimate that
+/// keeps a frame within the render budget before it holds the GL thread.
+inline constexpr double kStylizerLookupsPerSecond = 1.0e8;
+
 /// Where a mesh reference points: the built-in meshes are builtin:forest/ground and
 /// builtin:forest/trees; any other reference names an uploaded mesh.
 inline const std::string kBuiltinMeshPrefix = "builtin:forest/";

@@ -9,6 +9,88 @@
 
 namespace volstyle::core {
 
+namespace {
+
+/// The first problem of a TF (its fields named below `path`), anchors checked against `occluders`.
+void validateTransferFunction(const TransferFunction& tf, const std::string& path, const std::vector<Occluder>& occluders) {
+    if (!tf.layers.empty()) {
+        if (tf.width < 1 || tf.width > 1024 || tf.height < 1 || tf.height > 1024)
+            throw InvalidArgument(path + "/size: must be 1–1024 texels a side");
+        for (size_t l = 0; l < tf.layers.size(); ++l)
+            for (size_t c = 0; c < tf.layers[l].constraints.size(); ++c) {
+                const auto& anchor = tf.layers[l].constraints[c].anchor;
+                if (!anchor) continue;
+                const std::string at = path + "/layers/" + std::to_string(l) + "/constraints/" + std::to_string(c) + "/anchor";
+                for (int k = 0; k < 3; ++k)
+                    if (!(std::abs(anchor->position[k]) <= 1e9)) throw InvalidArgument(at + "/position: must be finite (|x| <= 1e9)");
+                if (!anchor->follow.empty() &&
+                    std::none_of(occluders.begin(), occluders.end(), [&](const Occluder& o) { return o.name == anchor->follow; }))
+                    throw InvalidArgument(at + "/follow: no occluder is named '" + anchor->follow + "'");
+            }
+    } else if (!tf.image || tf.image->empty()) {
+        throw InvalidArgument(path + "/image: the image is empty");
+    }
+    if (tf.image && (tf.image->width > 4096 || tf.image->height > 4096)) throw InvalidArgument(path + "/image: at most 4096 texels a side");
+    if (!(tf.depthFar > tf.depthNear) || !std::isfinite(tf.depthNear) || !std::isfinite(tf.depthFar))
+        throw InvalidArgument(path + "/depth_range: must be two finite numbers, the second larger");
+    if (tf.image)
+        for (float v : tf.image->rgba)
+            if (!std::isfinite(v) || v < 0) throw InvalidArgument(path + "/image: values must be finite and >= 0");
+}
+
+/// The TF's texel grid: its layers' size, or its image's.
+std::pair<int, int> tfSize(const TransferFunction& tf) {
+    if (!tf.layers.empty()) return {tf.width, tf.height};
+    return tf.image ? std::pair{tf.image->width, tf.image->height} : std::pair{0, 0};
+}
+
+/// Keys by increasing time, cameras of one size, and TFs that blend texel by texel: all keys or
+/// none have one, all of one size, mode and depth range.
+void validateKeyframes(const std::vector<StylizerKeyframe>& keys, const std::vector<Occluder>& occluders) {
+    if (keys.size() > kMaxKeyframes) throw InvalidArgument("/keyframes: at most " + std::to_string(kMaxKeyframes) + " keys");
+    for (size_t i = 0; i < keys.size(); ++i) {
+        const std::string at = "/keyframes/" + std::to_string(i);
+        const StylizerKeyframe& k = keys[i];
+        if (!(std::abs(k.time) <= 1e9)) throw InvalidArgument(at + "/time: must be finite (|t| <= 1e9)");
+        if (i > 0 && !(k.time > keys[i - 1].time)) throw InvalidArgument(at + "/time: keys go by increasing time");
+        try {
+            k.camera.validate();
+        } catch (const InvalidArgument& e) {
+            throw InvalidArgument(at + "/camera: " + e.what());
+        }
+        if (k.camera.width != keys[0].camera.width || k.camera.height != keys[0].camera.height)
+            throw InvalidArgument(at + "/camera: every key's camera has the first one's size (" + std::to_string(keys[0].camera.width) + "×" +
+                                  std::to_string(keys[0].camera.height) + ")");
+        if (k.transferFunction.has_value() != keys[0].transferFunction.has_value())
+            throw InvalidArgument(at + "/transfer_function: every key has a TF, or none does");
+        if (!k.transferFunction) continue;
+        const TransferFunction& tf = *k.transferFunction;
+        validateTransferFunction(tf, at + "/transfer_function", occluders);
+        const TransferFunction& first = *keys[0].transferFunction;
+        if (tfSize(tf) != tfSize(first) || tf.mode != first.mode || tf.depthNear != first.depthNear || tf.depthFar != first.depthFar)
+            throw InvalidArgument(at + "/transfer_function: keys blend their TFs texel by texel, so every key's has the first one's "
+                                       "size, mode and depth_range");
+    }
+}
+
+}  // namespace
+
+std::vector<TransferFunction*> StylizerScene::transferFunctions() {
+    std::vector<TransferFunction*> out;
+    if (transferFunction) out.push_back(&*transferFunction);
+    for (StylizerKeyframe& k : keyframes)
+        if (k.transferFunction) out.push_back(&*k.transferFunction);
+    return out;
+}
+
+std::vector<const TransferFunction*> StylizerScene::transferFunctions() const {
+    std::vector<const TransferFunction*> out;
+    if (transferFunction) out.push_back(&*transferFunction);
+    for (const StylizerKeyframe& k : keyframes)
+        if (k.transferFunction) out.push_back(&*k.transferFunction);
+    return out;
+}
+
 void StylizerScene::validate() const {
     for (const Occluder& o : occluders) {
         try {
@@ -53,33 +135,8 @@ void StylizerScene::validate() const {
         if (!(background[c] >= 0 && background[c] <= 1e6)) throw InvalidArgument("/background: must be in [0, 1e6]");
     if (!(medium.albedo >= 0 && medium.albedo <= 1)) throw InvalidArgument("/medium/albedo: must be in [0, 1]");
     camera.validate();
-    if (transferFunction) {
-        const TransferFunction& tf = *transferFunction;
-        if (!tf.layers.empty()) {
-            if (tf.width < 1 || tf.width > 1024 || tf.height < 1 || tf.height > 1024)
-                throw InvalidArgument("/transfer_function/size: must be 1–1024 texels a side");
-            for (size_t l = 0; l < tf.layers.size(); ++l)
-                for (size_t c = 0; c < tf.layers[l].constraints.size(); ++c) {
-                    const auto& anchor = tf.layers[l].constraints[c].anchor;
-                    if (!anchor) continue;
-                    const std::string at = "/transfer_function/layers/" + std::to_string(l) + "/constraints/" + std::to_string(c) + "/anchor";
-                    for (int k = 0; k < 3; ++k)
-                        if (!(std::abs(anchor->position[k]) <= 1e9)) throw InvalidArgument(at + "/position: must be finite (|x| <= 1e9)");
-                    if (!anchor->follow.empty() &&
-                        std::none_of(occluders.begin(), occluders.end(), [&](const Occluder& o) { return o.name == anchor->follow; }))
-                        throw InvalidArgument(at + "/follow: no occluder is named '" + anchor->follow + "'");
-                }
-        } else if (!tf.image || tf.image->empty()) {
-            throw InvalidArgument("/transfer_function/image: the image is empty");
-        }
-        if (tf.image && (tf.image->width > 4096 || tf.image->height > 4096))
-            throw InvalidArgument("/transfer_function/image: at most 4096 texels a side");
-        if (!(tf.depthFar > tf.depthNear) || !std::isfinite(tf.depthNear) || !std::isfinite(tf.depthFar))
-            throw InvalidArgument("/transfer_function/depth_range: must be two finite numbers, the second larger");
-        if (tf.image)
-            for (float v : tf.image->rgba)
-                if (!std::isfinite(v) || v < 0) throw InvalidArgument("/transfer_function/image: values must be finite and >= 0");
-    }
+    if (transferFunction) validateTransferFunction(*transferFunction, "/transfer_function", occluders);
+    validateKeyframes(keyframes, occluders);
 }
 
 void StylizeSettings::validate() const {

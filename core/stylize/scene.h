@@ -83,6 +83,17 @@ struct TransferFunction {
     bool hasAnchors() const;
 };
 
+/// A key of the camera path (issue #15): at `time` the camera is `camera` and the TF is
+/// `transferFunction` (none: the scene's own). Between two keys both are interpolated linearly
+/// (core/stylize/keyframes.h).
+struct StylizerKeyframe {
+    double time = 0;
+    Camera camera;
+    std::optional<TransferFunction> transferFunction = std::nullopt;
+};
+
+inline constexpr size_t kMaxKeyframes = 256;
+
 struct StylizerScene {
     std::vector<Occluder> occluders;
     StylizerLight light;
@@ -91,6 +102,13 @@ struct StylizerScene {
     Vec3d background{0.02, 0.025, 0.035};  ///< radiance behind everything (night sky)
     double time = 0;
     std::optional<TransferFunction> transferFunction;  ///< none: the physical image
+    /// A camera path with key-framed TFs, by increasing time; empty: none. With keys, `time`
+    /// places the frame on the path: its camera and TF come from the keys around it.
+    std::vector<StylizerKeyframe> keyframes = {};
+
+    /// The scene's TF and every key's, for what applies to all of them (nulls skipped).
+    std::vector<TransferFunction*> transferFunctions();
+    std::vector<const TransferFunction*> transferFunctions() const;
 
     /// Throws InvalidArgument naming the first problem (a bad mesh, a degenerate
     /// light, a shadow map outside 512–4096, a negative σt, ρ outside [0,1], a bad camera).

@@ -13,6 +13,7 @@
 #include "core/gl/shader_builder.h"
 #include "core/render/gl_convert.h"
 #include "core/shaders/layout.h"
+#include "core/stylize/keyframes.h"
 #include "core/stylize/light_map.h"
 #include "core/stylize/morphology_gpu.h"
 #include "core/stylize/tf_anchors.h"
@@ -159,28 +160,41 @@ double Stylizer::estimatedLookups(const StylizerScene& scene, const StylizeSetti
 
 StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings& settings) {
     scene.validate();
-    const auto& tf = scene.transferFunction;
-    if (!tf || tf->layers.empty() || (tf->image && !tf->hasAnchors())) {
-        StylizedFrame f = renderPass(scene, settings);
-        f.transferFunction = tf;
-        return f;
+    // The TFs to blend, weighted: the two keys' around the scene's time on a path, else its own.
+    std::vector<std::pair<TransferFunction, double>> tfs;
+    if (!scene.keyframes.empty() && scene.keyframes.front().transferFunction) {
+        const PathPosition at = pathPosition(scene.keyframes, scene.time);
+        tfs.push_back({*scene.keyframes[at.before].transferFunction, 1 - at.weight});
+        if (at.weight > 0) tfs.push_back({*scene.keyframes[at.after].transferFunction, at.weight});
+    } else if (scene.transferFunction) {
+        tfs.push_back({*scene.transferFunction, 1});
     }
+    const bool anchored = std::any_of(tfs.begin(), tfs.end(), [](const auto& t) { return t.first.hasAnchors(); });
+    // The TF the frame applies: compiled where it is layers (anchors moved first), blended.
+    auto blended = [&] {
+        TransferFunction out = tfs.front().first;
+        for (auto& [tf, w] : tfs)
+            if (!tf.layers.empty() && (!tf.image || tf.hasAnchors())) compileTransferFunction(tf);
+        out.layers.clear();
+        out.image = tfs.size() == 1 ? tfs.front().first.image
+                                    : std::make_shared<const Image>(blendImages(*tfs[0].first.image, *tfs[1].first.image, tfs[1].second));
+        return out;
+    };
     StylizerScene s = scene;
-    if (!tf->hasAnchors()) {
-        compileTransferFunction(*s.transferFunction);
+    s.transferFunction.reset();
+    if (!anchored) {
+        if (!tfs.empty()) s.transferFunction = blended();
         StylizedFrame f = renderPass(s, settings);
         f.transferFunction = s.transferFunction;
         return f;
     }
-    // Anchored constraints: where they are depends on this frame's V̄ and depths.
-    s.transferFunction.reset();
+    // Anchored constraints: where they are depends on this frame's V̄ and depths, so the frame is
+    // rendered without the TF and the TF applied to it.
     StylizedFrame f = renderPass(s, settings);
     const auto t = Clock::now();
-    TransferFunction resolved = *tf;
-    resolveAnchors(resolved, scene, f);
-    compileTransferFunction(resolved);
-    applyTransferFunction(resolved, f);
-    f.transferFunction = std::move(resolved);
+    for (auto& [tf, w] : tfs) resolveAnchors(tf, scene, f);
+    f.transferFunction = blended();
+    applyTransferFunction(*f.transferFunction, f);
     const double ms = msSince(t);
     f.shadeMs += ms, f.totalMs += ms;
     return f;

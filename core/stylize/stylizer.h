@@ -56,9 +56,10 @@ public:
     Stylizer(const Stylizer&) = delete;
     Stylizer& operator=(const Stylizer&) = delete;
 
-    /// Renders `scene` (validated first; InvalidArgument names the problem). A TF of layers is
-    /// compiled first; with constraints anchored in the scene the frame is rendered without it,
-    /// the anchors are found in its AOVs and the compiled TF is applied on the CPU.
+    /// Renders `scene` (validated first; InvalidArgument names the problem) from its camera (on a
+    /// path: sceneAtTime() places it). A TF of layers is compiled first; on a path the TFs of the
+    /// keys around the scene's time are blended; with constraints anchored in the scene the frame
+    /// is rendered without the TF, the anchors are found in its AOVs and the TF applied on the CPU.
     StylizedFrame render(const StylizerScene& scene, const StylizeSettings& settings = {});
 
     /// About how many shadow-map lookups (or texel operations) a frame costs: the per-pixel pass

@@ -1,10 +1,13 @@
-// Solve jobs: POST /sessions/{sid}/solve, GET/DELETE /jobs/{jid}, GET …/events (SSE),
-// GET …/preview/{vid}.png.
+// Jobs: POST /sessions/{sid}/solve, GET/DELETE /jobs/{jid}, GET …/events (SSE),
+// GET …/preview/{vid}.png; a sequence's GET …/frames/{i}.png and …/video.mp4.
 #include <fmt/format.h>
 
+#include <filesystem>
+#include <fstream>
 #include <mutex>
 
 #include "server/routes/route_context.h"
+#include "server/video_encoder.h"
 
 namespace volstyle::server {
 namespace {
@@ -53,6 +56,13 @@ void streamEvents(httplib::Response& res, std::shared_ptr<Job> job, StreamLimite
     }, [&streams, client](bool) { streams.release(client); });
 }
 
+/// A file as the answer's body (frames and videos are small enough to send whole).
+void replyFile(httplib::Response& res, const std::filesystem::path& path, const char* mime) {
+    std::ifstream in(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    res.set_content(std::move(bytes), mime);
+}
+
 }  // namespace
 
 void addJobRoutes(RouteContext& c) {
@@ -82,6 +92,13 @@ void addJobRoutes(RouteContext& c) {
     });
     c.http.Get(kJobPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
         streamEvents(res, c.service.job(req.matches[1]), c.streams, req.remote_addr);
+    });
+    // A sequence job's files (issue #15): its frames and its video.
+    c.http.Get(kJobPath + R"(/frames/([0-9]{1,6})\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
+        replyFile(res, c.service.jobFile(req.matches[1], sequenceFrameName(std::stoul(req.matches[2]))), "image/png");
+    });
+    c.http.Get(kJobPath + R"(/video\.mp4)", [&c](const httplib::Request& req, httplib::Response& res) {
+        replyFile(res, c.service.jobFile(req.matches[1], "video.mp4"), "video/mp4");
     });
     c.http.Get(kJobPath + R"(/preview/(v[0-9]+)\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
         replyImage(res, c.service.renderPreview(req.matches[1], req.matches[2]), protocol::ImageFormat::Png);

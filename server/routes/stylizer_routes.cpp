@@ -2,7 +2,7 @@
 // GET …/stylizer/occluders, PUT/DELETE …/stylizer/occluders/{name} (mesh files),
 // PUT/DELETE …/stylizer/tf and GET …/stylizer/tf.png (the transfer function), POST …/stylizer/undo
 // and …/redo, POST …/stylizer/pick (a pixel's TF position) and …/constraints (a TF constraint
-// clicked into the scene), POST …/stylizer/frame
+// clicked into the scene), POST …/stylizer/sequence (a job rendering the camera path), POST …/stylizer/frame
 // (a frame or AOV), GET …/stylizer/events (the live stream: SSE `frame` events whose URLs,
 // GET …/stylizer/frames/{revision}.jpeg, hold each new revision's frame).
 #include <fmt/format.h>
@@ -119,6 +119,10 @@ void addStylizerRoutes(RouteContext& c) {
         res.set_header("ETag", fmt::format("\"r{}\"", a.revision));
         reply(res, 200, {{"revision", a.revision}, {"layer", a.layer}, {"index", a.index},
                          {"constraint", protocol::tfConstraintToJson(a.constraint)}, {"pick", pickJson(a.pick)}});
+    });
+    c.http.Post(kStylizerPath + "/sequence", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        reply(res, 202, {{"job", c.service.startSequence(s, protocol::StylizerSequenceRequest::fromJson(c.body(req)))->id}});
     });
     c.http.Get(kStylizerPath + "/occluders", [&c](const httplib::Request& req, httplib::Response& res) {
         nlohmann::json list = nlohmann::json::array();

@@ -210,6 +210,25 @@ TEST(Cli, StylizesASceneFileAndItsAovs) {
     EXPECT_EQ(frame.width, 48);
 }
 
+TEST(Cli, StylizesACameraPathAsASequenceAndAVideo) {
+    // docs/examples/stylize/path.json: two key frames 2 s apart; 2 fps gives 5 frames.
+    auto dir = test::scratchDir();
+    const std::string example = std::string(VOLSTYLE_SOURCE_DIR) + "/docs/examples/stylize/path.json";
+    const bool video = std::system("command -v ffmpeg > /dev/null 2>&1") == 0;
+    Result r = run("stylize --scene " + example + " --sequence " + (dir / "frames").string() + " --fps 2" +
+                   (video ? " --video " + (dir / "path.mp4").string() : std::string()));
+    ASSERT_EQ(r.status, 0) << r.out;
+    for (int i = 0; i < 5; ++i) {
+        const auto frame = dir / "frames" / ("frame_0000" + std::to_string(i) + ".png");
+        ASSERT_TRUE(std::filesystem::exists(frame)) << frame;
+        EXPECT_EQ(core::loadImage(frame.string()).image.width, 320);
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir / "frames" / "frame_00005.png"));
+    if (video) {
+        EXPECT_GT(std::filesystem::file_size(dir / "path.mp4"), 1000u);
+    }
+}
+
 TEST(Cli, StylizeBadInputsAreExit2WithTheProblem) {
     auto dir = test::scratchDir();
     const std::string out = " -o " + (dir / "x.png").string();
@@ -229,6 +248,10 @@ TEST(Cli, StylizeBadInputsAreExit2WithTheProblem) {
         {"stylize --scene builtin:forest --aov colour" + out, "--aov"},
         {"stylize --scene builtin:forest --method fast" + out, "--method"},
         {"stylize --scene builtin:forest --time nan" + out, "--time"},
+        {"stylize --scene builtin:forest --fps 4" + out, "--fps belongs to --sequence"},
+        {"stylize --scene builtin:forest --sequence " + (dir / "seq").string(), "--end is required"},
+        {"stylize --scene builtin:forest --sequence " + (dir / "seq").string() + " --end 1 --fps 500", "fps"},
+        {"stylize --scene builtin:forest --sequence " + (dir / "seq").string() + " --end 1 --video x.avi", "--video must end in .mp4"},
     };
     for (const auto& [args, expected] : cases) {
         Result r = run(args);

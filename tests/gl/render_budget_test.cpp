@@ -10,6 +10,7 @@
 #include "core/render/chunked_dispatch.h"
 #include "core/render/gpu_volume.h"
 #include "core/volume/builtin_scenes.h"
+#include "../common/image_compare.h"
 #include "gl_test_env.h"
 
 using namespace volstyle;
@@ -29,12 +30,6 @@ struct ChunkedScene {
     Lighting l;
 };
 
-double maxAbsDifference(const Image& a, const Image& b) {
-    double m = 0;
-    for (size_t i = 0; i < a.rgba.size(); ++i) m = std::max(m, double(std::abs(a.rgba[i] - b.rgba[i])));
-    return m;
-}
-
 }  // namespace
 
 TEST(RenderBudget, ChunkedAndSingleDispatchGiveIdenticalPixels) {
@@ -47,7 +42,7 @@ TEST(RenderBudget, ChunkedAndSingleDispatchGiveIdenticalPixels) {
     const Image a = renderer.render(single, scene.cam, scene.l);
     const Image b = renderer.render(chunked, scene.cam, scene.l, {}, &stats, WorkBudget(1e6));  // bounded: chunked
     EXPECT_EQ(stats.lightVolumesRecomputed, 1);
-    EXPECT_EQ(maxAbsDifference(a, b), 0.0);
+    EXPECT_EQ(test::maxAbsDifference(a, b), 0.0);
 }
 
 TEST(RenderBudget, TheBudgetStopsThePassesAndNamesThem) {
@@ -76,7 +71,7 @@ TEST(RenderBudget, TheBudgetStopsThePassesAndNamesThem) {
         EXPECT_NE(std::string(e.what()).find("march"), std::string::npos) << e.what();
     }
     GpuVolume fresh(scene.v);
-    EXPECT_EQ(maxAbsDifference(renderer.render(fresh, scene.cam, scene.l), whole), 0.0);
+    EXPECT_EQ(test::maxAbsDifference(renderer.render(fresh, scene.cam, scene.l), whole), 0.0);
 }
 
 TEST(RenderBudget, ACancelFlagStopsBetweenChunks) {

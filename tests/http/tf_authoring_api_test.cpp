@@ -2,11 +2,13 @@
 // resource, constraints clicked into the frame (their TF position is the pixel's AOVs and the
 // pixel then shows their colour), anchors that follow an occluder as it and the camera move, and
 // undo/redo of scene changes. Frames are 64×36 (the fixture's image limit is 64 a side).
+#include <algorithm>
 #include <cmath>
 #include <set>
 
 #include "core/stylize/tf_anchors.h"
 #include "protocol/stylize_json.h"
+#include "server/video_encoder.h"
 #include "stylizer_fixture.h"
 
 namespace volstyle::test {
@@ -133,6 +135,51 @@ TEST_F(TfAuthoringApi, SceneChangesUndoAndRedo) {
     e = expectError(putScene(noImage), 400, "invalid_argument");
     EXPECT_EQ(e["error"]["details"][0]["path"], "/transfer_function/layers/0") << e;
     EXPECT_EQ(scene()["transfer_function"]["layers"][0]["type"], "solid");
+}
+
+TEST_F(TfAuthoringApi, ASequenceJobRendersTheCameraPathWithProgressAndAVideo) {
+    json s = smallForest();
+    s.erase("transfer_function");
+    json later = s["camera"];
+    later["eye"][0] = later["eye"][0].get<double>() + 1;
+    auto solid = [](double r, double g, double b) {
+        return json{{"mode", "replace"}, {"size", {8, 8}}, {"layers", {{{"type", "solid"}, {"colour", {r, g, b}}}}}};
+    };
+    s["keyframes"] = {{{"time", 0}, {"camera", s["camera"]}, {"transfer_function", solid(0.2, 0.4, 0.6)}},
+                      {{"time", 1}, {"camera", later}, {"transfer_function", solid(0.8, 0.2, 0)}}};
+    auto put = putScene(s);
+    ASSERT_EQ(put->status, 200) << put->body;
+    EXPECT_EQ(scene()["keyframes"].size(), 2u);
+    const bool video = !server::findFfmpeg().empty();
+    auto r = client().Post((base + "/sequence").c_str(), json{{"fps", 4}, {"video", video}}.dump(), "application/json");
+    ASSERT_EQ(r->status, 202) << r->body;
+    const std::string job = json::parse(r->body)["job"];
+    const auto events = readEvents(client(), "/api/v1/jobs/" + job + "/events");
+    EXPECT_EQ(std::count(events.begin(), events.end(), "progress"), 5) << "a progress event per frame";
+    ASSERT_FALSE(events.empty());
+    EXPECT_EQ(events.back(), "done");
+    const json result = json::parse(client().Get(("/api/v1/jobs/" + job).c_str())->body)["result"];
+    ASSERT_EQ(result["frames"], 5) << result;
+    auto frame = client().Get(result["frame_urls"][4].get<std::string>().c_str());
+    ASSERT_EQ(frame->status, 200);
+    const core::Image last = core::loadImageFromMemory(frame->body.data(), frame->body.size(), "frame").image;
+    EXPECT_EQ(last.width, 64);
+    EXPECT_EQ(last.height, 36);
+    expectError(client().Get(("/api/v1/jobs/" + job + "/frames/5.png").c_str()), 404, "not_found");
+    if (video) {
+        auto mp4 = client().Get(result["video_url"].get<std::string>().c_str());
+        ASSERT_EQ(mp4->status, 200);
+        EXPECT_EQ(mp4->body.substr(4, 4), "ftyp") << "an MP4";
+    }
+    std::printf("[ measured ] 5 frames of 64x36 in %.0f ms%s\n", result["render_ms"].get<double>(), video ? ", and a video" : "");
+
+    // Without key frames a sequence needs its end; bad fps names its field.
+    s.erase("keyframes");
+    ASSERT_EQ(putScene(s)->status, 200);
+    json e = expectError(client().Post((base + "/sequence").c_str(), "{}", "application/json"), 400, "invalid_argument");
+    EXPECT_EQ(e["error"]["details"][0]["path"], "/end") << e;
+    e = expectError(client().Post((base + "/sequence").c_str(), R"({"fps": 0, "end": 1})", "application/json"), 400, "invalid_argument");
+    EXPECT_EQ(e["error"]["details"][0]["path"], "/fps") << e;
 }
 
 }  // namespace

@@ -39,12 +39,17 @@ const Ajv = require('ajv');
   check('view', await json('PUT', `/sessions/${sid}/views/${view.id}/target`, png, 200), 'PUT target');
   const accepted = await json('POST', `/sessions/${sid}/solve`, { unknowns: ['emission'], max_iterations: 2 }, 202);
   check('job_accepted', accepted, 'POST solve');
-  let job;
-  for (let i = 0; i < 600; ++i) {
-    job = await json('GET', `/jobs/${accepted.job}`, undefined, 200);
-    if (['done', 'failed', 'cancelled'].includes(job.state)) break;
-    await new Promise((r) => setTimeout(r, 50));
-  }
+  // Polls a job until it ends (or 30 s pass); its last JSON.
+  const waitForJob = async (id) => {
+    let j;
+    for (let i = 0; i < 600; ++i) {
+      j = await json('GET', `/jobs/${id}`, undefined, 200);
+      if (['done', 'failed', 'cancelled'].includes(j.state)) break;
+      await new Promise((r) => setTimeout(r, 50));
+    }
+    return j;
+  };
+  const job = await waitForJob(accepted.job);
   check('job', job, 'GET job');
   check('session', await json('POST', `/sessions/${sid}/revert`, { version: 1 }, 200), 'POST revert');
   // Errors.
@@ -77,6 +82,16 @@ const Ajv = require('ajv');
   check('stylizer_constraint_request', constraint, 'a constraint request');
   check('stylizer_constraint', await json('POST', `${st}/constraints`, constraint, 200), 'POST constraints');
   check('stylizer_scene', await json('POST', `${st}/undo`, undefined, 200), 'POST undo');
+  // A camera path and its sequence job.
+  scene.keyframes = [{ time: 0, camera: scene.camera }, { time: 1, camera: { ...scene.camera, eye: [2, 1.7, 9] } }];
+  check('stylizer_scene', await json('PUT', st, scene, 200), 'PUT stylizer with key frames');
+  const sequence = { fps: 2 };
+  check('stylizer_sequence_request', sequence, 'a sequence request');
+  const started = await json('POST', `${st}/sequence`, sequence, 202);
+  check('job_accepted', started, 'POST sequence');
+  const seqJob = await waitForJob(started.job);
+  check('job', seqJob, 'GET sequence job');
+  if (seqJob.state !== 'done') { console.log('FAIL sequence job', JSON.stringify(seqJob)); failed++; }
   console.log(`${checked - failed} passed, ${failed} failed`);
   process.exit(failed ? 1 : 0);
 })().catch((e) => { console.error('FAIL:', e.message); process.exit(1); });
