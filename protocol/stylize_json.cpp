@@ -9,9 +9,6 @@
 namespace volstyle::protocol {
 namespace {
 
-void notYet(JsonReader& r, const nlohmann::json& j, const std::string& path, const char* field, const char* what) {
-    if (j.contains(field)) r.fail(path + "/" + field, std::string(what) + " is not rendered yet (issue #11); remove it");
-}
 
 /// A column-major 4x4 affine matrix (OpenGL's and glTF's order).
 std::optional<Mat4> transformFromJson(JsonReader& r, const nlohmann::json& j, const std::string& path) {
@@ -120,6 +117,35 @@ void phaseFromJson(JsonReader& r, const nlohmann::json& j, const std::string& pa
 
 }  // namespace
 
+core::StylizerVolume volumeFromJson(JsonReader& r, const nlohmann::json& j, const std::string& path, SceneSource source,
+                                    StylizerSceneRequest& out) {
+    core::StylizerVolume v;
+    if (!r.object(j, path, {"source", "box", "extinction_scale", "light_transmittance", "steps"})) return v;
+    out.volumeSource = j.contains("source") ? r.string(j["source"], path + "/source").value_or("") : (source == SceneSource::Api ? "session" : "");
+    if (source == SceneSource::Api && out.volumeSource != "session")
+        r.fail(path + "/source", "the API's stylizer uses the session's volume: \"session\" (upload another with PUT …/volume)");
+    if (source == SceneSource::File && out.volumeSource.empty()) r.fail(path + "/source", "is required: a VDB file or builtin:NAME");
+    if (j.contains("box")) {
+        const auto& b = j["box"];
+        std::optional<Vec3d> lo, hi;
+        if (b.is_array() && b.size() == 2) lo = r.vec3(b[0], path + "/box/0"), hi = r.vec3(b[1], path + "/box/1");
+        else r.fail(path + "/box", "must be [[x0, y0, z0], [x1, y1, z1]]");
+        if (lo && hi) {
+            if (hi->x > lo->x && hi->y > lo->y && hi->z > lo->z && std::abs(lo->x) <= 1e9 && std::abs(lo->y) <= 1e9 && std::abs(lo->z) <= 1e9 &&
+                std::abs(hi->x) <= 1e9 && std::abs(hi->y) <= 1e9 && std::abs(hi->z) <= 1e9)
+                v.lo = *lo, v.hi = *hi, out.volumeBoxGiven = true;
+            else r.fail(path + "/box", "the second corner must be above the first on every axis (finite, |x| <= 1e9)");
+        }
+    }
+    if (j.contains("extinction_scale")) v.extinctionScale = boundedNumber(r, j["extinction_scale"], path + "/extinction_scale", 0, 1e6, 1);
+    if (j.contains("light_transmittance")) v.lightTransmittance = r.boolean(j["light_transmittance"], path + "/light_transmittance").value_or(true);
+    if (j.contains("steps")) {
+        v.steps = r.integer(j["steps"], path + "/steps").value_or(v.steps);
+        if (v.steps < 1 || v.steps > 4096) r.check(path, "steps", "must be in [1, 4096]");
+    }
+    return v;
+}
+
 StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::string& path, SceneSource source) {
     JsonReader r;
     StylizerSceneRequest out;
@@ -156,7 +182,7 @@ StylizerSceneRequest stylizerSceneFromJson(const nlohmann::json& j, const std::s
                     s.keyframes.push_back(std::move(key));
                 }
         }
-        notYet(r, j, path, "volume", "a heterogeneous medium");
+        if (j.contains("volume")) s.volume = volumeFromJson(r, j["volume"], path + "/volume", source, out);
         if (j.contains("occluders")) {
             const auto& list = j["occluders"];
             if (!list.is_array()) r.fail(path + "/occluders", "must be an array of occluders");
@@ -270,7 +296,7 @@ nlohmann::json manipulationToJson(const core::Manipulation& m) {
 }  // namespace
 
 nlohmann::json stylizerSceneToJson(const core::StylizerScene& scene, const std::vector<std::string>& meshRefs,
-                                   const std::optional<std::string>& transferImageRef) {
+                                   const std::optional<std::string>& transferImageRef, const std::string& volumeSource) {
     nlohmann::json occluders = nlohmann::json::array();
     for (size_t i = 0; i < scene.occluders.size(); ++i) {
         const core::Occluder& o = scene.occluders[i];
@@ -295,6 +321,12 @@ nlohmann::json stylizerSceneToJson(const core::StylizerScene& scene, const std::
                         {"background", vec3Json(scene.background)},
                         {"time", scene.time}};
     if (const auto& tf = scene.transferFunction) j["transfer_function"] = transferFunctionToJson(*tf, transferImageRef);
+    if (const auto& v = scene.volume)
+        j["volume"] = {{"source", volumeSource.empty() ? "session" : volumeSource},
+                       {"box", {vec3Json(v->lo), vec3Json(v->hi)}},
+                       {"extinction_scale", v->extinctionScale},
+                       {"light_transmittance", v->lightTransmittance},
+                       {"steps", v->steps}};
     if (!scene.keyframes.empty()) {
         nlohmann::json keys = nlohmann::json::array();
         for (const core::StylizerKeyframe& k : scene.keyframes) {

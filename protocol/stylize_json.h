@@ -12,8 +12,9 @@
 ///    "camera": {…SPEC §1…}, "background": [r,g,b], "time": 0,
 ///    "keyframes": [{"time": 0, "camera": {…}, "transfer_function": {…}}, …]}  (issue #15: a camera path)
 /// Meshes are references the caller resolves (the CLI: paths relative to the file; the API: the
-/// names of uploaded occluder meshes or builtin:forest/NAME). `volume` (a heterogeneous medium)
-/// is not rendered yet and is refused by name rather than ignored.
+/// names of uploaded occluder meshes or builtin:forest/NAME). `volume` is a heterogeneous medium
+/// (issue #15): {"source": "session" | "cloud.vdb" | "builtin:NAME", "box": [[x0,y0,z0],[x1,y1,z1]]
+/// (default: the volume's bounds), "extinction_scale": 1, "light_transmittance": true, "steps": 128}.
 
 #include <nlohmann/json.hpp>
 
@@ -34,6 +35,11 @@ struct StylizerSceneRequest {
     /// The images the transfer function needs (its own, or its image layers'), left for the caller
     /// to load and attach (attachTfImage).
     std::vector<TfImageRef> tfImages;
+    /// `volume.source`: "session" (the API's only one), a VDB path or builtin:NAME (files); the
+    /// grid is the caller's to attach. `volumeBoxGiven`: false when the box is left to the
+    /// volume's own bounds.
+    std::string volumeSource;
+    bool volumeBoxGiven = false;
 };
 
 /// Throws ValidationError listing every invalid field (paths below `path`).
@@ -96,6 +102,7 @@ struct StylizerSequenceRequest {
 /// same scene: `meshRefs` name each occluder's mesh; `transferImageRef`, when given, is written
 /// as `transfer_function.image` (an image TF of a file).
 nlohmann::json stylizerSceneToJson(const core::StylizerScene& scene, const std::vector<std::string>& meshRefs,
-                                   const std::optional<std::string>& transferImageRef = std::nullopt);
+                                   const std::optional<std::string>& transferImageRef = std::nullopt,
+                                   const std::string& volumeSource = "session");
 
 }  // namespace volstyle::protocol

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <tuple>
 
 #include "core/base/errors.h"
 #include "core/gpu/gpu_device.h"
@@ -17,6 +18,7 @@
 #include "protocol/render_json.h"
 #include "protocol/stylize_json.h"
 #include "server/cli.h"
+#include "server/scene_source.h"
 #include "server/stylizer_state.h"
 #include "server/video_encoder.h"
 
@@ -85,6 +87,18 @@ core::StylizerScene loadStylizerScene(const std::string& spec) {
             throw InvalidArgument("'" + spec + "': " + (ref.key < 0 ? "" : "/keyframes/" + std::to_string(ref.key)) + "/transfer_function/" +
                                   (ref.layer < 0 ? "" : "layers/" + std::to_string(ref.layer) + "/") + "image: " + e.what());
         }
+    }
+    if (request.scene.volume) {  // a VDB path relative to the file, or builtin:NAME
+        const std::string& source = request.volumeSource;
+        const std::string where = source.rfind("builtin:", 0) == 0 ? source : (folder / source).string();
+        core::Volume volume;
+        try {
+            volume = loadScene(where);
+        } catch (const Error& e) {
+            throw InvalidArgument("'" + spec + "': /volume/source: " + e.what());
+        }
+        request.scene.volume->grid = core::densityGridOf(volume);
+        if (!request.volumeBoxGiven) std::tie(request.scene.volume->lo, request.scene.volume->hi) = volume.worldBounds();
     }
     return request.scene;
 }

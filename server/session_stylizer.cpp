@@ -39,9 +39,32 @@ void remember(std::vector<nlohmann::json>& stack, nlohmann::json scene) {
 
 }  // namespace
 
+namespace {
+
+/// Gives a heterogeneous medium the session volume's σt grid (made once per version). The
+/// session's lock held.
+void attachDensity(Session& s, core::StylizerScene& scene) {
+    if (!scene.volume) return;
+    if (!s.stylizer.density || s.stylizer.densityVersion != s.version) {
+        s.stylizer.density = core::densityGridOf(s.volume);
+        s.stylizer.densityVersion = s.version;
+    }
+    scene.volume->grid = s.stylizer.density;
+}
+
+/// The stylizer's state as a render reads it: the scene (with the session's current volume), its
+/// mesh references and revision. The session's lock held.
+StylizerSnapshot snapshotOf(Session& s) {
+    StylizerSnapshot out{s.stylizer.scene, s.stylizer.meshRefs, s.stylizer.revision};
+    attachDensity(s, out.scene);
+    return out;
+}
+
+}  // namespace
+
 StylizerSnapshot SessionService::stylizer(Session& s) const {
     std::lock_guard lock(s.mutex);
-    return {s.stylizer.scene, s.stylizer.meshRefs, s.stylizer.revision};
+    return snapshotOf(s);
 }
 
 void SessionService::stylizerChanged(Session& s) {
@@ -60,7 +83,8 @@ StylizerSnapshot SessionService::setStylizerScene(Session& s, const protocol::St
             throw ApiError(ErrorCode::TooLarge, message, {{std::string("/camera/") + name, message}});
         }
     std::lock_guard lock(s.mutex);
-    core::StylizerScene scene = resolveStylizerScene(s.stylizer, request);
+    core::StylizerScene scene = resolveStylizerScene(s.stylizer, request, &s.volume);
+    attachDensity(s, scene);
     try {
         scene.validate();
     } catch (const InvalidArgument& e) {
@@ -71,7 +95,7 @@ StylizerSnapshot SessionService::setStylizerScene(Session& s, const protocol::St
     s.stylizer.scene = std::move(scene);
     s.stylizer.meshRefs = request.meshRefs;
     stylizerChanged(s);
-    return {s.stylizer.scene, s.stylizer.meshRefs, s.stylizer.revision};
+    return snapshotOf(s);
 }
 
 StylizerSnapshot SessionService::undoStylizer(Session& s, bool redo) {
@@ -83,7 +107,8 @@ StylizerSnapshot SessionService::undoStylizer(Session& s, bool redo) {
     protocol::StylizerSceneRequest request;
     try {
         request = protocol::stylizerSceneFromJson(from.back(), "", protocol::SceneSource::Api);
-        scene = resolveStylizerScene(s.stylizer, request);
+        scene = resolveStylizerScene(s.stylizer, request, &s.volume);
+        attachDensity(s, scene);
         scene.validate();
     } catch (const std::exception& e) {  // a mesh or the TF image it used was deleted since
         throw ApiError(ErrorCode::Busy, std::string("the ") + (redo ? "next" : "previous") + " scene no longer resolves: " + e.what());
@@ -93,7 +118,7 @@ StylizerSnapshot SessionService::undoStylizer(Session& s, bool redo) {
     s.stylizer.scene = std::move(scene);
     s.stylizer.meshRefs = request.meshRefs;
     stylizerChanged(s);
-    return {s.stylizer.scene, s.stylizer.meshRefs, s.stylizer.revision};
+    return snapshotOf(s);
 }
 
 namespace {
@@ -256,7 +281,7 @@ StylizerPick SessionService::pickStylizer(Session& s, const protocol::StylizerPi
     pick.distance = f.linearDepth.pixel(q.x, q.y)[0];
     pick.occluder = f.pickedOccluder;
     if (pick.occluder >= 0) pick.occluderName = scene.occluders[size_t(pick.occluder)].name;
-    pick.position = cam.eye + cam.rayDirection(q.x + 0.5, q.y + 0.5) * pick.distance;
+    pick.position = cam.eye + cam.rayDirection(q.x, q.y) * pick.distance;
     if (q.anchor == protocol::StylizerPickRequest::Anchor::Object && pick.occluder < 0)
         throw ApiError(ErrorCode::InvalidArgument, "no occluder at pixel (" + std::to_string(q.x) + ", " + std::to_string(q.y) +
                                                        ") to follow; click on one or anchor to the world",
@@ -312,7 +337,7 @@ std::optional<LiveFrame> SessionService::nextLiveFrame(Session& s, uint64_t afte
         if (!s.stylizerChanged.wait_for(lock, wait, [&] { return s.removed || s.stylizer.revision > after; })) return std::nullopt;
         if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
         if (s.stylizer.live.revision == s.stylizer.revision) return s.stylizer.live;  // another stream rendered it
-        snapshot = {s.stylizer.scene, s.stylizer.meshRefs, s.stylizer.revision};
+        snapshot = snapshotOf(s);
     }
     core::StylizeSettings settings;
     settings.readShadowMaps = false;

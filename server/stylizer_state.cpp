@@ -1,6 +1,7 @@
 #include "server/stylizer_state.h"
 
 #include <algorithm>
+#include <tuple>
 
 #include "core/base/errors.h"
 #include "core/stylize/tf_anchors.h"
@@ -65,7 +66,8 @@ bool isMeshName(const std::string& name) {
     });
 }
 
-core::StylizerScene resolveStylizerScene(const StylizerState& state, const protocol::StylizerSceneRequest& request) {
+core::StylizerScene resolveStylizerScene(const StylizerState& state, const protocol::StylizerSceneRequest& request,
+                                         const core::Volume* sessionVolume) {
     core::StylizerScene scene = request.scene;
     std::vector<protocol::FieldError> problems;
     for (size_t i = 0; i < request.meshRefs.size(); ++i) {
@@ -86,6 +88,10 @@ core::StylizerScene resolveStylizerScene(const StylizerState& state, const proto
         else problems.push_back({(ref.key < 0 ? "" : "/keyframes/" + std::to_string(ref.key)) + "/transfer_function" +
                                      (ref.layer < 0 ? "" : "/layers/" + std::to_string(ref.layer)),
                                  "no transfer-function image uploaded: PUT it to …/stylizer/tf first"});
+    }
+    if (scene.volume && !request.volumeBoxGiven) {
+        if (sessionVolume) std::tie(scene.volume->lo, scene.volume->hi) = sessionVolume->worldBounds();
+        else problems.push_back({"/volume/box", "is required here (there is no volume whose bounds it could take)"});
     }
     if (!problems.empty()) throw protocol::ValidationError(problems);
     for (core::TransferFunction* tf : scene.transferFunctions()) try {

@@ -42,6 +42,9 @@ struct StylizerState {
     /// Earlier scenes (as their JSON, oldest first) for POST …/stylizer/undo, and the ones undone
     /// for …/redo; a new scene clears the redo stack. At most kStylizerUndoDepth each.
     std::vector<nlohmann::json> undo, redo;
+    /// The session volume's σt grid for a heterogeneous medium, made once per volume version.
+    std::shared_ptr<const core::DensityGrid> density;
+    int densityVersion = 0;
 
     /// Whether the scene's occluders use the uploaded mesh `name` (it cannot be deleted then).
     bool uses(const std::string& name) const;
@@ -77,6 +80,9 @@ bool isMeshName(const std::string& name);
 /// and its transfer function given the uploaded image and compiled when it is layers. Throws
 /// protocol::ValidationError naming /occluders/i/mesh (no such mesh), /transfer_function (no image
 /// uploaded) and the problems of the TF's layers.
-core::StylizerScene resolveStylizerScene(const StylizerState& state, const protocol::StylizerSceneRequest& request);
+/// `sessionVolume` gives a heterogeneous medium without a box the volume's bounds (no volume: the
+/// box is required).
+core::StylizerScene resolveStylizerScene(const StylizerState& state, const protocol::StylizerSceneRequest& request,
+                                         const core::Volume* sessionVolume = nullptr);
 
 }  // namespace volstyle::server

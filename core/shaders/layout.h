@@ -121,6 +121,8 @@ VS_CONSTANT(int, kUnitGBufferSurface, 10); /* camera G-buffer: xyz normal, w dis
 VS_CONSTANT(int, kUnitGBufferColour, 11);  /* camera G-buffer: rgb surface colour, w object id (1-based) */
 VS_CONSTANT(int, kStylizeLayers, 2);
 VS_CONSTANT(int, kUnitTransferFunction, 12); /* the stylizer's transfer function F (RGBA, row 0 = d at its far end) */
+VS_CONSTANT(int, kUnitStylizeDensity, 0);      /* heterogeneous medium: σt over its box (r32f 3D, scaled) */
+VS_CONSTANT(int, kUnitStylizeTransmittance, 1); /* its optical depth τ_l toward the light per voxel (r32f 3D, stylize_transmittance.comp) */
 VS_CONSTANT(int, kBindingScatterDepth, 2);  /* SSBO float[n*n]: the manipulated shadow map V̄ reads (row 0 at the bottom) */       /* AOV planes of stylize.comp: (scattering rgb, V̄), (distance, hit, 0, 0) */
 
 struct StylizeParams {
@@ -143,6 +145,8 @@ struct StylizeParams {
     VS_VEC4 spot;             /* xyz: the spot's position; w: cos of half its cone (no light outside) */
     VS_VEC4 spotCone;         /* x: cos of the inner half-angle (full intensity inside) */
     VS_IVEC4 mipOffset[4];    /* min-max level k starts at entry mipOffset[k / 4][k % 4] of b_MinMax */
+    VS_VEC4 volumeLo;         /* heterogeneous medium (issue #15): xyz its box's low corner; w steps along a view ray (0: homogeneous) */
+    VS_VEC4 volumeHi;         /* xyz its box's high corner; w 1: the volume's transmittance toward the light dims it */
 };
 VS_CONSTANT(int, kVisibilityNaive, 0);   /* N midpoint lookups of the manipulated map per view ray */
 VS_CONSTANT(int, kVisibilityMinMax, 1);  /* exact traversal of its min-max mipmap (stylize.comp) */

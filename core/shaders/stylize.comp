@@ -6,6 +6,12 @@
 // Surfaces are lit by the light, shadowed by the (unmodified) shadow map, plus the background
 // as ambient (a white diffuse surface under a uniform sky of radiance B reflects B). A transfer
 // function F(V̄, d) then multiplies or replaces L_scat (SPEC §7).
+// With a heterogeneous medium (u.volumeLo.w > 0; issue #15, beyond the paper) σt(x) comes from a
+// grid over a box and the ray's part in the box is marched: with τ(t) = ∫₀ᵗ σt,
+//   L_scat = ρ (∫ σt e^{−τ} L_e dt) V̄,   V̄ = ∫ σt V T_l dt / ∫ σt dt,
+// L_e = p E (directional; a spot's I·cone/d²·p per sample), T_l the grid's transmittance toward
+// the light (stylize_transmittance.comp), and surfaces behind are dimmed by e^{−τ(s)} and lit
+// through T_l. A constant grid filling the box gives the homogeneous formula back (docs/STYLIZER.md).
 #include "common/stylize_params.glsl"
 #include "common/pinhole.glsl"
 #include "common/phase.glsl"
@@ -17,6 +23,8 @@ layout(binding = kUnitShadowDepth) uniform sampler2D s_shadowDepth;
 layout(binding = kUnitGBufferSurface) uniform sampler2D s_surface;
 layout(binding = kUnitGBufferColour) uniform sampler2D s_colour;
 layout(binding = kUnitTransferFunction) uniform sampler2D s_transfer;
+layout(binding = kUnitStylizeDensity) uniform sampler3D s_density;
+layout(binding = kUnitStylizeTransmittance) uniform sampler3D s_lightDepth;  // τ_l: optical depth toward the light
 
 layout(std430, binding = kBindingImageOut) writeonly buffer b_Image {
     vec4 pixels[];
@@ -256,6 +264,52 @@ vec4 transferFunction(float vBar, float d) {
     return mix(top, bottom, f.y);
 }
 
+// The heterogeneous medium's grid coordinates of world point x ([0, 1]³ over the box).
+vec3 volumeUvw(vec3 x) { return (x - u.volumeLo.xyz) / (u.volumeHi.xyz - u.volumeLo.xyz); }
+bool insideVolume(vec3 x) { return all(greaterThanEqual(x, u.volumeLo.xyz)) && all(lessThanEqual(x, u.volumeHi.xyz)); }
+// T_l at x: the grid's transmittance toward the light, e^{−τ_l} (1 outside the box, or when it is off).
+float lightTransmittance(vec3 x) {
+    return u.volumeHi.w > 0.5 && insideVolume(x) ? exp(-texture(s_lightDepth, volumeUvw(x)).r) : 1.0;
+}
+
+// What the light gives a point x of the medium before visibility, per unit of σt e^{−τ}: p E for
+// the directional light, I·cone/d²·p for a spot (no homogeneous attenuation: T_l is in V̄).
+vec3 emittedTowardEye(vec3 x, vec3 dir) {
+    if (u.options.z != kStylizerLightSpot)
+        return u.irradiance.rgb * phaseValue(u.medium.z, u.medium.w, dot(u.lightDirection.xyz, -dir));
+    vec3 toLight = u.spot.xyz - x;
+    float d = max(length(toLight), 1e-6);
+    vec3 l = toLight / d;
+    float cone = smoothstep(u.spot.w, u.spotCone.x, dot(l, u.lightDirection.xyz));
+    return u.irradiance.rgb * cone / (d * d) * phaseValue(u.medium.z, u.medium.w, dot(l, -dir));
+}
+
+// Marches the view ray's part in the box, [0, s] clipped to it, at u.volumeLo.w midpoints:
+// V̄ (−1 when the ray meets no medium), ∫σt e^{−τ} L_e dt and e^{−τ(s)}.
+void marchVolume(vec3 e, vec3 dir, float s, out float vBar, out vec3 inScattered, out float transmittance) {
+    vBar = -1.0;
+    inScattered = vec3(0.0);
+    transmittance = 1.0;
+    vec3 inv = 1.0 / mix(dir, vec3(1e-30), equal(dir, vec3(0.0)));
+    vec3 t0 = (u.volumeLo.xyz - e) * inv, t1 = (u.volumeHi.xyz - e) * inv;
+    vec3 near = min(t0, t1), far = max(t0, t1);
+    float ta = max(max(near.x, near.y), max(near.z, 0.0)), tb = min(min(far.x, far.y), min(far.z, s));
+    if (!(tb > ta)) return;
+    int steps = int(u.volumeLo.w);
+    float dt = (tb - ta) / float(steps), tau = 0.0, weighted = 0.0, weights = 0.0;
+    for (int i = 0; i < steps; ++i) {
+        vec3 x = e + (ta + (float(i) + 0.5) * dt) * dir;
+        float w = texture(s_density, volumeUvw(x)).r * dt;  // σt dt
+        if (w <= 0.0) continue;
+        weighted += w * visibility(x, true) * lightTransmittance(x);
+        weights += w;
+        inScattered += exp(-tau) * (1.0 - exp(-w)) * emittedTowardEye(x, dir);  // exact for σt constant over the step
+        tau += w;
+    }
+    transmittance = exp(-tau);
+    if (weights > 0.0) vBar = weighted / weights;
+}
+
 float averageVisibility(vec3 dir, float s) {
     if (u.options.x != kVisibilityMinMax) return averageVisibilityNaive(u.eye.xyz, dir, s);
     return u.options.z == kStylizerLightSpot ? averageVisibilityMinMax(u.eye.xyz, dir, s) : averageVisibilityMinMaxOrtho(u.eye.xyz, dir, s);
@@ -272,15 +326,23 @@ void main() {
     float s = hit ? min(surface.w, u.background.w) : u.background.w;
 
     // Average visibility along the ray (Eq. 2's factored-out V̄).
-    float vBar = averageVisibility(dir, s);
-
-    // Single scattering with the visibility factored out: ρ p E (1 − e^{−σt s}) V̄ (directional),
-    // the numerical integral times V̄ (spot).
     float sigma = u.medium.x;
     vec3 scattering;
-    if (u.options.z == kStylizerLightSpot) {
+    float vBar, viewTransmittance;
+    if (u.volumeLo.w > 0.0) {
+        vec3 inScattered;
+        marchVolume(u.eye.xyz, dir, s, vBar, inScattered, viewTransmittance);
+        if (vBar < 0.0) vBar = averageVisibility(dir, s);  // no medium on the ray: the geometric V̄ (for the TF)
+        scattering = u.medium.y * inScattered * vBar;
+    } else if (u.options.z == kStylizerLightSpot) {
+        // Single scattering with the visibility factored out: ρ p E (1 − e^{−σt s}) V̄ (directional),
+        // the numerical integral times V̄ (spot).
+        vBar = averageVisibility(dir, s);
+        viewTransmittance = exp(-sigma * s);
         scattering = spotInScattering(u.eye.xyz, dir, s) * vBar;
     } else {
+        vBar = averageVisibility(dir, s);
+        viewTransmittance = exp(-sigma * s);
         vec3 light = u.lightDirection.xyz;
         float opacity = 1.0 - exp(-sigma * s);
         scattering = u.medium.y * phaseValue(u.medium.z, u.medium.w, dot(light, -dir)) * u.irradiance.rgb * opacity * vBar;
@@ -305,10 +367,11 @@ void main() {
         // A spot's texels grow with the distance from it (u.shadow.z is then per unit distance).
         float texelSize = u.options.z == kStylizerLightSpot ? u.shadow.z * distance(x, u.spot.xyz) : u.shadow.z;
         float lit = visibility(x + (1.5 * texelSize + 1e-4 * s) * n, false) * max(dot(n, light), 0.0);
+        if (u.volumeLo.w > 0.0) lit *= lightTransmittance(x);
         behind = albedo * (incident * lit * (1.0 / 3.14159265358979) + u.background.rgb);
     }
     int p = pix.y * size.x + pix.x;
-    pixels[p] = vec4(behind * exp(-sigma * s) + styled, 1.0);
+    pixels[p] = vec4(behind * viewTransmittance + styled, 1.0);
     int count = size.x * size.y;
     layers[p] = vec4(scattering, vBar);
     layers[count + p] = vec4(s, hit ? 1.0 : 0.0, 0.0, 0.0);

@@ -1,6 +1,7 @@
 #include "core/stylize/scene.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -75,6 +76,17 @@ void validateKeyframes(const std::vector<StylizerKeyframe>& keys, const std::vec
 
 }  // namespace
 
+std::shared_ptr<const DensityGrid> densityGridOf(const Volume& volume) {
+    static std::atomic<uint64_t> nextId{1};
+    auto grid = std::make_shared<DensityGrid>();
+    grid->dims = volume.dims();
+    grid->sigma.resize(volume.voxelCount());
+    const std::vector<float>& e = volume.extinction();
+    for (size_t i = 0; i < grid->sigma.size(); ++i) grid->sigma[i] = (e[3 * i] + e[3 * i + 1] + e[3 * i + 2]) / 3.0f;
+    grid->id = nextId++;
+    return grid;
+}
+
 std::vector<TransferFunction*> StylizerScene::transferFunctions() {
     std::vector<TransferFunction*> out;
     if (transferFunction) out.push_back(&*transferFunction);
@@ -136,6 +148,16 @@ void StylizerScene::validate() const {
     if (!(medium.albedo >= 0 && medium.albedo <= 1)) throw InvalidArgument("/medium/albedo: must be in [0, 1]");
     camera.validate();
     if (transferFunction) validateTransferFunction(*transferFunction, "/transfer_function", occluders);
+    if (volume) {
+        const StylizerVolume& v = *volume;
+        if (!v.grid || v.grid->sigma.size() != size_t(v.grid->dims.volume()) || v.grid->sigma.empty())
+            throw InvalidArgument("/volume: has no grid (the session has no volume?)");
+        for (int k = 0; k < 3; ++k)
+            if (!(v.hi[k] > v.lo[k]) || !(std::abs(v.lo[k]) <= 1e9 && std::abs(v.hi[k]) <= 1e9))
+                throw InvalidArgument("/volume/box: must be [[x0, y0, z0], [x1, y1, z1]], finite, with x1 > x0, y1 > y0, z1 > z0");
+        if (!(v.extinctionScale >= 0 && v.extinctionScale <= 1e6)) throw InvalidArgument("/volume/extinction_scale: must be in [0, 1e6]");
+        if (v.steps < 1 || v.steps > 4096) throw InvalidArgument("/volume/steps: must be in [1, 4096]");
+    }
     validateKeyframes(keyframes, occluders);
 }
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/image/image.h"
+#include "core/volume/volume.h"
 
 #include "core/math/vec.h"
 #include "core/render/params.h"
@@ -67,6 +68,32 @@ struct HomogeneousMedium {
     Phase phase{PhaseType::HenyeyGreenstein, 0.4};
 };
 
+/// σt of a volume on its voxel grid, for the stylizer's heterogeneous medium (issue #15): the
+/// mean of its RGB extinction per voxel, x fastest. Immutable and shared; `id` names its values
+/// (a new grid, a new id) so the stylizer keeps one GPU copy per grid.
+struct DensityGrid {
+    Int3 dims;
+    std::vector<float> sigma;
+    uint64_t id = 0;
+};
+
+/// The grid of a volume (its extinction's RGB mean), with a fresh id.
+std::shared_ptr<const DensityGrid> densityGridOf(const Volume& volume);
+
+/// A heterogeneous medium in place of the homogeneous one (issue #15, beyond the paper): σt =
+/// extinctionScale × the grid, stretched over the box [lo, hi] (the voxels' box maps onto it;
+/// nothing outside it), with the medium's albedo and phase. V̄ becomes the σt-weighted average,
+/// along the view ray inside the box, of the visibility times the volume's transmittance toward
+/// the light, and the first integral ∫σt e^{−τ(t)} dt is marched through the grid
+/// (docs/STYLIZER.md "Heterogeneous media").
+struct StylizerVolume {
+    std::shared_ptr<const DensityGrid> grid;  ///< null until the caller attaches it (the API: the session's volume)
+    Vec3d lo{-1, -1, -1}, hi{1, 1, 1};
+    double extinctionScale = 1;
+    bool lightTransmittance = true;  ///< off: the medium does not dim the light (as the homogeneous model)
+    int steps = 128;                 ///< samples along a view ray's part in the box, 1–4096
+};
+
 /// The transfer function F (SPEC §7): an RGBA image over (V̄ ∈ [0, 1] left to right, linear
 /// depth d = (s − depthRange₀)/(depthRange₁ − depthRange₀) ∈ [0, 1] bottom to top), sampled
 /// bilinearly between texel centres and clamped at the edges.
@@ -105,6 +132,8 @@ struct StylizerScene {
     /// A camera path with key-framed TFs, by increasing time; empty: none. With keys, `time`
     /// places the frame on the path: its camera and TF come from the keys around it.
     std::vector<StylizerKeyframe> keyframes = {};
+    /// A heterogeneous medium replacing `medium`'s extinction (its albedo and phase stay).
+    std::optional<StylizerVolume> volume = std::nullopt;
 
     /// The scene's TF and every key's, for what applies to all of them (nulls skipped).
     std::vector<TransferFunction*> transferFunctions();

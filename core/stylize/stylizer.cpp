@@ -15,6 +15,7 @@
 #include "core/shaders/layout.h"
 #include "core/stylize/keyframes.h"
 #include "core/stylize/light_map.h"
+#include "core/stylize/medium_gpu.h"
 #include "core/stylize/morphology_gpu.h"
 #include "core/stylize/tf_anchors.h"
 
@@ -73,6 +74,7 @@ struct Stylizer::Gpu {
         std::shared_ptr<GpuMesh> gpu;
     };
     std::map<const Mesh*, CachedMesh> meshes;
+    StylizerMediumCache medium;  ///< the heterogeneous medium's textures
 
     std::shared_ptr<GpuMesh> mesh(const std::shared_ptr<const Mesh>& m) {
         std::erase_if(meshes, [](const auto& entry) { return entry.second.mesh.expired(); });
@@ -145,6 +147,7 @@ double Stylizer::estimatedLookups(const StylizerScene& scene, const StylizeSetti
     const double texels = double(scene.light.shadowMapSize) * scene.light.shadowMapSize;
     double lookups = pixels * (settings.method == VisibilityMethod::Naive ? settings.steps : kAcceleratedLookupsPerRay);
     if (scene.light.type == StylizerLightType::Spot) lookups += pixels * settings.spotSteps;
+    if (scene.volume) lookups += pixels * 3.0 * scene.volume->steps;  // a shadow-map and two texture lookups a step
     const LightMap map = lightMapOf(scene);
     for (size_t i = 0; i < scene.occluders.size(); ++i) {
         const Manipulation& m = scene.occluders[i].manipulation;
@@ -387,6 +390,8 @@ StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSett
         glTextureSubImage2D(transfer.id(), 0, 0, 0, tf->image->width, tf->image->height, GL_RGBA, GL_FLOAT, tf->image->rgba.data());
         p.transfer = {tf->mode == TransferFunction::Mode::Multiply ? 1.0f : 2.0f, float(tf->depthNear), float(tf->depthFar), 0};
     }
+    if (scene.volume) p.medium.x = 0;  // the grid's σt replaces the homogeneous one (a spot's surfaces: T_l instead)
+    (void)m_gpu->medium.bind(m_device, scene.volume, p);  // inside the shading time
     m_device.setParams(p);
     glBindTextureUnit(layout::kUnitTransferFunction, transfer.id());
     glBindTextureUnit(layout::kUnitShadowDepth, shadowDepth.id());

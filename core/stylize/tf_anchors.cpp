@@ -36,7 +36,7 @@ Vec3d anchorWorldPosition(const StylizerScene& scene, const TfAnchor& anchor) {
 
 TfAnchor anchorAtPixel(const StylizerScene& scene, int x, int y, double s, int occluder) {
     const Camera& cam = scene.camera;
-    const Vec3d world = cam.eye + cam.rayDirection(x + 0.5, y + 0.5) * s;
+    const Vec3d world = cam.eye + cam.rayDirection(x, y) * s;
     if (occluder < 0 || occluder >= int(scene.occluders.size())) return {world, ""};
     const Occluder& o = scene.occluders[size_t(occluder)];
     return {o.worldFromObject.inverseAffine().applyPoint(world), o.name};

@@ -8,6 +8,7 @@
 
 #include "core/stylize/tf_anchors.h"
 #include "protocol/stylize_json.h"
+#include "../common/image_compare.h"
 #include "server/video_encoder.h"
 #include "stylizer_fixture.h"
 
@@ -180,6 +181,29 @@ TEST_F(TfAuthoringApi, ASequenceJobRendersTheCameraPathWithProgressAndAVideo) {
     EXPECT_EQ(e["error"]["details"][0]["path"], "/end") << e;
     e = expectError(client().Post((base + "/sequence").c_str(), R"({"fps": 0, "end": 1})", "application/json"), 400, "invalid_argument");
     EXPECT_EQ(e["error"]["details"][0]["path"], "/fps") << e;
+}
+
+TEST_F(TfAuthoringApi, TheSessionVolumeIsAHeterogeneousMedium) {
+    json s = smallForest();
+    s.erase("transfer_function");
+    ASSERT_EQ(putScene(s)->status, 200);
+    const core::Image homogeneous = frame();
+    s["volume"] = {{"extinction_scale", 0.5}};
+    auto r = putScene(s);
+    ASSERT_EQ(r->status, 200) << r->body;
+    const json back = json::parse(r->body)["volume"];
+    EXPECT_EQ(back["source"], "session");
+    EXPECT_EQ(back["box"].size(), 2u) << "the box defaults to the session volume's bounds: " << back;
+    const core::Image withVolume = frame();
+    EXPECT_GT(test::maxAbsDifference(homogeneous, withVolume), 1e-3) << "the medium changed";
+    for (float v : withVolume.rgba) ASSERT_TRUE(std::isfinite(v));
+    json bad = s;
+    bad["volume"]["source"] = "cloud.vdb";
+    bad["volume"]["steps"] = 0;
+    json e = expectError(putScene(bad), 400, "invalid_argument");
+    std::set<std::string> fields;
+    for (const auto& d : e["error"]["details"]) fields.insert(d["path"].get<std::string>());
+    EXPECT_TRUE(fields.count("/volume/source") && fields.count("/volume/steps")) << e;
 }
 
 }  // namespace

@@ -32,7 +32,8 @@ static_assert(sizeof(volstyle::core::layout::LobeParams) == 32 * volstyle::core:
 static_assert(sizeof(volstyle::core::layout::VectorParams) == 64);
 static_assert(offsetof(volstyle::core::layout::StylizeParams, options) == 384);
 static_assert(offsetof(volstyle::core::layout::StylizeParams, mipOffset) == 432);
-static_assert(sizeof(volstyle::core::layout::StylizeParams) == 496);
+static_assert(offsetof(volstyle::core::layout::StylizeParams, volumeLo) == 496);  // issue #15's heterogeneous medium
+static_assert(sizeof(volstyle::core::layout::StylizeParams) == 528);
 static_assert(sizeof(volstyle::core::layout::EditParams) == 64);
 
 TEST(Layout, MarchParamsMatchesStd140) {
