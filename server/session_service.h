@@ -183,6 +183,8 @@ public:
     /// Decodes and stores the TF image (RGB or RGBA, ≤ 4096 a side; 422 otherwise).
     TransferImageInfo setTransferImage(Session& s, const std::string& bytes);
     core::Image transferImage(Session& s) const;   ///< not_found without one
+    /// The TF the scene applies (its layers compiled; anchors where they were placed); not_found without one.
+    core::Image compiledTransferFunction(Session& s) const;
     void removeTransferImage(Session& s);          ///< busy (409) while the scene uses it
     /// A frame (or AOV) of the session's stylizer on the GL thread; over_budget (422) when its
     /// estimated time is over the render budget.

@@ -228,6 +228,13 @@ core::Image SessionService::transferImage(Session& s) const {
     return *s.stylizer.transferImage;
 }
 
+core::Image SessionService::compiledTransferFunction(Session& s) const {
+    std::lock_guard lock(s.mutex);
+    const auto& tf = s.stylizer.scene.transferFunction;
+    if (!tf || !tf->image) throw ApiError(ErrorCode::NotFound, "the stylizer's scene has no transfer function");
+    return *tf->image;
+}
+
 void SessionService::removeTransferImage(Session& s) {
     std::lock_guard lock(s.mutex);
     if (!s.stylizer.transferImage) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no transfer function uploaded");

@@ -59,6 +59,7 @@
     s.time = num('time');
     if (sh.tfUploaded && sh.tfEnabled) s.transfer_function = { mode: $('tf-mode').value, depth_range: [0, num('tf-depth')] };
     else delete s.transfer_function;
+    if (window.volstyleTf) window.volstyleTf.applyTo(s);  // tf_editor.js: TF layers, the camera path
     return s;
   }
 
@@ -98,6 +99,7 @@
     img.onload = () => { img.dataset.revision = String(event.revision); };
     img.src = src;
     $('shafts-download').href = src;
+    if (window.volstyleTf) window.volstyleTf.frameShown();
     $('shafts-info').textContent = `revision ${event.revision} · ${event.width}×${event.height} · ${event.render_ms.toFixed(0)} ms`;
     if (!sh.putBusy) $('shafts-busy').style.display = 'none';
   }
@@ -165,7 +167,17 @@
   // Dragging the frame orbits the camera or swings the light; the wheel zooms.
   let dragging = null;
   const frame = $('shafts-frame');
-  frame.addEventListener('pointerdown', (e) => { dragging = { x: e.clientX, y: e.clientY }; frame.setPointerCapture(e.pointerId); e.preventDefault(); });
+  frame.addEventListener('pointerdown', (e) => {
+    e.preventDefault();
+    if (document.querySelector('input[name=drag]:checked').value === 'constrain') {  // a TF constraint at the pixel
+      const r = frame.getBoundingClientRect(), w = frame.naturalWidth || 480, h = frame.naturalHeight || 270;
+      const x = Math.min(w - 1, Math.floor((e.clientX - r.left) / r.width * w)), y = Math.min(h - 1, Math.floor((e.clientY - r.top) / r.height * h));
+      if (window.volstyleTf) window.volstyleTf.constrainAt(x, y);
+      return;
+    }
+    dragging = { x: e.clientX, y: e.clientY };
+    frame.setPointerCapture(e.pointerId);
+  });
   frame.addEventListener('pointermove', (e) => {
     if (!dragging) return;
     const dx = (e.clientX - dragging.x) * 0.01, dy = (e.clientY - dragging.y) * 0.01;
@@ -248,4 +260,6 @@
     pushScene();
   };
   showOutputs();
+  // What tf_editor.js uses.
+  window.volstyleShafts = { pushScene, base, cameraJson, tfUploaded: () => sh.tfUploaded, sid: () => sh.sid };
 })();

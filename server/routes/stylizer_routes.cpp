@@ -1,6 +1,7 @@
 // A session's light-shaft stylizer (SPEC §7 "API"): GET/PUT …/stylizer (the scene),
 // GET …/stylizer/occluders, PUT/DELETE …/stylizer/occluders/{name} (mesh files),
-// PUT/DELETE …/stylizer/tf and GET …/stylizer/tf.png (the transfer function), POST …/stylizer/undo
+// PUT/DELETE …/stylizer/tf and GET …/stylizer/tf.png (the uploaded TF image), GET …/stylizer/transfer_function.png (the
+// TF the scene applies, its layers compiled), POST …/stylizer/undo
 // and …/redo, POST …/stylizer/pick (a pixel's TF position) and …/constraints (a TF constraint
 // clicked into the scene), POST …/stylizer/sequence (a job rendering the camera path), POST …/stylizer/frame
 // (a frame or AOV), GET …/stylizer/events (the live stream: SSE `frame` events whose URLs,
@@ -145,6 +146,12 @@ void addStylizerRoutes(RouteContext& c) {
         core::SaveOptions save;
         save.writeAlpha = true;
         res.set_content(core::encodeImage(c.service.transferImage(*c.service.find(req.matches[1])), "png", save), "image/png");
+    });
+    c.http.Get(kStylizerPath + R"(/transfer_function\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
+        core::SaveOptions save;
+        save.writeAlpha = true;
+        save.data = true;  // the TF's values as they are (it multiplies linear radiance)
+        res.set_content(core::encodeImage(c.service.compiledTransferFunction(*c.service.find(req.matches[1])), "png", save), "image/png");
     });
     c.http.Delete(kStylizerPath + "/tf", [&c](const httplib::Request& req, httplib::Response& res) {
         c.service.removeTransferImage(*c.service.find(req.matches[1]));
