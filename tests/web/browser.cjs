@@ -15,4 +15,29 @@ async function openBrowser() {
   return { url, screenshot, browser, fail };
 }
 
-module.exports = { openBrowser };
+// Opens the page in "Light shafts" mode once its session is ready; the live frame's helpers:
+// revision() on screen, newFrame(after, what) waits for a newer one, settle() waits until no scene
+// PUT is in flight (the frame on screen is then the newest).
+async function openShafts(browser, url, fail, viewport) {
+  const page = await browser.newPage({ viewport });
+  page.on('pageerror', (e) => console.error('page error:', e.message));
+  await page.goto(url);
+  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('session ready'), null, { timeout: 60000 });
+  await page.click('#mode-shafts');
+  const revision = () => page.evaluate(() => Number(document.getElementById('shafts-frame').dataset.revision || 0));
+  const newFrame = async (after, what) => {
+    try {
+      await page.waitForFunction((a) => Number(document.getElementById('shafts-frame').dataset.revision || 0) > a, after, { timeout: 60000 });
+    } catch (e) {
+      await fail(`no new frame after ${what} (still revision ${await revision()}; status: ${await page.textContent('#status')})`);
+    }
+    return revision();
+  };
+  const settle = async () => {
+    await page.waitForFunction(() => document.getElementById('shafts-busy').style.display === 'none', null, { timeout: 60000 });
+    return revision();
+  };
+  return { page, revision, newFrame, settle };
+}
+
+module.exports = { openBrowser, openShafts };

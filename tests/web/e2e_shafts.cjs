@@ -5,29 +5,14 @@
 // revision), and the TF must redden the frame. Saves a screenshot.
 // Usage: NODE_PATH=…/node_modules node e2e_shafts.cjs URL OUT.png
 'use strict';
-const { openBrowser } = require('./browser.cjs');
+const { openBrowser, openShafts } = require('./browser.cjs');
 
 (async () => {
 const { url, screenshot, browser, fail } = await openBrowser();
 let passed = 0;
 const check = async (ok, message) => { if (!ok) await fail(message); ++passed; };
 try {
-  const page = await browser.newPage({ viewport: { width: 1400, height: 820 } });
-  page.on('pageerror', (e) => console.error('page error:', e.message));
-  await page.goto(url);
-  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('session ready'), null, { timeout: 60000 });
-  await page.click('#mode-shafts');
-
-  const revision = () => page.evaluate(() => Number(document.getElementById('shafts-frame').dataset.revision || 0));
-  // Waits for a frame newer than `after` to be on screen; returns its revision.
-  const newFrame = async (after, what) => {
-    try {
-      await page.waitForFunction((a) => Number(document.getElementById('shafts-frame').dataset.revision || 0) > a, after, { timeout: 60000 });
-    } catch (e) {
-      await fail(`no new frame after ${what} (still revision ${await revision()}; status: ${await page.textContent('#status')})`);
-    }
-    return revision();
-  };
+  const { page, revision, newFrame, settle } = await openShafts(browser, url, fail, { width: 1400, height: 820 });
   // Mean R, G, B of the frame on screen (0–255).
   const meanColour = () => page.evaluate(async () => {
     const bmp = await createImageBitmap(await (await fetch(document.getElementById('shafts-frame').src)).blob());
@@ -41,12 +26,6 @@ try {
     await page.$eval('#' + id, (el, v) => { el.value = v; el.dispatchEvent(new Event('input', { bubbles: true })); }, String(value));
   };
 
-  // Waits until no scene PUT is in flight and the frame on screen is the newest (the stream's
-  // first frame may be the revision before the page's own first PUT).
-  const settle = async () => {
-    await page.waitForFunction(() => document.getElementById('shafts-busy').style.display === 'none', null, { timeout: 60000 });
-    return revision();
-  };
   let r = await newFrame(0, 'opening the mode');
   r = await settle();
   const first = await meanColour();

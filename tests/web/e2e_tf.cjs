@@ -4,31 +4,14 @@
 // constraint's colour; then two key frames make a camera path that the slider scrubs. Saves a
 // screenshot. Usage: NODE_PATH=…/node_modules node e2e_tf.cjs URL OUT.png
 'use strict';
-const { openBrowser } = require('./browser.cjs');
+const { openBrowser, openShafts } = require('./browser.cjs');
 
 (async () => {
 const { url, screenshot, browser, fail } = await openBrowser();
 let passed = 0;
 const check = async (ok, message) => { if (!ok) await fail(message); ++passed; };
 try {
-  const page = await browser.newPage({ viewport: { width: 1400, height: 1000 } });
-  page.on('pageerror', (e) => console.error('page error:', e.message));
-  await page.goto(url);
-  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('session ready'), null, { timeout: 60000 });
-  await page.click('#mode-shafts');
-  const revision = () => page.evaluate(() => Number(document.getElementById('shafts-frame').dataset.revision || 0));
-  const newFrame = async (after, what) => {
-    try {
-      await page.waitForFunction((a) => Number(document.getElementById('shafts-frame').dataset.revision || 0) > a, after, { timeout: 60000 });
-    } catch (e) {
-      await fail(`no new frame after ${what} (still revision ${await revision()}; status: ${await page.textContent('#status')})`);
-    }
-    return revision();
-  };
-  const settle = async () => {
-    await page.waitForFunction(() => document.getElementById('shafts-busy').style.display === 'none', null, { timeout: 60000 });
-    return revision();
-  };
+  const { page, revision, newFrame, settle } = await openShafts(browser, url, fail, { width: 1400, height: 1000 });
   // Mean R, G, B (0–255) of the frame on screen around (fx, fy), fractions of its size.
   const pixel = (fx, fy) => page.evaluate(async ([fx, fy]) => {
     const bmp = await createImageBitmap(await (await fetch(document.getElementById('shafts-frame').src)).blob());
