@@ -126,6 +126,7 @@ int renderSequence(const Arguments& args, const core::StylizerScene& scene, cons
     } catch (const InvalidArgument& e) {
         throw InvalidArgument(std::string("--fps/--start/--end: ") + e.what());
     }
+    core::checkPathCameras(scene, times);
     std::string video;
     if (args.has("video")) {
         video = args.get("video");
@@ -145,7 +146,7 @@ int renderSequence(const Arguments& args, const core::StylizerScene& scene, cons
         spdlog::info("frame {}/{} (t = {:.3f}) in {:.0f} ms", i + 1, times.size(), times[i], f.totalMs);
     }
     if (!video.empty()) {
-        encodeVideo(folder, fps, video);
+        encodeVideo(folder, times.size(), fps, video);
         spdlog::info("encoded {} frames at {:g} fps into '{}'", times.size(), fps, video);
     }
     return 0;

@@ -337,9 +337,15 @@ void Persistence::restoreStylizer(Session& s, const fs::path& dir) {
             request.meshRefs.erase(request.meshRefs.begin() + std::ptrdiff_t(i));
             request.scene.occluders.erase(request.scene.occluders.begin() + std::ptrdiff_t(i));
         }
-    if (!request.tfImages.empty() && !s.stylizer.transferImage) {
-        lost.push_back("the transfer function");
-        request.scene.transferFunction.reset();
+    if (!request.tfImages.empty() && !s.stylizer.transferImage) {  // the TFs that showed the image go
+        bool scene = false, keys = false;
+        for (const auto& ref : request.tfImages) (ref.key < 0 ? scene : keys) = true;
+        if (scene) lost.push_back("the transfer function"), request.scene.transferFunction.reset();
+        if (keys) {
+            lost.push_back("the key frames' transfer functions");
+            for (auto& k : request.scene.keyframes) k.transferFunction.reset();
+        }
+        request.tfImages.clear();
     }
     try {
         s.stylizer.scene = resolveStylizerScene(s.stylizer, request);

@@ -271,6 +271,7 @@ std::shared_ptr<core::GpuVolume> SessionService::commitVersion(Session& s, core:
     s.version = n;
     s.versions.add(n);
     saved(s);
+    if (s.stylizer.scene.volume) stylizerChanged(s);  // its medium is the session's volume: live frames follow
     return std::move(s.gpu);
 }
 

@@ -78,12 +78,16 @@ struct StylizerPick {
     std::string occluderName;  ///< empty for the sky
     Vec3d position;            ///< the world point at `distance` along the pixel's ray
     core::TfAnchor anchor;     ///< what the request's `anchor` asked for (position empty for "none")
+    /// The TF a constraint there goes into: on a path whose keys carry TFs, the key nearest the
+    /// time (its depth range gives `depth`); −1: the scene's own.
+    int key = -1;
 };
 
 /// A constraint clicked into the scene (POST …/stylizer/constraints).
 struct AddedTfConstraint {
     StylizerPick pick;
     int layer = 0, index = 0;  ///< where it went: transfer_function/layers/{layer}/constraints/{index}
+    int key = -1;              ///< … of key frame `key` (on a path whose keys carry TFs); −1: the scene's TF
     core::TfConstraint constraint;
     uint64_t revision = 0;
 };

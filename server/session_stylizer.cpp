@@ -31,10 +31,16 @@ core::StylizerScene sceneFor(const core::StylizerScene& scene, const std::option
     return out;
 }
 
-/// Pushes a scene onto an undo or redo stack, dropping the oldest beyond its depth.
+/// Pushes a scene onto an undo or redo stack, dropping the oldest beyond its depth or its bytes
+/// (every change rewrites the stacks with the scene).
 void remember(std::vector<nlohmann::json>& stack, nlohmann::json scene) {
     stack.push_back(std::move(scene));
-    if (stack.size() > kStylizerUndoDepth) stack.erase(stack.begin());
+    size_t bytes = 0;
+    for (const auto& j : stack) bytes += j.dump().size();
+    while (stack.size() > 1 && (stack.size() > kStylizerUndoDepth || bytes > kStylizerUndoBytes)) {
+        bytes -= stack.front().dump().size();
+        stack.erase(stack.begin());
+    }
 }
 
 }  // namespace
@@ -77,11 +83,15 @@ void SessionService::stylizerChanged(Session& s) {
 }
 
 StylizerSnapshot SessionService::setStylizerScene(Session& s, const protocol::StylizerSceneRequest& request) {
-    for (auto [side, name] : {std::pair{request.scene.camera.width, "width"}, std::pair{request.scene.camera.height, "height"}})
-        if (side > m_limits.maxImageSide) {
-            const std::string message = "images are limited to " + std::to_string(m_limits.maxImageSide) + " pixels a side";
-            throw ApiError(ErrorCode::TooLarge, message, {{std::string("/camera/") + name, message}});
-        }
+    auto checkSize = [&](const core::Camera& camera, const std::string& path) {
+        for (auto [side, name] : {std::pair{camera.width, "width"}, std::pair{camera.height, "height"}})
+            if (side > m_limits.maxImageSide) {
+                const std::string message = "images are limited to " + std::to_string(m_limits.maxImageSide) + " pixels a side";
+                throw ApiError(ErrorCode::TooLarge, message, {{path + "/" + name, message}});
+            }
+    };
+    checkSize(request.scene.camera, "/camera");
+    for (size_t k = 0; k < request.scene.keyframes.size(); ++k) checkSize(request.scene.keyframes[k].camera, "/keyframes/" + std::to_string(k) + "/camera");
     std::lock_guard lock(s.mutex);
     core::StylizerScene scene = resolveStylizerScene(s.stylizer, request, &s.volume);
     attachDensity(s, scene);
@@ -90,8 +100,14 @@ StylizerSnapshot SessionService::setStylizerScene(Session& s, const protocol::St
     } catch (const InvalidArgument& e) {
         throw ApiError(ErrorCode::InvalidArgument, e.what());
     }
-    remember(s.stylizer.undo, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs));
-    s.stylizer.redo.clear();
+    // A change of time alone (scrubbing, playing) or none at all is not a step to undo.
+    nlohmann::json before = protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs);
+    nlohmann::json after = protocol::stylizerSceneToJson(scene, request.meshRefs);
+    before.erase("time"), after.erase("time");
+    if (before != after) {
+        remember(s.stylizer.undo, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs));
+        s.stylizer.redo.clear();
+    }
     s.stylizer.scene = std::move(scene);
     s.stylizer.meshRefs = request.meshRefs;
     stylizerChanged(s);
@@ -110,8 +126,10 @@ StylizerSnapshot SessionService::undoStylizer(Session& s, bool redo) {
         scene = resolveStylizerScene(s.stylizer, request, &s.volume);
         attachDensity(s, scene);
         scene.validate();
-    } catch (const std::exception& e) {  // a mesh or the TF image it used was deleted since
-        throw ApiError(ErrorCode::Busy, std::string("the ") + (redo ? "next" : "previous") + " scene no longer resolves: " + e.what());
+    } catch (const std::exception& e) {  // a mesh or the TF image it used was deleted since: dropped, the one before is next
+        from.pop_back();
+        throw ApiError(ErrorCode::Busy, std::string("the ") + (redo ? "next" : "previous") + " scene no longer resolves, so it was dropped (" +
+                                            e.what() + "); try again for the one before it");
     }
     remember(to, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs));
     from.pop_back();
@@ -212,11 +230,22 @@ TransferImageInfo SessionService::setTransferImage(Session& s, const std::string
     auto image = std::make_shared<const core::Image>(std::move(loaded.image));
     std::lock_guard lock(s.mutex);
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+    const bool used = s.stylizer.usesTransferImage();
+    core::StylizerScene scene = s.stylizer.scene;
+    if (used) {  // the scene must stay valid with it (key frames' TFs share a size)
+        attachTransferImage(scene, image);
+        attachDensity(s, scene);
+        try {
+            scene.validate();
+        } catch (const InvalidArgument& e) {
+            throw ApiError(ErrorCode::Busy, std::string("the scene shows the TF image and would not be valid with this one: ") + e.what() +
+                                                "; PUT a scene that does not show it first");
+        }
+    }
     if (m_persist) m_persist->saveSessionFile(s.id, kTransferFile, bytes);
     s.stylizer.transferImage = image;
-    const bool used = s.stylizer.usesTransferImage();
     if (used) {
-        s.stylizer.attachTransferImage(image);
+        s.stylizer.scene = std::move(scene);
         stylizerChanged(s);
     }
     return {image->width, image->height, loaded.channels, used};
@@ -280,9 +309,14 @@ StylizerPick SessionService::pickStylizer(Session& s, const protocol::StylizerPi
     settings.readShadowMaps = false;
     settings.pick = core::StylizeSettings::Pixel{q.x, q.y};
     const core::StylizedFrame f = stylizeOnGl(scene, settings);
-    const core::TransferFunction tf = scene.transferFunction.value_or(core::TransferFunction{});
-    const core::TfPosition at = core::tfPositionAt(tf, f, q.x, q.y);
     StylizerPick pick;
+    if (!scene.keyframes.empty() && scene.keyframes.front().transferFunction) {
+        const core::PathPosition on = core::pathPosition(scene.keyframes, scene.time);
+        pick.key = int(on.weight < 0.5 ? on.before : on.after);
+    }
+    const core::TransferFunction tf = pick.key >= 0 ? *scene.keyframes[size_t(pick.key)].transferFunction
+                                                    : scene.transferFunction.value_or(core::TransferFunction{});
+    const core::TfPosition at = core::tfPositionAt(tf, f, q.x, q.y);
     pick.x = q.x, pick.y = q.y;
     pick.vBar = at.vBar, pick.depth = at.depth;
     pick.distance = f.linearDepth.pixel(q.x, q.y)[0];
@@ -310,14 +344,19 @@ AddedTfConstraint SessionService::addTfConstraint(Session& s, const protocol::St
     // The change goes through the scene's JSON and setStylizerScene: validated, undoable, saved.
     const StylizerSnapshot now = stylizer(s);
     nlohmann::json j = protocol::stylizerSceneToJson(now.scene, now.meshRefs);
-    nlohmann::json& tf = j["transfer_function"];
+    const int key = out.pick.key;
+    if (key >= 0 && size_t(key) >= now.scene.keyframes.size())
+        throw ApiError(ErrorCode::Busy, "the scene's key frames changed while the pixel was picked; try again");
+    nlohmann::json& tf = key >= 0 ? j["keyframes"][size_t(key)]["transfer_function"] : j["transfer_function"];
+    const bool hadTf = key >= 0 || now.scene.transferFunction.has_value();
     if (tf.is_null()) tf = protocol::transferFunctionToJson(core::TransferFunction{});
-    if (!tf.contains("layers")) tf["layers"] = now.scene.transferFunction ? nlohmann::json::array({{{"type", "image"}}}) : nlohmann::json::array();
+    if (!tf.contains("layers")) tf["layers"] = hadTf ? nlohmann::json::array({{{"type", "image"}}}) : nlohmann::json::array();
     nlohmann::json& layers = tf["layers"];
     int layer = -1;
     if (q.layer) {
         if (*q.layer < 0 || *q.layer >= int(layers.size()) || layers[size_t(*q.layer)].value("type", "") != "diffusion")
-            throw ApiError(ErrorCode::InvalidArgument, "layer " + std::to_string(*q.layer) + " is not a diffusion layer of the TF",
+            throw ApiError(ErrorCode::InvalidArgument, "layer " + std::to_string(*q.layer) + " is not a diffusion layer of the TF" +
+                                                           (key >= 0 ? " of key frame " + std::to_string(key) : std::string()),
                            {{"/layer", "must name a diffusion layer (GET …/stylizer lists them)"}});
         layer = *q.layer;
     } else {
@@ -333,6 +372,7 @@ AddedTfConstraint SessionService::addTfConstraint(Session& s, const protocol::St
     constraints.push_back(protocol::tfConstraintToJson(out.constraint));
     out.layer = layer;
     out.index = int(constraints.size()) - 1;
+    out.key = key;
     out.revision = setStylizerScene(s, protocol::stylizerSceneFromJson(j, "", protocol::SceneSource::Api)).revision;
     return out;
 }

@@ -23,8 +23,10 @@ using protocol::ErrorCode;
 using protocol::JobEvent;
 using protocol::JobState;
 
-/// A sequence's frames at most: 10 minutes at 24 fps.
+/// A sequence's frames at most: 10 minutes at 24 fps; and its pixels, all frames together (about
+/// 1,000 frames of 1920×1080, a few GB of PNG on disk).
 constexpr size_t kMaxSequenceFrames = 14400;
+constexpr double kMaxSequencePixels = 2.0e9;
 
 std::string jobUrl(const std::string& job, const std::string& file) { return "/api/v1/jobs/" + job + "/" + file; }
 
@@ -40,14 +42,23 @@ std::shared_ptr<Job> SessionService::startSequence(const std::shared_ptr<Session
     try {
         times = core::sequenceTimes(q.start.value_or(scene.keyframes.empty() ? scene.time : first), q.end.value_or(last), q.fps,
                                     kMaxSequenceFrames);
+        core::checkPathCameras(scene, times);
     } catch (const InvalidArgument& e) {
         throw ApiError(ErrorCode::InvalidArgument, std::string("the sequence: ") + e.what(), {{"/end", e.what()}});
     }
+    const core::Camera& cam = scene.keyframes.empty() ? scene.camera : scene.keyframes.front().camera;  // a path's size
+    const double pixels = double(times.size()) * cam.width * cam.height;
+    if (pixels > kMaxSequencePixels)
+        throw ApiError(ErrorCode::TooLarge,
+                       fmt::format("the sequence would be {} frames of {}×{} ({:.1e} pixels), over the limit of {:.0e}: use a lower "
+                                   "fps, a shorter span or a smaller camera",
+                                   times.size(), cam.width, cam.height, pixels, kMaxSequencePixels),
+                       {{"/fps", "too many pixels in all"}});
     if (q.video && findFfmpeg().empty())
         throw ApiError(ErrorCode::InvalidArgument, "this server has no ffmpeg to encode a video; ask for the frames alone",
                        {{"/video", "no ffmpeg on the server"}});
     // Each frame holds the GL thread like a POST …/frame: the same budget, checked per frame now.
-    const double seconds = core::Stylizer::estimatedLookups(scene, q.settings) / kStylizerLookupsPerSecond;
+    const double seconds = core::Stylizer::estimatedLookups(core::sceneAtTime(scene, times.front()), q.settings) / kStylizerLookupsPerSecond;
     if (m_limits.renderBudgetSeconds > 0 && seconds > m_limits.renderBudgetSeconds)
         throw ApiError(ErrorCode::OverBudget, fmt::format("each frame would take about {:.0f} s, over the render budget of {:g} s; use fewer "
                                                           "pixels or a smaller shadow map",
@@ -101,7 +112,7 @@ void SessionService::runSequence(Job& job, const core::StylizerScene& scene, con
     nlohmann::json result = {{"frames", times.size()}, {"fps", q.fps}, {"start", times.front()}, {"end", times.back()},
                              {"frame_urls", urls}, {"render_ms", totalMs}};
     if (q.video) {
-        encodeVideo(dir, q.fps, dir / "video.mp4");
+        encodeVideo(dir, times.size(), q.fps, dir / "video.mp4");
         result["video_url"] = jobUrl(job.id, "video.mp4");
     }
     spdlog::info("job {}: {} frames{}", job.id, times.size(), q.video ? " and a video" : "");

@@ -30,7 +30,7 @@ bool StylizerState::usesTransferImage() const {
     return std::any_of(tfs.begin(), tfs.end(), [](const core::TransferFunction* tf) { return showsImage(*tf); });
 }
 
-void StylizerState::attachTransferImage(std::shared_ptr<const core::Image> image) {
+void attachTransferImage(core::StylizerScene& scene, const std::shared_ptr<const core::Image>& image) {
     for (core::TransferFunction* tf : scene.transferFunctions()) {
         if (tf->layers.empty()) {
             tf->image = image;

@@ -50,13 +50,13 @@ struct StylizerState {
     bool uses(const std::string& name) const;
     /// Whether the scene's TF shows the uploaded TF image (an image TF or an image layer).
     bool usesTransferImage() const;
-    /// Puts a new uploaded TF image into the scene's TF where it shows it (compiling its layers again).
-    void attachTransferImage(std::shared_ptr<const core::Image> image);
+
     /// Vertices of every uploaded mesh together (bounded per session).
     size_t uploadedVertices() const;
 };
 
 inline constexpr size_t kStylizerUndoDepth = 64;
+inline constexpr size_t kStylizerUndoBytes = size_t(4) << 20;  ///< each stack's JSON at most (the newest entry always kept)
 
 /// Shadow-map lookups per second on llvmpipe's two cores (1920×1080 × 1024 naive steps took
 /// 6.4–20 s on two machines of this kind, bench/stylizer: the slower one), for the estimate that
@@ -72,6 +72,9 @@ StylizerState defaultStylizer();
 
 /// The built-in mesh `ref` names (builtin:forest/ground, builtin:forest/trees); null for any other.
 std::shared_ptr<const core::Mesh> builtinMesh(const std::string& ref);
+
+/// Puts a new uploaded TF image into `scene`'s TFs where they show it (compiling their layers again).
+void attachTransferImage(core::StylizerScene& scene, const std::shared_ptr<const core::Image>& image);
 
 /// Whether `name` may name an uploaded mesh: 1–64 of A–Z a–z 0–9 _ . - (it is a file name on disk).
 bool isMeshName(const std::string& name);

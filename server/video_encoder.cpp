@@ -35,13 +35,13 @@ std::string findFfmpeg() {
 
 std::string sequenceFrameName(size_t index) { return fmt::format("frame_{:05d}.png", index); }
 
-void encodeVideo(const fs::path& framesDir, double fps, const fs::path& output) {
+void encodeVideo(const fs::path& framesDir, size_t frames, double fps, const fs::path& output) {
     const std::string ffmpeg = findFfmpeg();
     if (ffmpeg.empty()) throw IoError("no ffmpeg on PATH to encode the video (Debian: apt install ffmpeg); the PNG frames are written");
     const fs::path log = output.string() + ".log";
     std::vector<std::string> args = {ffmpeg, "-nostdin", "-y", "-v", "error", "-framerate", fmt::format("{:g}", fps),
                                      "-i", (framesDir / "frame_%05d.png").string(),
-                                     "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-pix_fmt", "yuv420p",
+                                     "-frames:v", std::to_string(frames), "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-pix_fmt", "yuv420p",
                                      "-movflags", "+faststart", output.string()};
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());

@@ -11,10 +11,10 @@ namespace volstyle::server {
 /// The ffmpeg on PATH, or empty when there is none.
 std::string findFfmpeg();
 
-/// Encodes `framesDir`/frame_%05d.png at `fps` into `output` (.mp4, H.264, yuv420p, sides
-/// padded to even). Throws IoError naming ffmpeg's complaint; NotSupported-like IoError when
-/// ffmpeg is missing.
-void encodeVideo(const std::filesystem::path& framesDir, double fps, const std::filesystem::path& output);
+/// Encodes `frames` frames `framesDir`/frame_%05d.png from 0 at `fps` into `output` (.mp4, H.264,
+/// yuv420p, sides padded to even; older frames beyond them in the folder are left out). Throws
+/// IoError naming ffmpeg's complaint, or that there is no ffmpeg.
+void encodeVideo(const std::filesystem::path& framesDir, size_t frames, double fps, const std::filesystem::path& output);
 
 /// The file name of frame `index` of a sequence: frame_00012.png.
 std::string sequenceFrameName(size_t index);

@@ -110,7 +110,7 @@
       button('▼', 'move down', () => move(i, -1));
       button('✕', 'remove the layer', () => {
         tf.layers.splice(i, 1);
-        tf.selected = Math.min(tf.selected, tf.layers.length - 1);
+        if (i < tf.selected || tf.selected >= tf.layers.length) tf.selected -= 1;  // the same layer stays selected
         changed();
       });
       li.onclick = () => { tf.selected = i; renderLayers(); drawSquare(); };
@@ -123,12 +123,16 @@
     if (j < 0 || j >= tf.layers.length) return;
     [tf.layers[i], tf.layers[j]] = [tf.layers[j], tf.layers[i]];
     if (tf.selected === i) tf.selected = j;
+    else if (tf.selected === j) tf.selected = i;
     changed();
   }
   function changed() {
     renderLayers();
     drawSquare();
     sh.pushScene();
+    if (pathOn() && tf.keys[0].transfer_function) {
+      status('viewing the path: the frame shows the key frames\' TFs; uncheck "view the path" to see the layers you edit, or add a key', 'warn');
+    }
   }
 
   $('tf-add').onclick = () => {
@@ -193,14 +197,22 @@
     const layer = tf.layers[tf.selected];
     const body = { x, y, ...brush(), anchor: $('tf-follow').checked ? 'object' : 'none' };
     if (layer && layer.type === 'diffusion') body.layer = tf.selected;
+    if (pathOn() && tf.keys[0].transfer_function) delete body.layer;  // the server picks the nearest key's layer
     const added = await call('POST', `${sh.base()}/constraints`, body);
-    const scene = await call('GET', sh.base());
-    tf.layers = scene.transfer_function.layers;
-    tf.selected = added.layer;
+    const scene = await call('GET', sh.base());  // the server applied it: take its layers (and keys) back
+    if (added.key !== undefined) {
+      tf.keys = scene.keyframes;
+      renderKeys();
+    } else {
+      tf.layers = scene.transfer_function.layers;
+      tf.selected = added.layer;
+    }
     $('tf-picked').textContent = `pixel (${x}, ${y}): V̄ ${added.pick.v_bar.toFixed(3)}, depth ${added.pick.depth.toFixed(3)}` +
                                  (added.constraint.anchor ? ` · follows ${added.constraint.anchor.follow || 'the point'}` : '');
-    changed();
-    status(`TF constraint added at V̄ ${added.pick.v_bar.toFixed(3)}, depth ${added.pick.depth.toFixed(3)}`, 'ok');
+    renderLayers();
+    drawSquare();
+    status(`TF constraint added at V̄ ${added.pick.v_bar.toFixed(3)}, depth ${added.pick.depth.toFixed(3)}` +
+           (added.key !== undefined ? ` to key frame ${added.key + 1}` : ''), 'ok');
   });
   document.querySelectorAll('input[name=drag]').forEach((r) => r.addEventListener('change', () => {
     $('shafts-frame').style.cursor = r.value === 'constrain' ? 'crosshair' : 'grab';

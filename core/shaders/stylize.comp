@@ -267,9 +267,24 @@ vec4 transferFunction(float vBar, float d) {
 // The heterogeneous medium's grid coordinates of world point x ([0, 1]³ over the box).
 vec3 volumeUvw(vec3 x) { return (x - u.volumeLo.xyz) / (u.volumeHi.xyz - u.volumeLo.xyz); }
 bool insideVolume(vec3 x) { return all(greaterThanEqual(x, u.volumeLo.xyz)) && all(lessThanEqual(x, u.volumeHi.xyz)); }
-// T_l at x: the grid's transmittance toward the light, e^{−τ_l} (1 outside the box, or when it is off).
+// T_l at x: the grid's transmittance toward the light, e^{−τ_l} (1 when it is off). Outside the
+// box, the ray toward the light may cross it: then τ_l where it enters (the same ray onward), so a
+// cloud shadows the ground under it.
 float lightTransmittance(vec3 x) {
-    return u.volumeHi.w > 0.5 && insideVolume(x) ? exp(-texture(s_lightDepth, volumeUvw(x)).r) : 1.0;
+    if (u.volumeHi.w < 0.5) return 1.0;
+    if (insideVolume(x)) return exp(-texture(s_lightDepth, volumeUvw(x)).r);
+    vec3 l = u.lightDirection.xyz;
+    float reach = 3.0e38;
+    if (u.options.z == kStylizerLightSpot) {
+        reach = length(u.spot.xyz - x);
+        l = (u.spot.xyz - x) / max(reach, 1e-30);
+    }
+    vec3 inv = 1.0 / mix(l, vec3(1e-30), equal(l, vec3(0.0)));
+    vec3 t0 = (u.volumeLo.xyz - x) * inv, t1 = (u.volumeHi.xyz - x) * inv;
+    vec3 near = min(t0, t1), far = max(t0, t1);
+    float enter = max(max(near.x, near.y), near.z), leave = min(min(far.x, far.y), far.z);
+    if (!(leave > enter && enter > 0.0 && enter < reach)) return 1.0;
+    return exp(-texture(s_lightDepth, volumeUvw(x + enter * l)).r);
 }
 
 // What the light gives a point x of the medium before visibility, per unit of σt e^{−τ}: p E for

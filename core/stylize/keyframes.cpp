@@ -60,6 +60,19 @@ std::vector<double> sequenceTimes(double start, double end, double fps, size_t m
     return times;
 }
 
+void checkPathCameras(const StylizerScene& scene, const std::vector<double>& times) {
+    if (scene.keyframes.empty()) return;
+    for (double t : times) {
+        const PathPosition at = pathPosition(scene.keyframes, t);
+        try {
+            interpolateCamera(scene.keyframes[at.before].camera, scene.keyframes[at.after].camera, at.weight).validate();
+        } catch (const InvalidArgument& e) {
+            throw InvalidArgument("the path's camera at t = " + std::to_string(t) + " (between keys " + std::to_string(at.before) + " and " +
+                                  std::to_string(at.after) + ") is degenerate: " + e.what());
+        }
+    }
+}
+
 StylizerScene sceneAtTime(const StylizerScene& scene, double time) {
     StylizerScene s = scene;
     s.time = time;

@@ -33,6 +33,11 @@ std::pair<double, double> pathSpan(const std::vector<StylizerKeyframe>& keys);
 /// (0, 240], end before start or more than `maxFrames` frames.
 std::vector<double> sequenceTimes(double start, double end, double fps, size_t maxFrames);
 
+/// Throws InvalidArgument naming the first time of `times` whose interpolated camera is degenerate
+/// (two keys' up vectors opposed, the eye passing through the target): checked before a sequence
+/// starts, not when it reaches that frame.
+void checkPathCameras(const StylizerScene& scene, const std::vector<double>& times);
+
 /// The scene at `time`: its time set and, on a path, the camera interpolated. The TF is left to
 /// the stylizer (it blends the keys' compiled TFs, anchored constraints found per key).
 StylizerScene sceneAtTime(const StylizerScene& scene, double time);

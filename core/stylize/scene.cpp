@@ -34,7 +34,7 @@ void validateTransferFunction(const TransferFunction& tf, const std::string& pat
     if (tf.image && (tf.image->width > 4096 || tf.image->height > 4096)) throw InvalidArgument(path + "/image: at most 4096 texels a side");
     if (!(tf.depthFar > tf.depthNear) || !std::isfinite(tf.depthNear) || !std::isfinite(tf.depthFar))
         throw InvalidArgument(path + "/depth_range: must be two finite numbers, the second larger");
-    if (tf.image)
+    if (tf.image && tf.layers.empty())  // an uploaded image (compiled ones are checked as they are made)
         for (float v : tf.image->rgba)
             if (!std::isfinite(v) || v < 0) throw InvalidArgument(path + "/image: values must be finite and >= 0");
 }
@@ -159,6 +159,18 @@ void StylizerScene::validate() const {
         if (v.steps < 1 || v.steps > 4096) throw InvalidArgument("/volume/steps: must be in [1, 4096]");
     }
     validateKeyframes(keyframes, occluders);
+    // What compiling every TF costs: texels times (diffusion layers + 1), all TFs together.
+    double work = 0;
+    for (const TransferFunction* tf : transferFunctions()) {
+        if (tf->layers.empty()) continue;
+        double layers = 1;
+        for (const TfLayer& l : tf->layers) layers += l.kind == TfLayerKind::Diffusion ? 1 : 0;
+        work += double(tf->width) * tf->height * layers;
+    }
+    if (work > kMaxTfCompileWork)
+        throw InvalidArgument("/transfer_function: compiling every TF (the scene's and the key frames') would cost " +
+                              std::to_string(int64_t(work)) + " texel-layers, over the limit of " + std::to_string(int64_t(kMaxTfCompileWork)) +
+                              " (about 8 s): use smaller sizes, fewer diffusion layers or fewer keys with TFs");
 }
 
 void StylizeSettings::validate() const {

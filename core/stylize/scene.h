@@ -120,6 +120,10 @@ struct StylizerKeyframe {
 };
 
 inline constexpr size_t kMaxKeyframes = 256;
+/// Texels × (diffusion layers + 1) of every TF of a scene together: 2 M is about 8 s of
+/// compiling on one core (the diffusion solve costs ~4 µs a texel), e.g. 16 keys of 128² with
+/// 7 diffusion layers each.
+inline constexpr double kMaxTfCompileWork = 2.0e6;
 
 struct StylizerScene {
     std::vector<Occluder> occluders;

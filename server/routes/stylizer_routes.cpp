@@ -118,8 +118,10 @@ void addStylizerRoutes(RouteContext& c) {
         auto s = c.service.find(req.matches[1]);
         const AddedTfConstraint a = c.service.addTfConstraint(*s, protocol::StylizerPickRequest::fromJson(c.body(req), c.limits, true));
         res.set_header("ETag", fmt::format("\"r{}\"", a.revision));
-        reply(res, 200, {{"revision", a.revision}, {"layer", a.layer}, {"index", a.index},
-                         {"constraint", protocol::tfConstraintToJson(a.constraint)}, {"pick", pickJson(a.pick)}});
+        nlohmann::json body = {{"revision", a.revision}, {"layer", a.layer}, {"index", a.index},
+                               {"constraint", protocol::tfConstraintToJson(a.constraint)}, {"pick", pickJson(a.pick)}};
+        if (a.key >= 0) body["key"] = a.key;
+        reply(res, 200, body);
     });
     c.http.Post(kStylizerPath + "/sequence", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);

@@ -121,6 +121,13 @@ TEST_F(TfAuthoringApi, SceneChangesUndoAndRedo) {
     ASSERT_EQ(r->status, 200) << r->body;
     EXPECT_EQ(json::parse(r->body)["transfer_function"]["layers"][0]["type"], "solid");
     expectError(client().Post((base + "/redo").c_str(), "", "application/json"), 409, "busy");
+    // A change of time alone is no step: undo goes past it to the scene before the TF.
+    s["time"] = 3;
+    ASSERT_EQ(putScene(s)->status, 200);
+    r = client().Post((base + "/undo").c_str(), "", "application/json");
+    ASSERT_EQ(r->status, 200) << r->body;
+    EXPECT_FALSE(json::parse(r->body).contains("transfer_function"));
+    ASSERT_EQ(client().Post((base + "/redo").c_str(), "", "application/json")->status, 200);
 
     // Bad layers name their field and change nothing.
     json bad = s;
@@ -151,6 +158,10 @@ TEST_F(TfAuthoringApi, ASequenceJobRendersTheCameraPathWithProgressAndAVideo) {
     auto put = putScene(s);
     ASSERT_EQ(put->status, 200) << put->body;
     EXPECT_EQ(scene()["keyframes"].size(), 2u);
+    // On a path whose keys carry TFs a clicked constraint goes into the nearest key's (time 0: key 0).
+    const json added = postConstraint({{"x", 20}, {"y", 20}, {"colour", {0, 1, 0}}});
+    EXPECT_EQ(added["key"], 0) << added;
+    EXPECT_EQ(scene()["keyframes"][0]["transfer_function"]["layers"].size(), 2u);
     const bool video = !server::findFfmpeg().empty();
     auto r = client().Post((base + "/sequence").c_str(), json{{"fps", 4}, {"video", video}}.dump(), "application/json");
     ASSERT_EQ(r->status, 202) << r->body;
