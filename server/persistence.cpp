@@ -251,10 +251,14 @@ std::shared_ptr<Session> Persistence::loadSession(const fs::path& dir) {
     return s;
 }
 
-void Persistence::saveStylizerScene(const std::string& session, const json& scene, uint64_t revision, const json& undo, const json& redo) {
+void Persistence::saveStylizerScene(const std::string& session, const json& scene, uint64_t revision) {
     fs::create_directories(sessionDir(session) / "stylizer");
-    atomicWrite(sessionDir(session) / "stylizer" / "scene.json",
-                protocol::toText({{"revision", revision}, {"scene", scene}, {"undo", undo}, {"redo", redo}}, 2));
+    atomicWrite(sessionDir(session) / "stylizer" / "scene.json", protocol::toText({{"revision", revision}, {"scene", scene}}, 2));
+}
+
+void Persistence::saveStylizerHistory(const std::string& session, const json& undo, const json& redo) {
+    fs::create_directories(sessionDir(session) / "stylizer");
+    atomicWrite(sessionDir(session) / "stylizer" / "history.json", protocol::toText({{"undo", undo}, {"redo", redo}}));
 }
 
 void Persistence::saveSessionFile(const std::string& session, const std::string& file, const std::string& bytes) {
@@ -315,16 +319,23 @@ void Persistence::restoreStylizer(Session& s, const fs::path& dir) {
             damage("stylizer/tf.image", e.what());
         }
     }
+    if (fs::exists(dir / "stylizer" / "history.json")) {  // a convenience: an unreadable one is dropped, not the scene
+        try {
+            const json h = json::parse(readFile(dir / "stylizer" / "history.json"));
+            for (const json& scene : h.at("undo")) s.stylizer.undo.push_back(scene);
+            for (const json& scene : h.at("redo")) s.stylizer.redo.push_back(scene);
+        } catch (const std::exception& e) {
+            s.stylizer.undo.clear(), s.stylizer.redo.clear();
+            spdlog::warn("session {}: the stylizer's undo history is unreadable and was dropped: {}", s.id, e.what());
+        }
+    }
     if (!fs::exists(dir / "stylizer" / "scene.json")) return;  // never edited: builtin:forest
     protocol::StylizerSceneRequest request;
     try {
         const json j = json::parse(readFile(dir / "stylizer" / "scene.json"));
         request = protocol::stylizerSceneFromJson(j.at("scene"), "", protocol::SceneSource::Api);
         s.stylizer.revision = j.at("revision").get<uint64_t>();
-        // The undo history is a convenience: an unreadable one is dropped, not the scene.
-        for (const char* stack : {"undo", "redo"})
-            if (j.contains(stack) && j[stack].is_array())
-                for (const json& scene : j[stack]) (stack[0] == 'u' ? s.stylizer.undo : s.stylizer.redo).push_back(scene);
+
     } catch (const std::exception& e) {
         damage("stylizer/scene.json", std::string("the stylizer's scene is unreadable (it is builtin:forest again): ") + e.what());
         return;
@@ -359,8 +370,7 @@ void Persistence::restoreStylizer(Session& s, const fs::path& dir) {
         for (const auto& l : lost) what += (what.empty() ? "" : ", ") + l;
         s.damaged.push_back({"stylizer/scene.json", "its uploads were damaged; the scene lost " + what});
         spdlog::error("session {}'s stylizer scene lost {}", s.id, what);
-        saveStylizerScene(s.id, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), ++s.stylizer.revision,
-                          s.stylizer.undo, s.stylizer.redo);
+        saveStylizerScene(s.id, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), ++s.stylizer.revision);
     }
 }
 

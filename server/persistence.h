@@ -47,9 +47,10 @@ public:
     void removeSession(const std::string& session);
     /// The stylizer (stylizer/scene.json, stylizer/occluders/NAME.EXT, stylizer/tf.image): the
     /// scene as JSON; uploaded files as they were sent.
-    /// The stylizer's scene with its revision and its undo and redo stacks (arrays of scenes).
-    void saveStylizerScene(const std::string& session, const nlohmann::json& scene, uint64_t revision,
-                           const nlohmann::json& undo = nlohmann::json::array(), const nlohmann::json& redo = nlohmann::json::array());
+    void saveStylizerScene(const std::string& session, const nlohmann::json& scene, uint64_t revision);
+    /// The stylizer's undo and redo stacks (arrays of scenes), apart from the scene: written only
+    /// when they change (not for each frame of a played path).
+    void saveStylizerHistory(const std::string& session, const nlohmann::json& undo, const nlohmann::json& redo);
     /// An uploaded file as it was sent (the stylizer's, environment.image), atomically.
     void saveSessionFile(const std::string& session, const std::string& file, const std::string& bytes);
     void removeSessionFile(const std::string& session, const std::string& file);

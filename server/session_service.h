@@ -263,7 +263,8 @@ private:
                      const protocol::StylizerSequenceRequest& request, core::GpuDevice& device);
 
     /// Writes the stylizer's scene, moves its revision and wakes its streams (the lock held).
-    void stylizerChanged(Session& s);
+    /// `history`: the undo/redo stacks changed too (written apart from the scene).
+    void stylizerChanged(Session& s, bool history = false);
     /// On the GL thread: the one stylizer of the service (created on first use).
     core::Stylizer& stylizerEngine(core::GpuDevice& device);
     core::StylizedFrame stylizeOnGl(const core::StylizerScene& scene, const core::StylizeSettings& settings);

@@ -73,11 +73,12 @@ StylizerSnapshot SessionService::stylizer(Session& s) const {
     return snapshotOf(s);
 }
 
-void SessionService::stylizerChanged(Session& s) {
+void SessionService::stylizerChanged(Session& s, bool history) {
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
-    if (m_persist)
-        m_persist->saveStylizerScene(s.id, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), s.stylizer.revision + 1,
-                                     s.stylizer.undo, s.stylizer.redo);
+    if (m_persist) {
+        if (history) m_persist->saveStylizerHistory(s.id, s.stylizer.undo, s.stylizer.redo);
+        m_persist->saveStylizerScene(s.id, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), s.stylizer.revision + 1);
+    }
     ++s.stylizer.revision;
     s.stylizerChanged.notify_all();
 }
@@ -104,13 +105,14 @@ StylizerSnapshot SessionService::setStylizerScene(Session& s, const protocol::St
     nlohmann::json before = protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs);
     nlohmann::json after = protocol::stylizerSceneToJson(scene, request.meshRefs);
     before.erase("time"), after.erase("time");
-    if (before != after) {
+    const bool step = before != after;
+    if (step) {
         remember(s.stylizer.undo, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs));
         s.stylizer.redo.clear();
     }
     s.stylizer.scene = std::move(scene);
     s.stylizer.meshRefs = request.meshRefs;
-    stylizerChanged(s);
+    stylizerChanged(s, step);
     return snapshotOf(s);
 }
 
@@ -135,7 +137,7 @@ StylizerSnapshot SessionService::undoStylizer(Session& s, bool redo) {
     from.pop_back();
     s.stylizer.scene = std::move(scene);
     s.stylizer.meshRefs = request.meshRefs;
-    stylizerChanged(s);
+    stylizerChanged(s, true);
     return snapshotOf(s);
 }
 
