@@ -123,6 +123,8 @@ VS_CONSTANT(int, kStylizeLayers, 2);
 VS_CONSTANT(int, kUnitTransferFunction, 12); /* the stylizer's transfer function F (RGBA, row 0 = d at its far end) */
 VS_CONSTANT(int, kUnitStylizeDensity, 0);      /* heterogeneous medium: σt over its box (r32f 3D, scaled) */
 VS_CONSTANT(int, kUnitStylizeTransmittance, 1); /* its optical depth τ_l toward the light per voxel (r32f 3D, stylize_transmittance.comp) */
+VS_CONSTANT(int, kUnitStylizeOccupancy, 2);     /* its bricks: the largest σt a trilinear lookup inside each can return (r32f 3D, 0: skip it) */
+VS_CONSTANT(int, kStylizeBrick, 8);             /* voxels a brick side */
 VS_CONSTANT(int, kBindingScatterDepth, 2);  /* SSBO float[n*n]: the manipulated shadow map V̄ reads (row 0 at the bottom) */       /* AOV planes of stylize.comp: (scattering rgb, V̄), (distance, hit, 0, 0) */
 
 struct StylizeParams {

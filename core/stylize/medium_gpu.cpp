@@ -1,5 +1,8 @@
 #include "core/stylize/medium_gpu.h"
 
+#include <algorithm>
+#include <vector>
+
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
 #include "core/gl/shader_builder.h"
@@ -21,6 +24,33 @@ gl::Texture texture3D(Int3 n, const float* data, const char* label) {
     return t;
 }
 
+Int3 brickDims(Int3 n) {
+    const int b = layout::kStylizeBrick;
+    return {(n.x + b - 1) / b, (n.y + b - 1) / b, (n.z + b - 1) / b};
+}
+
+/// Per brick, the largest σt of the voxels a trilinear lookup inside it can read: the brick and
+/// one voxel around it (0: the march may skip it).
+std::vector<float> brickMaxima(const std::vector<float>& sigma, Int3 n) {
+    const Int3 nb = brickDims(n);
+    const int b = layout::kStylizeBrick;
+    std::vector<float> out(size_t(nb.volume()), 0.0f);
+    for (int k = 0; k < n.z; ++k)
+        for (int j = 0; j < n.y; ++j)
+            for (int i = 0; i < n.x; ++i) {
+                const float v = sigma[(size_t(k) * size_t(n.y) + size_t(j)) * size_t(n.x) + size_t(i)];
+                if (v <= 0) continue;
+                // Every brick whose dilated box [8B − 1, 8B + 8] holds voxel (i, j, k).
+                for (int bk = std::max(0, (k - 1) / b); bk <= std::min(nb.z - 1, (k + 1) / b); ++bk)
+                    for (int bj = std::max(0, (j - 1) / b); bj <= std::min(nb.y - 1, (j + 1) / b); ++bj)
+                        for (int bi = std::max(0, (i - 1) / b); bi <= std::min(nb.x - 1, (i + 1) / b); ++bi) {
+                            float& m = out[(size_t(bk) * size_t(nb.y) + size_t(bj)) * size_t(nb.x) + size_t(bi)];
+                            m = std::max(m, v);
+                        }
+            }
+    return out;
+}
+
 }  // namespace
 
 double StylizerMediumCache::bind(GpuDevice& device, const std::optional<StylizerVolume>& volume, layout::StylizeParams& p) {
@@ -31,8 +61,8 @@ double StylizerMediumCache::bind(GpuDevice& device, const std::optional<Stylizer
             const float one = 1;
             m_empty = texture3D({1, 1, 1}, &one, "stylizer-no-medium");
         }
-        glBindTextureUnit(layout::kUnitStylizeDensity, m_empty.id());
-        glBindTextureUnit(layout::kUnitStylizeTransmittance, m_empty.id());
+        for (int unit : {layout::kUnitStylizeDensity, layout::kUnitStylizeTransmittance, layout::kUnitStylizeOccupancy})
+            glBindTextureUnit(GLuint(unit), m_empty.id());
         return 0;
     }
     const auto t0 = Clock::now();
@@ -46,11 +76,16 @@ double StylizerMediumCache::bind(GpuDevice& device, const std::optional<Stylizer
         std::vector<float> sigma(v.grid->sigma);
         for (float& s : sigma) s = float(s * v.extinctionScale);
         m_density = texture3D(n, sigma.data(), "stylizer-density");
+        const std::vector<float> bricks = brickMaxima(sigma, n);
+        m_occupancy = texture3D(brickDims(n), bricks.data(), "stylizer-occupancy");
+        glTextureParameteri(m_occupancy.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTextureParameteri(m_occupancy.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
         m_densityKey = densityKey;
         m_lightKey.reset();
         built = true;
     }
     glBindTextureUnit(layout::kUnitStylizeDensity, m_density.id());
+    glBindTextureUnit(layout::kUnitStylizeOccupancy, m_occupancy.id());
     const LightKey lightKey{double(v.grid->id), v.extinctionScale, v.lo.x, v.lo.y, v.lo.z, v.hi.x, v.hi.y, v.hi.z, double(p.options.z),
                             p.lightDirection.x, p.lightDirection.y, p.lightDirection.z, p.spot.x, p.spot.y, p.spot.z};
     if (v.lightTransmittance && m_lightKey != lightKey) {
