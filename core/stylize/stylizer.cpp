@@ -148,6 +148,14 @@ double Stylizer::estimatedLookups(const StylizerScene& scene, const StylizeSetti
     double lookups = pixels * (settings.method == VisibilityMethod::Naive ? settings.steps : kAcceleratedLookupsPerRay);
     if (scene.light.type == StylizerLightType::Spot) lookups += pixels * settings.spotSteps;
     if (scene.volume) lookups += pixels * 3.0 * scene.volume->steps;  // a shadow-map and two texture lookups a step
+    // A TF with anchored constraints is compiled for every frame: about 4 µs a texel and
+    // diffusion layer on one core (bench/tf_bench), some 400 lookups' worth.
+    for (const TransferFunction* tf : scene.transferFunctions()) {
+        if (!tf->hasAnchors()) continue;
+        double diffusion = 0;
+        for (const TfLayer& l : tf->layers) diffusion += l.kind == TfLayerKind::Diffusion ? 1 : 0;
+        lookups += 400.0 * tf->width * tf->height * diffusion;
+    }
     const LightMap map = lightMapOf(scene);
     for (size_t i = 0; i < scene.occluders.size(); ++i) {
         const Manipulation& m = scene.occluders[i].manipulation;
