@@ -137,9 +137,7 @@ int renderSequence(const Arguments& args, const core::StylizerScene& scene, cons
     fs::create_directories(folder);
     auto device = core::GpuDevice::create();
     core::Stylizer stylizer(*device);
-    core::SaveOptions save;
-    save.data = !core::isPicture(output);
-    save.exposure = save.data ? 0 : args.number("exposure", 0);
+    const core::SaveOptions save = stylizerSaveOptions(output, args.number("exposure", 0));
     for (size_t i = 0; i < times.size(); ++i) {
         const core::StylizedFrame f = stylizer.render(core::sceneAtTime(scene, times[i]), settings);
         core::saveImage((folder / sequenceFrameName(i)).string(), f.output(output), save);
@@ -192,10 +190,7 @@ int runStylize(const std::vector<std::string>& argv) {
     auto device = core::GpuDevice::create();
     core::Stylizer stylizer(*device);
     const core::StylizedFrame f = stylizer.render(scene, settings);
-    core::SaveOptions save;
-    save.data = !core::isPicture(*output);  // V̄ and depths: values, not sRGB
-    save.exposure = save.data ? 0 : args.number("exposure", 0);
-    save.halfFloat = false;
+    const core::SaveOptions save = stylizerSaveOptions(*output, args.number("exposure", 0));
     core::saveImage(outputPath, f.output(*output), save);
     spdlog::info("stylized {}x{} in {:.1f} ms (shadow maps and edits {:.1f}, min-max mipmap {:.1f}, G-buffer {:.1f}, shading {:.1f}, read back {:.1f})",
                  scene.camera.width, scene.camera.height, f.totalMs, f.shadowMs, f.mipmapMs, f.gbufferMs, f.shadeMs, f.readbackMs);

@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <semaphore>
@@ -252,6 +253,9 @@ private:
     /// "unknowns": ["lights", …]: the environment lobes (and the volume's unknowns in turn); the
     /// session's lighting gets the solved radiances (and the volume a new version).
     void solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options, core::GpuDevice& device);
+    /// Runs `work` as the job's body: cancelled before it starts, or running (recorded) until it
+    /// returns (it sets the result and done) or throws (failed or cancelled, with the error).
+    void runJob(Job& job, const std::function<void()>& work);
     void finishJob(Job& job);
     /// A new job of session `s` (too_many_jobs at its queue limit), recorded and listed.
     std::shared_ptr<Job> queueJob(Session& s);

@@ -48,20 +48,7 @@ void SessionService::runSolve(const std::shared_ptr<Job>& job, const std::shared
         std::lock_guard lock(s->mutex);
         dropPreviews(*s);  // earlier jobs' last iterates: this job's previews replace them
     }
-    if (job->cancel) {
-        job->fail(JobState::Cancelled, protocol::ErrorCode::Cancelled, "cancelled before it started");
-    } else {
-        job->setState(JobState::Running);
-        saved(*job);
-        spdlog::info("job {} running", job->id);
-        try {
-            solveAndCommit(*job, s, options, device);
-        } catch (...) {
-            const protocol::ErrorReport e = protocol::describeException(std::current_exception());
-            job->fail(e.code == protocol::ErrorCode::Cancelled ? JobState::Cancelled : JobState::Failed, e.code, e.message,
-                      e.details);
-        }
-    }
+    runJob(*job, [&] { solveAndCommit(*job, s, options, device); });
     std::shared_ptr<core::GpuVolume> preview;  // freed here, on the GL thread, when the job is done
     {
         std::lock_guard lock(job->mutex);
@@ -171,6 +158,22 @@ void SessionService::solveLightsAndCommit(Job& job, const std::shared_ptr<Sessio
     std::lock_guard lock(job.mutex);
     job.state = JobState::Done;
     job.result = std::move(result);
+}
+
+void SessionService::runJob(Job& job, const std::function<void()>& work) {
+    if (job.cancel) {
+        job.fail(JobState::Cancelled, protocol::ErrorCode::Cancelled, "cancelled before it started");
+        return;
+    }
+    job.setState(JobState::Running);
+    saved(job);
+    spdlog::info("job {} running", job.id);
+    try {
+        work();
+    } catch (...) {
+        const protocol::ErrorReport e = protocol::describeException(std::current_exception());
+        job.fail(e.code == protocol::ErrorCode::Cancelled ? JobState::Cancelled : JobState::Failed, e.code, e.message, e.details);
+    }
 }
 
 void SessionService::finishJob(Job& job) {

@@ -11,7 +11,6 @@
 #include "core/image/image_io.h"
 #include "core/stylize/keyframes.h"
 #include "core/stylize/stylizer.h"
-#include "protocol/error_body.h"
 #include "server/session_service.h"
 #include "server/video_encoder.h"
 
@@ -65,18 +64,7 @@ std::shared_ptr<Job> SessionService::startSequence(const std::shared_ptr<Session
                                                           seconds, m_limits.renderBudgetSeconds));
     auto job = queueJob(*session);
     m_gl.submit([this, job, scene, times, q](core::GpuDevice& device) {
-        if (job->cancel) {
-            job->fail(JobState::Cancelled, ErrorCode::Cancelled, "cancelled before it started");
-        } else {
-            job->setState(JobState::Running);
-            saved(*job);
-            try {
-                runSequence(*job, scene, times, q, device);
-            } catch (...) {
-                const protocol::ErrorReport e = protocol::describeException(std::current_exception());
-                job->fail(e.code == ErrorCode::Cancelled ? JobState::Cancelled : JobState::Failed, e.code, e.message, e.details);
-            }
-        }
+        runJob(*job, [&] { runSequence(*job, scene, times, q, device); });
         finishJob(*job);
     });
     return job;
@@ -86,9 +74,7 @@ void SessionService::runSequence(Job& job, const core::StylizerScene& scene, con
                                  const protocol::StylizerSequenceRequest& q, core::GpuDevice& device) {
     const std::filesystem::path dir = jobFilesDir(job.id);
     std::filesystem::create_directories(dir);
-    core::SaveOptions save;
-    save.data = !core::isPicture(q.output);
-    save.exposure = save.data ? 0 : q.exposure;
+    const core::SaveOptions save = stylizerSaveOptions(q.output, q.exposure);
     core::StylizeSettings settings = q.settings;
     settings.readShadowMaps = q.output == core::StylizerOutput::ShadowMap || q.output == core::StylizerOutput::ModifiedShadowMap;
     nlohmann::json urls = nlohmann::json::array();

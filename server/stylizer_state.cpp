@@ -43,6 +43,14 @@ void attachTransferImage(core::StylizerScene& scene, const std::shared_ptr<const
     }
 }
 
+core::SaveOptions stylizerSaveOptions(core::StylizerOutput output, double exposure) {
+    core::SaveOptions save;
+    save.data = !core::isPicture(output);
+    save.exposure = save.data ? 0 : exposure;
+    save.halfFloat = false;
+    return save;
+}
+
 StylizerState defaultStylizer() {
     static const core::StylizerScene forest = core::builtinForest();
     StylizerState s;
@@ -94,6 +102,11 @@ core::StylizerScene resolveStylizerScene(const StylizerState& state, const proto
         else problems.push_back({"/volume/box", "is required here (there is no volume whose bounds it could take)"});
     }
     if (!problems.empty()) throw protocol::ValidationError(problems);
+    try {
+        scene.checkTfCompileWork();  // before the work, not after it
+    } catch (const InvalidArgument& e) {
+        throw protocol::ValidationError(std::vector<protocol::FieldError>{{"/transfer_function", e.what()}});
+    }
     for (core::TransferFunction* tf : scene.transferFunctions()) try {
             core::compileTransferFunction(*tf);  // anchored ones again for each frame
         } catch (const InvalidArgument& e) {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/image/image.h"
+#include "core/image/image_io.h"
 #include "core/stylize/scene.h"
 #include "protocol/stylize_json.h"
 
@@ -72,6 +73,11 @@ StylizerState defaultStylizer();
 
 /// The built-in mesh `ref` names (builtin:forest/ground, builtin:forest/trees); null for any other.
 std::shared_ptr<const core::Mesh> builtinMesh(const std::string& ref);
+
+/// How a stylizer output is written: the frame and the scattering as pictures (sRGB, `exposure`
+/// stops in 8-bit files), V̄ and the depths as data (linear, exposure ignored); EXR in float, so
+/// bright scattering and far depths stay finite.
+core::SaveOptions stylizerSaveOptions(core::StylizerOutput output, double exposure);
 
 /// Puts a new uploaded TF image into `scene`'s TFs where they show it (compiling their layers again).
 void attachTransferImage(core::StylizerScene& scene, const std::shared_ptr<const core::Image>& image);

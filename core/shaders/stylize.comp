@@ -16,6 +16,7 @@
 #include "common/pinhole.glsl"
 #include "common/phase.glsl"
 #include "common/min_max_entry.glsl"
+#include "common/ray_box.glsl"
 
 layout(local_size_x = kWorkgroup2D, local_size_y = kWorkgroup2D) in;
 
@@ -280,12 +281,9 @@ float lightTransmittance(vec3 x) {
         reach = length(u.spot.xyz - x);
         l = (u.spot.xyz - x) / max(reach, 1e-30);
     }
-    vec3 inv = 1.0 / mix(l, vec3(1e-30), equal(l, vec3(0.0)));
-    vec3 t0 = (u.volumeLo.xyz - x) * inv, t1 = (u.volumeHi.xyz - x) * inv;
-    vec3 near = min(t0, t1), far = max(t0, t1);
-    float enter = max(max(near.x, near.y), near.z), leave = min(min(far.x, far.y), far.z);
-    if (!(leave > enter && enter > 0.0 && enter < reach)) return 1.0;
-    return exp(-texture(s_lightDepth, volumeUvw(x + enter * l)).r);
+    vec2 span = rayBox(x, safeInverse(l), u.volumeLo.xyz, u.volumeHi.xyz);
+    if (!(span.y > span.x && span.x > 0.0 && span.x < reach)) return 1.0;
+    return exp(-texture(s_lightDepth, volumeUvw(x + span.x * l)).r);
 }
 
 // What the light gives a point x of the medium before visibility, per unit of σt e^{−τ}: p E for
@@ -306,10 +304,8 @@ void marchVolume(vec3 e, vec3 dir, float s, out float vBar, out vec3 inScattered
     vBar = -1.0;
     inScattered = vec3(0.0);
     transmittance = 1.0;
-    vec3 inv = 1.0 / mix(dir, vec3(1e-30), equal(dir, vec3(0.0)));
-    vec3 t0 = (u.volumeLo.xyz - e) * inv, t1 = (u.volumeHi.xyz - e) * inv;
-    vec3 near = min(t0, t1), far = max(t0, t1);
-    float ta = max(max(near.x, near.y), max(near.z, 0.0)), tb = min(min(far.x, far.y), min(far.z, s));
+    vec2 span = rayBox(e, safeInverse(dir), u.volumeLo.xyz, u.volumeHi.xyz);
+    float ta = max(span.x, 0.0), tb = min(span.y, s);
     if (!(tb > ta)) return;
     int steps = int(u.volumeLo.w);
     float dt = (tb - ta) / float(steps), tau = 0.0, weighted = 0.0, weights = 0.0;
@@ -318,16 +314,15 @@ void marchVolume(vec3 e, vec3 dir, float s, out float vBar, out vec3 inScattered
     vec3 voxels = vec3(textureSize(s_density, 0)), size = u.volumeHi.xyz - u.volumeLo.xyz;
     ivec3 bricks = textureSize(s_occupancy, 0);
     vec3 gPerT = dir * voxels / size;  // voxel coordinates per unit of t
-    vec3 gInv = 1.0 / mix(gPerT, vec3(1e-30), equal(gPerT, vec3(0.0)));
+    vec3 gInv = safeInverse(gPerT);
     for (int i = 0; i < steps;) {
         float t = ta + (float(i) + 0.5) * dt;
         vec3 x = e + t * dir;
         vec3 g = volumeUvw(x) * voxels;
         ivec3 b = clamp(ivec3(floor(g / float(kStylizeBrick))), ivec3(0), bricks - 1);
         if (texelFetch(s_occupancy, b, 0).r <= 0.0) {
-            vec3 lo = vec3(b * kStylizeBrick), hi = lo + float(kStylizeBrick);
-            vec3 exits = max((lo - g) * gInv, (hi - g) * gInv);
-            float leave = t + max(min(exits.x, min(exits.y, exits.z)), 0.0);
+            vec3 lo = vec3(b * kStylizeBrick);
+            float leave = t + max(rayBox(g, gInv, lo, lo + float(kStylizeBrick)).y, 0.0);
             i = max(i + 1, int(ceil((leave - ta) / dt - 0.5)));
             continue;
         }

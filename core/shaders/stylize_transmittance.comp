@@ -5,6 +5,7 @@
 // depth varies smoothly where the transmittance falls off exponentially inside a dense layer, so
 // interpolating it, not T_l, keeps a slab's shadow within 1% of the exact integral.
 #include "common/stylize_params.glsl"
+#include "common/ray_box.glsl"
 
 layout(local_size_x = kWorkgroup3D, local_size_y = kWorkgroup3D, local_size_z = kWorkgroup3D) in;
 
@@ -27,9 +28,7 @@ void main() {
         l = u.lightDirection.xyz;
     }
     // Where the ray toward the light leaves the box.
-    vec3 inv = 1.0 / mix(l, vec3(1e-30), equal(l, vec3(0.0)));
-    vec3 exits = max((lo - x) * inv, (u.volumeHi.xyz - x) * inv);
-    length_ = max(min(length_, min(exits.x, min(exits.y, exits.z))), 0.0);
+    length_ = max(min(length_, rayBox(x, safeInverse(l), lo, u.volumeHi.xyz).y), 0.0);
     float step = 0.5 * min(size.x / float(n.x), min(size.y / float(n.y), size.z / float(n.z)));
     int k = clamp(int(ceil(length_ / step)), 1, 4096);
     float dt = length_ / float(k), tau = 0.0;

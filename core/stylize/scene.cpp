@@ -103,6 +103,21 @@ std::vector<const TransferFunction*> StylizerScene::transferFunctions() const {
     return out;
 }
 
+void StylizerScene::checkTfCompileWork() const {
+    // What compiling every TF costs: texels times (diffusion layers + 1), all TFs together.
+    double work = 0;
+    for (const TransferFunction* tf : transferFunctions()) {
+        if (tf->layers.empty()) continue;
+        double layers = 1;
+        for (const TfLayer& l : tf->layers) layers += l.kind == TfLayerKind::Diffusion ? 1 : 0;
+        work += double(tf->width) * tf->height * layers;
+    }
+    if (work > kMaxTfCompileWork)
+        throw InvalidArgument("/transfer_function: compiling every TF (the scene's and the key frames') would cost " +
+                              std::to_string(int64_t(work)) + " texel-layers, over the limit of " + std::to_string(int64_t(kMaxTfCompileWork)) +
+                              " (about 8 s): use smaller sizes, fewer diffusion layers or fewer keys with TFs");
+}
+
 void StylizerScene::validate() const {
     for (const Occluder& o : occluders) {
         try {
@@ -159,18 +174,7 @@ void StylizerScene::validate() const {
         if (v.steps < 1 || v.steps > 4096) throw InvalidArgument("/volume/steps: must be in [1, 4096]");
     }
     validateKeyframes(keyframes, occluders);
-    // What compiling every TF costs: texels times (diffusion layers + 1), all TFs together.
-    double work = 0;
-    for (const TransferFunction* tf : transferFunctions()) {
-        if (tf->layers.empty()) continue;
-        double layers = 1;
-        for (const TfLayer& l : tf->layers) layers += l.kind == TfLayerKind::Diffusion ? 1 : 0;
-        work += double(tf->width) * tf->height * layers;
-    }
-    if (work > kMaxTfCompileWork)
-        throw InvalidArgument("/transfer_function: compiling every TF (the scene's and the key frames') would cost " +
-                              std::to_string(int64_t(work)) + " texel-layers, over the limit of " + std::to_string(int64_t(kMaxTfCompileWork)) +
-                              " (about 8 s): use smaller sizes, fewer diffusion layers or fewer keys with TFs");
+    checkTfCompileWork();
 }
 
 void StylizeSettings::validate() const {

@@ -143,6 +143,10 @@ struct StylizerScene {
     std::vector<TransferFunction*> transferFunctions();
     std::vector<const TransferFunction*> transferFunctions() const;
 
+    /// Throws InvalidArgument when compiling every TF (its own and its keys') would cost over
+    /// kMaxTfCompileWork: checked before anything is compiled, and by validate().
+    void checkTfCompileWork() const;
+
     /// Throws InvalidArgument naming the first problem (a bad mesh, a degenerate
     /// light, a shadow map outside 512–4096, a negative σt, ρ outside [0,1], a bad camera).
     void validate() const;

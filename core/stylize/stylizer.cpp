@@ -212,8 +212,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
 }
 
 StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSettings& settings) {
-    VOLSTYLE_CHECK(m_device.isOwnedByThisThread(), ==, true);
-    scene.validate();
+    VOLSTYLE_CHECK(m_device.isOwnedByThisThread(), ==, true);  // the scene: validated by render()
     settings.validate();
     if (settings.pick && !(settings.pick->x >= 0 && settings.pick->y >= 0 && settings.pick->x < scene.camera.width &&
                            settings.pick->y < scene.camera.height))

@@ -164,10 +164,8 @@ void addStylizerRoutes(RouteContext& c) {
         const auto request = protocol::StylizerFrameRequest::fromJson(c.body(req), c.limits);
         const core::StylizedFrame f = c.service.stylize(*s, request);
         res.set_header("X-Render-Ms", fmt::format("{:.1f}", f.totalMs));
-        core::SaveOptions save;
-        save.data = !core::isPicture(request.output);  // V̄ and depths: values, not sRGB
-        save.exposure = save.data || request.format == protocol::ImageFormat::Exr ? 0 : request.exposure;
-        save.halfFloat = false;                         // EXR: float, so bright scattering and far depths stay finite
+        const core::SaveOptions save =
+            stylizerSaveOptions(request.output, request.format == protocol::ImageFormat::Exr ? 0 : request.exposure);
         res.set_content(core::encodeImage(f.output(request.output), protocol::imageFormatName(request.format), save),
                         protocol::imageMimeType(request.format));
     });

@@ -8,20 +8,13 @@
 #include "core/stylize/keyframes.h"
 #include "core/stylize/stylizer.h"
 #include "../common/image_compare.h"
+#include "../common/small_forest.h"
 #include "gl_test_env.h"
 
 using namespace volstyle;
 using namespace volstyle::core;
 
 namespace {
-
-/// builtin:forest small: 64×36, a 512² shadow map.
-StylizerScene smallForest() {
-    StylizerScene s = builtinForest();
-    s.camera.width = 64, s.camera.height = 36;
-    s.light.shadowMapSize = 512;
-    return s;
-}
 
 /// A replace TF of one solid colour (so the scattering is the colour, wherever V̄ and d are).
 TransferFunction solidTf(Vec3d colour) {
@@ -37,7 +30,7 @@ TransferFunction solidTf(Vec3d colour) {
 }  // namespace
 
 TEST(Keyframes, TheTfIsTheKeysAtKeysAndTheirAverageMidway) {
-    StylizerScene scene = smallForest();
+    StylizerScene scene = test::smallForest();
     const Vec3d c0{0.2, 0.4, 0.6}, c1{0.8, 0.2, 0.0};
     StylizerKeyframe k0{0, scene.camera, solidTf(c0)}, k1{2, scene.camera, solidTf(c1)};
     k1.camera.eye = k1.camera.eye + Vec3d(1.0, 0.3, -0.5);
@@ -57,7 +50,7 @@ TEST(Keyframes, TheTfIsTheKeysAtKeysAndTheirAverageMidway) {
     const Vec3d half = (k0.camera.eye + k1.camera.eye) * 0.5;
     EXPECT_LT(length(sceneAtTime(scene, 1).camera.eye - half), 1e-12);
     // A frame at a key is the frame of the key's own scene.
-    StylizerScene atKey = smallForest();
+    StylizerScene atKey = test::smallForest();
     atKey.camera = k1.camera;
     atKey.transferFunction = k1.transferFunction;
     EXPECT_EQ(stylizer.render(sceneAtTime(scene, 2)).frame.rgba, stylizer.render(atKey).frame.rgba);
@@ -66,7 +59,7 @@ TEST(Keyframes, TheTfIsTheKeysAtKeysAndTheirAverageMidway) {
 TEST(Keyframes, ASequenceChangesNoFasterThanItsKeys) {
     // One camera, two TFs: between frames 1/fps apart each pixel may move by at most the keys'
     // difference times the step's share of the span.
-    StylizerScene scene = smallForest();
+    StylizerScene scene = test::smallForest();
     const Vec3d c0{0.1, 0.5, 0.9}, c1{0.9, 0.3, 0.1};
     scene.keyframes = {{0, scene.camera, solidTf(c0)}, {1, scene.camera, solidTf(c1)}};
     Stylizer stylizer(test::device());
@@ -87,7 +80,7 @@ TEST(Keyframes, ASequenceChangesNoFasterThanItsKeys) {
 }
 
 TEST(Keyframes, KeysMustBlend) {
-    StylizerScene scene = smallForest();
+    StylizerScene scene = test::smallForest();
     TransferFunction bigger = solidTf({1, 1, 1});
     bigger.width = 16;
     scene.keyframes = {{0, scene.camera, solidTf({1, 1, 1})}, {1, scene.camera, bigger}};

@@ -9,6 +9,7 @@
 #include <filesystem>
 
 #include "../common/image_compare.h"
+#include "../common/small_forest.h"
 #include "core/stylize/stylizer.h"
 #include "core/volume/builtin_scenes.h"
 #include "core/volume/vdb_io.h"
@@ -49,13 +50,17 @@ double sampleGrid(const DensityGrid& g, Vec3d lo, Vec3d hi, Vec3d x) {
     return v;
 }
 
+/// σt of a round blob off the centre of an n³ grid, 0 outside it.
+double blob(int i, int j, int k, int n) {
+    const double x = (i + 0.5) / n - 0.45, y = (j + 0.5) / n - 0.5, z = (k + 0.5) / n - 0.55;
+    return std::max(0.0, 1 - 30 * (x * x + y * y + z * z));
+}
+
 }  // namespace
 
 TEST(StylizerVolume, AHomogeneousVdbFillingTheSceneIsTheHomogeneousMedium) {
     VOLSTYLE_REQUIRE_GL();
-    StylizerScene homogeneous = builtinForest();
-    homogeneous.camera.width = 64, homogeneous.camera.height = 36;
-    homogeneous.light.shadowMapSize = 512;
+    StylizerScene homogeneous = test::smallForest();
     StylizeSettings naive;
     naive.method = VisibilityMethod::Naive;
     naive.steps = 128;
@@ -156,19 +161,15 @@ TEST(StylizerVolume, SkippingEmptyBricksChangesNothing) {
     VOLSTYLE_REQUIRE_GL();
     // A blob in a 40³ grid (5³ bricks, most empty) against the same blob over a floor of 1e-30
     // (no brick empty: every midpoint sampled): the frames and V̄ agree.
-    StylizerScene scene = builtinForest();
-    scene.camera.width = 64, scene.camera.height = 36;
-    scene.light.shadowMapSize = 512;
+    StylizerScene scene = test::smallForest();
     StylizerVolume v;
-    v.grid = grid(40, [](int i, int j, int k, int n) { return std::max(0.0, 1 - 30 * (std::pow((i + 0.5) / n - 0.45, 2) + std::pow((j + 0.5) / n - 0.5, 2) + std::pow((k + 0.5) / n - 0.55, 2))); });
+    v.grid = grid(40, blob);
     v.lo = {-7, 0, -8}, v.hi = {5, 7, 2};
     v.extinctionScale = 1.5;
     scene.volume = v;
     Stylizer stylizer(test::device());
     const StylizedFrame sparse = stylizer.render(scene);
-    scene.volume->grid = grid(40, [](int i, int j, int k, int n) {
-        return 1e-30 + std::max(0.0, 1 - 30 * (std::pow((i + 0.5) / n - 0.45, 2) + std::pow((j + 0.5) / n - 0.5, 2) + std::pow((k + 0.5) / n - 0.55, 2)));
-    });
+    scene.volume->grid = grid(40, [](int i, int j, int k, int n) { return 1e-30 + blob(i, j, k, n); });
     const StylizedFrame dense = stylizer.render(scene);
     const double frame = test::maxAbsDifference(sparse.frame, dense.frame), scattering = test::maxAbsDifference(sparse.scattering, dense.scattering);
     double peak = 0;

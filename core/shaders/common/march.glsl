@@ -5,6 +5,7 @@
 // segment per voxel cell the ray crosses, found by stepping from face to face (Amanatides–Woo),
 // so the box basis's weights — the length inside each cell — are exact.
 #include "common/volume.glsl"
+#include "common/ray_box.glsl"
 
 #ifndef VOLSTYLE_SKIP_EMPTY
 #define VOLSTYLE_SKIP_EMPTY 1
@@ -39,10 +40,8 @@ int skipEmptyBricks(int i, Segments s, vec3 o, vec3 d) {
     vec3 p = o + segmentMidpoint(s, i) * d;
     ivec3 brick = clamp(ivec3(floor((p + 0.5) / float(kBrickSize))), ivec3(0), u.brickDims.xyz - 1);
     if (texelFetch(s_occupancy, brick, 0).r > 0.0) return i;
-    vec3 lo = vec3(brick * kBrickSize) - 0.5, hi = lo + float(kBrickSize);
-    vec3 invD = 1.0 / mix(d, vec3(1e-30), equal(d, vec3(0.0)));
-    vec3 tFar = max((lo - o) * invD, (hi - o) * invD);
-    float tExit = min(tFar.x, min(tFar.y, tFar.z));
+    vec3 lo = vec3(brick * kBrickSize) - 0.5;
+    float tExit = rayBox(o, safeInverse(d), lo, lo + float(kBrickSize)).y;
     return max(i + 1, int(ceil((tExit - s.t0) / s.dt - 0.5)));
 #else
     return i;
@@ -54,9 +53,8 @@ float emptyBrickExit(vec3 p, vec3 o, vec3 invD) {
 #if VOLSTYLE_SKIP_EMPTY
     ivec3 brick = clamp(ivec3(floor((p + 0.5) / float(kBrickSize))), ivec3(0), u.brickDims.xyz - 1);
     if (texelFetch(s_occupancy, brick, 0).r > 0.0) return -1.0;
-    vec3 lo = vec3(brick * kBrickSize) - 0.5, hi = lo + float(kBrickSize);
-    vec3 tFar = max((lo - o) * invD, (hi - o) * invD);
-    return min(tFar.x, min(tFar.y, tFar.z));
+    vec3 lo = vec3(brick * kBrickSize) - 0.5;
+    return rayBox(o, invD, lo, lo + float(kBrickSize)).y;
 #else
     return -1.0;
 #endif
@@ -75,7 +73,7 @@ RayMarch beginMarch(vec2 range, vec3 o, vec3 d) {
     RayMarch m;
     m.o = o;
     m.d = d;
-    m.invD = 1.0 / mix(d, vec3(1e-30), equal(d, vec3(0.0)));
+    m.invD = safeInverse(d);
     m.seg = makeSegments(range, d);
     m.i = 0;
     m.t = range.x;
