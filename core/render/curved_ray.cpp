@@ -70,11 +70,16 @@ IndexField smoothSphere(double R, double inside, double width) {
 
 IndexField indexFieldOf(const Volume& volume) {
     if (!volume.refractiveIndex()) throw InvalidArgument("the volume has no refractive_index grid");
-    const std::vector<float>* grid = &*volume.refractiveIndex();
-    const Int3 n = volume.dims();
-    const Mat4 indexFromWorld = volume.worldFromIndex().inverseAffine();
+    // The volume outlives the field (documented): share its grid without copying.
+    return indexFieldOf(std::shared_ptr<const std::vector<float>>(std::shared_ptr<void>(), &*volume.refractiveIndex()), volume.dims(),
+                        volume.worldFromIndex());
+}
+
+IndexField indexFieldOf(std::shared_ptr<const std::vector<float>> values, Int3 n, const Mat4& worldFromIndex) {
+    if (!values || values->size() != size_t(n.volume())) throw InvalidArgument("indexFieldOf: the grid does not match its dims");
+    const Mat4 indexFromWorld = worldFromIndex.inverseAffine();
     // n and its index-space gradient at index-space point p (inside the voxels' box).
-    auto sample = [grid, n](const Vec3d& p, Vec3d* gradient) {
+    auto sample = [grid = std::move(values), n](const Vec3d& p, Vec3d* gradient) {
         int i0[3], i1[3];
         double f[3];
         bool clampedLow[3], clampedHigh[3];

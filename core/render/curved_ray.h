@@ -11,6 +11,7 @@
 /// tracer will be checked against.
 
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "core/math/vec.h"
@@ -52,5 +53,8 @@ IndexField smoothSphere(double radius, double inside, double width);
 /// gradient of that interpolant (per cell, carried to world space). Throws InvalidArgument when
 /// the volume has no refractive index. The volume must outlive the field.
 IndexField indexFieldOf(const Volume& volume);
+/// The same over a grid of n.x·n.y·n.z values (x fastest) placed by `worldFromIndex`; the field
+/// shares the grid.
+IndexField indexFieldOf(std::shared_ptr<const std::vector<float>> grid, Int3 n, const Mat4& worldFromIndex);
 
 }  // namespace volstyle::core

@@ -4,6 +4,7 @@
 #include <string_view>
 
 #include "core/base/errors.h"
+#include "core/render/curved_paths.h"
 #include "core/gl/object.h"
 #include "core/shaders/layout.h"
 
@@ -70,6 +71,7 @@ void GpuVolume::upload(const Volume& volume) {
     }
     t.albedo = volume.hasAlbedo() ? uploadRgb(volume.albedo(), d, "albedo") : gl::Texture();
     t.emission = volume.hasEmission() ? uploadRgb(volume.emission(), d, "emission") : gl::Texture();
+    m_refraction = RefractiveGrid::of(volume);  // paths are cached under its content's hash
     m_maxEmission = volume.hasEmission() ? maxComponent(Volume::range(volume.emission()).second) : 0.0f;
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("GpuVolume: out of GPU memory uploading the volume");
 }

@@ -12,6 +12,8 @@
 
 namespace volstyle::core {
 
+class RefractiveGrid;  // core/render/curved_paths.h
+
 class GpuVolume {
 public:
     /// Uploads `volume` (validated first; throws InvalidArgument, GpuError if too large for GL).
@@ -46,12 +48,15 @@ public:
     /// solve's copy), so derived data that is costly to rebuild can be shared between them.
     size_t extinctionHash() const { return m_extinctionHash; }
     void markOccupancyCurrent() { m_occupancyVersion = m_extinctionVersion; }
+    /// The refractive-index grid when it bends rays (curved_paths.h), else null.
+    const std::shared_ptr<const RefractiveGrid>& refraction() const { return m_refraction; }
 
 private:
     struct Textures;
     std::unique_ptr<Textures> m_textures;
     Int3 m_dims, m_brickDims;
     Mat4 m_worldFromIndex;
+    std::shared_ptr<const RefractiveGrid> m_refraction;
     size_t m_extinctionHash = 0;  // to detect unchanged extinction on re-upload
     float m_maxEmission = 0;
     bool m_extinctionIsGrey = true;

@@ -103,6 +103,7 @@ MarchSetup prepareMarch(GpuDevice& device, GpuVolume& volume, const Camera& came
         }
     }
     p.march.z = float(radianceBound(volume, lighting, environment.get(), setup));
+    setup.paths = refractedPaths(device, volume, camera, settings, stats, budget);
     return setup;
 }
 
@@ -115,6 +116,7 @@ void bindMarch(GpuDevice& device, const GpuVolume& volume, const MarchSetup& set
         glBindTextureUnit(GLuint(layout::kUnitLightDepth0 + i), setup.lightDepth[i]->texture.id());
     if (setup.lobes || setup.backgroundLobes) device.setParams(setup.lobeParams, layout::kBindingLobeParams);
     if (setup.lobes) glBindTextureUnit(layout::kUnitLobeTransmittance, setup.lobes->texture.id());
+    if (setup.paths) bindRefractedPaths(*setup.paths);
 }
 
 }  // namespace volstyle::core

@@ -18,6 +18,7 @@
 #include "core/render/gpu_volume.h"
 #include "core/render/lobe_volumes.h"
 #include "core/render/params.h"
+#include "core/render/refracted_paths.h"
 #include "core/render/render_stats.h"
 #include "core/shaders/layout.h"
 
@@ -34,6 +35,8 @@ struct MarchSetup {
     /// and their directions, solid angles and radiances.
     std::shared_ptr<const LobeLightVolumes> lobes;
     layout::LobeParams lobeParams;
+    /// The camera's rays bent by the volume's refractive index, or null: straight rays.
+    std::shared_ptr<const RefractedPaths> paths;
 };
 
 /// Updates occupancy if stale, finds or computes the derived volumes, fills the uniform block.

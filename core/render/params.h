@@ -154,6 +154,9 @@ struct RenderSettings {
     bool hardwareFilter = false;    ///< sample with the texture unit (fast, 8-bit weights on GPUs)
     /// One segment per voxel cell crossed (Amanatides–Woo) instead of equal steps of stepVoxels.
     bool exactTraversal = false;
+    /// Follow the volume's refractive_index grid (issue #16). Off, or with no grid or a constant
+    /// one, rays are straight and the straight-ray kernels run unchanged.
+    bool refraction = true;
 
     void validate() const;
 };

@@ -10,6 +10,7 @@ struct RenderStats {
     double occupancyMs = 0;    ///< occupancy recomputed this frame (0 when cached)
     double totalMs = 0;        ///< wall clock including readback
     int lightVolumesRecomputed = 0;
+    double refractionMs = 0;   ///< refracted rays traced this frame (0 when cached or straight)
 };
 
 }  // namespace volstyle::core

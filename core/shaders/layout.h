@@ -66,7 +66,10 @@ VS_CONSTANT(int, kBindingVectorY, 4);
 VS_CONSTANT(int, kBindingVectorZ, 5);
 VS_CONSTANT(int, kBindingPartials, 6);     /* per-workgroup partial sums (dvec4) */
 VS_CONSTANT(int, kWorkgroup1D, 256);
-VS_CONSTANT(int, kBindingIndexList, 7);    /* SSBO uint[]: the elements a vector kernel touches (VOLSTYLE_INDEXED) */
+VS_CONSTANT(int, kBindingIndexList, 7);
+/* Refracted view rays (common/march.glsl, VOLSTYLE_CURVED; core/render/refracted_paths.h). */
+VS_CONSTANT(int, kBindingPathStart, 8);   /* SSBO uint[pixels + 1]: pixel p's vertices are [start[p], start[p+1]) */
+VS_CONSTANT(int, kBindingPathVertex, 9);  /* SSBO vec4[]: index-space position, arc length from the eye (world) */    /* SSBO uint[]: the elements a vector kernel touches (VOLSTYLE_INDEXED) */
 
 /* Everything a march needs: camera, grid, lighting. World-space t parameterises rays. */
 struct MarchParams {

@@ -63,15 +63,12 @@ void main() {
 #endif
     if (marched) {
         vec3 dir = cameraRay(pix);
-        vec3 o, d;
-        vec2 range;
-        viewRay(dir, o, d, range);
         vec3 transmittance = vec3(1.0);
-        if (range.x < range.y) {
-            RayMarch m = beginMarch(range, o, d);
+        RayMarch m;
+        if (beginViewMarch(pix, dir, m)) {
             float tMid, dt;
             while (nextSegment(m, true, tMid, dt)) {
-                vec3 p = o + tMid * d;
+                vec3 p = m.o + tMid * m.d;
                 Stencil st = stencilAt(p);
                 vec3 sigma = fetchTrilinear(s_extinction, st);
                 if (max3(sigma) <= 0.0) continue;
@@ -83,9 +80,10 @@ void main() {
 #if VOLSTYLE_ADJOINT
                 LobeStencil ls = lobeStencilAt(p);
                 vec3 rw = r * w;
-                for (int k = 0; k < count; ++k) s_sums[local * uint(kLobeChunk) + uint(k)] += rw * lobeResponse(ls, first + k, dir);
+                vec3 along = marchDirection(m, dir);
+                for (int k = 0; k < count; ++k) s_sums[local * uint(kLobeChunk) + uint(k)] += rw * lobeResponse(ls, first + k, along);
 #else
-                sum += w * lobeInScattering(p, dir);
+                sum += w * lobeInScattering(p, marchDirection(m, dir));
 #endif
                 transmittance *= exp(-tau);
                 if (max3(transmittance) < u.projectorCutoff.x) break;  // as project.comp
@@ -94,7 +92,7 @@ void main() {
 #if VOLSTYLE_BACKGROUND_LOBES
         // The lobes seen directly (Background::fromLobes): the cell the ray leaves through adds
         // its radiance times T(0, s), the transmittance left at the ray's end.
-        int cell = lobeCellOf(dir);
+        int cell = lobeCellOf(exitDirection(pix, dir));
         if (cell >= 0) {
 #if VOLSTYLE_ADJOINT
             int k = cell - first;

@@ -324,24 +324,21 @@ void main() {
     vec3 sum = vec3(0.0);
 
     vec3 dir = cameraRay(pix);
-    vec3 o, d;
-    vec2 range;
-    viewRay(dir, o, d, range);
-    if (range.x < range.y) {
-        RayMarch m = beginMarch(range, o, d);
+    RayMarch m;
+    if (beginViewMarch(pix, dir, m)) {
         float tMid, dt;
 #if VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EXTINCTION
         // Log-space tomography: o_k = Σ σ_i ∫ v_i dt. The current extinction is not involved,
         // so no skipping: every segment of the box counts.
         CornerCache cache = emptyCache(0u);
-        while (nextSegment(m, false, tMid, dt)) apply(basisAt(o + tMid * d), cache, vec3(dt), r, sum);
+        while (nextSegment(m, false, tMid, dt)) apply(basisAt(m.o + tMid * m.d), cache, vec3(dt), r, sum);
         flush(cache);
 #else
         vec3 transmittance = vec3(1.0);
         uint albedoBlock = VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO ? uint(u.unknownLayout.x) : 0u;
         CornerCache emission = emptyCache(0u), albedo = emptyCache(albedoBlock);
         while (nextSegment(m, true, tMid, dt)) {
-            vec3 p = o + tMid * d;
+            vec3 p = m.o + tMid * m.d;
             vec3 sigma = fetchTrilinear(s_extinction, stencilAt(p));
             if (max3(sigma) <= 0.0) continue;
             vec3 tau = sigma * dt;
@@ -351,7 +348,7 @@ void main() {
             apply(b, emission, opacity, r, sum);
 #endif
 #if VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_ALBEDO || VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO
-            apply(b, albedo, opacity * inScattering(p, dir), r, sum);
+            apply(b, albedo, opacity * inScattering(p, marchDirection(m, dir)), r, sum);
 #endif
             transmittance *= exp(-tau);
             // Only a transmittance cut-off: forward and adjoint must stop at the same segment.

@@ -36,20 +36,16 @@ void main() {
     ivec2 pix = ivec2(gl_GlobalInvocationID.xy) + u.dispatchOffset.xy;  // chunked_dispatch.h
     if (pix.x >= u.imageSize.x || pix.y >= u.imageSize.y) return;
 
-    // Set up the view ray in index space, parameterised by world distance t.
+    // The view ray in index space, parameterised by world distance t (or its refracted path).
     vec3 dir = cameraRay(pix);
-    vec3 o, d;
-    vec2 range;
-    viewRay(dir, o, d, range);
-
     vec3 radiance = vec3(0.0);
     vec3 transmittance = vec3(1.0);
     vec3 emitted = vec3(0.0), scattered = vec3(0.0);  // the parts of radiance (VOLSTYLE_LAYERS)
-    if (range.x < range.y) {
-        RayMarch m = beginMarch(range, o, d);
+    RayMarch m;
+    if (beginViewMarch(pix, dir, m)) {
         float tMid, dt;
         while (nextSegment(m, true, tMid, dt)) {
-            Stencil st = stencilAt(o + tMid * d);
+            Stencil st = stencilAt(m.o + tMid * m.d);
             vec3 sigma = fetchTrilinear(s_extinction, st);
             if (max3(sigma) <= 0.0) continue;
 
@@ -64,7 +60,7 @@ void main() {
 #else
             vec3 albedo = vec3(1.0);
 #endif
-            Ls = albedo * inScattering(st.p, dir);
+            Ls = albedo * inScattering(st.p, marchDirection(m, dir));
 #endif
             // Segment of optical depth τ = σ dt: opacity 1 - e^{-τ}, then attenuate.
             vec3 tau = sigma * dt;
@@ -80,7 +76,7 @@ void main() {
             if ((T < u.march.y && T * u.march.z <= u.march.y * max3(radiance)) || T < 1e-3 * u.march.y) break;
         }
     }
-    vec3 background = backgroundRadiance(pix, dir);
+    vec3 background = backgroundRadiance(pix, exitDirection(pix, dir));
     float alpha = 1.0 - (transmittance.r + transmittance.g + transmittance.b) / 3.0;
     int p = pix.y * u.imageSize.x + pix.x;
     pixels[p] = vec4(radiance + transmittance * background, alpha);

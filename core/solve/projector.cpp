@@ -60,6 +60,7 @@ void Projector::useProgram(const View& v, gl::ShaderBuilder& builder) {
         .define("VOLSTYLE_HAS_LOBES", needsLight && v.setup.lobes ? 1 : 0)
         .define("VOLSTYLE_SKIP_EMPTY", 1)
         .define("VOLSTYLE_EXACT_TRAVERSAL", m_exactTraversal ? 1 : 0);
+    if (v.setup.paths) builder.define("VOLSTYLE_CURVED", 1);  // the view's refracted paths, traced once in addView
     glUseProgram(m_device.program(builder).id());
     bindMarch(m_device, m_volume, v.setup);
 }

@@ -155,6 +155,27 @@ const std::vector<BuiltinSceneInfo>& builtinScenes() {
     return scenes;
 }
 
+void addGlassSphere(Volume& volume, const GlassSphere& g) {
+    const auto [lo, hi] = volume.worldBounds();
+    const Vec3d centre = (lo + hi) * 0.5;
+    const Vec3d voxel = volume.voxelSize();
+    const double edge = std::max(g.edgeVoxels, 1e-3) * std::min({voxel.x, voxel.y, voxel.z});
+    const PerlinNoise noise(g.seed);
+    const Int3 n = volume.dims();
+    std::vector<float> index(volume.voxelCount());
+    forEachSlice(n.z, [&](int k) {
+        for (int j = 0; j < n.y; ++j)
+            for (int i = 0; i < n.x; ++i) {
+                const Vec3d x = volume.worldFromIndex().applyPoint({double(i), double(j), double(k)});
+                // 1 − smoothstep across [R − edge/2, R + edge/2]: the glass's share of the voxel.
+                const double inside = 1 - smoothstep(g.radius - 0.5 * edge, g.radius + 0.5 * edge, length(x - centre));
+                const double glass = g.index + g.noise * noise(x * g.noiseFrequency);
+                index[volume.index(i, j, k)] = float(1 + (glass - 1) * inside);
+            }
+    });
+    volume.refractiveIndex() = std::move(index);
+}
+
 Mat4 unitBoxWorldFromIndex(Int3 dims) {
     double h = 2.0 / std::max({dims.x, dims.y, dims.z});
     Vec3d origin{-0.5 * dims.x * h + 0.5 * h, -0.5 * dims.y * h + 0.5 * h, -0.5 * dims.z * h + 0.5 * h};

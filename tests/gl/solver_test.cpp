@@ -12,6 +12,7 @@
 #include "core/render/gpu_volume.h"
 #include "core/solve/solver.h"
 #include "core/volume/builtin_scenes.h"
+#include "../common/mask_solve.h"
 #include "../common/stamped_cloud.h"
 #include "gl_test_env.h"
 
@@ -163,19 +164,12 @@ TEST(Solver, RecoversExtinctionFromMasks) {
     const int res = 24;
     Volume truth = makeBuiltinScene("sphere", res);
     const Vec3d Lm{1.0, 0.9, 0.8};
-    auto& e = truth.ensureEmission();
-    for (size_t i = 0; i < truth.voxelCount(); ++i) e[3 * i] = float(Lm.x), e[3 * i + 1] = float(Lm.y), e[3 * i + 2] = float(Lm.z);
+    test::fillEmission(truth, Lm);
     Lighting l;
     l.lights.clear();
     l.background.color = {0.1, 0.2, 0.5};
     auto views = targetsFrom(truth, l, ringCameras(6, 32));
-    Volume start = truth;
-    start.extinction().assign(start.voxelCount() * 3, 0.0f);
-    SolveOptions opt;
-    opt.unknown = Unknown::Extinction;
-    opt.mediumRadiance = Lm;
-    opt.maxIterations = 80;
-    opt.tolerance = 1e-6;
+    auto [start, opt] = test::maskSolve(truth, Lm);
     SolveResult r = Solver(test::device(), start, l, views, opt).run();
     std::cout << "[ measured ] extinction: " << r.report.iterations << " iterations (" << r.report.stopReason
               << "), log-ratio RMS " << meanOf(r.report.initialRms) << " -> " << meanOf(r.report.finalRms)

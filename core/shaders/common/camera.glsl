@@ -1,5 +1,5 @@
 // Pinhole camera rays (SPEC §1): through pixel centres, row 0 at the top.
-#include "common/volume.glsl"
+#include "common/march.glsl"
 #include "common/pinhole.glsl"
 
 vec3 cameraRay(ivec2 pix) { return pinholeRay(pix, u.imageSize.xy, u.camForward, u.camRight, u.camUp.xyz); }
@@ -11,4 +11,45 @@ void viewRay(vec3 dir, out vec3 o, out vec3 d, out vec2 range) {
     d = mat3(u.indexFromWorld) * dir;
     range = intersectVolumeBox(o, d);
     range = vec2(max(range.x, u.rayRange.x), min(range.y, u.rayRange.y));
+}
+
+#if VOLSTYLE_CURVED
+// Pixel pix's path: its vertices' span in the path buffers.
+ivec2 pathOf(ivec2 pix) {
+    int p = pix.y * u.imageSize.x + pix.x;
+    return ivec2(pathStart[p], pathStart[p + 1]);
+}
+#endif
+
+// The march of pixel pix's view ray (world direction dir), straight or along its refracted
+// path (common/march.glsl); false when it misses the volume.
+bool beginViewMarch(ivec2 pix, vec3 dir, out RayMarch m) {
+#if VOLSTYLE_CURVED
+    ivec2 span = pathOf(pix);
+    m.vertex = span.x;
+    m.lastVertex = span.y - 1;
+    m.range = u.rayRange.xy;
+    m.w = dir;
+    m.o = m.d = m.invD = vec3(0.0);
+    m.seg.t0 = m.seg.dt = 0.0;
+    m.seg.count = 0;  // no piece yet: nextSegment() starts the first
+    m.i = 0;
+    m.t = m.tEnd = 0.0;
+    return m.lastVertex > m.vertex;
+#else
+    vec3 o, d;
+    vec2 range;
+    viewRay(dir, o, d, range);
+    m = beginMarch(range, o, d);  // set even when unused: the compiler sees m written on every path
+    return range.x < range.y;
+#endif
+}
+
+// The direction pixel pix's ray leaves in (for the background): its last piece's.
+vec3 exitDirection(ivec2 pix, vec3 dir) {
+#if VOLSTYLE_CURVED
+    ivec2 span = pathOf(pix);
+    if (span.y - span.x >= 2) return worldDirection(pathVertex[span.y - 1].xyz - pathVertex[span.y - 2].xyz);
+#endif
+    return dir;
 }

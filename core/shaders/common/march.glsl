@@ -4,6 +4,10 @@
 // Eq. 1, Listing 1). Exact traversal (VOLSTYLE_EXACT_TRAVERSAL, TVCG Sec. 5.2 after [44]): one
 // segment per voxel cell the ray crosses, found by stepping from face to face (Amanatides–Woo),
 // so the box basis's weights — the length inside each cell — are exact.
+// Curved rays (VOLSTYLE_CURVED, issue #16): a view ray bent by the refractive index is a polyline
+// traced on the CPU (core/render/curved_paths.h); each of its straight pieces is marched as a
+// straight ray is, so W and Wᵀ still share every segment. Without it the code below is the
+// straight march, unchanged.
 #include "common/volume.glsl"
 #include "common/ray_box.glsl"
 
@@ -12,6 +16,18 @@
 #endif
 #ifndef VOLSTYLE_EXACT_TRAVERSAL
 #define VOLSTYLE_EXACT_TRAVERSAL 0
+#endif
+#ifndef VOLSTYLE_CURVED
+#define VOLSTYLE_CURVED 0
+#endif
+
+#if VOLSTYLE_CURVED
+layout(std430, binding = kBindingPathStart) readonly buffer b_PathStart {
+    uint pathStart[];  // pixel p's vertices: [pathStart[p], pathStart[p + 1])
+};
+layout(std430, binding = kBindingPathVertex) readonly buffer b_PathVertex {
+    vec4 pathVertex[];  // xyz: index-space position; w: length along the path from the eye (world)
+};
 #endif
 
 struct Segments {
@@ -62,15 +78,20 @@ float emptyBrickExit(vec3 p, vec3 o, vec3 invD) {
 
 // A ray being marched: the kernels call nextSegment() until it returns false.
 struct RayMarch {
-    vec3 o, d, invD;
+    vec3 o, d, invD;  // the straight ray (or the current piece of a curved one): o + t d
     Segments seg;  // marching: the equal segments
     int i;         // marching: the next segment
     float t;       // exact traversal: where the next segment starts
     float tEnd;
+#if VOLSTYLE_CURVED
+    int vertex;      // the first vertex of the next piece
+    int lastVertex;  // the path's last vertex
+    vec2 range;      // [near, far] along the path
+    vec3 w;          // the current piece's unit direction (world)
+#endif
 };
 
-RayMarch beginMarch(vec2 range, vec3 o, vec3 d) {
-    RayMarch m;
+void startPiece(inout RayMarch m, vec2 range, vec3 o, vec3 d) {
     m.o = o;
     m.d = d;
     m.invD = safeInverse(d);
@@ -78,12 +99,36 @@ RayMarch beginMarch(vec2 range, vec3 o, vec3 d) {
     m.i = 0;
     m.t = range.x;
     m.tEnd = range.y;
+}
+
+RayMarch beginMarch(vec2 range, vec3 o, vec3 d) {
+    RayMarch m;
+    startPiece(m, range, o, d);
     return m;
 }
 
-// The next segment (midpoint tMid, length dt). With `skip`, segments in empty bricks are jumped
-// over: they contribute exactly nothing. False once the ray has left the volume.
-bool nextSegment(inout RayMarch m, bool skip, out float tMid, out float dt) {
+#if VOLSTYLE_CURVED
+// The world direction of index-space displacement d.
+vec3 worldDirection(vec3 d) { return normalize(inverse(mat3(u.indexFromWorld)) * d); }
+
+// Moves to the path's next piece inside [near, far]; false at its end.
+bool nextPiece(inout RayMarch m) {
+    while (m.vertex < m.lastVertex) {
+        vec4 a = pathVertex[m.vertex], b = pathVertex[m.vertex + 1];
+        ++m.vertex;
+        vec2 r = vec2(max(a.w, m.range.x), min(b.w, m.range.y));
+        if (!(r.y > r.x) || !(b.w > a.w)) continue;
+        vec3 d = (b.xyz - a.xyz) / (b.w - a.w);  // index units per unit of path length
+        startPiece(m, r, a.xyz - a.w * d, d);
+        m.w = worldDirection(d);
+        return true;
+    }
+    return false;
+}
+#endif
+
+// The next segment of the current straight ray or piece.
+bool nextSegmentOnPiece(inout RayMarch m, bool skip, out float tMid, out float dt) {
 #if !VOLSTYLE_EXACT_TRAVERSAL
     while (m.i < m.seg.count) {
         if (skip) {
@@ -122,5 +167,27 @@ bool nextSegment(inout RayMarch m, bool skip, out float tMid, out float dt) {
         return true;
     }
     return false;
+#endif
+}
+
+// The next segment (midpoint tMid, length dt). With `skip`, segments in empty bricks are jumped
+// over: they contribute exactly nothing. False once the ray has left the volume.
+bool nextSegment(inout RayMarch m, bool skip, out float tMid, out float dt) {
+#if VOLSTYLE_CURVED
+    for (;;) {
+        if (nextSegmentOnPiece(m, skip, tMid, dt)) return true;
+        if (!nextPiece(m)) return false;
+    }
+#else
+    return nextSegmentOnPiece(m, skip, tMid, dt);
+#endif
+}
+
+// The ray's direction where the march is (world, unit): the view ray's, or the current piece's.
+vec3 marchDirection(RayMarch m, vec3 viewDir) {
+#if VOLSTYLE_CURVED
+    return m.w;
+#else
+    return viewDir;
 #endif
 }

@@ -1,0 +1,141 @@
+// Rays traced through a volume's refractive_index grid (issue #16, core/render/curved_paths.h):
+// a sampled glass ball deviates rays as Snell's law at its two surfaces predicts; a sampled
+// Luneburg lens focuses a parallel beam on its far pole; the path's error shrinks with the step
+// (second order, the midpoint rule); flat stretches are one straight piece; a constant grid bends
+// nothing (no RefractiveGrid at all).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "core/base/errors.h"
+#include "core/render/curved_paths.h"
+#include "core/volume/builtin_scenes.h"
+
+using namespace volstyle;
+using namespace volstyle::core;
+
+namespace {
+
+Vec3d worldOf(const RefractiveGrid& g, const PathVertex& v) { return g.worldFromIndex().applyPoint(Vec3d(v.x, v.y, v.z)); }
+
+/// The direction a path leaves in (world, unit).
+Vec3d exitDirection(const RefractiveGrid& g, const std::vector<PathVertex>& path) {
+    return normalize(worldOf(g, path.back()) - worldOf(g, path[path.size() - 2]));
+}
+
+Volume glassBall(int res, double n, double radius, double noise = 0, double edgeVoxels = 1.5) {
+    Volume v({res, res, res}, unitBoxWorldFromIndex({res, res, res}));
+    addGlassSphere(v, {n, radius, edgeVoxels, noise, 3, 1});
+    return v;
+}
+
+Volume luneburgLens(int res, double radius) {
+    Volume v({res, res, res}, unitBoxWorldFromIndex({res, res, res}));
+    std::vector<float> index(v.voxelCount());
+    for (int k = 0; k < res; ++k)
+        for (int j = 0; j < res; ++j)
+            for (int i = 0; i < res; ++i) {
+                const double r = length(v.worldFromIndex().applyPoint({double(i), double(j), double(k)})) / radius;
+                index[v.index(i, j, k)] = float(r < 1 ? std::sqrt(2 - r * r) : 1.0);
+            }
+    v.refractiveIndex() = std::move(index);
+    return v;
+}
+
+}  // namespace
+
+TEST(CurvedPaths, AGlassBallDeviatesRaysAsSnellsLawPredicts) {
+    const double n = 1.5, R = 0.6;
+    const auto grid = RefractiveGrid::of(glassBall(96, n, R));
+    ASSERT_TRUE(grid);
+    double worst = 0;
+    for (double b : {0.06, 0.15, 0.24, 0.33}) {
+        const auto path = traceViewPath(*grid, {b, 0.0, -3.0}, {0, 0, 1}, 0, 1e30, {0.25});
+        ASSERT_GE(path.size(), 3u);
+        // Two refractions: D = 2(θi − θt), sin θi = b/R, sin θt = sin θi / n, towards the axis.
+        const double ti = std::asin(b / R), tt = std::asin(std::sin(ti) / n), want = 2 * (ti - tt);
+        const Vec3d out = exitDirection(*grid, path);
+        const double got = std::atan2(-out.x, out.z);
+        std::printf("[ measured ] glass ball n=%.2f, b=%.2f: deviation %.5f rad, Snell %.5f\n", n, b, got, want);
+        worst = std::max(worst, std::abs(got - want));
+    }
+    // A 96³ grid, its surface a 1.5-voxel smooth step: the sampled ball's error, not the tracer's.
+    EXPECT_LE(worst, 0.025);
+}
+
+TEST(CurvedPaths, ASampledLuneburgLensFocusesOnItsFarPole) {
+    const double R = 0.7;
+    const auto grid = RefractiveGrid::of(luneburgLens(96, R));
+    ASSERT_TRUE(grid);
+    double worst = 0;
+    for (double b : {0.07, 0.21, 0.35, 0.49}) {
+        const auto path = traceViewPath(*grid, {b, 0.0, -3.0}, {0, 0, 1}, 0, 1e30, {0.25});
+        // Where the ray crosses the sphere again (its last vertex inside r < R).
+        Vec3d exit;
+        for (const auto& v : path)
+            if (length(worldOf(*grid, v)) < R) exit = worldOf(*grid, v);
+        const double miss = length(exit - Vec3d(0, 0, R));
+        std::printf("[ measured ] Luneburg R=%.2f, b=%.2f: exits %.4f from the pole\n", R, b, miss);
+        worst = std::max(worst, miss);
+    }
+    EXPECT_LE(worst, 0.03);  // two voxels of the 96³ grid (the last vertex inside is ≤ one step short)
+}
+
+TEST(CurvedPaths, ThePathsErrorShrinksWithTheStep) {
+    // A noisy ball whose surface is 4 voxels wide: the trilinear index's gradient jumps at every
+    // cell face, which caps any scheme's order; on steeper surfaces the error stalls near 1e-3.
+    const auto grid = RefractiveGrid::of(glassBall(48, 1.4, 0.6, 0.05, 4));
+    ASSERT_TRUE(grid);
+    auto exitOf = [&](double step, RayScheme scheme) {
+        const auto path = traceViewPath(*grid, {0.21, 0.13, -3.0}, {0.01, 0.02, 1}, 0, 1e30, {step, scheme});
+        return std::make_pair(worldOf(*grid, path.back()), exitDirection(*grid, path));
+    };
+    const auto ref = exitOf(0.02, RayScheme::RungeKutta4);  // the reference: RK4 at a fiftieth of a voxel
+    double previous = 1e9, euler = 0;
+    for (double step : {1.0, 0.25, 0.0625}) {
+        const auto [x, d] = exitOf(step, RayScheme::Midpoint);
+        const double e = length(x - ref.first) + length(d - ref.second);
+        const auto [xe, de] = exitOf(step, RayScheme::EulerForward);
+        euler = length(xe - ref.first) + length(de - ref.second);
+        std::printf("[ measured ] step %.4f voxels: exit error (position + direction) midpoint %.2e, Euler %.2e\n", step, e, euler);
+        EXPECT_LT(e, previous);
+        previous = e;
+    }
+    EXPECT_LT(previous, 1e-3);
+    EXPECT_LT(previous, 0.3 * euler) << "the midpoint rule beats Euler forward at the same step";
+}
+
+TEST(CurvedPaths, FlatStretchesAreOneStraightPiece) {
+    const auto grid = RefractiveGrid::of(glassBall(32, 1.5, 0.3));
+    ASSERT_TRUE(grid);
+    // Past the ball (|x| > 0.3 + an edge): the index is 1 all along, one piece box face to face.
+    const auto path = traceViewPath(*grid, {0.7, 0.05, -3.0}, {0, 0, 1}, 0, 1e30);
+    ASSERT_EQ(path.size(), 2u);
+    EXPECT_NEAR(path.front().t, 2.0, 1e-5);  // enters the box at z = −1
+    EXPECT_NEAR(path.back().t, 4.0, 1e-5);
+    // A constant grid (any value): no refractive grid at all, the straight path runs.
+    Volume constant({8, 8, 8}, unitBoxWorldFromIndex({8, 8, 8}));
+    constant.refractiveIndex() = std::vector<float>(constant.voxelCount(), 1.2f);
+    EXPECT_FALSE(RefractiveGrid::of(constant));
+}
+
+TEST(CurvedPaths, AViewsPathsAreTracedPerPixel) {
+    const auto grid = RefractiveGrid::of(glassBall(24, 1.4, 0.5));
+    Camera c;
+    c.eye = {0.1, 0.2, 3};
+    c.width = 12, c.height = 9;
+    const ViewPaths p = traceViewPaths(*grid, c);
+    ASSERT_EQ(p.start.size(), size_t(12 * 9 + 1));
+    EXPECT_EQ(p.start.back(), p.vertices.size());
+    for (int y = 0; y < c.height; ++y)
+        for (int x = 0; x < c.width; ++x) {
+            const auto one = traceViewPath(*grid, c.eye, c.rayDirection(x, y), c.nearDist, c.farDist);
+            const size_t k = size_t(y * c.width + x);
+            ASSERT_EQ(p.start[k + 1] - p.start[k], one.size());
+            for (size_t i = 0; i < one.size(); ++i) EXPECT_EQ(p.vertices[p.start[k] + i].t, one[i].t);
+        }
+    PathTracing tiny;
+    tiny.maxBytes = 64;
+    EXPECT_THROW(traceViewPaths(*grid, c, tiny), OverBudget);
+}
