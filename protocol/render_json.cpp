@@ -150,6 +150,27 @@ core::Perturbation perturbationFromJson(const nlohmann::json& j) {
     return p;
 }
 
+core::GlassSphere glassSphereFromJson(const nlohmann::json& j) {
+    JsonReader r;
+    core::GlassSphere g;
+    if (r.object(j, "", {"index", "radius", "edge_voxels", "noise", "noise_frequency", "seed"})) {
+        if (j.contains("index")) g.index = r.number(j["index"], "/index").value_or(g.index);
+        if (j.contains("radius")) g.radius = r.number(j["radius"], "/radius").value_or(g.radius);
+        if (j.contains("edge_voxels")) g.edgeVoxels = r.number(j["edge_voxels"], "/edge_voxels").value_or(g.edgeVoxels);
+        if (j.contains("noise")) g.noise = r.number(j["noise"], "/noise").value_or(g.noise);
+        if (j.contains("noise_frequency")) g.noiseFrequency = r.number(j["noise_frequency"], "/noise_frequency").value_or(g.noiseFrequency);
+        if (j.contains("seed")) {
+            const auto seed = r.integer(j["seed"], "/seed");
+            if (seed && *seed < 0) r.fail("/seed", "must be >= 0");
+            else if (seed) g.seed = uint32_t(*seed);
+        }
+    }
+    if (r.ok())
+        for (const auto& [field, message] : g.check()) r.fail("/" + field, message);
+    r.throwIfErrors();
+    return g;
+}
+
 nlohmann::json translucentToJson(const core::TranslucentSettings& s) {
     return {{"slice_spacing", s.sliceSpacing},
             {"light_buffer", s.lightBufferSize},

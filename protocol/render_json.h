@@ -21,6 +21,7 @@
 
 #include "core/render/params.h"
 #include "core/translucent/translucent_settings.h"
+#include "core/volume/glass_sphere.h"
 #include "protocol/validation.h"
 
 namespace volstyle::protocol {
@@ -61,6 +62,9 @@ nlohmann::json translucentToJson(const core::TranslucentSettings& s);
 /// "seed", "time"} (core/translucent/perturbation.h), baked into a new version; one that changes
 /// nothing (both amplitudes 0, an empty body) is refused.
 core::Perturbation perturbationFromJson(const nlohmann::json& j);
+/// POST …/refraction's body: a glass sphere (issue #16) — index, radius, edge_voxels, noise,
+/// noise_frequency, seed; absent fields keep core::GlassSphere's defaults.
+core::GlassSphere glassSphereFromJson(const nlohmann::json& j);
 
 LightingRequest lightingFromJson(const nlohmann::json& j, const std::string& path = "",
                                  bool allowFilePaths = false);

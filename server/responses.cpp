@@ -33,6 +33,7 @@ nlohmann::json sessionJson(Session& s) {
     nlohmann::json grids = nlohmann::json::array({"extinction"});
     if (v.hasAlbedo()) grids.push_back("albedo");
     if (v.hasEmission()) grids.push_back("emission");
+    if (v.refractiveIndex()) grids.push_back("refractive_index");
     nlohmann::json j = {{"id", s.id},
             {"created", s.created},
             {"scene", s.scene},

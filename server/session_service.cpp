@@ -354,6 +354,29 @@ int SessionService::perturb(Session& s, const core::Perturbation& perturbation) 
     return now;
 }
 
+int SessionService::setRefraction(Session& s, const std::optional<core::GlassSphere>& glass) {
+    core::Volume volume;
+    {
+        std::lock_guard lock(s.mutex);
+        volume = s.volume;
+    }
+    if (glass) {
+        core::addGlassSphere(volume, *glass);  // off the lock: O(voxels)
+    } else {
+        if (!volume.refractiveIndex()) throw ApiError(ErrorCode::InvalidArgument, "the volume has no refractive_index grid to remove");
+        volume.refractiveIndex().reset();
+    }
+    std::shared_ptr<core::GpuVolume> stale;
+    int now = 0;
+    {
+        std::lock_guard lock(s.mutex);
+        stale = commitVersion(s, std::move(volume));
+        now = s.version;
+    }
+    release(std::move(stale));
+    return now;
+}
+
 void SessionService::uploadVdb(Session& s, const std::string& bytes) {
     checkUploadSize(bytes, "the VDB");
     TempVdb tmp;

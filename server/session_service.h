@@ -147,6 +147,9 @@ public:
     int revert(Session& s, int version);                          ///< the new version number
     /// Bakes the perturbation (core/translucent/perturbation.h) into a new version; its number.
     int perturb(Session& s, const core::Perturbation& perturbation);
+    /// Gives the volume a generated refractive_index grid (a glass sphere with noise, issue #16),
+    /// or removes its grid (nullopt; InvalidArgument when it has none), in a new version; its number.
+    int setRefraction(Session& s, const std::optional<core::GlassSphere>& glass);
     void uploadVdb(Session& s, const std::string& bytes);          ///< a new version
     /// The VDB of a version (the current one by default): a stored version's file is sent as it
     /// was written (its size checked). A damaged version answers io_error (422).

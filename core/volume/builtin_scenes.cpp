@@ -169,7 +169,7 @@ void addGlassSphere(Volume& volume, const GlassSphere& g) {
                 const Vec3d x = volume.worldFromIndex().applyPoint({double(i), double(j), double(k)});
                 // 1 − smoothstep across [R − edge/2, R + edge/2]: the glass's share of the voxel.
                 const double inside = 1 - smoothstep(g.radius - 0.5 * edge, g.radius + 0.5 * edge, length(x - centre));
-                const double glass = g.index + g.noise * noise(x * g.noiseFrequency);
+                const double glass = std::max(1.0, g.index + g.noise * noise(x * g.noiseFrequency));
                 index[volume.index(i, j, k)] = float(1 + (glass - 1) * inside);
             }
     });

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/volume/glass_sphere.h"
 #include "core/volume/volume.h"
 
 namespace volstyle::core {
@@ -26,15 +27,6 @@ const std::vector<BuiltinSceneInfo>& builtinScenes();
 /// known ones) or a resolution outside [kMinSceneResolution, kMaxSceneResolution].
 Volume makeBuiltinScene(const std::string& name, int resolution = kDefaultSceneResolution);
 
-/// A glass sphere for refraction (issue #16, the TVCG paper's Fig. 8).
-struct GlassSphere {
-    double index = 1.33;        ///< n inside
-    double radius = 0.55;       ///< world units, centred on the volume's box
-    double edgeVoxels = 2;      ///< width of the smooth step from 1 to `index` at the surface
-    double noise = 0.03;        ///< amplitude of the Perlin noise added to n inside
-    double noiseFrequency = 3;  ///< of the noise, per world unit
-    uint32_t seed = 1;
-};
 /// Sets `volume`'s refractive_index grid to `glass` (1 outside the sphere, so the box's faces do
 /// not refract).
 void addGlassSphere(Volume& volume, const GlassSphere& glass = {});

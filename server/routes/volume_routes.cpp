@@ -1,5 +1,6 @@
 // A session's volume versions: PUT …/volume (upload a VDB), GET …/volume.vdb[?version=N],
-// POST …/revert, POST …/perturb (bake a perturbation into a new version).
+// POST …/revert, POST …/perturb (bake a perturbation into a new version), POST/DELETE
+// …/refraction (a generated glass sphere's refractive index, or none).
 #include "server/responses.h"
 #include "server/routes/route_context.h"
 
@@ -21,6 +22,17 @@ void addVolumeRoutes(RouteContext& c) {
         auto s = c.service.find(req.matches[1]);
         const core::Perturbation p = protocol::perturbationFromJson(c.body(req));
         c.service.perturb(*s, p);
+        reply(res, 200, sessionJson(*s));
+    });
+    // A generated refractive index (a glass sphere with noise, issue #16), or none: a new version.
+    c.http.Post(kSessionPath + "/refraction", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        c.service.setRefraction(*s, protocol::glassSphereFromJson(c.body(req)));
+        reply(res, 200, sessionJson(*s));
+    });
+    c.http.Delete(kSessionPath + "/refraction", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        c.service.setRefraction(*s, std::nullopt);
         reply(res, 200, sessionJson(*s));
     });
     c.http.Post(kSessionPath + "/revert", [&c](const httplib::Request& req, httplib::Response& res) {

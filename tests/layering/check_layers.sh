@@ -8,7 +8,7 @@ cd "$root"
 status=0
 
 # The GL-free value headers of core (the volstyle_values target) that protocol may include.
-values='core/base/|core/math/|core/image/image\.h|core/render/(params|environment_lobes|curved_ray|curved_paths)\.h|core/solve/solve_options\.h|core/solve/solve_types\.h|core/shaders/layout\.h|core/volume/volume\.h|core/volume/resample\.h|core/stylize/(mesh|scene|tf_layers)\.h|core/translucent/(translucent_settings|perturbation)\.h'
+values='core/base/|core/math/|core/image/image\.h|core/render/(params|environment_lobes|curved_ray|curved_paths)\.h|core/solve/solve_options\.h|core/solve/solve_types\.h|core/shaders/layout\.h|core/volume/(volume|glass_sphere)\.h|core/volume/resample\.h|core/stylize/(mesh|scene|tf_layers)\.h|core/translucent/(translucent_settings|perturbation)\.h'
 
 # check FILES... -- ALLOWED_REGEX: every project include ("core/…", "protocol/…", "server/…") and
 # every forbidden system header must match the allowed pattern.
