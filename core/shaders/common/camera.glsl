@@ -26,16 +26,8 @@ ivec2 pathOf(ivec2 pix) {
 bool beginViewMarch(ivec2 pix, vec3 dir, out RayMarch m) {
 #if VOLSTYLE_CURVED
     ivec2 span = pathOf(pix);
-    m.vertex = span.x;
-    m.lastVertex = span.y - 1;
-    m.range = u.rayRange.xy;
-    m.w = dir;
-    m.o = m.d = m.invD = vec3(0.0);
-    m.seg.t0 = m.seg.dt = 0.0;
-    m.seg.count = 0;  // no piece yet: nextSegment() starts the first
-    m.i = 0;
-    m.t = m.tEnd = 0.0;
-    return m.lastVertex > m.vertex;
+    m = RayMarch(vec3(0.0), vec3(0.0), vec3(0.0), Segments(0.0, 0.0, 0), 0, 0.0, 0.0, span.x, span.y - 1, u.rayRange.xy, dir);
+    return m.lastVertex > m.vertex;  // no piece yet: the first nextSegment() starts one
 #else
     vec3 o, d;
     vec2 range;
