@@ -11,6 +11,7 @@
 
 #include "core/base/errors.h"
 #include "core/image/image_io.h"
+#include "core/volume/builtin_scenes.h"
 #include "protocol/render_json.h"
 
 namespace volstyle::server {
@@ -153,6 +154,19 @@ std::vector<double> numbers(const std::string& flag, const std::string& value, s
     if (out.size() != count)
         throw InvalidArgument("--" + flag + " takes " + std::to_string(count) + " comma-separated numbers, got '" + value + "'");
     return out;
+}
+
+void applyGlassOption(const Arguments& args, core::Volume& volume) {
+    if (!args.has("glass")) return;
+    const auto parts = split(args.get("glass"), ',');
+    if (parts.empty() || parts.size() > 3) throw InvalidArgument("--glass takes N, N,R or N,R,NOISE, got '" + args.get("glass") + "'");
+    core::GlassSphere g;
+    g.index = parseNumber("glass", parts[0]);
+    if (parts.size() > 1) g.radius = parseNumber("glass", parts[1]);
+    if (parts.size() > 2) g.noise = parseNumber("glass", parts[2]);
+    g.noise = std::min(g.noise, std::max(g.index - 1, 0.0));  // the default noise on a weak glass: n stays >= 1
+    for (const auto& [field, message] : g.check()) throw InvalidArgument("--glass: " + field + " " + message);
+    core::addGlassSphere(volume, g);
 }
 
 const char* versionString() { return VOLSTYLE_VERSION; }

@@ -11,6 +11,7 @@
 
 #include "core/base/errors.h"
 #include "core/render/params.h"
+#include "core/volume/volume.h"
 #include "protocol/validation.h"
 
 namespace volstyle::server {
@@ -73,6 +74,16 @@ double parseNumber(const std::string& flag, const std::string& text);
 std::vector<std::string> split(const std::string& s, char sep);
 /// `count` comma-separated numbers of `--flag` (InvalidArgument naming it otherwise).
 std::vector<double> numbers(const std::string& flag, const std::string& value, size_t count);
+
+/// --glass N[,R[,NOISE]]: bakes a glass sphere's refractive index into `volume` (issue #16); a
+/// no-op without the flag. Throws InvalidArgument naming the bad value.
+void applyGlassOption(const Arguments& args, core::Volume& volume);
+/// The help line of --glass (render and solve share it; constants, so other files' static
+/// command tables can use them at start-up).
+inline constexpr const char* kGlassValue = "N[,R[,NOISE]]";
+inline constexpr const char* kGlassHelp =
+    "bake a glass sphere of index N into the volume (radius R world units, default 0.55; noise amplitude NOISE, default 0.03): "
+    "rays bend through it; default: the volume's own refractive_index, if any";
 
 /// Parses argv (after the subcommand); `flags` are options that take no value. Unknown options
 /// throw InvalidArgument naming them and listing `known`.

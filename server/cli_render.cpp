@@ -44,6 +44,8 @@ const CommandSpec kRender{
         {"no-skip", "", "march through empty space too (a check; same image, slower)"},
         {"hw-filter", "", "sample with the texture unit (faster on GPUs, 8-bit weights)"},
         {"exact-traversal", "", "one segment per voxel crossed instead of equal steps"},
+        {"glass", kGlassValue, kGlassHelp},
+        {"no-refraction", "", "straight rays even through a refractive_index grid (default: rays bend, docs/REFRACTION.md)"},
         {"mode", "M", "single_scattering (default) or translucent"},
         {"translucent", "T.json", "translucent: its parameters as JSON (the API's \"translucent\" object); flags override"},
         {"slice-spacing", "VOXELS", "translucent: distance between slices; default 1"},
@@ -60,7 +62,8 @@ const CommandSpec kRender{
     },
     "  volstyle render --scene builtin:cloud:64 -o cloud.png\n"
     "  volstyle render --scene builtin:plume:48 --exposure 1 -o plume.exr\n"
-    "  volstyle render --scene builtin:cloud:64 --mode translucent --transport 1,0.6,0.3 -o glow.png\n"};
+    "  volstyle render --scene builtin:cloud:64 --mode translucent --transport 1,0.6,0.3 -o glow.png\n"
+    "  volstyle render --scene builtin:cloud:64 --glass 1.33 -o through-glass.png\n"};
 
 /// The translucent preview's parameters: T.json, then the flags; validated (InvalidArgument).
 core::TranslucentSettings translucentSettings(const Arguments& args) {
@@ -112,12 +115,15 @@ int runRender(const std::vector<std::string>& argv) {
     settings.skipEmptySpace = !args.has("no-skip");
     settings.hardwareFilter = args.has("hw-filter");
     settings.exactTraversal = args.has("exact-traversal");
+    settings.refraction = !args.has("no-refraction");
     settings.validate();
     const double exposure = args.number("exposure", 0);
     const std::string mode = args.has("mode") ? args.get("mode") : "single_scattering";
     if (mode != "single_scattering" && mode != "translucent")
         throw InvalidArgument("--mode must be single_scattering or translucent, got '" + mode + "'");
     const bool translucent = mode == "translucent";
+    if (translucent && (args.has("glass") || args.has("no-refraction")))
+        throw InvalidArgument("--glass and --no-refraction are for single scattering: the translucent preview's rays are straight");
     for (const char* flag : {"translucent", "slice-spacing", "blur-angle", "indirect-extinction", "transport", "surface-shading", "no-indirect",
                              "perturb", "perturb-extinction", "seed", "time"})
         if (!translucent && args.has(flag)) throw InvalidArgument(std::string("--") + flag + " needs --mode translucent");
@@ -125,6 +131,7 @@ int runRender(const std::vector<std::string>& argv) {
 
     auto t0 = Clock::now();
     core::Volume volume = loadScene(args.get("scene"));
+    applyGlassOption(args, volume);
     if (!camera) camera = core::framingCamera(volume.worldBounds());
     spdlog::debug("scene {} loaded in {:.1f} ms", args.get("scene"), msSince(t0));
     t0 = Clock::now();

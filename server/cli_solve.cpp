@@ -47,6 +47,7 @@ const CommandSpec kSolve{
     "OUT.vdb with OUT.lighting.json and OUT.lighting.exr beside it.",
     {
         {"scene", "SRC", "builtin:NAME[:RES] or a .vdb file (required)"},
+        {"glass", kGlassValue, kGlassHelp},
         {"views", "VIEWS.json", "{\"views\": [{\"camera\", \"target\": IMAGE, \"weights\"?, \"background\"?: PLATE}], \"lighting\"?} (required)"},
         {"unknowns", "LIST", "emission, albedo, emission,albedo, extinction, lights, or lights with emission and/or albedo; default emission"},
         {"rounds", "N", "lights with emission/albedo: rounds of lights then volume (each --iterations); default 8"},
@@ -263,6 +264,7 @@ int runLightSolve(const Arguments& args, core::Lighting lighting, std::vector<co
     core::EnvironmentLight& env = lighting.environment;
 
     core::Volume volume = loadScene(args.get("scene"));
+    applyGlassOption(args, volume);
     auto device = core::GpuDevice::create();
     if (withVolume) {
         const int rounds = int(args.number("rounds", 8));
@@ -323,6 +325,7 @@ int runSolve(const std::vector<std::string>& argv) {
     if (lights) return runLightSolve(args, lighting, std::move(views), opt, output, withVolume);
 
     core::Volume volume = loadScene(args.get("scene"));
+    applyGlassOption(args, volume);
 
     auto device = core::GpuDevice::create();
     core::Solver solver(*device, volume, lighting, std::move(views), opt);

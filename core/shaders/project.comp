@@ -70,8 +70,8 @@ layout(std430, binding = kBindingColWeight) writeonly buffer b_ColWeight {
     float colWeight[];
 };
 #endif
-uint g_pixel;    // this invocation's pixel within its view
-uint g_entries;  // entries of its row so far
+uint g_pixel = 0u;    // this invocation's pixel within its view
+uint g_entries = 0u;  // entries of its row so far
 
 // One entry of the row: counted (pass 1), or written to the row and to the element's column
 // (pass 2, at the slot the count pass reserved).

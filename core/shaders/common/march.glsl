@@ -91,7 +91,8 @@ struct RayMarch {
 #endif
 };
 
-void startPiece(inout RayMarch m, vec2 range, vec3 o, vec3 d) {
+RayMarch beginMarch(vec2 range, vec3 o, vec3 d) {
+    RayMarch m;
     m.o = o;
     m.d = d;
     m.invD = safeInverse(d);
@@ -99,11 +100,6 @@ void startPiece(inout RayMarch m, vec2 range, vec3 o, vec3 d) {
     m.i = 0;
     m.t = range.x;
     m.tEnd = range.y;
-}
-
-RayMarch beginMarch(vec2 range, vec3 o, vec3 d) {
-    RayMarch m;
-    startPiece(m, range, o, d);
     return m;
 }
 
@@ -119,8 +115,12 @@ bool nextPiece(inout RayMarch m) {
         vec2 r = vec2(max(a.w, m.range.x), min(b.w, m.range.y));
         if (!(r.y > r.x) || !(b.w > a.w)) continue;
         vec3 d = (b.xyz - a.xyz) / (b.w - a.w);  // index units per unit of path length
-        startPiece(m, r, a.xyz - a.w * d, d);
-        m.w = worldDirection(d);
+        RayMarch piece = beginMarch(r, a.xyz - a.w * d, d);  // marched as a straight ray is
+        piece.vertex = m.vertex;
+        piece.lastVertex = m.lastVertex;
+        piece.range = m.range;
+        piece.w = worldDirection(d);
+        m = piece;
         return true;
     }
     return false;
