@@ -96,6 +96,22 @@ const bakeDetail = guard(async () => {
   status(`detail baked into version ${s.volume.version}`, 'ok');
 });
 
+// A glass sphere as the volume's refractive index, or none (a new version each; Undo takes it back).
+const addGlass = guard(async () => {
+  if (!state.sid) throw new Error('create a session first');
+  const s = await call('POST', `/sessions/${state.sid}/refraction`, { index: Number($('glass-index').value), radius: Number($('glass-radius').value) });
+  showSession(s);
+  await renderViewport();
+  status(`glass sphere in version ${s.volume.version}: renders and solves bend through it`, 'ok');
+});
+const removeGlass = guard(async () => {
+  if (!state.sid) throw new Error('create a session first');
+  const s = await call('DELETE', `/sessions/${state.sid}/refraction`);
+  showSession(s);
+  await renderViewport();
+  status(`glass removed in version ${s.volume.version}`, 'ok');
+});
+
 function showSession(s) {
   state.sid = s.id;
   state.version = s.volume.version;
@@ -379,10 +395,12 @@ $('plate-file').onchange = (e) => e.target.files[0] && uploadPlate(e.target.file
 
 $('translucent').onchange = () => { $('translucent-controls').hidden = !$('translucent').checked; renderViewport(); };
 $('tl-bake').onclick = bakeDetail;
-for (const id of ['tl-blur', 'tl-extinction', 'tl-surface', 'tl-spacing', 'tl-amplitude', 'tl-frequency', 'tl-time']) {
+$('glass-add').onclick = addGlass;
+$('glass-remove').onclick = removeGlass;
+for (const id of ['tl-blur', 'tl-extinction', 'tl-surface', 'tl-spacing', 'tl-amplitude', 'tl-frequency', 'tl-time', 'glass-index', 'glass-radius']) {
   const show = () => { document.querySelector(`output[for="${id}"]`).textContent = $(id).value; };
   show();
-  $(id).addEventListener('input', () => { show(); renderViewport(); });
+  $(id).addEventListener('input', () => { show(); if (id.startsWith('tl-')) renderViewport(); });
 }
 $('tl-transport').addEventListener('input', () => renderViewport());
 $('new-session').onclick = newSession;

@@ -137,6 +137,21 @@ try {
     await fail(`the translucent render failed: ${await page.evaluate(() => document.getElementById('status').textContent)}`);
   console.log('[ measured ] translucent viewport renders and follows its sliders');
   await page.screenshot({ path: screenshot.replace(/\.png$/, '_translucent.png') });
+  await page.uncheck('#translucent');
+
+  // Refraction (issue #16): "Add glass" puts a glass sphere in a new version and the viewport
+  // re-renders through it; "Remove glass" takes it out again.
+  const versionOf = () => page.evaluate(() => Number(document.getElementById('session-info').textContent.match(/version (\d+)/)[1]));
+  const beforeGlass = await versionOf();
+  const straightSrc = await page.evaluate(() => document.getElementById('viewport').src);
+  await page.click('#glass-add');
+  await page.waitForFunction((b) => document.getElementById('status').textContent.startsWith('glass sphere in version') &&
+                               document.getElementById('viewport').src !== b, straightSrc, { timeout: 60000 });
+  if ((await versionOf()) !== beforeGlass + 1) await fail(`adding glass made version ${await versionOf()}, not ${beforeGlass + 1}`);
+  await page.screenshot({ path: screenshot.replace(/\.png$/, '_glass.png') });
+  await page.click('#glass-remove');
+  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('glass removed'), null, { timeout: 60000 });
+  console.log('[ measured ] glass added (a new version, the viewport re-rendered through it) and removed');
   console.log('1 passed, 0 failed');
 } catch (e) {
   await fail(e.message);
