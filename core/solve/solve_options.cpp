@@ -31,6 +31,10 @@ std::vector<FieldProblem> SolveOptions::check() const {
         weight(r.towardOne, (prefix + "toward_one").c_str());
     };
     weights(regularization, "");
+    if (!(prior.weight >= 0 && prior.weight <= 1e9)) out.push_back({"prior/weight", "must be in [0, 1e9]"});
+    if (prior.weight > 0 && !prior.values) out.push_back({"prior/values", "a prior with a weight needs its values"});
+    if (prior.weight > 0 && (resolution || coarseIterations > 0))
+        out.push_back({"prior", "a prior lives on the volume's own grid: no resolution, no coarse iterations"});
     if (emissionRegularization) weights(*emissionRegularization, "emission/");
     if (albedoRegularization) weights(*albedoRegularization, "albedo/");
     if (maxIterations < 1 || maxIterations > 10000) out.push_back({"max_iterations", "must be in [1, 10000]"});

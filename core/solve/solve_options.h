@@ -64,6 +64,14 @@ struct SolveOptions {
     /// changed, only the unknowns those pixels see move, and only the pixels that see them are
     /// recomputed. false: every solve moves every unknown.
     bool localResolve = true;
+    /// A prior: weight · ‖a − p‖² (per hull unknown, scaled as `l2`), p three values (RGB) per
+    /// element of the unknown grid, blocks in order. The key-frame solver (keyframe_solver.h)
+    /// couples neighbouring frames through it. Needs the volume's own grid (no `resolution`),
+    /// no coarse iterations; a solve with a prior never re-solves locally.
+    struct Prior {
+        std::shared_ptr<const std::vector<float>> values;
+        double weight = 0;
+    } prior;
     /// Light reconstruction (SPEC §8; "unknowns": ["lights"] alone or with emission/albedo): the
     /// environment lobes' radiances, alone (LightSolver) or in turn with `unknown`
     /// (solveLightsAndVolume, `lightRounds` rounds). `lobes` 0 keeps the lighting's own count

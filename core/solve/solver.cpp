@@ -94,7 +94,8 @@ void Solver::State::computeResiduals() {
         if (b.cId <= 0) continue;
         if (av.empty()) av = a.download(), r.assign(av.size(), 0.0f);
         for (size_t i = 4 * b.range.first; i < 4 * (b.range.first + b.range.count); ++i)
-            if (i % 4 != 3 && hullHost[i - i % 4] > 0) r[i] = float(b.cId * (b.target - av[i]));
+            if (i % 4 != 3 && hullHost[i - i % 4] > 0)
+                r[i] = float(b.cId * ((b.targets.empty() ? b.target : b.targets[i - 4 * b.range.first]) - av[i]));
     }
     if (!r.empty()) rId.upload(r);
 }

@@ -332,14 +332,28 @@ void Solver::State::buildRegularizers() {
         for (size_t e = b * cells; e < (b + 1) * cells; ++e) inHull += hullHost[4 * e] > 0 ? 1 : 0;
         const double Mh = std::max<double>(1.0, double(inHull));
         const Regularization& reg = opt.regularizationFor(kinds[b]);
-        const double lambda = reg.l2 + reg.towardOne;
+        const double lp = opt.prior.values ? opt.prior.weight : 0.0;
+        const double lambda = reg.l2 + reg.towardOne + lp;
         BlockRegularizer br;
         br.range = {b * cells, cells};
         br.cLap = std::sqrt(reg.laplacian / Mh);
         br.cId = std::sqrt(lambda / Mh);
         br.target = lambda > 0 ? reg.towardOne / lambda : 0;
+        if (lp > 0) {
+            // λ0‖a‖² + λ1‖a − 1‖² + λp‖a − p‖² = λ‖a − t‖² + (λ1 + λp p² − λ t²), t = (λ1 + λp p)/λ.
+            const std::vector<float>& p = *opt.prior.values;
+            if (p.size() != 3 * elements) throw InvalidArgument("the prior has " + std::to_string(p.size() / 3) + " values for " + std::to_string(elements) + " unknowns");
+            br.targets.assign(4 * cells, 0.0f);
+            for (size_t e = 0; e < cells; ++e)
+                for (int c = 0; c < 3; ++c) {
+                    const double pe = p[3 * (b * cells + e) + size_t(c)], t = (reg.towardOne + lp * pe) / lambda;
+                    br.targets[4 * e + size_t(c)] = float(t);
+                    if (hullHost[4 * (b * cells + e)] > 0) constant[c] += (reg.towardOne + lp * pe * pe - lambda * t * t) / Mh;
+                }
+        } else {
+            constant += Vec3d(lambda > 0 ? reg.l2 * reg.towardOne / lambda : 0);
+        }
         blocks.push_back(br);
-        constant += Vec3d(lambda > 0 ? reg.l2 * reg.towardOne / lambda : 0);
     }
 }
 

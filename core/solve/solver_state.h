@@ -25,6 +25,9 @@ class SolveCache;
 struct BlockRegularizer {
     Range range;
     double cLap = 0, cId = 0, target = 0;
+    /// With a prior (SolveOptions::prior): the target per unknown (4 per element of `range`:
+    /// (λ1·1 + λp·p)/λ), else empty and `target` holds for every unknown.
+    std::vector<float> targets;
 };
 
 /// Per channel: how far one step goes, and whether a bound cuts it short.

@@ -1,0 +1,62 @@
+#pragma once
+/// \file keyframe_solver.h
+/// Key frames of an animated volume solved jointly (issue #16, the TVCG paper's Sec.
+/// "Animation", taken further): each key frame k has its own volume (its extinction) and views;
+/// its emission or albedo a_k is solved for
+///     Σ_k ‖W_k a_k − o_k‖²_D + regularization + λ_t Σ_{neighbours j,k} ‖a_k − A_{j→k} a_j‖²,
+/// where A_{j→k} carries a_j to frame k: voxel for voxel (the paper's "same voxel over time"), or
+/// along the sequence's velocity (`vel` grids; beyond the paper). The joint problem is solved by
+/// block Gauss–Seidel: sweep 0 solves each frame alone, each later sweep re-solves frame k with
+/// the prior ‖a_k − p_k‖², p_k the mean of its neighbours carried to it (equal, up to a
+/// constant, to its share of the temporal term), warm-started from its last solution. A frame
+/// without views takes p_k (its own least-squares answer). After each solve the frame's values are
+/// extended into its empty voxels by diffusion (the paper's remedy), so a voxel that fills in a
+/// later frame carries sensible values there. Frames between key frames are blended (inBetween).
+/// GL thread only; GL-free header.
+
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "core/gpu/gpu_device.h"
+#include "core/solve/solve_options.h"
+#include "core/volume/volume.h"
+
+namespace volstyle::core {
+
+struct KeyFrame {
+    int frame = 0;                 ///< its frame number (increasing along the sequence)
+    Volume volume;                 ///< its extinction; its emission/albedo is the start
+    std::vector<SolveView> views;  ///< may be empty: the frame then follows its neighbours
+    /// The velocity (world units per frame, 3 per voxel; a `vel` grid), or none.
+    std::vector<float> velocity;
+};
+
+struct KeyFrameOptions {
+    SolveOptions solve;        ///< emission or albedo; the per-frame options
+    double temporal = 1;       ///< λ_t per hull unknown (as `l2`)
+    int sweeps = 4;            ///< Gauss–Seidel sweeps over the frames (1: each frame alone)
+    bool followFlow = true;    ///< carry values along the velocity where frames have one
+    bool extendIntoEmpty = true;
+};
+
+struct KeyFrameReport {
+    int sweeps = 0;
+    /// Per sweep: the largest change of any frame's values (max abs), the last one's convergence.
+    std::vector<double> change;
+    std::vector<SolveReport> frames;  ///< the last solve of each frame (frames without views: empty)
+};
+
+/// The solved key frames' volumes, in the input's order. Throws InvalidArgument: fewer than one
+/// frame, frames of different dims or transforms, frame numbers not increasing, velocity grids
+/// of the wrong size, an unknown other than emission or albedo, or invalid per-frame options.
+std::vector<Volume> solveKeyFrames(GpuDevice& device, const std::vector<KeyFrame>& frames, const Lighting& lighting,
+                                   const KeyFrameOptions& options, KeyFrameReport* report = nullptr,
+                                   const std::function<void(int sweep, int frame)>& progress = {});
+
+/// The property (`unknown`'s grid) of frame f between key frames a (frame fa) and b (frame fb):
+/// each carried to f along its velocity (when given) and blended linearly by (f − fa)/(fb − fa).
+std::vector<float> inBetween(const std::vector<float>& a, int fa, const std::vector<float>& velocityA, const std::vector<float>& b, int fb,
+                             const std::vector<float>& velocityB, int f, Int3 dims, const Mat4& worldFromIndex);
+
+}  // namespace volstyle::core
