@@ -11,6 +11,7 @@
 
 #include "core/base/errors.h"
 #include "core/render/params.h"
+#include "core/solve/solve_options.h"
 #include "core/volume/volume.h"
 #include "protocol/validation.h"
 
@@ -64,6 +65,7 @@ const CommandSpec& serveCommand();
 const CommandSpec& infoCommand();
 const CommandSpec& convertCommand();
 const CommandSpec& stylizeCommand();
+const CommandSpec& animateCommand();
 
 /// The version of this build (the project's version in CMakeLists.txt).
 const char* versionString();
@@ -113,7 +115,13 @@ auto fromFile(const std::string& path, F&& parse) {
 /// A lighting object from a file (`jsonPath`): environment map paths are relative to it.
 core::Lighting lightingFromJsonFile(const nlohmann::json& j, const std::string& jsonPath, const std::string& pointer = "");
 
+/// The views of VIEWS.json: {"views": [{"name"?, "camera", "target", "weights"?, "background"?}],
+/// "lighting"?}; "background" is the view's plate (SPEC §1), an image of the camera's size. With
+/// `frames`, each view also names its "frame" (an animation's), returned in order.
+std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& lighting, std::vector<int>* frames = nullptr);
+
 int runRender(const std::vector<std::string>& args);
+int runAnimate(const std::vector<std::string>& args);
 int runSolve(const std::vector<std::string>& args);
 int runServe(const std::vector<std::string>& args);
 int runInfo(const std::vector<std::string>& args);

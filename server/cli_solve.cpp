@@ -72,9 +72,9 @@ const CommandSpec kSolve{
     "  volstyle solve --scene builtin:cloud:32 --views views.json --unknowns emission,albedo -o out.vdb\n"
     "  volstyle solve --scene builtin:cloud:32 --views views.json --unknowns lights --lights 32 -o sky.json\n"};
 
-/// The views of VIEWS.json: {"views": [{"name"?, "camera", "target", "weights"?, "background"?}],
-/// "lighting"?}; "background" is the view's plate (SPEC §1), an image of the camera's size.
-std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& lighting) {
+}  // namespace
+
+std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& lighting, std::vector<int>* frames) {
     nlohmann::json j = readJsonFile(path);
     protocol::JsonReader r;
     std::vector<core::SolveView> views;
@@ -86,7 +86,14 @@ std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& 
             for (size_t i = 0; i < j["views"].size(); ++i) {
                 const auto& v = j["views"][i];
                 const std::string p = "/views/" + std::to_string(i);
-                if (!r.object(v, p, {"name", "camera", "target", "weights", "background"})) continue;
+                const bool known = frames ? r.object(v, p, {"name", "camera", "target", "weights", "background", "frame"})
+                                          : r.object(v, p, {"name", "camera", "target", "weights", "background"});
+                if (!known) continue;
+                if (frames) {
+                    const auto frame = v.contains("frame") ? r.integer(v["frame"], p + "/frame") : std::nullopt;
+                    if (!v.contains("frame")) r.fail(p + "/frame", "each view of an animation names its frame");
+                    frames->push_back(frame.value_or(0));
+                }
                 core::SolveView view;
                 view.name = v.contains("name") ? r.string(v["name"], p + "/name").value_or("") : "v" + std::to_string(i + 1);
                 if (!v.contains("camera") || !v.contains("target")) {
@@ -123,6 +130,8 @@ std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& 
     }
     return views;
 }
+
+namespace {
 
 /// One line, redrawn in place on a terminal, appended otherwise (logs).
 class ProgressBar {

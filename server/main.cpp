@@ -19,7 +19,8 @@ using volstyle::server::CommandSpec;
 const std::vector<const CommandSpec*>& commands() {
     static const std::vector<const CommandSpec*> all{
         &volstyle::server::serveCommand(), &volstyle::server::renderCommand(), &volstyle::server::solveCommand(),
-        &volstyle::server::stylizeCommand(), &volstyle::server::infoCommand(), &volstyle::server::convertCommand()};
+        &volstyle::server::stylizeCommand(), &volstyle::server::animateCommand(), &volstyle::server::infoCommand(),
+        &volstyle::server::convertCommand()};
     return all;
 }
 
@@ -74,6 +75,7 @@ int main(int argc, char** argv) {
     try {
         if (command == "render") return volstyle::server::runRender(args);
         if (command == "stylize") return volstyle::server::runStylize(args);
+        if (command == "animate") return volstyle::server::runAnimate(args);
         if (command == "info") return volstyle::server::runInfo(args);
         if (command == "convert") return volstyle::server::runConvert(args);
         if (command == "solve") return volstyle::server::runSolve(args);

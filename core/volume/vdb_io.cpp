@@ -323,6 +323,21 @@ Volume loadVdb(const std::string& path, const VolumeLimits& limits) {
     return volume;
 }
 
+std::vector<float> velocityOf(const Volume& volume) {
+    const auto& source = volume.vdbSource();
+    if (!source) return {};
+    openvdb::GridBase::ConstPtr grid;
+    for (const char* name : {"vel", "v", "velocity"})
+        if (!grid) grid = findGrid(source->grids, name);
+    if (!grid) return {};
+    if (!openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(grid))
+        throw InvalidArgument("the velocity grid " + quoted(grid->getName()) + " is " + grid->valueType() + "; volstyle reads a vec3s velocity");
+    std::vector<float> v = densify(grid, *source->roles[kExtinction], source->origin, source->dims, grid->getName());
+    for (float x : v)
+        if (!std::isfinite(x)) throw InvalidArgument("the velocity grid " + quoted(grid->getName()) + " has non-finite values");
+    return v;
+}
+
 namespace {
 
 /// Sets every voxel of the dense box whose value in `grid` differs from the volume's: on an empty

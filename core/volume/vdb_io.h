@@ -30,6 +30,12 @@ Volume loadVdb(const std::string& path, const VolumeLimits& limits = {});
 /// and renames it into place.
 void saveVdb(const std::string& path, const Volume& volume);
 
+/// The velocity grid of a volume read from a VDB — `vel` (Houdini's name), `v` or `velocity`, a
+/// Vec3f grid in world units per second — on the volume's voxels (3 per voxel); empty when the
+/// file had none or the volume was not read from a file. Throws InvalidArgument for a velocity
+/// grid that is not Vec3f or has non-finite values.
+std::vector<float> velocityOf(const Volume& volume);
+
 /// Summary of one grid in a file, for `volstyle info`.
 struct VdbGridInfo {
     std::string name;

@@ -14,4 +14,12 @@ inline double maxAbsDifference(const core::Image& a, const core::Image& b) {
     return m;
 }
 
+/// The RMS difference over the RGB channels of every pixel (same-sized images).
+inline double rmsDifference(const core::Image& a, const core::Image& b) {
+    double s = 0;
+    for (size_t i = 0; i < a.pixelCount(); ++i)
+        for (int c = 0; c < 3; ++c) s += std::pow(double(a.rgba[4 * i + size_t(c)]) - b.rgba[4 * i + size_t(c)], 2);
+    return std::sqrt(s / (3.0 * double(a.pixelCount())));
+}
+
 }  // namespace volstyle::test

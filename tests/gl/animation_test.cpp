@@ -11,6 +11,7 @@
 #include "core/solve/keyframe_solver.h"
 #include "core/volume/builtin_scenes.h"
 #include "core/volume/sequence.h"
+#include "../common/image_compare.h"
 #include "gl_test_env.h"
 
 using namespace volstyle;
@@ -81,12 +82,7 @@ KeyFrame keyFrame(int f, bool withViews) {
     return k;
 }
 
-double rms(const Image& a, const Image& b) {
-    double s = 0;
-    for (size_t i = 0; i < a.pixelCount(); ++i)
-        for (int c = 0; c < 3; ++c) s += std::pow(double(a.rgba[4 * i + size_t(c)]) - b.rgba[4 * i + size_t(c)], 2);
-    return std::sqrt(s / (3.0 * double(a.pixelCount())));
-}
+double rms(const Image& a, const Image& b) { return test::rmsDifference(a, b); }
 
 /// RMS over three views between frame 1 rendered with `emission` and the truth.
 double frameOneError(const std::vector<float>& emission) {

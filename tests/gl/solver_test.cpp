@@ -14,6 +14,7 @@
 #include "core/volume/builtin_scenes.h"
 #include "../common/mask_solve.h"
 #include "../common/stamped_cloud.h"
+#include "../common/image_compare.h"
 #include "gl_test_env.h"
 
 using namespace volstyle;
@@ -45,12 +46,7 @@ std::vector<SolveView> targetsFrom(const Volume& truth, const Lighting& l, const
     return views;
 }
 
-double rms(const Image& a, const Image& b) {
-    double s = 0;
-    for (size_t i = 0; i < a.pixelCount(); ++i)
-        for (int c = 0; c < 3; ++c) s += std::pow(double(a.rgba[4 * i + size_t(c)]) - b.rgba[4 * i + size_t(c)], 2);
-    return std::sqrt(s / (3.0 * double(a.pixelCount())));
-}
+double rms(const Image& a, const Image& b) { return test::rmsDifference(a, b); }
 
 double correlation(const std::vector<float>& x, const std::vector<float>& y, const std::vector<bool>& mask) {
     double sx = 0, sy = 0, n = 0;
