@@ -82,7 +82,50 @@ RenderRequest RenderRequest::fromJson(const nlohmann::json& j, const RequestLimi
 AddViewRequest AddViewRequest::fromJson(const nlohmann::json& j, const RequestLimits& limits) {
     JsonReader r;
     AddViewRequest q;
-    if (r.object(j, "", {"camera"})) q.camera = readCamera(r, j, "/camera", limits);
+    if (r.object(j, "", {"camera", "frame"})) {
+        q.camera = readCamera(r, j, "/camera", limits);
+        if (j.contains("frame")) {
+            q.frame = r.integer(j["frame"], "/frame");
+            if (q.frame && (*q.frame < 0 || *q.frame > kMaxFrameNumber)) r.fail("/frame", "must be in [0, " + std::to_string(kMaxFrameNumber) + "]");
+        }
+    }
+    r.throwIfErrors();
+    return q;
+}
+
+AnimateRequest AnimateRequest::fromJson(const nlohmann::json& j) {
+    JsonReader r;
+    AnimateRequest q;
+    if (r.object(j, "", {"unknowns", "temporal", "sweeps", "max_iterations", "follow_flow", "fps"})) {
+        if (j.contains("unknowns")) {
+            const auto& u = j["unknowns"];
+            if (u == nlohmann::json::array({"emission"})) q.albedo = false;
+            else if (u == nlohmann::json::array({"albedo"})) q.albedo = true;
+            else r.fail("/unknowns", "must be [\"emission\"] or [\"albedo\"]");
+        }
+        if (j.contains("temporal")) q.temporal = r.number(j["temporal"], "/temporal").value_or(q.temporal);
+        if (j.contains("sweeps")) q.sweeps = r.integer(j["sweeps"], "/sweeps").value_or(q.sweeps);
+        if (j.contains("max_iterations")) q.maxIterations = r.integer(j["max_iterations"], "/max_iterations").value_or(q.maxIterations);
+        if (j.contains("follow_flow")) q.followFlow = r.boolean(j["follow_flow"], "/follow_flow").value_or(q.followFlow);
+        if (j.contains("fps")) q.fps = r.number(j["fps"], "/fps").value_or(q.fps);
+        if (!(q.temporal >= 0 && q.temporal <= 1e9)) r.fail("/temporal", "must be in [0, 1e9]");
+        if (q.sweeps < 1 || q.sweeps > 100) r.fail("/sweeps", "must be in [1, 100]");
+        if (q.maxIterations < 1 || q.maxIterations > 10000) r.fail("/max_iterations", "must be in [1, 10000]");
+        if (!(q.fps > 0 && q.fps <= 1000)) r.fail("/fps", "must be in (0, 1000]");
+    }
+    r.throwIfErrors();
+    return q;
+}
+
+FramesRenderRequest FramesRenderRequest::fromJson(const nlohmann::json& j, const RequestLimits& limits) {
+    JsonReader r;
+    FramesRenderRequest q;
+    if (r.object(j, "", {"camera", "exposure"})) {
+        if (!j.contains("camera")) r.fail("/camera", "is required");
+        else q.camera = readCamera(r, j, "/camera", limits);
+        if (j.contains("exposure")) q.exposure = r.number(j["exposure"], "/exposure").value_or(0);
+        if (!(q.exposure >= -30 && q.exposure <= 30)) r.fail("/exposure", "must be in [-30, 30] stops");
+    }
     r.throwIfErrors();
     return q;
 }

@@ -60,10 +60,32 @@ struct RenderRequest {
     static RenderRequest fromJson(const nlohmann::json& j, const RequestLimits& limits);
 };
 
-/// POST /sessions/{sid}/views: {"camera": {…}}.
+/// The largest frame number of an animation (10 minutes at 60 fps and then some).
+constexpr int kMaxFrameNumber = 99999;
+
+/// POST /sessions/{sid}/views: {"camera": {…}, "frame"?: N} (a frame of the animation).
 struct AddViewRequest {
     core::Camera camera;
+    std::optional<int> frame;
     static AddViewRequest fromJson(const nlohmann::json& j, const RequestLimits& limits);
+};
+
+/// POST /sessions/{sid}/animate (docs/ANIMATION.md): the key-frame solve's options.
+struct AnimateRequest {
+    bool albedo = false;        ///< "unknowns": ["emission"] (default) or ["albedo"]
+    double temporal = 0.05;
+    int sweeps = 3;
+    int maxIterations = 30;
+    bool followFlow = true;     ///< "follow_flow"
+    double fps = 24;            ///< turns the frames' `vel` grids (units per second) into units per frame
+    static AnimateRequest fromJson(const nlohmann::json& j);
+};
+
+/// POST /sessions/{sid}/frames/render: {"camera": {…}, "exposure"?: stops}.
+struct FramesRenderRequest {
+    core::Camera camera;
+    double exposure = 0;
+    static FramesRenderRequest fromJson(const nlohmann::json& j, const RequestLimits& limits);
 };
 
 /// POST /sessions/{sid}/revert: {"version": N}.

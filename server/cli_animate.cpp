@@ -151,28 +151,10 @@ int runAnimate(const std::vector<std::string>& argv) {
                                     std::to_string(keys[size_t(k)].frame));
         });
         // Every frame: a key frame's solution; between two, their blend; outside, the nearest carried.
-        auto property = [&](core::Volume& v) -> std::vector<float>& {
-            return o.solve.unknown == core::Unknown::Emission ? v.ensureEmission() : v.ensureAlbedo();
-        };
         for (int f = first; f <= last; ++f) {
             core::Volume& frame = frames[size_t(f - first)];
-            size_t next = 0;
-            while (next < keys.size() && keys[next].frame < f) ++next;
-            core::Volume a = solved[std::min(next, keys.size() - 1)];
-            if (next < keys.size() && keys[next].frame == f) {
-                property(frame) = property(a);
-            } else if (next == 0 || next == keys.size()) {
-                const size_t k = next == 0 ? 0 : keys.size() - 1;
-                core::Volume nearest = solved[k];
-                const auto index = core::velocityInIndexUnits(keys[k].velocity, frame.worldFromIndex().inverseAffine());
-                property(frame) = core::advect(property(nearest), frame.dims(), o.followFlow ? index : std::vector<float>{}, double(f - keys[k].frame));
-            } else {
-                core::Volume before = solved[next - 1];
-                const auto& va = o.followFlow ? keys[next - 1].velocity : std::vector<float>{};
-                const auto& vb = o.followFlow ? keys[next].velocity : std::vector<float>{};
-                property(frame) = core::inBetween(property(before), keys[next - 1].frame, va, property(a), keys[next].frame, vb, f, frame.dims(),
-                                                  frame.worldFromIndex());
-            }
+            (o.solve.unknown == core::Unknown::Emission ? frame.ensureEmission() : frame.ensureAlbedo()) =
+                core::frameFromKeys(keys, solved, o.solve.unknown, f, o.followFlow);
         }
         std::string changes;
         for (double c : report.change) changes += (changes.empty() ? "" : ", ") + std::to_string(c);

@@ -90,6 +90,7 @@ HttpServer::HttpServer(ServerOptions options) {
     addSystemRoutes(m->routes);
     addSessionRoutes(m->routes);
     addVolumeRoutes(m->routes);
+    addFrameRoutes(m->routes);
     addViewRoutes(m->routes);
     addJobRoutes(m->routes);
     addStylizerRoutes(m->routes);

@@ -16,6 +16,7 @@
 #include "protocol/error_body.h"
 #include "protocol/render_json.h"
 #include "protocol/stylize_json.h"
+#include "server/responses.h"
 
 namespace volstyle::server {
 namespace {
@@ -86,12 +87,13 @@ void Persistence::saveSession(Session& s) {
         if (auto b = s.versions.storedBytes(n)) bytes[std::to_string(n)] = *b;
     for (const auto& d : s.damaged) damaged.push_back({{"file", d.file}, {"reason", d.reason}});
     json views = json::array();
-    for (const auto& v : s.views)
-        views.push_back({{"id", v.id}, {"camera", protocol::cameraToJson(v.camera)}, {"has_target", v.target.has_value()},
-                         {"has_weights", v.weights.has_value()}, {"has_background", bool(v.background)}});
+    for (const auto& v : s.views) views.push_back(viewJson(v));
+    json frames = json::array();
+    for (const auto& [n, f] : s.frames) frames.push_back({{"frame", n}, {"solved", f.solved}});
     json j = {{"id", s.id}, {"created", s.created}, {"scene", s.scene}, {"version", s.version},
               {"versions", s.versions.numbers()}, {"version_bytes", bytes}, {"damaged", damaged},
-              {"lighting", protocol::lightingToJson(s.lighting, s.environmentMap.get())}, {"views", views}, {"next_view", s.nextView}, {"jobs", s.jobs}};
+              {"lighting", protocol::lightingToJson(s.lighting, s.environmentMap.get())}, {"views", views}, {"next_view", s.nextView}, {"jobs", s.jobs},
+              {"frames", frames}};
     atomicWrite(dir / "session.json", protocol::toText(j, 2));
 }
 
@@ -194,6 +196,17 @@ void Persistence::removeJob(const std::string& job) {
     fs::remove_all(jobFilesDir(job), ec);
 }
 
+void Persistence::saveFrame(const std::string& session, int frame, const core::Volume& volume) {
+    const fs::path dir = sessionDir(session) / "frames";
+    fs::create_directories(dir);
+    core::saveVdb((dir / (std::to_string(frame) + ".vdb")).string(), volume);  // a temporary file renamed into place
+}
+
+void Persistence::removeFrame(const std::string& session, int frame) {
+    std::error_code ec;
+    fs::remove(sessionDir(session) / "frames" / (std::to_string(frame) + ".vdb"), ec);
+}
+
 void Persistence::saveJob(const Job& job) { atomicWrite(m_dir / "jobs" / (job.id + ".json"), protocol::toText(job.toJson(), 2)); }
 
 std::vector<std::shared_ptr<Session>> Persistence::loadSessions() {
@@ -231,6 +244,7 @@ std::shared_ptr<Session> Persistence::loadSession(const fs::path& dir) {
     restoreVersions(*s, j);
     for (const auto& v : j.at("views")) {
         SessionView view{v.at("id"), protocol::cameraFromJson(v.at("camera")), std::nullopt, std::nullopt};
+        if (v.contains("frame")) view.frame = v.at("frame").get<int>();
         for (const char* kind : {"target", "weights", "background"}) {
             if (!v.value(std::string("has_") + kind, false)) continue;  // "has_background": since 2026-12
             const std::string file = "views/" + view.id + "/" + kind + ".exr";
@@ -245,6 +259,17 @@ std::shared_ptr<Session> Persistence::loadSession(const fs::path& dir) {
             }
         }
         s->views.push_back(std::move(view));
+    }
+    // The animation's frames (since issue #16): a damaged one is quarantined and dropped.
+    for (const auto& f : j.value("frames", json::array())) {
+        const int n = f.at("frame").get<int>();
+        const std::string file = "frames/" + std::to_string(n) + ".vdb";
+        try {
+            s->frames[n] = {core::loadVdb((dir / file).string()), f.value("solved", false)};
+        } catch (const std::exception& e) {
+            quarantineFile(s->id, file, e.what());
+            s->damaged.push_back({file, e.what()});
+        }
     }
     restoreStylizer(*s, dir);
     if (s->damaged.size() != damagedBefore) saveSession(*s);  // the damage (and any fall-back) is recorded

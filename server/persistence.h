@@ -5,7 +5,8 @@
 /// when the server starts. Jobs that were queued or running when the server stopped read
 /// `failed` with code `interrupted`.
 ///
-/// Layout: DIR/sessions/<sid>/session.json, versions/<N>.vdb, views/<vid>/{target,weights,background}.exr;
+/// Layout: DIR/sessions/<sid>/session.json, versions/<N>.vdb, views/<vid>/{target,weights,background}.exr,
+/// frames/<n>.vdb (an animation's frames);
 /// DIR/jobs/<jid>.json; DIR/quarantine/.
 ///
 /// Damage (issue #9): a file found unreadable is moved to DIR/quarantine/<sid>/<file> beside a
@@ -54,6 +55,9 @@ public:
     /// An uploaded file as it was sent (the stylizer's, environment.image), atomically.
     void saveSessionFile(const std::string& session, const std::string& file, const std::string& bytes);
     void removeSessionFile(const std::string& session, const std::string& file);
+    /// A frame of the session's animation (frames/<n>.vdb), atomically; removeFrame deletes it.
+    void saveFrame(const std::string& session, int frame, const core::Volume& volume);
+    void removeFrame(const std::string& session, int frame);
     void saveJob(const Job& job);
     void removeJob(const std::string& job);  ///< its record and its files
     /// The folder of a job's files (a sequence's frames and video).

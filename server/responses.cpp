@@ -10,8 +10,10 @@ nlohmann::json vec(const Vec3d& v) { return nlohmann::json::array({v.x, v.y, v.z
 }  // namespace
 
 nlohmann::json viewJson(const SessionView& v) {
-    return {{"id", v.id}, {"camera", protocol::cameraToJson(v.camera)}, {"has_target", v.target.has_value()},
-            {"has_weights", v.weights.has_value()}, {"has_background", bool(v.background)}};
+    nlohmann::json j = {{"id", v.id}, {"camera", protocol::cameraToJson(v.camera)}, {"has_target", v.target.has_value()},
+                        {"has_weights", v.weights.has_value()}, {"has_background", bool(v.background)}};
+    if (v.frame) j["frame"] = *v.frame;
+    return j;
 }
 
 nlohmann::json viewsJson(const Session& s) {

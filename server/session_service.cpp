@@ -170,9 +170,9 @@ nlohmann::json SessionService::lightingJson(Session& s, const core::Lighting& li
     return protocol::lightingToJson(lighting, s.environmentMap.get());
 }
 
-SessionView SessionService::addView(Session& s, const core::Camera& camera) {
+SessionView SessionService::addView(Session& s, const core::Camera& camera, std::optional<int> frame) {
     std::lock_guard lock(s.mutex);
-    s.views.push_back({"v" + std::to_string(s.nextView++), camera, std::nullopt, std::nullopt});
+    s.views.push_back({"v" + std::to_string(s.nextView++), camera, std::nullopt, std::nullopt, nullptr, frame});
     saved(s);
     return s.views.back();
 }
@@ -378,6 +378,17 @@ int SessionService::setRefraction(Session& s, const std::optional<core::GlassSph
 }
 
 void SessionService::uploadVdb(Session& s, const std::string& bytes) {
+    core::Volume v = readUploadedVdb(bytes);
+    std::shared_ptr<core::GpuVolume> stale;
+    {
+        std::lock_guard lock(s.mutex);
+        s.scene = "upload";  // the session no longer shows its first scene (saved with the version)
+        stale = commitVersion(s, std::move(v));
+    }
+    release(std::move(stale));
+}
+
+core::Volume SessionService::readUploadedVdb(const std::string& bytes) const {
     checkUploadSize(bytes, "the VDB");
     TempVdb tmp;
     std::ofstream(tmp.path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
@@ -390,13 +401,7 @@ void SessionService::uploadVdb(Session& s, const std::string& bytes) {
             for (size_t pos; (pos = msg.find(path)) != std::string::npos;) msg.replace(pos, path.size(), "the upload");
         throw ApiError(dynamic_cast<const LimitExceeded*>(&e) ? ErrorCode::TooLarge : ErrorCode::UnsupportedMedia, msg);
     }
-    std::shared_ptr<core::GpuVolume> stale;
-    {
-        std::lock_guard lock(s.mutex);
-        s.scene = "upload";  // the session no longer shows its first scene (saved with the version)
-        stale = commitVersion(s, std::move(v));
-    }
-    release(std::move(stale));
+    return v;
 }
 
 std::string SessionService::downloadVdb(Session& s, std::optional<int> version) {
@@ -417,7 +422,10 @@ std::string SessionService::downloadVdb(Session& s, std::optional<int> version) 
             throw;
         }
     }
-    const core::Volume v = olderVersion(s, n);
+    return vdbBytes(olderVersion(s, n));
+}
+
+std::string SessionService::vdbBytes(const core::Volume& v) {
     TempVdb tmp;
     core::saveVdb(tmp.path.string(), v);
     std::ifstream f(tmp.path, std::ios::binary);
@@ -480,14 +488,19 @@ std::shared_ptr<Job> SessionService::startSolve(const std::shared_ptr<Session>& 
     {
         std::lock_guard lock(s.mutex);
         bool anyTarget = false;
-        for (const auto& v : s.views) anyTarget |= v.target.has_value();
-        if (!anyTarget) throw ApiError(ErrorCode::InvalidArgument, "no view has a target; PUT …/views/{vid}/target first");
+        for (const auto& v : s.views) anyTarget |= v.target.has_value() && !v.frame;
+        if (!anyTarget)
+            throw ApiError(ErrorCode::InvalidArgument, "no view of the volume has a target (views of an animation's frames are solved by "
+                                                       "POST …/animate); PUT …/views/{vid}/target first");
         // "views" names views of this session that have targets: check now, not when the job runs.
         std::vector<protocol::FieldError> problems;
         for (size_t i = 0; i < options.views.size(); ++i) {
             auto it = std::find_if(s.views.begin(), s.views.end(), [&](const SessionView& v) { return v.id == options.views[i]; });
             if (it == s.views.end()) problems.push_back({"/views/" + std::to_string(i), "no view '" + options.views[i] + "' in this session"});
             else if (!it->target) problems.push_back({"/views/" + std::to_string(i), "view '" + options.views[i] + "' has no target yet"});
+            else if (it->frame)
+                problems.push_back({"/views/" + std::to_string(i), "view '" + options.views[i] + "' shows frame " + std::to_string(*it->frame) +
+                                                                       " of the animation: POST …/animate solves it"});
         }
         if (!problems.empty()) throw protocol::ValidationError(problems);
     }

@@ -134,7 +134,7 @@ public:
 
 
     // Views.
-    SessionView addView(Session& s, const core::Camera& camera);
+    SessionView addView(Session& s, const core::Camera& camera, std::optional<int> frame = std::nullopt);
     SessionView view(Session& s, const std::string& viewId) const;  ///< a copy; ApiError not_found
     void removeView(Session& s, const std::string& viewId);
     /// Decodes an uploaded image (413 over the upload limit, 422 undecodable or over the side
@@ -150,6 +150,18 @@ public:
     /// Gives the volume a generated refractive_index grid (a glass sphere with noise, issue #16),
     /// or removes its grid (nullopt; InvalidArgument when it has none), in a new version; its number.
     int setRefraction(Session& s, const std::optional<core::GlassSphere>& glass);
+
+    // The session's animation (issue #16, docs/ANIMATION.md; session_frames.cpp).
+    /// Stores an uploaded VDB as frame n (replacing it); must share the other frames' grid.
+    void uploadFrame(Session& s, int n, const std::string& bytes);
+    void removeFrame(Session& s, int n);
+    std::string downloadFrame(Session& s, int n);
+    /// Solves the frames that have views with targets (key frames) jointly, fills every other
+    /// frame from them, and stores the results (solved): a job with a progress event per key
+    /// frame and sweep.
+    std::shared_ptr<Job> startAnimate(const std::shared_ptr<Session>& session, const protocol::AnimateRequest& request);
+    /// Renders every frame with one camera to PNG in the job's folder (GET /jobs/{id}/frames/{i}.png).
+    std::shared_ptr<Job> startFramesRender(const std::shared_ptr<Session>& session, const protocol::FramesRenderRequest& request);
     void uploadVdb(Session& s, const std::string& bytes);          ///< a new version
     /// The VDB of a version (the current one by default): a stored version's file is sent as it
     /// was written (its size checked). A damaged version answers io_error (422).
@@ -216,6 +228,11 @@ public:
 
 private:
     void checkUploadSize(const std::string& bytes, const std::string& what) const;
+    /// A volume as the bytes of a VDB file (saveVdb).
+    static std::string vdbBytes(const core::Volume& v);
+    /// An uploaded VDB read in the child reader (UnsupportedMedia, TooLarge naming "the upload").
+    core::Volume readUploadedVdb(const std::string& bytes) const;
+    void runAnimate(Job& job, Session& s, const protocol::AnimateRequest& q, core::GpuDevice& device);
     /// Makes `volume` the newest version, on disk before it returns. Call with the session's
     /// lock held; returns the stale GPU copy (release() it after unlocking).
     std::shared_ptr<core::GpuVolume> commitVersion(Session& s, core::Volume volume);

@@ -36,6 +36,16 @@ struct SessionView {
     /// The background plate (SPEC §1): what this view sees behind the volume, replacing the
     /// lighting's background in its renders and solves. Shared: renders hold it, never copy it.
     std::shared_ptr<const core::Image> background = nullptr;
+    /// The frame of the session's animation this view shows (issue #16), or none: the session's
+    /// volume. Views of frames are solved by POST …/animate, not POST …/solve.
+    std::optional<int> frame = std::nullopt;
+};
+
+/// A frame of the session's animation (issue #16): its volume as uploaded, or as the last
+/// POST …/animate left it (`solved`).
+struct SessionFrame {
+    core::Volume volume;
+    bool solved = false;
 };
 
 struct Session {
@@ -48,6 +58,7 @@ struct Session {
     std::vector<DamagedFile> damaged;      ///< files of the session found unreadable (quarantined)
     std::vector<SessionView> views;
     int nextView = 1;
+    std::map<int, SessionFrame> frames;    ///< the animation's frames by number (docs/ANIMATION.md)
     std::vector<std::string> jobs;
     core::Lighting lighting;
     /// The uploaded lat-long map (PUT …/environment) that the lighting names "session"

@@ -34,6 +34,7 @@ SolveInputs snapshot(Session& s) {
     std::lock_guard lock(s.mutex);
     SolveInputs in{s.volume, s.lighting, {}, {}};
     for (const auto& v : s.views) {
+        if (v.frame) continue;  // a frame of the animation: POST …/animate solves it
         in.viewIds.push_back(v.id);
         in.views.push_back({v.id, v.camera, v.target.value_or(core::Image()), v.weights, v.background});
     }

@@ -27,8 +27,6 @@ using protocol::JobState;
 constexpr size_t kMaxSequenceFrames = 14400;
 constexpr double kMaxSequencePixels = 2.0e9;
 
-std::string jobUrl(const std::string& job, const std::string& file) { return "/api/v1/jobs/" + job + "/" + file; }
-
 }  // namespace
 
 std::shared_ptr<Job> SessionService::startSequence(const std::shared_ptr<Session>& session, const protocol::StylizerSequenceRequest& q) {
@@ -85,7 +83,7 @@ void SessionService::runSequence(Job& job, const core::StylizerScene& scene, con
         const std::string name = sequenceFrameName(i);
         core::saveImage((dir / name).string(), f.output(q.output), save);
         totalMs += f.totalMs;
-        urls.push_back(jobUrl(job.id, "frames/" + std::to_string(i) + ".png"));
+        urls.push_back(jobFileUrl(job.id, "frames/" + std::to_string(i) + ".png"));
         const nlohmann::json progress = {{"frame", i + 1}, {"frames", times.size()}, {"time", times[i]}, {"url", urls.back()},
                                          {"render_ms", f.totalMs}};
         {
@@ -99,7 +97,7 @@ void SessionService::runSequence(Job& job, const core::StylizerScene& scene, con
                              {"frame_urls", urls}, {"render_ms", totalMs}};
     if (q.video) {
         encodeVideo(dir, times.size(), q.fps, dir / "video.mp4");
-        result["video_url"] = jobUrl(job.id, "video.mp4");
+        result["video_url"] = jobFileUrl(job.id, "video.mp4");
     }
     spdlog::info("job {}: {} frames{}", job.id, times.size(), q.video ? " and a video" : "");
     std::lock_guard lock(job.mutex);

@@ -18,5 +18,7 @@ void encodeVideo(const std::filesystem::path& framesDir, size_t frames, double f
 
 /// The file name of frame `index` of a sequence: frame_00012.png.
 std::string sequenceFrameName(size_t index);
+/// The URL of a job's file (GET /api/v1/jobs/{id}/{file}: frames/3.png, video.mp4).
+inline std::string jobFileUrl(const std::string& job, const std::string& file) { return "/api/v1/jobs/" + job + "/" + file; }
 
 }  // namespace volstyle::server

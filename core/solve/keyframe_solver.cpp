@@ -102,6 +102,27 @@ std::vector<Volume> solveKeyFrames(GpuDevice& device, const std::vector<KeyFrame
     return out;
 }
 
+std::vector<float> frameFromKeys(const std::vector<KeyFrame>& keys, const std::vector<Volume>& solved, Unknown unknown, int f,
+                                 bool followFlow) {
+    if (keys.empty() || keys.size() != solved.size()) throw InvalidArgument("frameFromKeys: one solved volume per key frame");
+    auto property = [&](size_t k) -> const std::vector<float>& {
+        const Volume& v = solved[k];
+        return unknown == Unknown::Emission ? v.emission() : v.albedo();
+    };
+    auto velocity = [&](size_t k) { return followFlow ? keys[k].velocity : std::vector<float>{}; };
+    const Volume& grid = solved[0];
+    size_t next = 0;
+    while (next < keys.size() && keys[next].frame < f) ++next;
+    if (next < keys.size() && keys[next].frame == f) return property(next);
+    if (next == 0 || next == keys.size()) {
+        const size_t k = next == 0 ? 0 : keys.size() - 1;
+        const auto index = velocity(k).empty() ? std::vector<float>{} : velocityInIndexUnits(velocity(k), grid.worldFromIndex().inverseAffine());
+        return advect(property(k), grid.dims(), index, double(f - keys[k].frame));
+    }
+    return inBetween(property(next - 1), keys[next - 1].frame, velocity(next - 1), property(next), keys[next].frame, velocity(next), f,
+                     grid.dims(), grid.worldFromIndex());
+}
+
 std::vector<float> inBetween(const std::vector<float>& a, int fa, const std::vector<float>& velocityA, const std::vector<float>& b, int fb,
                              const std::vector<float>& velocityB, int f, Int3 dims, const Mat4& worldFromIndex) {
     if (!(fa < fb) || f < fa || f > fb) throw InvalidArgument("inBetween: the frame must lie between its key frames");

@@ -54,6 +54,13 @@ std::vector<Volume> solveKeyFrames(GpuDevice& device, const std::vector<KeyFrame
                                    const KeyFrameOptions& options, KeyFrameReport* report = nullptr,
                                    const std::function<void(int sweep, int frame)>& progress = {});
 
+/// Frame f's property (emission or albedo, as `unknown`) from the solved key frames (`keys`
+/// for their frame numbers and velocities, `solved` in the same order): a key frame's own values;
+/// between two key frames their blend, each carried along its flow (with `followFlow`); before
+/// the first or after the last, carried from it.
+std::vector<float> frameFromKeys(const std::vector<KeyFrame>& keys, const std::vector<Volume>& solved, Unknown unknown, int f,
+                                 bool followFlow);
+
 /// The property (`unknown`'s grid) of frame f between key frames a (frame fa) and b (frame fb):
 /// each carried to f along its velocity (when given) and blended linearly by (f − fa)/(fb − fa).
 std::vector<float> inBetween(const std::vector<float>& a, int fa, const std::vector<float>& velocityA, const std::vector<float>& b, int fb,

@@ -69,6 +69,7 @@ void replyImage(httplib::Response& res, const core::RenderLayers& render, protoc
 void addSystemRoutes(RouteContext& c);   ///< health, schema, scenes
 void addSessionRoutes(RouteContext& c);  ///< sessions, lighting, renders
 void addVolumeRoutes(RouteContext& c);   ///< volume upload, download, revert
+void addFrameRoutes(RouteContext& c);    ///< an animation's frames, its key-frame solve and frame render
 void addViewRoutes(RouteContext& c);     ///< views, targets, weights, view renders
 void addJobRoutes(RouteContext& c);      ///< solve, jobs, events, previews
 void addStylizerRoutes(RouteContext& c); ///< the stylizer's scene, meshes, TF, frames, live stream

@@ -10,7 +10,7 @@ void addViewRoutes(RouteContext& c) {
     c.http.Post(kSessionPath + "/views", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);
         auto request = protocol::AddViewRequest::fromJson(c.body(req), c.limits);
-        reply(res, 201, viewJson(c.service.addView(*s, request.camera)));
+        reply(res, 201, viewJson(c.service.addView(*s, request.camera, request.frame)));
     });
     c.http.Get(kSessionPath + "/views", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);

@@ -5,7 +5,10 @@
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
+#include <unistd.h>
+
 #include <chrono>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <thread>
@@ -76,6 +79,26 @@ protected:
     size_t m_maxUploadBytes = 64 * 1024;  ///< small, so the limit is cheap to test
 };
 
+
+/// A server on a data directory of its own, restartable (durability checks).
+class PersistentApi : public Api {
+protected:
+    void SetUp() override {
+        m_dir = std::filesystem::temp_directory_path() / ("volstyle-api-" + std::to_string(::getpid()));
+        std::filesystem::remove_all(m_dir);
+        start({}, m_dir.string());
+    }
+    void TearDown() override {
+        Api::TearDown();
+        std::filesystem::remove_all(m_dir);
+    }
+    void restart() {
+        m_server->stop();
+        m_thread.join();
+        start({}, m_dir.string());
+    }
+    std::filesystem::path m_dir;
+};
 
 inline std::string pngOf(const core::Image& img) { return core::encodeImage(img, "png"); }
 

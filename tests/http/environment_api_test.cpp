@@ -32,24 +32,7 @@ core::Image decode(const httplib::Result& r) {
     return core::loadImageFromMemory(r->body.data(), r->body.size(), "answer").image;
 }
 
-class EnvironmentApi : public Api {
-protected:
-    void SetUp() override {
-        m_dir = std::filesystem::temp_directory_path() / ("volstyle-env-" + std::to_string(::getpid()));
-        std::filesystem::remove_all(m_dir);
-        start({}, m_dir.string());
-    }
-    void TearDown() override {
-        Api::TearDown();
-        std::filesystem::remove_all(m_dir);
-    }
-    void restart() {
-        m_server->stop();
-        m_thread.join();
-        start({}, m_dir.string());
-    }
-    std::filesystem::path m_dir;
-};
+class EnvironmentApi : public PersistentApi {};
 
 }  // namespace
 

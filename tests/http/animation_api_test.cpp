@@ -1,0 +1,129 @@
+// An animation over the API (issue #16): frames uploaded as VDBs (one grid for all), views tied to
+// frames, POST …/animate solving the key frames as a job and storing every frame, frames
+// downloaded as VDBs and rendered to PNG by a job; frames and views' frames survive a restart.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <unistd.h>
+
+#include "api_fixture.h"
+#include "core/image/image_io.h"
+#include "core/volume/builtin_scenes.h"
+#include "core/volume/vdb_io.h"
+
+using namespace volstyle;
+using namespace volstyle::test;
+
+namespace {
+
+/// Frame f: a ball of smoke moving +0.3 along x per frame (16³).
+std::string ballFrame(int f, int res = 16) {
+    const Int3 dims{res, res, res};
+    core::Volume v(dims, core::unitBoxWorldFromIndex(dims));
+    for (int k = 0; k < res; ++k)
+        for (int j = 0; j < res; ++j)
+            for (int i = 0; i < res; ++i) {
+                const Vec3d x = v.worldFromIndex().applyPoint({double(i), double(j), double(k)});
+                const bool in = length(x - Vec3d(-0.3 + 0.3 * f, 0, 0)) < 0.45;
+                v.setExtinction(i, j, k, Vec3(in ? 3.0f : 0.0f));
+            }
+    const auto path = std::filesystem::temp_directory_path() / ("volstyle-ball-" + std::to_string(::getpid()) + ".vdb");
+    core::saveVdb(path.string(), v);
+    std::ifstream in(path, std::ios::binary);
+    std::stringstream bytes;
+    bytes << in.rdbuf();
+    std::filesystem::remove(path);
+    return bytes.str();
+}
+
+class AnimationApi : public PersistentApi {};
+
+}  // namespace
+
+TEST_F(AnimationApi, KeyFramesAreSolvedStoredRenderedAndKept) {
+    const std::string id = createSession(16), base = "/api/v1/sessions/" + id;
+    for (int f = 0; f <= 2; ++f) {
+        auto r = client().Put((base + "/frames/" + std::to_string(f)).c_str(), ballFrame(f), "application/octet-stream");
+        ASSERT_EQ(r->status, 200) << r->body;
+    }
+    json frames = json::parse(client().Get((base + "/frames").c_str())->body);
+    ASSERT_EQ(frames.size(), 3u);
+    EXPECT_EQ(frames[1]["dims"], json::array({16, 16, 16}));
+    // A frame on another grid, and garbage, are refused; nothing changes.
+    expectError(client().Put((base + "/frames/3").c_str(), ballFrame(3, 12), "application/octet-stream"), 400, "invalid_argument");
+    expectError(client().Put((base + "/frames/3").c_str(), "not a vdb", "application/octet-stream"), 422, "unsupported_media");
+    EXPECT_EQ(json::parse(client().Get((base + "/frames").c_str())->body).size(), 3u);
+    expectError(client().Post((base + "/animate").c_str(), "{}", "application/json"), 400, "invalid_argument");  // no painted frame yet
+
+    // Views of frames 0 and 2 with targets: the key frames.
+    for (int f : {0, 2}) {
+        const json view = {{"camera", {{"eye", {0.3, 0.6, 2.8}}, {"target", {0, 0, 0}}, {"width", 16}, {"height", 16}}}, {"frame", f}};
+        auto r = client().Post((base + "/views").c_str(), view.dump(), "application/json");
+        ASSERT_EQ(r->status, 201) << r->body;
+        EXPECT_EQ(json::parse(r->body)["frame"], f);
+        core::Image target(16, 16);
+        for (float& x : target.rgba) x = 0.5f;
+        const std::string vid = json::parse(r->body)["id"];
+        ASSERT_EQ(client().Put((base + "/views/" + vid + "/target").c_str(), pngOf(target), "image/png")->status, 200);
+    }
+    // The volume's own solve ignores views of frames.
+    expectError(client().Post((base + "/solve").c_str(), "{}", "application/json"), 400, "invalid_argument");
+    json e = expectError(client().Post((base + "/animate").c_str(), R"({"sweeps": 0, "unknowns": ["extinction"], "fps": -1})", "application/json"),
+                         400, "invalid_argument");
+    std::set<std::string> paths;
+    for (const auto& d : e["error"]["details"]) paths.insert(d["path"].get<std::string>());
+    EXPECT_EQ(paths, (std::set<std::string>{"/sweeps", "/unknowns", "/fps"}));
+
+    // The key-frame solve: a job with a progress event per key frame and sweep.
+    auto started = client().Post((base + "/animate").c_str(), R"({"sweeps": 2, "max_iterations": 10, "temporal": 0.05})", "application/json");
+    ASSERT_EQ(started->status, 202) << started->body;
+    const std::string jid = json::parse(started->body)["job"];
+    const auto events = readEvents(client(), "/api/v1/jobs/" + jid + "/events");
+    EXPECT_EQ(std::count(events.begin(), events.end(), "progress"), 4) << "2 sweeps × 2 key frames";
+    ASSERT_FALSE(events.empty());
+    EXPECT_EQ(events.back(), "done");
+    const json job = json::parse(client().Get(("/api/v1/jobs/" + jid).c_str())->body);
+    EXPECT_EQ(job["result"]["key_frames"], json::array({0, 2}));
+    EXPECT_EQ(job["result"]["frames"], json::array({0, 1, 2}));
+    frames = json::parse(client().Get((base + "/frames").c_str())->body);
+    for (const auto& f : frames) EXPECT_TRUE(f["solved"].get<bool>()) << f.dump();
+
+    // Frame 1 (no views) as a VDB: the blend of its key frames, with emission.
+    auto vdb = client().Get((base + "/frames/1.vdb").c_str());
+    ASSERT_EQ(vdb->status, 200);
+    const auto path = m_dir / "frame1.vdb";
+    std::ofstream(path, std::ios::binary) << vdb->body;
+    const core::Volume one = core::loadVdb(path.string());
+    ASSERT_TRUE(one.hasEmission());
+    float peak = 0;
+    for (float x : one.emission()) peak = std::max(peak, x);
+    EXPECT_GT(peak, 0.01f) << "the key frames' emission, blended";
+
+    // Every frame to PNG: a job.
+    auto render = client().Post((base + "/frames/render").c_str(),
+                                R"({"camera": {"eye": [0.3, 0.6, 2.8], "target": [0, 0, 0], "width": 32, "height": 32}, "exposure": 1})",
+                                "application/json");
+    ASSERT_EQ(render->status, 202) << render->body;
+    const std::string rid = json::parse(render->body)["job"];
+    EXPECT_EQ(readEvents(client(), "/api/v1/jobs/" + rid + "/events").back(), "done");
+    const json rendered = json::parse(client().Get(("/api/v1/jobs/" + rid).c_str())->body);
+    ASSERT_EQ(rendered["result"]["frame_urls"].size(), 3u);
+    auto png = client().Get(rendered["result"]["frame_urls"][2].get<std::string>().c_str());
+    ASSERT_EQ(png->status, 200);
+    EXPECT_EQ(core::loadImageFromMemory(png->body.data(), png->body.size(), "frame").image.width, 32);
+
+    // Frames and views' frames survive a restart; DELETE drops a frame.
+    restart();
+    frames = json::parse(client().Get((base + "/frames").c_str())->body);
+    ASSERT_EQ(frames.size(), 3u);
+    EXPECT_TRUE(frames[1]["solved"].get<bool>());
+    EXPECT_EQ(frames[0]["views"], 1);
+    const json session = json::parse(client().Get(base.c_str())->body);
+    EXPECT_EQ(session["views"][1]["frame"], 2);
+    ASSERT_EQ(client().Delete((base + "/frames/1").c_str())->status, 200);
+    EXPECT_EQ(json::parse(client().Get((base + "/frames").c_str())->body).size(), 2u);
+    expectError(client().Get((base + "/frames/1.vdb").c_str()), 404, "not_found");
+}
