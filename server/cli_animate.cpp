@@ -29,7 +29,8 @@ const CommandSpec kAnimate{
     "animate",
     "restyle or render an animated volume (a VDB per frame)",
     "--frames PATTERN --range A-B [--views VIEWS.json -o OUT_PATTERN.vdb] [--render OUT_PATTERN.png --camera CAM.json]",
-    "Reads frames A..B of PATTERN (printf style: smoke.%04d.vdb). With --views (each view names its\n"
+    "Reads frames A..B of PATTERN (printf style: smoke.%04d.vdb), or of one VDB holding them all\n"
+    "(grids named density.12, vel_12, or with a 'frame' metadata entry). With --views (each view names its\n"
     "\"frame\"), the frames that have views are key frames, solved jointly: each frame's views, plus\n"
     "a temporal term tying neighbouring key frames voxel for voxel or, where the files carry a `vel`\n"
     "grid, along the flow; the frames between key frames are blended from them (carried along the\n"
@@ -37,7 +38,7 @@ const CommandSpec kAnimate{
     "--render writes a PNG per frame (the solved frames, else the input), with progress.\n"
     "docs/ANIMATION.md has the method and the measurements.",
     {
-        {"frames", "PATTERN", "the frames' VDB files, printf style (smoke.%04d.vdb) (required)"},
+        {"frames", "PATTERN", "the frames' VDB files, printf style (smoke.%04d.vdb), or one VDB whose grids are stamped with frames (required)"},
         {"range", "A-B", "the first and last frame numbers (required)"},
         {"views", "VIEWS.json", "painted views as for solve, each with \"frame\": N; default none (render only)"},
         {"unknowns", "U", "emission or albedo; default emission"},
@@ -117,15 +118,26 @@ int runAnimate(const std::vector<std::string>& argv) {
                 throw InvalidArgument("view '" + views[i].name + "' is on frame " + std::to_string(viewFrames[i]) + ", outside --range");
     }
 
-    // The frames, and their velocity in world units per frame.
+    // The frames (a file each, or one file holding them all), and their velocity in world units
+    // per frame.
+    const std::string pattern = args.get("frames");
+    std::map<int, core::Volume> stamped;
+    const bool oneFile = pattern.find('%') == std::string::npos;
+    if (oneFile) {
+        stamped = core::loadVdbFrames(pattern);
+        if (stamped.empty())
+            throw InvalidArgument("'" + pattern + "' has no frame number (use %d or %04d) and holds no grids stamped with a frame "
+                                  "(density.12, vel_12, or a 'frame' metadata entry)");
+    }
     std::vector<core::Volume> frames;
     std::vector<std::vector<float>> velocity;
     for (int f = first; f <= last; ++f) {
-        frames.push_back(core::loadVdb(frameName(args.get("frames"), f)));
+        if (oneFile && !stamped.count(f)) throw InvalidArgument("'" + pattern + "' holds no frame " + std::to_string(f));
+        frames.push_back(oneFile ? std::move(stamped[f]) : core::loadVdb(frameName(pattern, f)));
         std::vector<float> v = core::velocityOf(frames.back());
         for (float& x : v) x = float(x / fps);
         velocity.push_back(std::move(v));
-        if (!(frames.back().dims() == frames[0].dims()) || !(frames.back().worldFromIndex() == frames[0].worldFromIndex()))
+        if (solve && (!(frames.back().dims() == frames[0].dims()) || !(frames.back().worldFromIndex() == frames[0].worldFromIndex())))
             throw InvalidArgument("frame " + std::to_string(f) + " does not share frame " + std::to_string(first) +
                                   "'s grid (dims and transform): resample the sequence onto one grid first");
     }

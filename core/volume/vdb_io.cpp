@@ -17,7 +17,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
+#include <optional>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -258,8 +260,10 @@ void checkValues(Role role, const std::vector<float>& rgb, const openvdb::GridBa
 
 }  // namespace
 
-Volume loadVdb(const std::string& path, const VolumeLimits& limits) {
-    FileContents file = readVdbFile(path);
+namespace {
+
+/// A volume from a file's grids (loadVdb after reading; loadVdbFrames per frame).
+Volume volumeFromGrids(FileContents file, const std::string& path, const VolumeLimits& limits) {
     auto source = std::make_shared<VdbSource>();
     source->grids = file.grids;
     source->fileMetadata = file.metadata;
@@ -321,6 +325,44 @@ Volume loadVdb(const std::string& path, const VolumeLimits& limits) {
     }
     volume.setVdbSource(std::move(source));
     return volume;
+}
+
+/// The frame a grid belongs to in a file that holds a whole animation — an integer `frame`
+/// metadata entry, or a name ending in `.N` or `_N` — and its name without the number.
+std::optional<std::pair<int, std::string>> frameOfGrid(const openvdb::GridBase& grid) {
+    if (auto m = grid.getMetadata<openvdb::Int32Metadata>("frame")) return std::make_pair(int(m->value()), grid.getName());
+    if (auto m = grid.getMetadata<openvdb::Int64Metadata>("frame")) return std::make_pair(int(m->value()), grid.getName());
+    const std::string& name = grid.getName();
+    size_t digits = name.size();
+    while (digits > 0 && std::isdigit(static_cast<unsigned char>(name[digits - 1]))) --digits;
+    if (digits == name.size() || digits < 2 || (name[digits - 1] != '.' && name[digits - 1] != '_') || name.size() - digits > 6) return std::nullopt;
+    return std::make_pair(std::stoi(name.substr(digits)), name.substr(0, digits - 1));
+}
+
+}  // namespace
+
+Volume loadVdb(const std::string& path, const VolumeLimits& limits) { return volumeFromGrids(readVdbFile(path), path, limits); }
+
+std::map<int, Volume> loadVdbFrames(const std::string& path, const VolumeLimits& limits) {
+    const FileContents file = readVdbFile(path);
+    std::map<int, FileContents> frames;
+    for (const auto& g : file.grids) {
+        const auto frame = frameOfGrid(*g);
+        if (!frame) continue;
+        openvdb::GridBase::Ptr copy = openvdb::ConstPtrCast<openvdb::GridBase>(g)->copyGrid();  // shares the tree; only the name changes
+        copy->setName(frame->second);
+        frames[frame->first].grids.push_back(copy);
+        frames[frame->first].metadata = file.metadata;
+    }
+    std::map<int, Volume> out;
+    for (auto& [n, contents] : frames) {
+        try {
+            out[n] = volumeFromGrids(std::move(contents), path, limits);
+        } catch (const InvalidArgument& e) {
+            throw InvalidArgument("frame " + std::to_string(n) + ": " + e.what());
+        }
+    }
+    return out;
 }
 
 std::vector<float> velocityOf(const Volume& volume) {

@@ -4,6 +4,7 @@
 /// and `albedo` (Vec3f or float), optional float `refractive_index`. OpenVDB headers stay inside
 /// vdb_io.cpp.
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,13 @@ namespace volstyle::core {
 /// losslessly. Throws IoError (missing, not a VDB, corrupt, truncated) or InvalidArgument (no
 /// extinction grid, unsupported grid type, non-linear transform, values out of range, over `limits`).
 Volume loadVdb(const std::string& path, const VolumeLimits& limits = {});
+
+/// The frames of one VDB holding a whole animation: grids with an integer `frame` metadata entry,
+/// or named with a frame number after a dot or underscore (`density.12`, `density_0012`,
+/// `vel.12`), grouped by frame, each frame read as loadVdb reads a file (its grids renamed
+/// without the number). Empty when no grid is stamped with a frame. Same errors as loadVdb, the
+/// frame named.
+std::map<int, Volume> loadVdbFrames(const std::string& path, const VolumeLimits& limits = {});
 
 /// Writes a volume so that loadVdb gives it back bit for bit (so it renders the same).
 /// A volume read from a file is written into that file's grids: an unchanged grid as it was, a

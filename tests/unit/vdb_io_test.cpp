@@ -338,3 +338,62 @@ TEST(VdbIo, GridsWithAnotherTransformAreResampled) {
     // Density voxel (i,j,k) is at world 0.5 i; emission there is its own x index 0.5 i (linear).
     for (int i = 0; i < 8; ++i) EXPECT_NEAR(v.emission()[3 * v.index(i, 2, 2)], 0.5f * float(i), 1e-5f) << i;
 }
+
+TEST(VdbIo, TheVelocityComesFromTheVelGrid) {
+    auto dir = test::scratchDir();
+    const Volume v = loadVdb(writeForeignFile(dir));
+    const std::vector<float> vel = velocityOf(v);
+    ASSERT_EQ(vel.size(), 3 * v.voxelCount());
+    // Where the density is, vel = (r, −r, 0.5) with density 2r: check every voxel that has density.
+    size_t checked = 0;
+    for (size_t i = 0; i < v.voxelCount(); ++i) {
+        const float d = v.extinction()[3 * i];
+        if (d <= 0 || vel[3 * i + 2] == 0) continue;  // the 8³ tile of density has no velocity
+        EXPECT_NEAR(vel[3 * i], d / 2, 1e-6);
+        EXPECT_NEAR(vel[3 * i + 1], -d / 2, 1e-6);
+        EXPECT_NEAR(vel[3 * i + 2], 0.5, 1e-6);
+        ++checked;
+    }
+    EXPECT_GT(checked, 100u);
+    EXPECT_TRUE(velocityOf(makeBuiltinScene("cube", 8)).empty()) << "a volume made in memory has no velocity";
+}
+
+TEST(VdbIo, AFileHoldingAnAnimationIsReadFrameByFrame) {
+    // Frames stamped in the grids' names (density.1, vel_2) and by `frame` metadata (frame 7).
+    auto dir = test::scratchDir();
+    openvdb::initialize();
+    openvdb::GridPtrVec grids;
+    for (int f : {1, 2, 7}) {
+        auto density = openvdb::FloatGrid::create(0.0f);
+        auto vel = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+        for (int i = 0; i < 4; ++i) {
+            density->tree().setValue(openvdb::Coord(i + f, 0, 0), float(f));
+            vel->tree().setValue(openvdb::Coord(i + f, 0, 0), openvdb::Vec3s(float(f), 0, 0));
+        }
+        if (f == 7) {
+            density->setName("density");
+            vel->setName("vel");
+            density->insertMeta("frame", openvdb::Int32Metadata(7));
+            vel->insertMeta("frame", openvdb::Int32Metadata(7));
+        } else {
+            density->setName("density." + std::to_string(f));
+            vel->setName("vel_" + std::to_string(f));
+        }
+        grids.push_back(density);
+        grids.push_back(vel);
+    }
+    const std::string path = (dir / "animation.vdb").string();
+    openvdb::io::File(path).write(grids);
+    const auto frames = loadVdbFrames(path);
+    ASSERT_EQ(frames.size(), 3u);
+    for (const auto& [f, v] : frames) {
+        EXPECT_EQ(v.dims(), (Int3{4, 1, 1})) << f;
+        EXPECT_EQ(v.extinction()[0], float(f)) << f;
+        const auto vel = velocityOf(v);
+        ASSERT_EQ(vel.size(), 12u) << f;
+        EXPECT_EQ(vel[0], float(f)) << f;
+        EXPECT_NEAR(v.worldFromIndex()(0, 3), double(f), 1e-12) << "frame " << f << "'s box starts at its own voxels";
+    }
+    // A file of one frame holds no stamped grid.
+    EXPECT_TRUE(loadVdbFrames(writeForeignFile(dir)).empty());
+}
