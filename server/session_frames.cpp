@@ -41,7 +41,50 @@ void SessionService::uploadFrame(Session& s, int n, const std::string& bytes) {
     if (n < 0 || n > protocol::kMaxFrameNumber)
         throw ApiError(ErrorCode::InvalidArgument, "frame numbers are in [0, " + std::to_string(protocol::kMaxFrameNumber) + "]");
     core::Volume v = readUploadedVdb(bytes);
+    core::velocityOf(v);  // a velocity grid that cannot be read is refused now, not in the solve
     std::lock_guard lock(s.mutex);
+    storeFrame(s, n, std::move(v));
+    saved(s);
+}
+
+std::vector<int> SessionService::uploadFrames(Session& s, const std::string& bytes) {
+    std::map<int, core::Volume> frames = readUploadedVdbFrames(bytes);
+    for (auto& [n, v] : frames) {
+        if (n < 0 || n > protocol::kMaxFrameNumber)
+            throw ApiError(ErrorCode::InvalidArgument, "frame numbers are in [0, " + std::to_string(protocol::kMaxFrameNumber) + "]");
+        core::velocityOf(v);
+    }
+    std::vector<int> numbers;
+    std::lock_guard lock(s.mutex);
+    // All or nothing: every frame is checked (against the session's frames and the file's first)
+    // before any is stored.
+    size_t added = 0;
+    for (const auto& [n, v] : frames) {
+        storeFrameChecks(s, n, v);
+        if (!(v.dims() == frames.begin()->second.dims()) || !(v.worldFromIndex() == frames.begin()->second.worldFromIndex()))
+            throw ApiError(ErrorCode::InvalidArgument, fmt::format("frames {} and {} of the file lie on different grids: an animation's frames "
+                                                                   "share one grid (dims and transform); resample them first",
+                                                                   frames.begin()->first, n));
+        added += s.frames.count(n) ? 0 : 1;
+    }
+    if (s.frames.size() + added > kMaxFrames)
+        throw ApiError(ErrorCode::TooLarge, fmt::format("the session would hold {} frames, over the limit of {}", s.frames.size() + added, kMaxFrames));
+    for (auto& [n, v] : frames) {
+        numbers.push_back(n);
+        storeFrame(s, n, std::move(v));
+    }
+    saved(s);
+    return numbers;
+}
+
+void SessionService::storeFrame(Session& s, int n, core::Volume v) {
+    storeFrameChecks(s, n, v);
+    if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+    if (m_persist) m_persist->saveFrame(s.id, n, v);
+    s.frames[n] = {std::move(v), false};
+}
+
+void SessionService::storeFrameChecks(const Session& s, int n, const core::Volume& v) {
     if (!s.frames.count(n) && s.frames.size() >= kMaxFrames)
         throw ApiError(ErrorCode::TooLarge, "the session holds " + std::to_string(kMaxFrames) + " frames already");
     for (const auto& [m, f] : s.frames)
@@ -50,11 +93,6 @@ void SessionService::uploadFrame(Session& s, int n, const std::string& bytes) {
                            fmt::format("frame {} is {}x{}x{} on another grid than frame {} ({}x{}x{}): an animation's frames share one grid "
                                        "(dims and transform); resample them first",
                                        n, v.dims().x, v.dims().y, v.dims().z, m, f.volume.dims().x, f.volume.dims().y, f.volume.dims().z));
-    core::velocityOf(v);  // a velocity grid that cannot be read is refused now, not in the solve
-    if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
-    if (m_persist) m_persist->saveFrame(s.id, n, v);
-    s.frames[n] = {std::move(v), false};
-    saved(s);
 }
 
 void SessionService::removeFrame(Session& s, int n) {

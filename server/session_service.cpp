@@ -389,12 +389,22 @@ void SessionService::uploadVdb(Session& s, const std::string& bytes) {
 }
 
 core::Volume SessionService::readUploadedVdb(const std::string& bytes) const {
+    return readUpload<core::Volume>(bytes, [this](const std::string& path) { return loadUntrustedVdb(path, m_limits.volumeLimits, m_limits.vdbReader); });
+}
+
+std::map<int, core::Volume> SessionService::readUploadedVdbFrames(const std::string& bytes) const {
+    return readUpload<std::map<int, core::Volume>>(
+        bytes, [this](const std::string& path) { return loadUntrustedVdbFrames(path, m_limits.volumeLimits, m_limits.vdbReader); });
+}
+
+template <typename T>
+T SessionService::readUpload(const std::string& bytes, const std::function<T(const std::string&)>& read) const {
     checkUploadSize(bytes, "the VDB");
     TempVdb tmp;
     std::ofstream(tmp.path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
-    core::Volume v;
+    T v;
     try {
-        v = loadUntrustedVdb(tmp.path.string(), m_limits.volumeLimits, m_limits.vdbReader);
+        v = read(tmp.path.string());
     } catch (const Error& e) {
         std::string msg = e.what();
         for (const std::string& path : {"'" + tmp.path.string() + "'", tmp.path.string()})

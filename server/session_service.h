@@ -154,6 +154,8 @@ public:
     // The session's animation (issue #16, docs/ANIMATION.md; session_frames.cpp).
     /// Stores an uploaded VDB as frame n (replacing it); must share the other frames' grid.
     void uploadFrame(Session& s, int n, const std::string& bytes);
+    /// Stores every frame of one VDB holding a whole animation (core::loadVdbFrames); their numbers.
+    std::vector<int> uploadFrames(Session& s, const std::string& bytes);
     void removeFrame(Session& s, int n);
     std::string downloadFrame(Session& s, int n);
     /// Solves the frames that have views with targets (key frames) jointly, fills every other
@@ -232,6 +234,14 @@ private:
     static std::string vdbBytes(const core::Volume& v);
     /// An uploaded VDB read in the child reader (UnsupportedMedia, TooLarge naming "the upload").
     core::Volume readUploadedVdb(const std::string& bytes) const;
+    std::map<int, core::Volume> readUploadedVdbFrames(const std::string& bytes) const;
+    /// An upload written to a temporary file and read by `read`; its errors name "the upload".
+    template <typename T>
+    T readUpload(const std::string& bytes, const std::function<T(const std::string&)>& read) const;
+    /// Stores frame n (the session locked by the caller): one grid for all frames, at most kMaxFrames.
+    void storeFrame(Session& s, int n, core::Volume v);
+    /// storeFrame's checks: frame n may join the session's frames (one grid, at most kMaxFrames).
+    static void storeFrameChecks(const Session& s, int n, const core::Volume& v);
     void runAnimate(Job& job, Session& s, const protocol::AnimateRequest& q, core::GpuDevice& device);
     /// Makes `volume` the newest version, on disk before it returns. Call with the session's
     /// lock held; returns the stale GPU copy (release() it after unlocking).

@@ -76,13 +76,17 @@ std::string trimmed(std::string s) {
 
 }  // namespace
 
-core::Volume loadUntrustedVdb(const std::string& path, const core::VolumeLimits& limits, const VdbReaderOptions& reader) {
+namespace {
+
+/// Reads `path` in the child first (with --frames: as an animation); throws what it refused.
+void checkInChild(const std::string& path, const core::VolumeLimits& limits, const VdbReaderOptions& reader, bool frames) {
     if (!reader.executable.empty()) {
         std::string errors;
         bool timedOut = false;
-        const int status = runChild({reader.executable, "read-vdb", path, "--max-voxels", std::to_string(limits.maxVoxels),
-                                     "--max-memory-mib", std::to_string(reader.maxAddressSpaceMiB)},
-                                    reader.seconds, errors, timedOut);
+        std::vector<std::string> argv{reader.executable, "read-vdb", path, "--max-voxels", std::to_string(limits.maxVoxels),
+                                      "--max-memory-mib", std::to_string(reader.maxAddressSpaceMiB)};
+        if (frames) argv.push_back("--frames");
+        const int status = runChild(argv, reader.seconds, errors, timedOut);
         const std::string why = trimmed(errors);
         if (timedOut)
             throw InvalidArgument("reading " + path + " took over " + fmt::format("{:g}", reader.seconds) +
@@ -101,11 +105,22 @@ core::Volume loadUntrustedVdb(const std::string& path, const core::VolumeLimits&
                           ", inside OpenVDB): the file is damaged or malicious");
         }
     }
+}
+
+}  // namespace
+
+core::Volume loadUntrustedVdb(const std::string& path, const core::VolumeLimits& limits, const VdbReaderOptions& reader) {
+    checkInChild(path, limits, reader, false);
     return core::loadVdb(path, limits);  // the reader succeeded on these bytes: so does this
 }
 
+std::map<int, core::Volume> loadUntrustedVdbFrames(const std::string& path, const core::VolumeLimits& limits, const VdbReaderOptions& reader) {
+    checkInChild(path, limits, reader, true);
+    return core::loadVdbFrames(path, limits);
+}
+
 int runReadVdb(const std::vector<std::string>& argv) {
-    Arguments args = parseArguments(argv, {"max-voxels", "max-memory-mib"}, {});
+    Arguments args = parseArguments(argv, {"max-voxels", "max-memory-mib"}, {"frames"});
     if (args.positional.size() != 1) throw InvalidArgument("usage: volstyle read-vdb FILE --max-voxels N [--max-memory-mib M]");
     core::VolumeLimits limits;
     limits.maxVoxels = int64_t(args.number("max-voxels", double(limits.maxVoxels)));
@@ -118,7 +133,12 @@ int runReadVdb(const std::vector<std::string>& argv) {
     (void)cap;  // ASan and TSan reserve terabytes of shadow address space: no limit in those builds
 #endif
     try {
-        core::loadVdb(args.positional[0], limits);
+        if (args.has("frames")) {
+            if (core::loadVdbFrames(args.positional[0], limits).empty())
+                throw InvalidArgument("the file holds no grids stamped with a frame (density.12, vel_12, or a 'frame' metadata entry)");
+        } else {
+            core::loadVdb(args.positional[0], limits);
+        }
         return kLoads;
     } catch (const LimitExceeded& e) {
         std::cerr << e.what() << "\n";

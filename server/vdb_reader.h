@@ -7,6 +7,7 @@
 /// only if it succeeds does the server load the file itself (the same code on the same bytes).
 /// A child that crashes, runs out of memory or time is a refused upload, not a dead server.
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -24,7 +25,11 @@ struct VdbReaderOptions {
 /// (damaged, unsupported, or it crashed the reader) with messages naming the file `nameHint`.
 core::Volume loadUntrustedVdb(const std::string& path, const core::VolumeLimits& limits, const VdbReaderOptions& reader);
 
-/// `volstyle read-vdb FILE --max-voxels N [--max-memory-mib M]`: the child's side. Exit status 0
+/// The same for a VDB holding a whole animation (core::loadVdbFrames; InvalidArgument when no grid
+/// is stamped with a frame).
+std::map<int, core::Volume> loadUntrustedVdbFrames(const std::string& path, const core::VolumeLimits& limits, const VdbReaderOptions& reader);
+
+/// `volstyle read-vdb FILE --max-voxels N [--max-memory-mib M] [--frames]`: the child's side. Exit status 0
 /// (loads), 3 (over the limits), 4 (invalid), 5 (unreadable); the reason on stderr.
 int runReadVdb(const std::vector<std::string>& args);
 

@@ -29,6 +29,12 @@ void addFrameRoutes(RouteContext& c) {
         c.service.uploadFrame(*s, std::stoi(req.matches[2]), bytes);
         reply(res, 200, framesJson(*s));
     });
+    // One VDB holding the whole animation (grids stamped with their frames): every frame at once.
+    putUpload(c, kSessionPath + "/frames", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
+        auto s = c.service.find(req.matches[1]);
+        c.service.uploadFrames(*s, bytes);
+        reply(res, 200, framesJson(*s));
+    });
     c.http.Get(kSessionPath + "/frames", [&c](const httplib::Request& req, httplib::Response& res) {
         reply(res, 200, framesJson(*c.service.find(req.matches[1])));
     });

@@ -127,3 +127,21 @@ TEST_F(AnimationApi, KeyFramesAreSolvedStoredRenderedAndKept) {
     EXPECT_EQ(json::parse(client().Get((base + "/frames").c_str())->body).size(), 2u);
     expectError(client().Get((base + "/frames/1.vdb").c_str()), 404, "not_found");
 }
+
+TEST_F(AnimationApi, OneVdbHoldingTheWholeAnimationUploadsEveryFrame) {
+    const std::string id = createSession(16), base = "/api/v1/sessions/" + id;
+    auto read = [](const std::string& file) {
+        std::ifstream in(std::string(VOLSTYLE_SOURCE_DIR) + "/docs/examples/animate/" + file, std::ios::binary);
+        std::stringstream bytes;
+        bytes << in.rdbuf();
+        return bytes.str();
+    };
+    auto r = client().Put((base + "/frames").c_str(), read("ball_all.vdb"), "application/octet-stream");
+    ASSERT_EQ(r->status, 200) << r->body;
+    const json frames = json::parse(r->body);
+    ASSERT_EQ(frames.size(), 3u);
+    EXPECT_EQ(frames[2]["frame"], 2);
+    // A file of one frame (no stamped grids) is not an animation; nothing changes.
+    expectError(client().Put((base + "/frames").c_str(), read("ball.0.vdb"), "application/octet-stream"), 422, "unsupported_media");
+    EXPECT_EQ(json::parse(client().Get((base + "/frames").c_str())->body).size(), 3u);
+}

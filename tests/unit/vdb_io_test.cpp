@@ -397,3 +397,32 @@ TEST(VdbIo, AFileHoldingAnAnimationIsReadFrameByFrame) {
     // A file of one frame holds no stamped grid.
     EXPECT_TRUE(loadVdbFrames(writeForeignFile(dir)).empty());
 }
+
+TEST(VdbIo, TheExampleFramesMakeOneFileOnOneGrid) {
+    // docs/examples/animate/ball.{0,1,2}.vdb as one file (grids density.0, density.1, density.2):
+    // the frames come back on one grid with the same values (docs/examples/animate/ball_all.vdb is
+    // this file).
+    openvdb::initialize();
+    auto dir = test::scratchDir();
+    openvdb::GridPtrVec grids;
+    for (int f = 0; f <= 2; ++f) {
+        openvdb::io::File in(std::string(VOLSTYLE_SOURCE_DIR) + "/docs/examples/animate/ball." + std::to_string(f) + ".vdb");
+        in.open(/*delayLoad=*/false);  // the trees are read now: the file closes below
+        const openvdb::GridPtrVecPtr read = in.getGrids();  // held: a range-for over *getGrids() would dangle
+        for (const auto& g : *read) {
+            g->setName(g->getName() + "." + std::to_string(f));
+            grids.push_back(g);
+        }
+        in.close();
+    }
+    const std::string path = (dir / "ball_all.vdb").string();
+    openvdb::io::File(path).write(grids);
+    const auto frames = loadVdbFrames(path);
+    ASSERT_EQ(frames.size(), 3u);
+    for (const auto& [f, v] : frames) {
+        const Volume alone = loadVdb(std::string(VOLSTYLE_SOURCE_DIR) + "/docs/examples/animate/ball." + std::to_string(f) + ".vdb");
+        EXPECT_EQ(v.dims(), alone.dims());
+        EXPECT_TRUE(v.worldFromIndex() == alone.worldFromIndex());
+        EXPECT_EQ(v.extinction(), alone.extinction()) << f;
+    }
+}
