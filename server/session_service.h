@@ -230,6 +230,8 @@ public:
 
 private:
     void checkUploadSize(const std::string& bytes, const std::string& what) const;
+    /// Copies the volume, edits the copy off the lock and commits it as a new version; its number.
+    int editVolume(Session& s, const std::function<void(core::Volume&)>& edit);
     /// A volume as the bytes of a VDB file (saveVdb).
     static std::string vdbBytes(const core::Volume& v);
     /// An uploaded VDB read in the child reader (UnsupportedMedia, TooLarge naming "the upload").
