@@ -42,6 +42,9 @@ void GLAPIENTRY debugCallback(GLenum, GLenum type, GLuint id, GLenum severity, G
                               const GLchar* message, const void*) {
     auto level = spdlog::level::debug;
     if (severity == GL_DEBUG_SEVERITY_HIGH || type == GL_DEBUG_TYPE_ERROR) level = spdlog::level::err;
+    // NVIDIA reports every buffer read-back and state-based recompile as a medium performance
+    // warning: on a GPU server that is thousands of log lines a solve. Debug level, like hints.
+    else if (type == GL_DEBUG_TYPE_PERFORMANCE) level = spdlog::level::debug;
     else if (severity == GL_DEBUG_SEVERITY_MEDIUM) level = spdlog::level::warn;
     else if (severity == GL_DEBUG_SEVERITY_NOTIFICATION) level = spdlog::level::trace;
     spdlog::log(level, "GL[{}]: {}", id, message);

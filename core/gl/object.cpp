@@ -29,6 +29,12 @@ Buffer createBuffer(size_t bytes, const void* data, GLbitfield storageFlags, con
     return Buffer(id);
 }
 
+void writeBuffer(const Buffer& buffer, size_t offset, size_t bytes, const void* data) {
+    if (bytes == 0) return;
+    const Buffer staging = createBuffer(bytes, data, 0, "upload-staging");
+    glCopyNamedBufferSubData(staging.id(), buffer.id(), 0, GLintptr(offset), GLsizeiptr(bytes));
+}
+
 Texture createTexture(GLenum target, const std::string& name) {
     GLuint id = 0;
     glCreateTextures(target, 1, &id);

@@ -58,6 +58,13 @@ using VertexArray = Object<VertexArrayTraits>;
 /// Creation, each with a debug label (glObjectLabel) that shows in KHR_debug messages.
 Buffer createBuffer(size_t bytes, const void* data, GLbitfield storageFlags, const std::string& label);
 Texture createTexture(GLenum target, const std::string& label);
+/// Writes `bytes` of `data` into `buffer` at `offset`, ordered after every GL command before it:
+/// through a staging buffer created with the data and a GPU copy. On NVIDIA's driver (580, H200)
+/// a glNamedBufferSubData into a buffer of more than 64 KiB after a glClearNamedBufferData of it
+/// was lost — the buffer read back zeros (seen on the device machine; the solver's joint emission
+/// + albedo vectors were the first to cross 64 KiB). glNamedBufferSubData stays only where a
+/// small block is written whole (GpuDevice::setParams, the translucent slices' 96-byte polygons).
+void writeBuffer(const Buffer& buffer, size_t offset, size_t bytes, const void* data);
 Program createProgram(const std::string& label);
 Sampler createSampler(const std::string& label);
 Query createQuery(GLenum target, const std::string& label);

@@ -77,7 +77,9 @@ void main() {
         }
     }
     vec3 background = backgroundRadiance(pix, exitDirection(pix, dir));
-    float alpha = 1.0 - (transmittance.r + transmittance.g + transmittance.b) / 3.0;
+    // Summed as 1 − T per channel: a ray that meets no medium gets alpha 0 exactly. 1 − ΣT/3 did
+    // not on NVIDIA, whose division by 3 is a multiply by 1/3 (3 · 0.33333334 > 1: alpha −1e-7).
+    float alpha = clamp(dot(vec3(1.0) - transmittance, vec3(1.0)) / 3.0, 0.0, 1.0);
     int p = pix.y * u.imageSize.x + pix.x;
     pixels[p] = vec4(radiance + transmittance * background, alpha);
 #if VOLSTYLE_LAYERS

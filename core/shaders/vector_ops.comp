@@ -56,6 +56,18 @@ shared dvec4 s_reduce[kWorkgroup1D];
 
 vec2 boundsOf(uint i) { return (int(i) / v.count.z) == 0 ? v.bounds.xy : v.bounds.zw; }
 
+// Per-component helpers for STEP and MAXCHANGE: a dvec4 written at a loop index (t[c] = …) makes
+// NVIDIA's linker fail ("can't find __setVectorIndex"), so the components are named instead.
+const double kNone = 1e300lf;  // no bound; lf: as a float literal it overflows (NVIDIA refuses it)
+// The longest step along p from a that stays inside [b.x, b.y] (an upper bound ≥ 1e30 is none).
+double stepToBound(float a, float p, vec2 b) {
+    if (p > 0.0 && b.y < 1e30) return max(0.0lf, double(b.y - a) / double(p));
+    if (p < 0.0) return max(0.0lf, double(b.x - a) / double(p));
+    return kNone;
+}
+// |x − y| / z where z > 0 (the relative change), else 0.
+double relativeChange(float x, float y, float z) { return z > 0.0 ? abs(double(x) - double(y)) / double(z) : 0.0lf; }
+
 void main() {
     uint local = gl_LocalInvocationID.x;
     uint k = gl_GlobalInvocationID.x;
@@ -110,16 +122,12 @@ void main() {
                                                   fixedLower.z || fixedUpper.z));
     }
 #elif VOLSTYLE_OP == VOLSTYLE_OP_STEP
-    const double kNone = 1e300;
     dvec4 t = dvec4(kNone);
     for (uint e = k; e < uint(v.count.x); e += gl_NumWorkGroups.x * kWorkgroup1D) {
         uint j = elementAt(e);
         vec2 b = boundsOf(j);
-        for (int c = 0; c < 3; ++c) {
-            float p = y[j][c], a = x[j][c];
-            if (p > 0.0 && b.y < 1e30) t[c] = min(t[c], max(0.0lf, double(b.y - a) / double(p)));
-            else if (p < 0.0) t[c] = min(t[c], max(0.0lf, double(b.x - a) / double(p)));
-        }
+        vec3 a = x[j].rgb, p = y[j].rgb;
+        t = min(t, dvec4(stepToBound(a.r, p.r, b), stepToBound(a.g, p.g, b), stepToBound(a.b, p.b, b), kNone));
     }
     s_reduce[local] = t;
     barrier();
@@ -132,8 +140,8 @@ void main() {
     dvec4 m = dvec4(0.0);
     for (uint e = k; e < uint(v.count.x); e += gl_NumWorkGroups.x * kWorkgroup1D) {
         uint j = elementAt(e);
-        for (int c = 0; c < 3; ++c)
-            if (z[j][c] > 0.0) m[c] = max(m[c], abs(double(x[j][c]) - double(y[j][c])) / double(z[j][c]));
+        m = max(m, dvec4(relativeChange(x[j].r, y[j].r, z[j].r), relativeChange(x[j].g, y[j].g, z[j].g),
+                         relativeChange(x[j].b, y[j].b, z[j].b), 0.0lf));
     }
     s_reduce[local] = m;
     barrier();

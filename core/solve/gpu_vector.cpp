@@ -15,7 +15,7 @@ GpuVector::GpuVector(size_t elements, const std::string& label)
 
 void GpuVector::upload(const std::vector<float>& rgba) {
     VOLSTYLE_CHECK(rgba.size(), ==, m_elements * 4);
-    glNamedBufferSubData(m_buffer.id(), 0, GLsizeiptr(rgba.size() * sizeof(float)), rgba.data());
+    gl::writeBuffer(m_buffer, 0, rgba.size() * sizeof(float), rgba.data());
 }
 
 std::vector<float> GpuVector::download() const {

@@ -142,8 +142,8 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
         (long long)weightBytes > m_device.capabilities().maxStorageBlockBytes)
         return nullptr;
     r->entries = entries;
-    glNamedBufferSubData(r->rowStart.id(), 0, GLsizeiptr(4 * rowStart.size()), rowStart.data());
-    glNamedBufferSubData(r->colStart.id(), 0, GLsizeiptr(4 * colStart.size()), colStart.data());
+    gl::writeBuffer(r->rowStart, 0, 4 * rowStart.size(), rowStart.data());
+    gl::writeBuffer(r->colStart, 0, 4 * colStart.size(), colStart.data());
     // Zeroed: a slot a ray left unfilled (fewer entries than counted) is element 0 with weight 0.
     r->rowIndex = zeroedBuffer(4 * entries, "rows-index");
     r->rowWeight = zeroedBuffer(weightBytes, "rows-weight");

@@ -339,9 +339,13 @@ StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSett
     m_device.finish();
     out.shadowMs = msSince(t);
     t = Clock::now();
+    gl::GpuTimer mipmapTimer, shadeTimer;
+    mipmapTimer.begin();
     if (settings.method == VisibilityMethod::Accelerated) buildMinMaxMipmap(m_device, scatterDepth, n, p);
+    mipmapTimer.end();
     m_device.finish();
     out.mipmapMs = msSince(t);
+    out.mipmapGpuMs = mipmapTimer.elapsedMs();
 
     // 2. The camera's G-buffer: normal and distance, colour and id.
     t = Clock::now();
@@ -410,10 +414,13 @@ StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSett
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingImageOut, m_gpu->pixels.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingLayersOut, m_gpu->layers.id());
     const int g = layout::kWorkgroup2D;
+    shadeTimer.begin();
     glDispatchCompute(GLuint((cam.width + g - 1) / g), GLuint((cam.height + g - 1) / g), 1);
+    shadeTimer.end();
     gl::barrierAfterComputeWrites();
     m_device.finish();
     out.shadeMs = msSince(t);
+    out.shadeGpuMs = shadeTimer.elapsedMs();
     t = Clock::now();
     out.frame = Image(cam.width, cam.height);
     glGetNamedBufferSubData(m_gpu->pixels.id(), 0, GLsizeiptr(bytes), out.frame.rgba.data());

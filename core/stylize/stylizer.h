@@ -35,6 +35,9 @@ struct StylizedFrame {
     double shadeMs = 0;     ///< the per-pixel pass: V̄, scattering, surfaces, transfer function
     double readbackMs = 0;  ///< the frame, its AOVs and the maps back to the CPU
     double totalMs = 0;
+    /// The mipmap's and the per-pixel pass's GPU time alone (GL timer queries): on a GPU the wall
+    /// clock above also counts the driver's latency and the clock's ramp, which a 1 ms pass drowns in.
+    double mipmapGpuMs = 0, shadeGpuMs = 0;
 
     const Image& output(StylizerOutput which) const {
         switch (which) {
