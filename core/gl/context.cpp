@@ -25,9 +25,13 @@ std::string envOr(const char* name, const std::string& fallback) {
     return v && *v ? std::string(v) : fallback;
 }
 
-/// The first EGL device that is not Mesa's software device, if any.
+/// The first EGL device that is not Mesa's software device, if any. NVIDIA's EGL names the
+/// enumeration EGL_EXT_device_base (enumeration and query together), Mesa's glvnd setup
+/// EGL_EXT_device_enumeration: either will do (seen on the H200 device machine, driver 580).
 EGLDeviceEXT findHardwareDevice() {
-    if (!epoxy_has_egl_extension(EGL_NO_DISPLAY, "EGL_EXT_device_enumeration")) return nullptr;
+    if (!epoxy_has_egl_extension(EGL_NO_DISPLAY, "EGL_EXT_device_enumeration") &&
+        !epoxy_has_egl_extension(EGL_NO_DISPLAY, "EGL_EXT_device_base"))
+        return nullptr;
     EGLDeviceEXT devices[16];
     EGLint count = 0;
     if (!eglQueryDevicesEXT(16, devices, &count)) return nullptr;
@@ -99,23 +103,33 @@ void releaseDisplay(EGLDisplay display) {
 }  // namespace
 
 std::unique_ptr<Context> Context::create(const ContextOptions& options) {
-    std::unique_ptr<Context> ctx(new Context());
-    ctx->m_egl = std::make_unique<Egl>();
-    Egl& egl = *ctx->m_egl;
     const std::string platform = options.platform.empty() ? envOr("VOLSTYLE_EGL", "auto") : options.platform;
     if (platform != "auto" && platform != "device" && platform != "surfaceless")
         throw GpuError("gl::Context: VOLSTYLE_EGL must be 'device' or 'surfaceless', got '" + platform + "'");
-
-    // Choose the EGL display: a GPU device if there is one (or if forced), else surfaceless Mesa.
-    if (platform != "surfaceless") {
-        if (EGLDeviceEXT device = findHardwareDevice()) {
-            egl.display = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, device, nullptr);
-            ctx->m_caps.platform = "device";
-        } else if (platform == "device") {
-            throw GpuError("gl::Context: VOLSTYLE_EGL=device but no EGL GPU device was found");
+    if (platform != "auto") return createOn(platform, options.debug);
+    // auto: a GPU device if there is one, else the surfaceless platform (Mesa's, or the GPU
+    // driver's own where it has one, as NVIDIA's does). A device that cannot give a GL 4.5 core
+    // context falls back too, rather than leaving the server without GL.
+    if (findHardwareDevice()) {
+        try {
+            return createOn("device", options.debug);
+        } catch (const GpuError& e) {
+            spdlog::warn("gl::Context: the EGL GPU device failed ({}); trying the surfaceless platform", e.what());
         }
     }
-    if (egl.display == EGL_NO_DISPLAY) {
+    return createOn("surfaceless", options.debug);
+}
+
+std::unique_ptr<Context> Context::createOn(const std::string& platform, bool debugOption) {
+    std::unique_ptr<Context> ctx(new Context());
+    ctx->m_egl = std::make_unique<Egl>();
+    Egl& egl = *ctx->m_egl;
+    if (platform == "device") {
+        EGLDeviceEXT device = findHardwareDevice();
+        if (!device) throw GpuError("gl::Context: VOLSTYLE_EGL=device but no EGL GPU device was found");
+        egl.display = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, device, nullptr);
+        ctx->m_caps.platform = "device";
+    } else {
         if (!epoxy_has_egl_extension(EGL_NO_DISPLAY, "EGL_MESA_platform_surfaceless"))
             throw GpuError("gl::Context: no EGL GPU device and no EGL_MESA_platform_surfaceless; install libegl-mesa0");
         egl.display = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
@@ -129,7 +143,7 @@ std::unique_ptr<Context> Context::create(const ContextOptions& options) {
     if (!eglBindAPI(EGL_OPENGL_API)) throw GpuError("gl::Context: this EGL has no desktop OpenGL");
 
     // A configless, surfaceless GL 4.5 core context: compute work only, no default framebuffer.
-    const bool debug = options.debug || envOr("VOLSTYLE_GL_DEBUG", "0") == "1";
+    const bool debug = debugOption || envOr("VOLSTYLE_GL_DEBUG", "0") == "1";
     const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4,
                                  EGL_CONTEXT_MINOR_VERSION, 5,
                                  EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,

@@ -63,6 +63,8 @@ public:
 
 private:
     Context() = default;
+    /// A context on one platform ("device" or "surfaceless"); throws GpuError saying why not.
+    static std::unique_ptr<Context> createOn(const std::string& platform, bool debug);
     struct Egl;
     std::unique_ptr<Egl> m_egl;
     Capabilities m_caps;
