@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Packs what a check on a GPU machine needs into .device-bundle/ (git-ignored, ~12 MB): the GL
+# Packs what a check on a GPU machine needs into .device-bundle/ (git-ignored, about 9 MB): the GL
 # tests that need no file libraries (gl_tests_device) and the GL benchmarks, the three small
 # libraries they link beside libc and libstdc++ (spdlog, fmt, epoxy), glvnd's EGL/GL loaders as
 # Debian packages (for a machine that has the NVIDIA driver but no libEGL.so.1), and
@@ -16,6 +16,7 @@ for b in "${binaries[@]}"; do cp "$build/bin/$b" "$out/bin/"; done
 # Every library the binaries need beyond the C and C++ runtimes travels with them; anything
 # else (OpenImageIO, OpenVDB…) would mean a binary picked up a dependency it should not have.
 for b in "${binaries[@]}"; do
+  if ldd "$out/bin/$b" | grep -q "not found"; then echo "device_bundle: $b has libraries ldd cannot find" >&2; exit 1; fi
   ldd "$out/bin/$b" | awk '/=> \//{print $1, $3}' | while read -r name path; do
     case "$name" in
       libc.so*|libm.so*|libdl.so*|libpthread.so*|librt.so*|libgcc_s.so*|libstdc++.so*|ld-linux*) ;;

@@ -110,14 +110,21 @@ std::unique_ptr<Context> Context::create(const ContextOptions& options) {
     // auto: a GPU device if there is one, else the surfaceless platform (Mesa's, or the GPU
     // driver's own where it has one, as NVIDIA's does). A device that cannot give a GL 4.5 core
     // context falls back too, rather than leaving the server without GL.
+    std::string deviceError;
     if (findHardwareDevice()) {
         try {
             return createOn("device", options.debug);
         } catch (const GpuError& e) {
-            spdlog::warn("gl::Context: the EGL GPU device failed ({}); trying the surfaceless platform", e.what());
+            deviceError = e.what();
+            spdlog::warn("gl::Context: the EGL GPU device failed ({}); trying the surfaceless platform", deviceError);
         }
     }
-    return createOn("surfaceless", options.debug);
+    try {
+        return createOn("surfaceless", options.debug);
+    } catch (const GpuError& e) {
+        if (deviceError.empty()) throw;
+        throw GpuError(std::string(e.what()) + "; before that, the EGL GPU device: " + deviceError);
+    }
 }
 
 std::unique_ptr<Context> Context::createOn(const std::string& platform, bool debugOption) {
@@ -131,7 +138,7 @@ std::unique_ptr<Context> Context::createOn(const std::string& platform, bool deb
         ctx->m_caps.platform = "device";
     } else {
         if (!epoxy_has_egl_extension(EGL_NO_DISPLAY, "EGL_MESA_platform_surfaceless"))
-            throw GpuError("gl::Context: no EGL GPU device and no EGL_MESA_platform_surfaceless; install libegl-mesa0");
+            throw GpuError("gl::Context: this EGL has no surfaceless platform (EGL_MESA_platform_surfaceless); install libegl-mesa0");
         egl.display = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
         ctx->m_caps.platform = "surfaceless";
     }

@@ -1,7 +1,8 @@
 #pragma once
 /// \file context.h
-/// A headless OpenGL 4.5 core context through EGL: an EGL GPU device when one exists, otherwise
-/// Mesa's surfaceless platform (llvmpipe). `VOLSTYLE_EGL=device|surfaceless` forces one.
+/// A headless OpenGL 4.5 core context through EGL: an EGL GPU device when one exists and gives
+/// the context, otherwise the surfaceless platform (Mesa's llvmpipe, or a GPU driver's own, as
+/// NVIDIA's). `VOLSTYLE_EGL=device|surfaceless` forces one.
 /// The context is current on the thread that created it; every GL object must be created, used
 /// and destroyed on that thread.
 

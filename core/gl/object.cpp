@@ -2,6 +2,8 @@
 
 #include "core/gl/object.h"
 
+#include <algorithm>
+
 #include "core/base/errors.h"
 
 namespace volstyle::core::gl {
@@ -30,9 +32,13 @@ Buffer createBuffer(size_t bytes, const void* data, GLbitfield storageFlags, con
 }
 
 void writeBuffer(const Buffer& buffer, size_t offset, size_t bytes, const void* data) {
-    if (bytes == 0) return;
-    const Buffer staging = createBuffer(bytes, data, 0, "upload-staging");
-    glCopyNamedBufferSubData(staging.id(), buffer.id(), 0, GLintptr(offset), GLsizeiptr(bytes));
+    const auto* bytesIn = static_cast<const unsigned char*>(data);
+    for (size_t done = 0; done < bytes; done += kWriteChunkBytes) {
+        const size_t n = std::min(kWriteChunkBytes, bytes - done);
+        // Deleted at the end of this iteration: GL keeps it until the copy has read it.
+        const Buffer staging = createBuffer(n, bytesIn + done, 0, "upload-staging");
+        glCopyNamedBufferSubData(staging.id(), buffer.id(), 0, GLintptr(offset + done), GLsizeiptr(n));
+    }
 }
 
 Texture createTexture(GLenum target, const std::string& name) {

@@ -58,13 +58,15 @@ using VertexArray = Object<VertexArrayTraits>;
 /// Creation, each with a debug label (glObjectLabel) that shows in KHR_debug messages.
 Buffer createBuffer(size_t bytes, const void* data, GLbitfield storageFlags, const std::string& label);
 Texture createTexture(GLenum target, const std::string& label);
-/// Writes `bytes` of `data` into `buffer` at `offset`, ordered after every GL command before it:
-/// through a staging buffer created with the data and a GPU copy. On NVIDIA's driver (580, H200)
-/// a glNamedBufferSubData into a buffer of more than 64 KiB after a glClearNamedBufferData of it
-/// was lost — the buffer read back zeros (seen on the device machine; the solver's joint emission
-/// + albedo vectors were the first to cross 64 KiB). glNamedBufferSubData stays only where a
-/// small block is written whole (GpuDevice::setParams, the translucent slices' 96-byte polygons).
+/// Writes `bytes` of `data` into `buffer` at `offset` through staging buffers created with the data
+/// (at most kWriteChunkBytes each) and GPU copies — a driver workaround: on NVIDIA's driver (580,
+/// H200) a glNamedBufferSubData into a buffer of more than 64 KiB after a glClearNamedBufferData
+/// of it was lost, the buffer read back zeros (seen on the device machine; the solver's joint
+/// emission + albedo vectors were the first to cross 64 KiB). As with glNamedBufferSubData, shader
+/// writes to `buffer` need a barrier first. glNamedBufferSubData stays only where a small block is
+/// written whole (GpuDevice::setParams, the translucent slices' 96-byte polygons).
 void writeBuffer(const Buffer& buffer, size_t offset, size_t bytes, const void* data);
+constexpr size_t kWriteChunkBytes = size_t(32) << 20;  ///< so an upload never doubles its size on the GPU
 Program createProgram(const std::string& label);
 Sampler createSampler(const std::string& label);
 Query createQuery(GLenum target, const std::string& label);
@@ -102,6 +104,19 @@ public:
     void end();
     /// Milliseconds; blocks until the result is available.
     double elapsedMs();
+
+    /// begin() now, end() when the scope is left, by a throw too: a query left open would make
+    /// the next begin() on this thread fail.
+    class Scope {
+    public:
+        explicit Scope(GpuTimer& timer) : m_timer(timer) { m_timer.begin(); }
+        ~Scope() { m_timer.end(); }
+        Scope(const Scope&) = delete;
+        Scope& operator=(const Scope&) = delete;
+
+    private:
+        GpuTimer& m_timer;
+    };
 
 private:
     Query m_query;

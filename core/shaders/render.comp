@@ -78,7 +78,7 @@ void main() {
     }
     vec3 background = backgroundRadiance(pix, exitDirection(pix, dir));
     // Summed as 1 − T per channel: a ray that meets no medium gets alpha 0 exactly. 1 − ΣT/3 did
-    // not on NVIDIA, whose division by 3 is a multiply by 1/3 (3 · 0.33333334 > 1: alpha −1e-7).
+    // not on NVIDIA (−1.2e-7: its division is by an approximate reciprocal, which GLSL allows).
     float alpha = clamp(dot(vec3(1.0) - transmittance, vec3(1.0)) / 3.0, 0.0, 1.0);
     int p = pix.y * u.imageSize.x + pix.x;
     pixels[p] = vec4(radiance + transmittance * background, alpha);

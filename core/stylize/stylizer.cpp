@@ -340,9 +340,10 @@ StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSett
     out.shadowMs = msSince(t);
     t = Clock::now();
     gl::GpuTimer mipmapTimer, shadeTimer;
-    mipmapTimer.begin();
-    if (settings.method == VisibilityMethod::Accelerated) buildMinMaxMipmap(m_device, scatterDepth, n, p);
-    mipmapTimer.end();
+    {
+        gl::GpuTimer::Scope timed(mipmapTimer);
+        if (settings.method == VisibilityMethod::Accelerated) buildMinMaxMipmap(m_device, scatterDepth, n, p);
+    }
     m_device.finish();
     out.mipmapMs = msSince(t);
     out.mipmapGpuMs = mipmapTimer.elapsedMs();
@@ -414,9 +415,10 @@ StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSett
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingImageOut, m_gpu->pixels.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingLayersOut, m_gpu->layers.id());
     const int g = layout::kWorkgroup2D;
-    shadeTimer.begin();
-    glDispatchCompute(GLuint((cam.width + g - 1) / g), GLuint((cam.height + g - 1) / g), 1);
-    shadeTimer.end();
+    {
+        gl::GpuTimer::Scope timed(shadeTimer);
+        glDispatchCompute(GLuint((cam.width + g - 1) / g), GLuint((cam.height + g - 1) / g), 1);
+    }
     gl::barrierAfterComputeWrites();
     m_device.finish();
     out.shadeMs = msSince(t);
