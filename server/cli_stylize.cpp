@@ -182,7 +182,7 @@ int runStylize(const std::vector<std::string>& argv) {
     const double steps = args.number("steps", settings.steps);
     if (steps != std::floor(steps)) throw InvalidArgument("--steps: must be a whole number");
     settings.steps = int(std::clamp(steps, -1.0, 1e6));
-    settings.readShadowMaps = *output == core::StylizerOutput::ShadowMap || *output == core::StylizerOutput::ModifiedShadowMap;
+    core::readBackOnly(settings, *output);
     settings.validate();
 
     if (sequence) return renderSequence(args, scene, settings, *output);

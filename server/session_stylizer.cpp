@@ -295,8 +295,7 @@ core::StylizedFrame SessionService::stylizeOnGl(const core::StylizerScene& scene
 core::StylizedFrame SessionService::stylize(Session& s, const protocol::StylizerFrameRequest& request) {
     core::StylizerScene scene = sceneFor(stylizer(s).scene, request.camera, request.time);
     core::StylizeSettings settings = request.settings;
-    settings.readShadowMaps =
-        request.output == core::StylizerOutput::ShadowMap || request.output == core::StylizerOutput::ModifiedShadowMap;
+    core::readBackOnly(settings, request.output);
     return stylizeOnGl(scene, settings);
 }
 
@@ -389,7 +388,7 @@ std::optional<LiveFrame> SessionService::nextLiveFrame(Session& s, uint64_t afte
         snapshot = snapshotOf(s);
     }
     core::StylizeSettings settings;
-    settings.readShadowMaps = false;
+    core::readBackOnly(settings, core::StylizerOutput::Frame);  // the stream sends the frame alone
     const auto t0 = Clock::now();
     const core::StylizedFrame f = stylizeOnGl(core::sceneAtTime(snapshot.scene, snapshot.scene.time), settings);
     LiveFrame live{snapshot.revision, core::encodeImage(f.frame, "jpeg"), f.frame.width, f.frame.height,

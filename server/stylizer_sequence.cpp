@@ -74,7 +74,7 @@ void SessionService::runSequence(Job& job, const core::StylizerScene& scene, con
     std::filesystem::create_directories(dir);
     const core::SaveOptions save = stylizerSaveOptions(q.output, q.exposure);
     core::StylizeSettings settings = q.settings;
-    settings.readShadowMaps = q.output == core::StylizerOutput::ShadowMap || q.output == core::StylizerOutput::ModifiedShadowMap;
+    core::readBackOnly(settings, q.output);
     nlohmann::json urls = nlohmann::json::array();
     double totalMs = 0;
     for (size_t i = 0; i < times.size(); ++i) {

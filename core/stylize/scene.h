@@ -163,6 +163,10 @@ struct StylizeSettings {
     /// Read the shadow maps back (their AOVs); off, StylizedFrame::shadowMap and
     /// modifiedShadowMap stay empty and a frame saves two n×n read-backs (live previews).
     bool readShadowMaps = true;
+    /// Read the AOVs back (V̄, L_scat, linear depth); off, only the frame comes back, which on a
+    /// GPU saves most of a frame's time (live previews). A TF with anchored constraints reads
+    /// them whatever this says: it is placed from them.
+    bool readAovs = true;
     /// A pixel whose occluder StylizedFrame::pickedOccluder names (a click in the scene).
     struct Pixel {
         int x = 0, y = 0;
@@ -176,6 +180,13 @@ enum class StylizerOutput { Frame, AverageVisibility, LinearDepth, ShadowMap, Mo
 /// The frame and the scattering are pictures (sRGB and exposure in 8-bit files); the other AOVs
 /// are data, stored linearly (core::SaveOptions::data).
 inline bool isPicture(StylizerOutput o) { return o == StylizerOutput::Frame || o == StylizerOutput::Scattering; }
+/// Has a frame read back only what `which` needs: the shadow maps for the map outputs, the AOVs
+/// for V̄, depth and the scattering, neither for the frame itself.
+inline void readBackOnly(StylizeSettings& settings, StylizerOutput which) {
+    settings.readShadowMaps = which == StylizerOutput::ShadowMap || which == StylizerOutput::ModifiedShadowMap;
+    settings.readAovs = which == StylizerOutput::AverageVisibility || which == StylizerOutput::LinearDepth ||
+                        which == StylizerOutput::Scattering;
+}
 
 /// The built-in scene `forest`: a ground plane and a grove of trees whose canopies are clouds of
 /// leaf quads, under a low sun, seen from inside a hazy wood: light shafts through foliage.

@@ -200,8 +200,10 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
         return f;
     }
     // Anchored constraints: where they are depends on this frame's V̄ and depths, so the frame is
-    // rendered without the TF and the TF applied to it.
-    StylizedFrame f = renderPass(s, settings);
+    // rendered without the TF (and with its AOVs) and the TF applied to it.
+    StylizeSettings withAovs = settings;
+    withAovs.readAovs = true;
+    StylizedFrame f = renderPass(s, withAovs);
     const auto t = Clock::now();
     for (auto& [tf, w] : tfs) resolveAnchors(tf, scene, f);
     f.transferFunction = blended();
@@ -426,12 +428,14 @@ StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSett
     t = Clock::now();
     out.frame = Image(cam.width, cam.height);
     glGetNamedBufferSubData(m_gpu->pixels.id(), 0, GLsizeiptr(bytes), out.frame.rgba.data());
-    std::vector<float> plane(pixelCount * 4);
-    glGetNamedBufferSubData(m_gpu->layers.id(), 0, GLsizeiptr(bytes), plane.data());
-    out.scattering = readChannelPlane(plane, cam.width, cam.height, 0, false);
-    out.averageVisibility = readChannelPlane(plane, cam.width, cam.height, 3, true);
-    glGetNamedBufferSubData(m_gpu->layers.id(), GLintptr(bytes), GLsizeiptr(bytes), plane.data());
-    out.linearDepth = readChannelPlane(plane, cam.width, cam.height, 0, true);
+    if (settings.readAovs) {
+        std::vector<float> plane(pixelCount * 4);
+        glGetNamedBufferSubData(m_gpu->layers.id(), 0, GLsizeiptr(bytes), plane.data());
+        out.scattering = readChannelPlane(plane, cam.width, cam.height, 0, false);
+        out.averageVisibility = readChannelPlane(plane, cam.width, cam.height, 3, true);
+        glGetNamedBufferSubData(m_gpu->layers.id(), GLintptr(bytes), GLsizeiptr(bytes), plane.data());
+        out.linearDepth = readChannelPlane(plane, cam.width, cam.height, 0, true);
+    }
     auto mapImage = [n](const std::vector<float>& depthRows) {
         Image img(n, n);
         for (int y = 0; y < n; ++y)

@@ -306,3 +306,25 @@ double worstVisibilityError(const StylizerScene& scene, const StylizedFrame& f, 
     return worst;
 }
 
+
+// A frame read back without its AOVs (live previews) is the same frame, bit for bit; the AOVs
+// stay empty, and the shadow maps too unless asked for.
+TEST(Stylizer, AFrameWithoutItsAovsIsTheSameFrame) {
+    VOLSTYLE_REQUIRE_GL();
+    StylizerScene scene = holeScene();
+    scene.light.shadowMapSize = 512;
+    Stylizer stylizer(test::device());
+    const StylizedFrame full = stylizer.render(scene, {});
+    StylizeSettings lean;
+    readBackOnly(lean, StylizerOutput::Frame);
+    const StylizedFrame frameOnly = stylizer.render(scene, lean);
+    ASSERT_EQ(frameOnly.frame.rgba.size(), full.frame.rgba.size());
+    EXPECT_EQ(frameOnly.frame.rgba, full.frame.rgba);
+    EXPECT_EQ(frameOnly.averageVisibility.pixelCount(), 0u);
+    EXPECT_EQ(frameOnly.linearDepth.pixelCount(), 0u);
+    EXPECT_EQ(frameOnly.shadowMap.pixelCount(), 0u);
+    EXPECT_GT(full.averageVisibility.pixelCount(), 0u);
+    StylizeSettings vBar;
+    readBackOnly(vBar, StylizerOutput::AverageVisibility);
+    EXPECT_EQ(stylizer.render(scene, vBar).averageVisibility.rgba, full.averageVisibility.rgba);
+}
