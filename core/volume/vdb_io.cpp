@@ -17,7 +17,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cctype>
 #include <cmath>
 #include <optional>
 #include <cstring>
@@ -29,6 +28,7 @@
 
 #include "core/base/errors.h"
 #include "core/volume/vdb_file.h"
+#include "core/volume/vdb_grid_roles.h"
 
 // Reading whole files (vdb_file.h), shared with vdb_inspect.cpp.
 namespace volstyle::core::vdb_file {
@@ -91,10 +91,7 @@ FileContents readVdbFile(const std::string& path) {
 
 namespace volstyle::core {
 
-namespace {
-/// What a grid does in the volume. The file's names for them: kRoleNames (first match wins).
-enum Role { kExtinction, kAlbedo, kEmission, kRefractiveIndex, kRoleCount };
-}  // namespace
+using namespace vdb_role;  // Role and the grid conventions (vdb_grid_roles.h)
 
 struct VdbSource {
     openvdb::GridCPtrVec grids;  ///< every grid of the file in its order, as read (never modified)
@@ -151,39 +148,6 @@ std::string gridNames(const openvdb::GridCPtrVec& grids) {
     std::string s;
     for (const auto& g : grids) s += (s.empty() ? "" : ", ") + g->getName();
     return s.empty() ? "(none)" : s;
-}
-
-/// The names a role is read from, in order of preference (Houdini and Blender call extinction
-/// `density`), and the name a grid made from scratch gets (grey extinction: `density`).
-std::vector<std::string> roleNames(Role role) {
-    switch (role) {
-        case kExtinction: return {"extinction", "density"};
-        case kAlbedo: return {"albedo"};
-        case kEmission: return {"emission"};
-        default: return {"refractive_index"};
-    }
-}
-
-/// What a voxel the file does not store is worth in the volume: albedo defaults to white, the
-/// refractive index to vacuum, the rest to zero.
-float absentValue(Role role) {
-    return role == kAlbedo ? kDefaultAlbedo : role == kRefractiveIndex ? 1.0f : 0.0f;
-}
-
-/// The dense RGB grid of the volume for a role (the refractive index repeated in R, G and B).
-std::vector<float> denseOfVolume(const Volume& v, Role role) {
-    switch (role) {
-        case kExtinction: return v.extinction();
-        case kAlbedo: return v.albedo();
-        case kEmission: return v.emission();
-        default: {
-            std::vector<float> rgb;
-            if (!v.refractiveIndex()) return rgb;
-            rgb.reserve(v.voxelCount() * 3);
-            for (float n : *v.refractiveIndex()) rgb.insert(rgb.end(), {n, n, n});
-            return rgb;
-        }
-    }
 }
 
 /// Fills a dense RGB grid from a float or Vec3f VDB grid, voxel (i,j,k) of the dense grid being
@@ -332,11 +296,7 @@ Volume volumeFromGrids(FileContents file, const std::string& path, const VolumeL
 std::optional<std::pair<int, std::string>> frameOfGrid(const openvdb::GridBase& grid) {
     if (auto m = grid.getMetadata<openvdb::Int32Metadata>("frame")) return std::make_pair(int(m->value()), grid.getName());
     if (auto m = grid.getMetadata<openvdb::Int64Metadata>("frame")) return std::make_pair(int(m->value()), grid.getName());
-    const std::string& name = grid.getName();
-    size_t digits = name.size();
-    while (digits > 0 && std::isdigit(static_cast<unsigned char>(name[digits - 1]))) --digits;
-    if (digits == name.size() || digits < 2 || (name[digits - 1] != '.' && name[digits - 1] != '_') || name.size() - digits > 6) return std::nullopt;
-    return std::make_pair(std::stoi(name.substr(digits)), name.substr(0, digits - 1));
+    return frameOfGridName(grid.getName());
 }
 
 }  // namespace
