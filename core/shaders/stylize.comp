@@ -173,38 +173,50 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
     clipToHalfSpace(1.0 - h0.y, -h1.y, ta, tb);
     clipToHalfSpace(1.0 + h0.y, h1.y, ta, tb);
     if (!(tb > ta)) return 1.0;
+    // Walk the stretch [0, len] from whichever end makes the depth grow: V̄ does not depend on the
+    // direction, and then a cell's depth range along the ray is [z(t), z(tExit)].
+    float len0 = tb - ta;
+    if (h1.z < 0.0) {
+        h0 += tb * h1;
+        h1 = -h1;
+    } else {
+        h0 += ta * h1;
+    }
     int n = u.imageSize.z;
     float fn = float(n);
     vec2 a = (h0.xy * 0.5 + 0.5) * fn, b = h1.xy * 0.5 * fn;
     float z0 = h0.z * 0.5 + 0.5, dz = h1.z * 0.5, bias = u.shadow.x;
     vec2 sgn = sign(b);
-    vec2 invB = vec2(abs(b.x) > 1e-30 ? 1.0 / b.x : 0.0, abs(b.y) > 1e-30 ? 1.0 / b.y : 0.0);
-    ivec2 ahead = ivec2(greaterThan(sgn, vec2(0.0)));  // which bound of a cell is ahead
-    vec2 nudge = sgn * 1e-3;
-    float lit = s - (tb - ta);
-    int top = u.options.y - 1, level = top;
-    float t = ta, tiny = 1e-6 * s;
-    ivec2 texel = ivec2(floor(a + t * b + nudge));
-    // The current level's side and first entry, kept up to date as the walk opens and climbs.
-    int side = 1, offset = u.mipOffset[top >> 2][top & 3];
-    for (int iter = 0; iter < 65536 && t < tb; ++iter) {
+    bvec2 moves = greaterThan(abs(b), vec2(1e-30));
+    // A cell's exit along an axis is (bound − a) / b; an axis the ray does not move along never
+    // bounds it ((bound + 1e9) · 1e30 overflows to +∞).
+    vec2 invB = vec2(moves.x ? 1.0 / b.x : 1.0e30, moves.y ? 1.0 / b.y : 1.0e30);
+    vec2 aExit = vec2(moves.x ? a.x : -1.0e9, moves.y ? a.y : -1.0e9);
+    ivec2 ahead = ivec2(greaterThan(sgn, vec2(0.0)));
+    vec2 aNudged = a + sgn * 1e-3;
+    float invDz = dz > 1e-30 ? 1.0 / dz : 0.0;
+    float lit = s - len0;
+    int top = u.options.y - 1;
+    // Start at the finest level whose cells are as large as the stretch's extent on the map.
+    vec2 extent = abs(b) * len0;
+    int level = min(top, findMSB(int(max(extent.x, extent.y)) + 1) + 1);
+    float t = 0.0, tiny = 1e-6 * s, zA = z0;
+    ivec2 texel = ivec2(floor(aNudged));
+    int side = mipSide(n, level), offset = u.mipOffset[level >> 2][level & 3];
+    for (int iter = 0; iter < 65536 && t < len0; ++iter) {
         ivec2 cell = texel >> level;
-        vec2 bound = vec2((cell + ahead) << level);
-        float tExit = tb;
-        if (sgn.x != 0.0) tExit = min(tExit, (bound.x - a.x) * invB.x);
-        if (sgn.y != 0.0) tExit = min(tExit, (bound.y - a.y) * invB.y);
-        tExit = min(max(tExit, t + tiny), tb);
-        // The footprint clip keeps the ray on the map; the clamp only catches rounding at its rim.
+        vec2 exits = (vec2((cell + ahead) << level) - aExit) * invB;
+        float tExit = min(max(min(exits.x, exits.y), t + tiny), len0);
         cell = clamp(cell, ivec2(0), ivec2(side - 1));
         vec2 mm = minMaxOfEntry(minMax[offset + cell.y * side + cell.x], level == 0);
-        float zA = z0 + t * dz, zB = z0 + tExit * dz;
-        float zLo = min(zA, zB), zHi = max(zA, zB);
-        if (mm.x >= 1.0 || zHi <= mm.x + bias) {
+        float zB = z0 + tExit * dz;
+        if (zB <= mm.x + bias || mm.x >= 1.0) {
             lit += tExit - t;
-        } else if (mm.y < 1.0 && zLo > mm.y + bias) {
+        } else if (zA > mm.y + bias && mm.y < 1.0) {
         } else if (level == 0) {
-            float limit = mm.x + bias, len = tExit - t;
-            lit += dz > 0.0 ? clamp((limit - z0) / dz - t, 0.0, len) : dz < 0.0 ? clamp(tExit - (limit - z0) / dz, 0.0, len) : (zA <= limit ? len : 0.0);
+            // One texel, depth D: lit up to where z(t) = D + bias (z grows along the walk).
+            float limit = mm.x + bias;
+            lit += dz > 1e-30 ? clamp((limit - z0) * invDz - t, 0.0, tExit - t) : (zA <= limit ? tExit - t : 0.0);
         } else {
             level -= 1;  // undecided: open the cell
             side = mipSide(n, level);
@@ -212,7 +224,8 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
             continue;
         }
         t = tExit;
-        texel = ivec2(floor(a + t * b + nudge));
+        zA = zB;
+        texel = ivec2(floor(aNudged + t * b));
         if (level < top && (texel >> (level + 1)) != (cell >> 1)) {  // left the parent
             offset += side * side;
             level += 1;

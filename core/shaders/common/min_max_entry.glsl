@@ -6,7 +6,7 @@
 // stays exactly 1.
 const float kDepthStep = 1.0 / 65535.0;
 
-float unpackDepth16(uint q) { return q >= 65535u ? 1.0 : float(q) * kDepthStep; }
+float unpackDepth16(uint q) { return float(q) * kDepthStep; }  // 65535 · kDepthStep is exactly 1.0 in float
 
 vec2 minMaxOfEntry(uint bits, bool level0) {
     if (level0) return vec2(uintBitsToFloat(bits));
