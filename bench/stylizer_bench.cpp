@@ -3,7 +3,8 @@
 //   Table 1 — per shadow-map size (512/1024/2048): ms of the shadow maps (+ holes on the
 //             canopies), the min-max mipmap, the G-buffer, the per-pixel pass (V̄, scattering,
 //             surfaces) with and without a transfer function, for the accelerated V̄ and the
-//             naive one (1024 lookups), and the accelerated V̄'s difference from the naive one.
+//             naive one (1024 lookups), and the accelerated V̄'s difference from the naive one;
+//             the four passes render in turn each round, and speed-ups are taken within rounds.
 //   Time against error — the naive V̄ at 64–4096 steps against the accelerated one (exact
 //             against the map) on the 2048² map.
 //   Table 2 — the closing of a 2048² map per kernel radius (box and disc).
@@ -13,6 +14,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <iostream>
 #include <random>
 #include <sstream>
@@ -33,19 +35,55 @@ struct Times {
     double mipmapGpu = 0, shadeGpu = 0;  // GPU time alone (timer queries)
 };
 
+Times timesOf(const StylizedFrame& f) {
+    return {f.shadowMs, f.mipmapMs, f.gbufferMs, f.shadeMs, f.totalMs, f.mipmapGpuMs, f.shadeGpuMs};
+}
+
+Times medianOf(const std::vector<Times>& rounds) {
+    const auto med = [&](double Times::*field) {
+        std::vector<double> v;
+        for (const Times& t : rounds) v.push_back(t.*field);
+        return bench::median(v);
+    };
+    return {med(&Times::shadow), med(&Times::mipmap),    med(&Times::gbuffer), med(&Times::shade),
+            med(&Times::total),  med(&Times::mipmapGpu), med(&Times::shadeGpu)};
+}
+
+struct Config {
+    const StylizerScene* scene;
+    StylizeSettings settings;
+};
+
+/// Every config rendered once per round, `reps` rounds after one that compiles the kernels; the
+/// result holds each config's times per round. This VM's speed drifts by ±10% within a minute:
+/// a round puts the same drift on all its configs, so ratios taken within a round hold where
+/// ratios of separately taken medians did not. `last` gets each config's last frame.
+std::vector<std::vector<Times>> interleavedRounds(Stylizer& stylizer, const std::vector<Config>& configs, int reps,
+                                                  std::vector<StylizedFrame>* last) {
+    std::vector<std::vector<Times>> rounds(configs.size());
+    std::vector<StylizedFrame> frames(configs.size());
+    for (int r = 0; r <= reps; ++r)
+        for (size_t c = 0; c < configs.size(); ++c) {
+            frames[c] = stylizer.render(*configs[c].scene, configs[c].settings);
+            if (r > 0) rounds[c].push_back(timesOf(frames[c]));
+        }
+    if (last) *last = std::move(frames);
+    return rounds;
+}
+
 /// Medians over `reps` renders (after one to compile the kernels).
 Times timeRenders(Stylizer& stylizer, const StylizerScene& scene, const StylizeSettings& settings, int reps, StylizedFrame* last) {
-    std::vector<double> shadow, mipmap, gbuffer, shade, total, mipmapGpu, shadeGpu;
-    StylizedFrame f = stylizer.render(scene, settings);
-    for (int r = 0; r < reps; ++r) {
-        f = stylizer.render(scene, settings);
-        shadow.push_back(f.shadowMs), mipmap.push_back(f.mipmapMs), gbuffer.push_back(f.gbufferMs);
-        shade.push_back(f.shadeMs), total.push_back(f.totalMs);
-        mipmapGpu.push_back(f.mipmapGpuMs), shadeGpu.push_back(f.shadeGpuMs);
-    }
-    if (last) *last = std::move(f);
-    return {bench::median(shadow),  bench::median(mipmap),    bench::median(gbuffer), bench::median(shade),
-            bench::median(total),   bench::median(mipmapGpu), bench::median(shadeGpu)};
+    std::vector<StylizedFrame> frames;
+    const Times t = medianOf(interleavedRounds(stylizer, {{&scene, settings}}, reps, last ? &frames : nullptr)[0]);
+    if (last) *last = std::move(frames[0]);
+    return t;
+}
+
+/// The median over rounds of a ratio taken within each round.
+double medianRatio(const std::vector<std::vector<Times>>& rounds, const std::function<double(size_t round)>& ratio) {
+    std::vector<double> v;
+    for (size_t r = 0; r < rounds[0].size(); ++r) v.push_back(ratio(r));
+    return bench::median(v);
 }
 
 struct Difference {
@@ -102,44 +140,49 @@ int main(int argc, char** argv) {
     std::vector<std::string> json;
     std::cout << "device: " << device->capabilities().renderer << "\n";
     std::cout << "Table 1: forest " << scene.camera.width << "x" << scene.camera.height
-              << ", holes on the canopies; ms (median of " << reps << ")\n";
+              << ", holes on the canopies; ms, median of " << reps
+              << " rounds (each renders the four passes in turn; speed-ups are medians of per-round ratios)\n";
     std::cout << "  SM    shadow+holes  mipmap  G-buffer  pass(acc)  pass(acc,TF)  pass(naive 1024)  pass(V̄ 1 lookup)  total(acc)  speed-up pass  V̄(naive) V̄(acc) speed-up V̄  V̄ max / p99.9 / mean diff\n";
     for (int sm : quick ? std::vector<int>{512, 1024} : std::vector<int>{512, 1024, 2048}) {
         scene.light.shadowMapSize = sm;
         StylizeSettings acc, naive;
         naive.method = VisibilityMethod::Naive;
         naive.steps = 1024;
-        StylizedFrame a, b;
-        const Times ta = timeRenders(stylizer, scene, acc, reps, &a);
         if (acceleratedOnly) {  // for profiling the accelerated pass: no naive, no other tables
+            const Times ta = timeRenders(stylizer, scene, acc, reps, nullptr);
             std::printf("  %-5d %12.1f %7.1f %9.1f %10.1f\n", sm, ta.shadow, ta.mipmap, ta.gbuffer, ta.shade);
             continue;
         }
         StylizerScene withTf = scene;
         withTf.transferFunction = TransferFunction{warmTransferFunction(), TransferFunction::Mode::Multiply, 0, 40};
-        const Times tf = timeRenders(stylizer, withTf, acc, reps, nullptr);
-        const Times tn = timeRenders(stylizer, scene, naive, std::max(1, reps / 2), &b);
         // The pass with a one-lookup V̄: everything but V̄ (G-buffer reads, surfaces, scattering,
         // writes). V̄'s own cost is a pass's time over it (the paper's "Scattering Vis." column).
         StylizeSettings base = naive;
         base.steps = 1;
-        const Times t1 = timeRenders(stylizer, scene, base, reps, nullptr);
+        std::vector<StylizedFrame> frames;
+        const auto rounds = interleavedRounds(stylizer, {{&scene, acc}, {&withTf, acc}, {&scene, naive}, {&scene, base}}, reps, &frames);
+        const StylizedFrame &a = frames[0], &b = frames[2];
+        const Times ta = medianOf(rounds[0]), tf = medianOf(rounds[1]), tn = medianOf(rounds[2]), t1 = medianOf(rounds[3]);
+        const auto vNaiveIn = [&](size_t r) { return rounds[2][r].shade - rounds[3][r].shade; };
+        const auto vAccIn = [&](size_t r) { return rounds[0][r].mipmap + rounds[0][r].shade - rounds[3][r].shade; };
         const double vNaive = tn.shade - t1.shade, vAcc = ta.mipmap + ta.shade - t1.shade;
+        const double vSpeedup = medianRatio(rounds, [&](size_t r) { return vNaiveIn(r) / vAccIn(r); });
+        const double passSpeedup = medianRatio(rounds, [&](size_t r) { return rounds[2][r].shade / (rounds[0][r].mipmap + rounds[0][r].shade); });
         // The same from the GPU's own clock (timer queries): on a GPU the wall clock of a 1 ms
         // pass is mostly the driver's latency.
         const double gNaive = tn.shadeGpu - t1.shadeGpu, gAcc = ta.mipmapGpu + ta.shadeGpu - t1.shadeGpu;
         const Difference d = visibilityDifference(a.averageVisibility, b.averageVisibility);
         char line[640];
         std::snprintf(line, sizeof line, "  %-5d %12.1f %7.1f %9.1f %10.1f %13.1f %17.1f %18.1f %11.1f %12.1fx %9.1f %7.1f %9.1fx  %.4f / %.4f / %.5f\n", sm,
-                      ta.shadow, ta.mipmap, ta.gbuffer, ta.shade, tf.shade, tn.shade, t1.shade, ta.total, tn.shade / (ta.mipmap + ta.shade), vNaive,
-                      vAcc, vNaive / vAcc, d.max, d.p999, d.mean);
+                      ta.shadow, ta.mipmap, ta.gbuffer, ta.shade, tf.shade, tn.shade, t1.shade, ta.total, passSpeedup, vNaive,
+                      vAcc, vSpeedup, d.max, d.p999, d.mean);
         std::cout << line;
         if (!device->capabilities().isSoftware)  // llvmpipe's timer queries read ~0
             std::printf("        GPU time: mipmap %.3f, pass acc %.3f, naive 1024 %.3f, V̄ 1 lookup %.3f; V̄ naive %.3f, acc %.3f: %.1fx\n", ta.mipmapGpu,
                         ta.shadeGpu, tn.shadeGpu, t1.shadeGpu, gNaive, gAcc, gNaive / gAcc);
         std::ostringstream js;
         js << "{\"table\":1,\"sm\":" << sm << ",\"shadow_ms\":" << ta.shadow << ",\"mipmap_ms\":" << ta.mipmap << ",\"gbuffer_ms\":" << ta.gbuffer
-           << ",\"pass_accelerated_ms\":" << ta.shade << ",\"pass_accelerated_tf_ms\":" << tf.shade << ",\"pass_naive1024_ms\":" << tn.shade << ",\"pass_vbar_1_lookup_ms\":" << t1.shade << ",\"vbar_speedup\":" << jsonRatio(vNaive, vAcc) << ",\"gpu_mipmap_ms\":" << ta.mipmapGpu << ",\"gpu_pass_accelerated_ms\":" << ta.shadeGpu
+           << ",\"pass_accelerated_ms\":" << ta.shade << ",\"pass_accelerated_tf_ms\":" << tf.shade << ",\"pass_naive1024_ms\":" << tn.shade << ",\"pass_vbar_1_lookup_ms\":" << t1.shade << ",\"vbar_speedup\":" << (std::isfinite(vSpeedup) ? std::to_string(vSpeedup) : "null") << ",\"gpu_mipmap_ms\":" << ta.mipmapGpu << ",\"gpu_pass_accelerated_ms\":" << ta.shadeGpu
            << ",\"gpu_pass_naive1024_ms\":" << tn.shadeGpu << ",\"gpu_pass_vbar_1_lookup_ms\":" << t1.shadeGpu << ",\"gpu_vbar_speedup\":" << jsonRatio(gNaive, gAcc)
            << ",\"vbar_max_diff\":" << d.max << ",\"vbar_p999_diff\":" << d.p999 << ",\"vbar_mean_diff\":" << d.mean << "}";
         json.push_back(js.str());

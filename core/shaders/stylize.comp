@@ -185,7 +185,8 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
     int n = u.imageSize.z;
     float fn = float(n);
     vec2 a = (h0.xy * 0.5 + 0.5) * fn, b = h1.xy * 0.5 * fn;
-    float z0 = h0.z * 0.5 + 0.5, dz = h1.z * 0.5, bias = u.shadow.x;
+    // z0 carries the bias: a texel of depth D lights the ray where z(t) − bias ≤ D.
+    float z0 = h0.z * 0.5 + 0.5 - u.shadow.x, dz = h1.z * 0.5;
     vec2 sgn = sign(b);
     bvec2 moves = greaterThan(abs(b), vec2(1e-30));
     // A cell's exit along an axis is (bound − a) / b; an axis the ray does not move along never
@@ -210,13 +211,12 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
         cell = clamp(cell, ivec2(0), ivec2(side - 1));
         vec2 mm = minMaxOfEntry(minMax[offset + cell.y * side + cell.x], level == 0);
         float zB = z0 + tExit * dz;
-        if (zB <= mm.x + bias || mm.x >= 1.0) {
+        if (zB <= mm.x || mm.x >= 1.0) {
             lit += tExit - t;
-        } else if (zA > mm.y + bias && mm.y < 1.0) {
+        } else if (zA > mm.y && mm.y < 1.0) {
         } else if (level == 0) {
-            // One texel, depth D: lit up to where z(t) = D + bias (z grows along the walk).
-            float limit = mm.x + bias;
-            lit += dz > 1e-30 ? clamp((limit - z0) * invDz - t, 0.0, tExit - t) : (zA <= limit ? tExit - t : 0.0);
+            // One texel, depth D: lit up to where z(t) − bias = D (z grows along the walk).
+            lit += dz > 1e-30 ? clamp((mm.x - z0) * invDz - t, 0.0, tExit - t) : (zA <= mm.x ? tExit - t : 0.0);
         } else {
             level -= 1;  // undecided: open the cell
             side = mipSide(n, level);
@@ -225,8 +225,10 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
         }
         t = tExit;
         zA = zB;
-        texel = ivec2(floor(aNudged + t * b));
-        if (level < top && (texel >> (level + 1)) != (cell >> 1)) {  // left the parent
+        // The bits of the texel that the step changed: the parent (level + 1) changed with any above.
+        ivec2 moved = texel ^ ivec2(floor(aNudged + t * b));
+        texel ^= moved;
+        if (level < top && ((moved.x | moved.y) >> (level + 1)) != 0) {
             offset += side * side;
             level += 1;
             side = mipSide(n, level);
