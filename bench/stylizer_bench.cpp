@@ -8,8 +8,9 @@
 //   Time against error — the naive V̄ at 64–4096 steps against the accelerated one (exact
 //             against the map) on the 2048² map.
 //   Table 2 — the closing of a 2048² map per kernel radius (box and disc).
-// Usage: stylizer_bench [--quick] [--accelerated-only] [--reps N]. Prints tables, then one JSON line
-// per row (--accelerated-only: Table 1's accelerated columns alone, for profiling).
+// Usage: stylizer_bench [--quick] [--accelerated-only] [--reps N] [--table1-only SM]. Prints tables,
+// then one JSON line per row (--accelerated-only: Table 1's accelerated columns alone, for
+// profiling; --table1-only: Table 1 for one map size and nothing else, for repeated runs).
 #include <spdlog/spdlog.h>
 
 #include <cmath>
@@ -119,13 +120,14 @@ std::shared_ptr<const Image> warmTransferFunction() {
 
 int main(int argc, char** argv) {
     bool quick = false, acceleratedOnly = false;
-    int reps = 2;
+    int reps = 2, onlySize = 0;
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--quick")) quick = true;
         else if (!std::strcmp(argv[i], "--accelerated-only")) acceleratedOnly = true;
         else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::max(1, std::atoi(argv[++i]));
+        else if (!std::strcmp(argv[i], "--table1-only") && i + 1 < argc) onlySize = std::clamp(std::atoi(argv[++i]), 512, 4096);
         else {
-            std::cerr << "usage: stylizer_bench [--quick] [--accelerated-only] [--reps N]\n";
+            std::cerr << "usage: stylizer_bench [--quick] [--accelerated-only] [--reps N] [--table1-only SM]\n";
             return 2;
         }
     }
@@ -143,7 +145,8 @@ int main(int argc, char** argv) {
               << ", holes on the canopies; ms, median of " << reps
               << " rounds (each renders the four passes in turn; speed-ups are medians of per-round ratios)\n";
     std::cout << "  SM    shadow+holes  mipmap  G-buffer  pass(acc)  pass(acc,TF)  pass(naive 1024)  pass(V̄ 1 lookup)  total(acc)  speed-up pass  V̄(naive) V̄(acc) speed-up V̄  V̄ max / p99.9 / mean diff\n";
-    for (int sm : quick ? std::vector<int>{512, 1024} : std::vector<int>{512, 1024, 2048}) {
+    const std::vector<int> sizes = onlySize ? std::vector<int>{onlySize} : quick ? std::vector<int>{512, 1024} : std::vector<int>{512, 1024, 2048};
+    for (int sm : sizes) {
         scene.light.shadowMapSize = sm;
         StylizeSettings acc, naive;
         naive.method = VisibilityMethod::Naive;
@@ -188,7 +191,10 @@ int main(int argc, char** argv) {
         json.push_back(js.str());
     }
 
-    if (acceleratedOnly) return 0;
+    if (acceleratedOnly || onlySize) {
+        for (const std::string& line : json) std::cout << line << "\n";
+        return 0;
+    }
     scene.light.shadowMapSize = quick ? 1024 : 2048;
     std::cout << "\nTime against error: naive V̄ vs the accelerated (exact against the " << scene.light.shadowMapSize << "² map)\n";
     std::cout << "  method          pass ms   V̄ max diff   p99.9     mean\n";
