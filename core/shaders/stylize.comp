@@ -188,10 +188,11 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
     // z0 carries the bias: a texel of depth D lights the ray where z(t) − bias ≤ D.
     float z0 = h0.z * 0.5 + 0.5 - u.shadow.x, dz = h1.z * 0.5;
     vec2 sgn = sign(b);
-    bvec2 moves = greaterThan(abs(b), vec2(1e-30));
+    bvec2 moves = greaterThan(abs(b), vec2(1e-20));
     // A cell's exit along an axis is (bound − a) / b; an axis the ray does not move along never
-    // bounds it ((bound + 1e9) · 1e30 overflows to +∞).
-    vec2 invB = vec2(moves.x ? 1.0 / b.x : 1.0e30, moves.y ? 1.0 / b.y : 1.0e30);
+    // bounds it: (bound + 1e9) · 1e20 lies past any stretch, and stays finite however a compiler
+    // rearranges it.
+    vec2 invB = vec2(moves.x ? 1.0 / b.x : 1.0e20, moves.y ? 1.0 / b.y : 1.0e20);
     vec2 aExit = vec2(moves.x ? a.x : -1.0e9, moves.y ? a.y : -1.0e9);
     ivec2 ahead = ivec2(greaterThan(sgn, vec2(0.0)));
     vec2 aNudged = a + sgn * 1e-3;
