@@ -199,10 +199,14 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
     float invDz = dz > 1e-30 ? 1.0 / dz : 0.0;
     float lit = s - len0;
     int top = u.options.y - 1;
-    // Start at the finest level whose cells are as large as the stretch's extent on the map.
+    // Start where the cells are larger than the stretch's extent on the map, E texels: 2^k > ⌊E⌋ + 1
+    // (at most two levels above the finest that holds it). Any level gives a correct walk; this one
+    // skips opening the levels above.
     vec2 extent = abs(b) * len0;
     int level = min(top, findMSB(int(max(extent.x, extent.y)) + 1) + 1);
-    float t = 0.0, tiny = 1e-6 * s, zA = z0;
+    // The least step: a millionth of the stretch (of the whole ray, a step could skip texels of a
+    // short stretch on a long ray).
+    float t = 0.0, tiny = 1e-6 * len0, zA = z0;
     ivec2 texel = ivec2(floor(aNudged));
     int side = mipSide(n, level), offset = u.mipOffset[level >> 2][level & 3];
     for (int iter = 0; iter < 65536 && t < len0; ++iter) {

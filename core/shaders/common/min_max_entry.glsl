@@ -4,9 +4,11 @@
 // numbers in one uint, min rounded down and max rounded up, so a coarse bound only ever widens
 // (never decides wrongly) and the walk reads 4 bytes per step, not 8. Depth 1 (nothing drawn)
 // stays exactly 1.
-const float kDepthStep = 1.0 / 65535.0;
+// 1/65535 rounded to nearest, by its bits rather than by a compiler's constant folding: with it
+// 65535 · kDepthStep is exactly 1.0, so code 65535 unpacks to "nothing drawn" with no compare.
+const float kDepthStep = uintBitsToFloat(0x37800080u);
 
-float unpackDepth16(uint q) { return float(q) * kDepthStep; }  // 65535 · kDepthStep is exactly 1.0 in float
+float unpackDepth16(uint q) { return float(q) * kDepthStep; }
 
 vec2 minMaxOfEntry(uint bits, bool level0) {
     if (level0) return vec2(uintBitsToFloat(bits));
