@@ -207,13 +207,15 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
     // The least step: a millionth of the stretch (of the whole ray, a step could skip texels of a
     // short stretch on a long ray).
     float t = 0.0, tiny = 1e-6 * len0, zA = z0;
-    ivec2 texel = ivec2(floor(aNudged));
+    // Texels are clamped to the map where they are found: the footprint clip keeps the stretch on
+    // it, so a texel off it is rounding (or the nudge) at its rim, and every cell of a clamped texel
+    // is then on its level (no clamp per step).
+    ivec2 texel = clamp(ivec2(floor(aNudged)), ivec2(0), ivec2(n - 1));
     int side = mipSide(n, level), offset = u.mipOffset[level >> 2][level & 3];
     for (int iter = 0; iter < 65536 && t < len0; ++iter) {
         ivec2 cell = texel >> level;
         vec2 exits = (vec2((cell + ahead) << level) - aExit) * invB;
         float tExit = min(max(min(exits.x, exits.y), t + tiny), len0);
-        cell = clamp(cell, ivec2(0), ivec2(side - 1));
         vec2 mm = minMaxOfEntry(minMax[offset + cell.y * side + cell.x], level == 0);
         float zB = z0 + tExit * dz;
         if (zB <= mm.x || mm.x >= 1.0) {
@@ -231,7 +233,7 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
         t = tExit;
         zA = zB;
         // The bits of the texel that the step changed: the parent (level + 1) changed with any above.
-        ivec2 moved = texel ^ ivec2(floor(aNudged + t * b));
+        ivec2 moved = texel ^ clamp(ivec2(floor(aNudged + t * b)), ivec2(0), ivec2(n - 1));
         texel ^= moved;
         if (level < top && ((moved.x | moved.y) >> (level + 1)) != 0) {
             offset += side * side;
