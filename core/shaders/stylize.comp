@@ -47,6 +47,9 @@ layout(std430, binding = kBindingMinMax) readonly buffer b_MinMax {
 bool litAgainst(float z, float occluder) { return occluder >= 1.0 || z <= occluder + u.shadow.x; }
 float depth01(vec4 h) { return h.z / h.w * 0.5 + 0.5; }
 
+// The texel of an n×n map under a position in texel units, clamped to the map (rounding at its rim).
+ivec2 mapTexel(vec2 position, int n) { return clamp(ivec2(floor(position)), ivec2(0), ivec2(n - 1)); }
+
 // V(x): 1 where the light reaches world point x, by the unmodified map (surfaces) or the
 // manipulated one (the scattering). The light's clip space is homogeneous (w = 1 for a
 // directional light's orthographic map, perspective for a spot). Outside the map's footprint
@@ -58,7 +61,7 @@ float visibility(vec3 x, bool manipulated) {
     vec3 c = h.xyz / h.w;
     if (any(greaterThan(abs(c.xy), vec2(1.0)))) return 1.0;
     int n = u.imageSize.z;
-    ivec2 texel = clamp(ivec2(floor((c.xy * 0.5 + 0.5) * float(n))), ivec2(0), ivec2(n - 1));
+    ivec2 texel = mapTexel((c.xy * 0.5 + 0.5) * float(n), n);
     float occluder = manipulated ? scatterDepth[texel.y * n + texel.x] : texelFetch(s_shadowDepth, texel, 0).r;
     return litAgainst(c.z * 0.5 + 0.5, occluder) ? 1.0 : 0.0;
 }
@@ -173,7 +176,7 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
     clipToHalfSpace(1.0 - h0.y, -h1.y, ta, tb);
     clipToHalfSpace(1.0 + h0.y, h1.y, ta, tb);
     if (!(tb > ta)) return 1.0;
-    // Walk the stretch [0, len] from whichever end makes the depth grow: V̄ does not depend on the
+    // Walk the stretch [0, len0] from whichever end makes the depth grow: V̄ does not depend on the
     // direction, and then a cell's depth range along the ray is [z(t), z(tExit)].
     float len0 = tb - ta;
     if (h1.z < 0.0) {
@@ -210,7 +213,7 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
     // Texels are clamped to the map where they are found: the footprint clip keeps the stretch on
     // it, so a texel off it is rounding (or the nudge) at its rim, and every cell of a clamped texel
     // is then on its level (no clamp per step).
-    ivec2 texel = clamp(ivec2(floor(aNudged)), ivec2(0), ivec2(n - 1));
+    ivec2 texel = mapTexel(aNudged, n);
     int side = mipSide(n, level), offset = u.mipOffset[level >> 2][level & 3];
     for (int iter = 0; iter < 65536 && t < len0; ++iter) {
         ivec2 cell = texel >> level;
@@ -233,7 +236,7 @@ float averageVisibilityMinMaxOrtho(vec3 e, vec3 dir, float s) {
         t = tExit;
         zA = zB;
         // The bits of the texel that the step changed: the parent (level + 1) changed with any above.
-        ivec2 moved = texel ^ clamp(ivec2(floor(aNudged + t * b)), ivec2(0), ivec2(n - 1));
+        ivec2 moved = texel ^ mapTexel(aNudged + t * b, n);
         texel ^= moved;
         if (level < top && ((moved.x | moved.y) >> (level + 1)) != 0) {
             offset += side * side;
