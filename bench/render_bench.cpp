@@ -7,7 +7,8 @@
 //   hw_ms / hw_err — the texture unit's trilinear filter instead of 8 texel fetches
 // Then the light-depth volumes alone (issue #10): build ms per resolution and sun direction
 // (overhead, the default diagonal, grazing), with the grid's nodes and bytes.
-// Usage: render_bench [--quick] [--lights-only] [--reps N]. Prints tables, then one JSON line per row.
+// Usage: render_bench [--quick] [--lights-only] [--reps N] [--resolutions 64,128,256] [--steps 0.5,1].
+// Prints tables, then one JSON line per row.
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -92,15 +93,26 @@ void printLightVolumes(const std::vector<LightRow>& rows, int reps, const std::s
     std::printf("\n");
 }
 
+/// "64,128,256" → {64, 128, 256}.
+std::vector<double> numberList(const char* text) {
+    std::vector<double> out;
+    std::stringstream in(text);
+    for (std::string item; std::getline(in, item, ',');) out.push_back(std::stod(item));
+    return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     bool quick = false, lightsOnly = false;
     int reps = 3;
+    std::vector<double> chosenResolutions, chosenSteps;
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--quick")) quick = true;
         if (!std::strcmp(argv[i], "--lights-only")) lightsOnly = true;
         if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
+        if (!std::strcmp(argv[i], "--resolutions") && i + 1 < argc) chosenResolutions = numberList(argv[++i]);
+        if (!std::strcmp(argv[i], "--steps") && i + 1 < argc) chosenSteps = numberList(argv[++i]);
     }
     spdlog::set_level(spdlog::level::warn);
     auto device = GpuDevice::create();
@@ -112,8 +124,10 @@ int main(int argc, char** argv) {
     cam.width = cam.height = 480;
     const Lighting lighting = benchLighting();
 
-    const std::vector<int> resolutions = quick ? std::vector<int>{32, 64} : std::vector<int>{32, 64, 128, 256};
-    const std::vector<double> steps = quick ? std::vector<double>{0.5, 1} : std::vector<double>{0.25, 0.5, 1, 2};
+    std::vector<int> resolutions = quick ? std::vector<int>{32, 64} : std::vector<int>{32, 64, 128, 256};
+    std::vector<double> steps = quick ? std::vector<double>{0.5, 1} : std::vector<double>{0.25, 0.5, 1, 2};
+    if (!chosenResolutions.empty()) resolutions.assign(chosenResolutions.begin(), chosenResolutions.end());
+    if (!chosenSteps.empty()) steps = chosenSteps;
     const std::vector<LightRow> lightRows = benchLightVolumes(renderer, resolutions, reps);
     std::vector<Row> rows;
     for (int res : lightsOnly ? std::vector<int>{} : resolutions) {

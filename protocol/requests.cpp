@@ -52,7 +52,7 @@ CreateSessionRequest CreateSessionRequest::fromJson(const nlohmann::json& j, con
 RenderRequest RenderRequest::fromJson(const nlohmann::json& j, const RequestLimits& limits) {
     JsonReader r;
     RenderRequest q;
-    if (r.object(j, "", {"camera", "format", "exposure", "mode", "translucent"})) {
+    if (r.object(j, "", {"camera", "format", "exposure", "mode", "translucent", "exr_type"})) {
         q.camera = readCamera(r, j, "/camera", limits);
         if (j.contains("format")) {
             auto f = r.string(j["format"], "/format");
@@ -61,6 +61,11 @@ RenderRequest RenderRequest::fromJson(const nlohmann::json& j, const RequestLimi
             else if (f) r.fail("/format", "must be 'png' or 'exr'");
         }
         if (j.contains("exposure")) q.exposure = r.number(j["exposure"], "/exposure").value_or(0);
+        if (j.contains("exr_type")) {
+            const auto t = r.string(j["exr_type"], "/exr_type");
+            if (t == "float") q.exrHalf = false;
+            else if (t && *t != "half") r.fail("/exr_type", "must be 'half' or 'float'");
+        }
         if (j.contains("mode")) {
             const auto m = r.string(j["mode"], "/mode");
             if (m == "translucent") q.mode = RenderMode::Translucent;

@@ -55,6 +55,7 @@ struct RenderRequest {
     core::Camera camera;
     ImageFormat format = ImageFormat::Png;
     double exposure = 0;  ///< stops, PNG only
+    bool exrHalf = true;  ///< "exr_type": "half" (default, pictures) or "float" (data: targets, CT)
     RenderMode mode = RenderMode::SingleScattering;
     core::TranslucentSettings translucent;  ///< "translucent": {…} (mode "translucent" only)
     static RenderRequest fromJson(const nlohmann::json& j, const RequestLimits& limits);

@@ -40,6 +40,7 @@ const CommandSpec kRender{
         {"camera", "CAM.json", "camera (eye, target, up, fov_y_deg, width, height); default: frames the volume, 480x480"},
         {"lighting", "L.json", "sun(s), background and phase function; default: one warm sun and a blue sky"},
         {"exposure", "STOPS", "PNG brightness in stops (EXR stays linear); default 0"},
+        {"exr-type", "T", "EXR samples: half (default, pictures) or float (data: targets of a solve, CT)"},
         {"step", "VOXELS", "march step in voxels; default 0.5"},
         {"no-skip", "", "march through empty space too (a check; same image, slower)"},
         {"hw-filter", "", "sample with the texture unit (faster on GPUs, 8-bit weights)"},
@@ -118,6 +119,10 @@ int runRender(const std::vector<std::string>& argv) {
     settings.refraction = !args.has("no-refraction");
     settings.validate();
     const double exposure = args.number("exposure", 0);
+    const std::string exrType = args.has("exr-type") ? args.get("exr-type") : "half";
+    if (exrType != "half" && exrType != "float") throw InvalidArgument("--exr-type must be half or float, got '" + exrType + "'");
+    if (args.has("exr-type") && ext != ".exr") throw InvalidArgument("--exr-type is for -o OUT.exr");
+    const bool exrHalf = exrType == "half";
     const std::string mode = args.has("mode") ? args.get("mode") : "single_scattering";
     if (mode != "single_scattering" && mode != "translucent")
         throw InvalidArgument("--mode must be single_scattering or translucent, got '" + mode + "'");
@@ -146,7 +151,7 @@ int runRender(const std::vector<std::string>& argv) {
         core::Image medium;
         const core::Image image = preview.render(gpuVolume, *camera, lighting, translucentOptions, &tstats, &medium);
         if (ext == ".exr") {
-            core::saveExrLayers(output, {{"", &medium}, {"beauty", &image}});
+            core::saveExrLayers(output, {{"", &medium}, {"beauty", &image}}, exrHalf);
         } else {
             core::SaveOptions save;
             save.exposure = exposure;
@@ -160,7 +165,7 @@ int runRender(const std::vector<std::string>& argv) {
     if (ext == ".exr") {
         // Compositing-ready: premultiplied medium without the background, plus its layers.
         const core::RenderLayers layers = renderer.renderLayers(gpuVolume, *camera, lighting, settings, &stats);
-        core::saveExrLayers(output, core::exrLayersOf(layers));
+        core::saveExrLayers(output, core::exrLayersOf(layers), exrHalf);
     } else {
         core::Image image = renderer.render(gpuVolume, *camera, lighting, settings, &stats);
         core::SaveOptions save;

@@ -109,7 +109,7 @@ std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& 
                 auto weights = v.contains("weights") ? r.string(v["weights"], p + "/weights") : std::nullopt;
                 auto plate = v.contains("background") ? r.string(v["background"], p + "/background") : std::nullopt;
                 if (!r.ok()) continue;
-                view.target = core::loadImage((base / *target).string()).image;
+                view.target = core::pictureOf(core::loadImage((base / *target).string()));  // a render EXR: its picture
                 if (weights) view.weights = core::loadImage((base / *weights).string()).image;
                 if (plate) view.background = std::make_shared<const core::Image>(core::loadImage((base / *plate).string()).image);
                 views.push_back(std::move(view));

@@ -208,7 +208,8 @@ SessionView SessionService::setViewImage(Session& s, const std::string& viewId, 
     };
     core::Image image;
     try {
-        image = core::loadImageFromMemory(bytes.data(), bytes.size(), what, m_limits.maxImageSide, checkHeader).image;
+        const core::LoadedImage loaded = core::loadImageFromMemory(bytes.data(), bytes.size(), what, m_limits.maxImageSide, checkHeader);
+        image = isTarget ? core::pictureOf(loaded) : loaded.image;  // a render EXR as a target: the picture it shows
     } catch (const Error& e) {
         throw ApiError(ErrorCode::UnsupportedMedia, e.what());  // undecodable, or over the side limit
     }

@@ -1,6 +1,7 @@
 #include "core/cpu_ref/reference_renderer.h"
 
 #include "core/cpu_ref/march_ref.h"
+#include "core/shaders/layout.h"
 
 #include <algorithm>
 #include <cmath>
@@ -46,37 +47,70 @@ V3<S> opticalDepthToLight(const Volume& volume, const V3<S>& p, const Vec3d& lig
 }
 
 template <typename S>
-LightDepthGrid<S> lightDepthGrid(const Volume& volume, const Vec3d& lightDirection, double stepVoxels) {
+LightDepthGrid<S> lightDepthGrid(const Volume& volume, const Vec3d& lightDirection, double stepVoxels, double across,
+                                 double along) {
     const Int3 n = volume.dims();
+    if (across <= 0) across = lightGridAcross(maxVoxelDepth(maxComponent(Volume::range(volume.extinction()).second), volume.worldFromIndex()));
     LightDepthGrid<S> g;
-    g.grid = makeLightGrid(n, volume.worldFromIndex().inverseAffine(), normalize(lightDirection));
+    g.volume = &volume;
+    g.stepVoxels = stepVoxels;
+    g.grid = makeLightGrid(n, volume.worldFromIndex().inverseAffine(), normalize(lightDirection), across, along);
     const Int3 m = g.grid.dims;
     g.depth.assign(size_t(m.volume()) * 3, S(0));
     const V3<S> d = applyLinear(g.grid.indexFromGrid, V3<S>(0, 0, 1));
-    const S stepsPerNode = length(d) / S(stepVoxels);
+    const S stepsPerNode = length(d) / S(2 * stepVoxels);  // as light_depth.comp: twice the march step
     const S worldPerNode = length(applyLinear(volume.worldFromIndex(), d));  // σ is per world unit
+    // ∫ σ (clamped to the box, as light_depth.comp samples it) over [ta, tb] of o + t d.
+    auto integral = [&](const V3<S>& o, S ta, S tb) {
+        V3<S> sum(S(0));
+        if (!(tb > ta)) return sum;
+        const int count = std::max(1, int(std::ceil((tb - ta) * stepsPerNode)));
+        const S dt = (tb - ta) / S(count);
+        for (int i = 0; i < count; ++i) sum += trilinear<S>(volume.extinction(), n, o + d * (ta + (S(i) + S(0.5)) * dt));
+        return sum * (dt * worldPerNode);
+    };
+    const S reach = S(std::sqrt(2 * across * across + along * along) + 1e-3);  // a cell diagonal
     for (int b = 0; b < m.y; ++b)
         for (int a = 0; a < m.x; ++a) {
             const V3<S> o = toS<S>(g.grid.indexFromGrid.applyPoint({double(a), double(b), 0.0}));
-            const auto [tIn, tOut] = intersectBox(o, d, n);
-            V3<S> tau(S(0));
-            for (int c = 1; c < m.z; ++c) {
-                const S t0 = std::max(S(c - 1), tIn), t1 = std::min(S(c), tOut);
-                if (t1 > t0 && minComponent(tau) <= S(64)) {  // as light_depth.comp
-                    const int count = std::max(1, int(std::ceil((t1 - t0) * stepsPerNode)));
-                    const S dt = (t1 - t0) / S(count);
-                    for (int i = 0; i < count; ++i)
-                        tau += trilinear<S>(volume.extinction(), n, o + d * (t0 + (S(i) + S(0.5)) * dt)) * (dt * worldPerNode);
-                }
+            auto store = [&](int c, const V3<S>& tau) {
                 const size_t idx = 3 * ((size_t(c) * m.y + size_t(b)) * m.x + size_t(a));
                 g.depth[idx] = tau.x, g.depth[idx + 1] = tau.y, g.depth[idx + 2] = tau.z;
+            };
+            // As light_depth.comp: the nodes within a cell diagonal of the box, the depth extended
+            // past the box from where the row crosses the planes of its light-side faces (t*).
+            S tLo = -std::numeric_limits<S>::max(), tHi = std::numeric_limits<S>::max();
+            for (int k = 0; k < 3; ++k) {
+                const S inv = S(1) / (d[k] == 0 ? S(1e-30) : d[k]);
+                const S t0 = (S(-0.5) - reach - o[k]) * inv, t1 = (S(n[k]) - S(0.5) + reach - o[k]) * inv;
+                tLo = std::max(tLo, std::min(t0, t1));
+                tHi = std::min(tHi, std::max(t0, t1));
+            }
+            if (tLo >= tHi) continue;
+            const int cFirst = std::max(0, int(std::floor(tLo))), cLast = std::min(m.z - 1, int(std::ceil(tHi)));
+            S tStar = S(cFirst - m.z);
+            for (int k = 0; k < 3; ++k)
+                if (std::abs(d[k]) > S(1e-6) * length(d))
+                    tStar = std::max(tStar, ((d[k] > 0 ? S(-0.5) : S(n[k]) - S(0.5)) - o[k]) / d[k]);
+            tStar = std::min(tStar, S(cLast + m.z));
+            const int c0 = std::max(cFirst, int(std::ceil(tStar)));
+            V3<S> tau = c0 <= cLast ? integral(o, tStar, S(c0)) : V3<S>(S(0));
+            for (int c = c0; c <= cLast; ++c) {
+                if (c > c0 && minComponent(tau) <= S(64)) tau += integral(o, S(c - 1), S(c));
+                store(c, tau);
+            }
+            const int c1 = std::min(cLast, int(std::ceil(tStar)) - 1);
+            tau = c1 >= cFirst ? -integral(o, S(c1), tStar) : V3<S>(S(0));
+            for (int c = c1; c >= cFirst; --c) {
+                if (c < c1) tau = tau - integral(o, S(c), S(c + 1));
+                store(c, tau);
             }
         }
     return g;
 }
 
 template <typename S>
-V3<S> LightDepthGrid<S>::at(const V3<S>& p) const {
+V3<S> LightDepthGrid<S>::interpolated(const V3<S>& p) const {
     const V3<S> q(S(grid.gridFromIndex(0, 0)) * p.x + S(grid.gridFromIndex(0, 1)) * p.y + S(grid.gridFromIndex(0, 2)) * p.z + S(grid.gridFromIndex(0, 3)),
                   S(grid.gridFromIndex(1, 0)) * p.x + S(grid.gridFromIndex(1, 1)) * p.y + S(grid.gridFromIndex(1, 2)) * p.z + S(grid.gridFromIndex(1, 3)),
                   S(grid.gridFromIndex(2, 0)) * p.x + S(grid.gridFromIndex(2, 1)) * p.y + S(grid.gridFromIndex(2, 2)) * p.z + S(grid.gridFromIndex(2, 3)));
@@ -84,10 +118,44 @@ V3<S> LightDepthGrid<S>::at(const V3<S>& p) const {
 }
 
 template <typename S>
+V3<S> LightDepthGrid<S>::at(const V3<S>& p) const {
+    // lighting.glsl's lightDepthAt, step for step (its comment says why).
+    const Int3 n = volume->dims();
+    const V3<S> toLight = -applyLinear(grid.indexFromGrid, V3<S>(0, 0, 1));  // one node toward the light
+    const S nodeVoxels = length(toLight);
+    const S worldPerNode = length(applyLinear(volume->worldFromIndex(), toLight));
+    const S stepsPerNode = nodeVoxels / S(stepVoxels);
+    const S exitNodes = std::max(intersectBox(p, toLight, n).second, S(0));
+    const S gz = S(grid.gridFromIndex(2, 0)) * p.x + S(grid.gridFromIndex(2, 1)) * p.y + S(grid.gridFromIndex(2, 2)) * p.z +
+                 S(grid.gridFromIndex(2, 3));
+    V3<S> tau(S(0));
+    S s0 = 0, s1 = gz - std::floor(gz);
+    for (int k = 0;; ++k) {
+        const S s1Box = std::min(s1, exitNodes);
+        V3<S> span(S(0));
+        if (s1Box > s0) {
+            const int count = std::max(1, int(std::ceil((s1Box - s0) * stepsPerNode - S(1e-3))));  // as the GLSL
+            const S ds = (s1Box - s0) / S(count);
+            for (int i = 0; i < count; ++i) span += trilinear<S>(volume->extinction(), n, p + toLight * (s0 + (S(i) + S(0.5)) * ds));
+            span = span * (ds * worldPerNode);
+        }
+        tau += span;
+        if (exitNodes <= s1 || minComponent(tau) >= S(layout::kLightMarchOpaque)) return tau;
+        if (k >= layout::kLightMarchMaxSpans || (s1 >= S(layout::kLightMarchMinNodes) && maxComponent(span) < S(layout::kLightMarchDenseSpan))) {
+            const V3<S> g = interpolated(p + toLight * s1);  // on the node plane
+            return tau + V3<S>(std::max(g.x, S(0)), std::max(g.y, S(0)), std::max(g.z, S(0)));
+        }
+        s0 = s1;
+        s1 += 1;
+    }
+}
+
+template <typename S>
 LightDepthLookup<S>::LightDepthLookup(const Volume& volume, const Vec3d& lightDirection, double stepVoxels,
-                                      LightDepthMethod method)
-    : m_volume(volume), m_direction(lightDirection), m_step(stepVoxels), m_method(method) {
-    if (method == LightDepthMethod::Grid) m_grid = lightDepthGrid<S>(volume, lightDirection, stepVoxels);
+                                      LightDepthMethod method, bool gridOnly)
+    : m_volume(volume), m_direction(lightDirection), m_step(stepVoxels), m_method(method), m_gridOnly(gridOnly) {
+    if (method == LightDepthMethod::Grid)
+        m_grid = lightDepthGrid<S>(volume, lightDirection, stepVoxels, gridOnly ? kLightGridSpacing : 0.0);
     if (method == LightDepthMethod::VoxelCentres) {
         const Int3 n = volume.dims();
         m_voxelCentres.assign(volume.voxelCount() * 3, S(0));
@@ -104,7 +172,7 @@ LightDepthLookup<S>::LightDepthLookup(const Volume& volume, const Vec3d& lightDi
 template <typename S>
 V3<S> LightDepthLookup<S>::at(const V3<S>& p) const {
     switch (m_method) {
-        case LightDepthMethod::Grid: return m_grid.at(p);
+        case LightDepthMethod::Grid: return m_gridOnly ? m_grid.interpolated(p) : m_grid.at(p);
         case LightDepthMethod::Exact: return opticalDepthToLight<S>(m_volume, p, m_direction, m_step);
         case LightDepthMethod::VoxelCentres: return trilinear<S>(m_voxelCentres, m_volume.dims(), p);
     }
@@ -132,7 +200,8 @@ struct LobesRef {
             if (maxComponent(radiance[size_t(i)]) <= 0) continue;
             direction.push_back(basis.directions[size_t(i)]);
             irradiance.push_back(radiance[size_t(i)] * omega[size_t(i)]);
-            const LightDepthLookup<S> depth(volume, basis.directions[size_t(i)], stepVoxels, method);
+            // As lobe_volumes.cpp: the grid alone, rows a voxel apart (no march from each node).
+            const LightDepthLookup<S> depth(volume, basis.directions[size_t(i)], stepVoxels, method, /*gridOnly=*/true);
             std::vector<S> t(size_t(dims.volume()) * 3);
             for (int k = 0; k < dims.z; ++k)
                 for (int j = 0; j < dims.y; ++j)
@@ -158,7 +227,8 @@ struct LobesRef {
 
 template <typename S>
 Image renderReference(const Volume& volume, const Camera& camera, const Lighting& lighting, double stepVoxels,
-                      LightDepthMethod method) {
+                      LightDepthMethod method, double lightStepVoxels) {
+    const double lightStep = method == LightDepthMethod::Exact && lightStepVoxels > 0 ? lightStepVoxels : stepVoxels;
     camera.validate();
     lighting.validate();
     const Int3 n = volume.dims();
@@ -169,7 +239,7 @@ Image renderReference(const Volume& volume, const Camera& camera, const Lighting
     for (const auto& l : lighting.lights) {
         if (maxComponent(l.irradiance) <= 0) continue;
         lights.push_back(&l);
-        depths.emplace_back(volume, l.direction, stepVoxels, method);
+        depths.emplace_back(volume, l.direction, lightStep, method);
     }
     const LobesRef<S> lobes(volume, lighting.environment, stepVoxels, method);
     // The lobes seen directly as the background: each direction its cell's radiance.
@@ -226,11 +296,11 @@ Image renderReference(const Volume& volume, const Camera& camera, const Lighting
     return image;
 }
 
-template Image renderReference<double>(const Volume&, const Camera&, const Lighting&, double, LightDepthMethod);
-template Image renderReference<float>(const Volume&, const Camera&, const Lighting&, double, LightDepthMethod);
+template Image renderReference<double>(const Volume&, const Camera&, const Lighting&, double, LightDepthMethod, double);
+template Image renderReference<float>(const Volume&, const Camera&, const Lighting&, double, LightDepthMethod, double);
 template Vec3T<double> opticalDepthToLight<double>(const Volume&, const Vec3T<double>&, const Vec3d&, double);
 template struct LightDepthGrid<double>;
-template LightDepthGrid<double> lightDepthGrid<double>(const Volume&, const Vec3d&, double);
+template LightDepthGrid<double> lightDepthGrid<double>(const Volume&, const Vec3d&, double, double, double);
 template class LightDepthLookup<double>;
 template class LightDepthLookup<float>;
 

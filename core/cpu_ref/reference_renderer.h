@@ -18,9 +18,11 @@ enum class LightDepthMethod {
     VoxelCentres,  ///< a march from every voxel centre, trilinear between them (before issue #10)
 };
 
+/// `lightStepVoxels` (> 0): the step of LightDepthMethod::Exact's marches toward the lights, finer
+/// than the view's to get the exact light integral; default the view's step.
 template <typename Scalar>
 Image renderReference(const Volume& volume, const Camera& camera, const Lighting& lighting,
-                      double stepVoxels, LightDepthMethod method = LightDepthMethod::Grid);
+                      double stepVoxels, LightDepthMethod method = LightDepthMethod::Grid, double lightStepVoxels = 0);
 
 /// Optical depth toward `lightDirection` (world, toward the light) from index-space point p,
 /// marched in equal segments of at most `stepVoxels` to the voxels' box.
@@ -34,17 +36,26 @@ template <typename Scalar>
 struct LightDepthGrid {
     LightGrid grid;
     std::vector<Scalar> depth;
-    /// Trilinear between nodes at index-space point p, as lighting.glsl's lightDepthAt.
+    const Volume* volume = nullptr;
+    double stepVoxels = 0.5;
+    /// The optical depth at index-space point p as lighting.glsl's lightDepthAt gets it: marched
+    /// from p over its first node spans, then the grid's depth where the march stopped.
     Vec3T<Scalar> at(const Vec3T<Scalar>& p) const;
+    /// Trilinear between nodes at p (the grid alone, as lobe_volume.comp reads it).
+    Vec3T<Scalar> interpolated(const Vec3T<Scalar>& p) const;
 };
+/// `across` ≤ 0: the spacing the GL renderer picks for this volume's lights (lightGridAcross).
 template <typename Scalar>
-LightDepthGrid<Scalar> lightDepthGrid(const Volume& volume, const Vec3d& lightDirection, double stepVoxels);
+LightDepthGrid<Scalar> lightDepthGrid(const Volume& volume, const Vec3d& lightDirection, double stepVoxels,
+                                      double across = 0, double along = kLightGridSpacing);
 
 /// Optical depth toward the light at one point, by any of the methods above.
 template <typename Scalar>
 class LightDepthLookup {
 public:
-    LightDepthLookup(const Volume& volume, const Vec3d& lightDirection, double stepVoxels, LightDepthMethod method);
+    /// `gridOnly`: Grid reads the grid alone (rows a voxel apart), as the environment's lobes do.
+    LightDepthLookup(const Volume& volume, const Vec3d& lightDirection, double stepVoxels, LightDepthMethod method,
+                     bool gridOnly = false);
     Vec3T<Scalar> at(const Vec3T<Scalar>& p) const;
 
 private:
@@ -52,6 +63,7 @@ private:
     Vec3d m_direction;
     double m_step;
     LightDepthMethod m_method;
+    bool m_gridOnly;
     LightDepthGrid<Scalar> m_grid;        // Grid
     std::vector<Scalar> m_voxelCentres;   // VoxelCentres: 3 per voxel
 };

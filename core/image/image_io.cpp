@@ -62,6 +62,30 @@ std::string sniffExtension(const unsigned char* p, size_t n) {
     return "";
 }
 
+/// A volstyle render's EXR (core/render/exr_layers.h) holds the medium alone in RGBA with its
+/// `background` and `transmittance` layers beside it: keep those two (RGB) when both are there.
+void readRenderLayers(const OIIO::ImageSpec& spec, const std::vector<float>& pixels, LoadedImage& out) {
+    auto channel = [&](const std::string& name) {
+        for (int c = 0; c < spec.nchannels; ++c)
+            if (spec.channel_name(c) == name) return c;
+        return -1;
+    };
+    int background[3], transmittance[3];
+    for (int c = 0; c < 3; ++c) {
+        background[c] = channel(std::string("background.") + "RGB"[c]);
+        transmittance[c] = channel(std::string("transmittance.") + "RGB"[c]);
+        if (background[c] < 0 || transmittance[c] < 0) return;
+    }
+    const int nch = spec.nchannels, w = out.image.width, h = out.image.height;
+    out.background = Image(w, h);
+    out.transmittance = Image(w, h);
+    for (size_t i = 0; i < out.image.pixelCount(); ++i)
+        for (int c = 0; c < 3; ++c) {
+            out.background.rgba[4 * i + size_t(c)] = pixels[i * size_t(nch) + size_t(background[c])];
+            out.transmittance.rgba[4 * i + size_t(c)] = pixels[i * size_t(nch) + size_t(transmittance[c])];
+        }
+}
+
 }  // namespace
 
 LoadedImage loadImage(const std::string& path, int maxSide, const ImageHeaderCheck& checkHeader) {
@@ -108,12 +132,24 @@ LoadedImage loadImage(const std::string& path, int maxSide, const ImageHeaderChe
         }
         dst[3] = alphaIndex >= 0 ? src[alphaIndex] : 1.0f;
     }
-    size_t bad = out.image.countNonFinite();
+    readRenderLayers(spec, pixels, out);
+    size_t bad = out.image.countNonFinite() + out.background.countNonFinite() + out.transmittance.countNonFinite();
     if (bad > 0) {
         throw InvalidArgument("'" + path + "' contains " + std::to_string(bad) +
                               " non-finite (NaN or Inf) values; fix or clamp them before uploading");
     }
     return out;
+}
+
+Image pictureOf(const LoadedImage& loaded) {
+    if (!loaded.isRender()) return loaded.image;
+    Image picture = loaded.image;
+    for (size_t i = 0; i < picture.pixelCount(); ++i) {
+        for (size_t c = 0; c < 3; ++c)
+            picture.rgba[4 * i + c] += loaded.transmittance.rgba[4 * i + c] * loaded.background.rgba[4 * i + c];
+        picture.rgba[4 * i + 3] = 1;
+    }
+    return picture;
 }
 
 LoadedImage loadImageFromMemory(const void* data, size_t size, const std::string& nameHint,

@@ -17,6 +17,10 @@ struct LoadedImage {
     bool hasAlpha = false;
     int channels = 0;
     bool wasSrgb = false;  ///< the file was 8/16-bit and was linearised
+    /// A volstyle render's EXR (docs/FORMATS.md): its `background` and `transmittance` layers
+    /// (RGB; empty for any other file). `image` is then the medium alone, premultiplied.
+    Image background, transmittance;
+    bool isRender() const { return !background.empty() && !transmittance.empty(); }
 };
 
 /// Called with an image's size once its header is read and before any pixel is decoded: it may
@@ -30,6 +34,12 @@ LoadedImage loadImage(const std::string& path, int maxSide = 8192, const ImageHe
 /// Loads an image from bytes in memory (an upload); `nameHint` is used in error messages.
 LoadedImage loadImageFromMemory(const void* data, size_t size, const std::string& nameHint,
                                 int maxSide = 8192, const ImageHeaderCheck& checkHeader = {});
+
+/// The picture an image shows, as a solve's target reads it: a volstyle render's EXR is its medium
+/// over its background, RGB + transmittance × background, with weight (alpha) 1 — its alpha is
+/// coverage, not paint (issue #34: read as the medium alone, an absorber's views were black); any
+/// other image is itself.
+Image pictureOf(const LoadedImage& loaded);
 
 struct SaveOptions {
     double exposure = 0;        ///< stops; applied as 2^exposure before encoding

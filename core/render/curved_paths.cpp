@@ -87,11 +87,12 @@ int RefractiveGrid::brickOf(const Vec3d& p, Int3* brick) const {
 bool RefractiveGrid::flatAt(const Vec3d& p) const { return brickOf(p, nullptr) != 0; }
 
 std::vector<PathVertex> traceViewPath(const RefractiveGrid& grid, const Vec3d& eye, const Vec3d& direction, double nearDist,
-                                      double farDist, const PathTracing& tracing) {
+                                      double farDist, const PathTracing& tracing, Vec3d* exitDirection) {
     const Mat4& indexFromWorld = grid.indexFromWorld();
     const Int3 n = grid.dims();
     const Vec3d boxLo(-0.5, -0.5, -0.5), boxHi(n.x - 0.5, n.y - 0.5, n.z - 0.5);
     const Vec3d dir = normalize(direction);
+    if (exitDirection) *exitDirection = dir;
     const auto [tIn, tOut] = rayBox(indexFromWorld.applyPoint(eye), indexFromWorld.applyVector(dir), boxLo, boxHi);
     const double start = std::max(tIn, 0.0);
     if (!(tOut > start) || start >= farDist) return {};
@@ -151,6 +152,7 @@ std::vector<PathVertex> traceViewPath(const RefractiveGrid& grid, const Vec3d& e
             const double leave = std::clamp(rayBox(p, q - p, boxLo, boxHi).second, 0.0, 1.0);
             const Vec3d x = s.x + (next.x - s.x) * leave;
             push(x, t + length(x - s.x));
+            s = next;  // the step's end state: its direction is where the ray goes on (n = 1 at the box's faces)
             break;
         }
         t += length(next.x - s.x);
@@ -158,6 +160,7 @@ std::vector<PathVertex> traceViewPath(const RefractiveGrid& grid, const Vec3d& e
         push(s.x, t);
     }
     if (path.size() < 2) return {};
+    if (exitDirection) *exitDirection = normalize(s.v);
     return path;
 }
 
@@ -168,6 +171,7 @@ ViewPaths traceViewPaths(const RefractiveGrid& grid, const Camera& camera, const
     const int w = camera.width, h = camera.height;
     std::vector<std::vector<PathVertex>> rows(static_cast<size_t>(h));
     std::vector<std::vector<uint32_t>> counts(static_cast<size_t>(h), std::vector<uint32_t>(static_cast<size_t>(w)));
+    std::vector<std::array<float, 4>> exits(size_t(w) * size_t(h));
     std::atomic<int> nextRow{0};
     std::atomic<size_t> bytes{0};
     std::atomic<bool> stop{false};
@@ -178,8 +182,10 @@ ViewPaths traceViewPaths(const RefractiveGrid& grid, const Camera& camera, const
             for (int y = nextRow++; y < h && !stop; y = nextRow++) {
                 budget.check("tracing the refracted rays", double(y) / h);
                 for (int x = 0; x < w; ++x) {
-                    const auto path = traceViewPath(grid, camera.eye, camera.rayDirection(x, y), camera.nearDist, camera.farDist, tracing);
+                    Vec3d exit;
+                    const auto path = traceViewPath(grid, camera.eye, camera.rayDirection(x, y), camera.nearDist, camera.farDist, tracing, &exit);
                     counts[size_t(y)][size_t(x)] = uint32_t(path.size());
+                    exits[size_t(y) * size_t(w) + size_t(x)] = {float(exit.x), float(exit.y), float(exit.z), path.empty() ? 0.0f : 1.0f};
                     rows[size_t(y)].insert(rows[size_t(y)].end(), path.begin(), path.end());
                 }
                 if ((bytes += rows[size_t(y)].size() * sizeof(PathVertex)) > tracing.maxBytes)
@@ -215,6 +221,7 @@ ViewPaths traceViewPaths(const RefractiveGrid& grid, const Camera& camera, const
         std::vector<PathVertex>().swap(rows[size_t(y)]);
     }
     paths.start.push_back(uint32_t(paths.vertices.size()));
+    paths.exitDirection = std::move(exits);
     return paths;
 }
 

@@ -12,6 +12,7 @@
 /// (a brick of 8³ voxels whose values and one-voxel apron are all equal, so ∇n = 0 in it) the ray
 /// crosses in one straight piece; collinear pieces merge.
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -62,7 +63,14 @@ struct ViewPaths {
     int width = 0, height = 0;
     std::vector<uint32_t> start;        ///< width·height + 1: pixel p's vertices are [start[p], start[p+1])
     std::vector<PathVertex> vertices;   ///< none for a ray that misses the box
-    size_t bytes() const { return start.size() * sizeof(uint32_t) + vertices.size() * sizeof(PathVertex); }
+    /// width·height: the world direction each ray leaves the box in (xyz unit, w 1), from the ray
+    /// equation's state, not from the last piece's two float32 ends: where a ray leaves near a
+    /// vertex its last piece can be 1e-5 voxels long, and its direction noise (issue #34: a
+    /// speck 0.057 rad off behind a Luneburg lens). w 0 for a ray that misses the box.
+    std::vector<std::array<float, 4>> exitDirection;
+    size_t bytes() const {
+        return start.size() * sizeof(uint32_t) + vertices.size() * sizeof(PathVertex) + exitDirection.size() * 4 * sizeof(float);
+    }
 };
 
 struct PathTracing {
@@ -82,8 +90,9 @@ struct PathTracing {
 ViewPaths traceViewPaths(const RefractiveGrid& grid, const Camera& camera, const PathTracing& tracing = {},
                          const WorkBudget& budget = WorkBudget());
 
-/// One pixel's path (world positions of its vertices) — for tests and the CPU oracle.
+/// One pixel's path (world positions of its vertices) — for tests and the CPU oracle — and, when
+/// `exitDirection` is given, the world direction it leaves in (its own direction if it misses).
 std::vector<PathVertex> traceViewPath(const RefractiveGrid& grid, const Vec3d& eye, const Vec3d& direction, double nearDist,
-                                      double farDist, const PathTracing& tracing = {});
+                                      double farDist, const PathTracing& tracing = {}, Vec3d* exitDirection = nullptr);
 
 }  // namespace volstyle::core

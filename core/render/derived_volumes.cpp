@@ -53,11 +53,12 @@ std::string lightDepthKey(const GpuVolume& volume, const Vec3d& direction, const
 }
 
 std::shared_ptr<LightDepthVolume> computeLightDepth(GpuDevice& device, const GpuVolume& volume, const Vec3d& towardLight,
-                                                   const RenderSettings& march, RenderStats& stats, const WorkBudget& budget) {
+                                                   const RenderSettings& march, RenderStats& stats, const WorkBudget& budget,
+                                                   double across) {
     const Vec3d dir = normalize(towardLight);
     const auto t0 = Clock::now();
     auto result = std::make_shared<LightDepthVolume>();
-    result->grid = makeLightGrid(volume.dims(), volume.worldFromIndex().inverseAffine(), dir);
+    result->grid = makeLightGrid(volume.dims(), volume.worldFromIndex().inverseAffine(), dir, across);
     const Int3 n = result->grid.dims;
     GLint maxSize = 0;
     glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &maxSize);
@@ -105,7 +106,8 @@ std::shared_ptr<const LightDepthVolume> lightDepthVolume(GpuDevice& device, cons
                                                          RenderStats& stats, const WorkBudget& budget) {
     const std::string key = lightDepthKey(volume, normalize(light.direction), march);
     if (auto cached = device.cache().find<LightDepthVolume>(key)) return cached;
-    return device.cache().insert<LightDepthVolume>(key, computeLightDepth(device, volume, light.direction, march, stats, budget));
+    const double across = lightGridAcross(maxVoxelDepth(volume.maxExtinction(), volume.worldFromIndex()));
+    return device.cache().insert<LightDepthVolume>(key, computeLightDepth(device, volume, light.direction, march, stats, budget, across));
 }
 
 namespace {

@@ -39,9 +39,11 @@ struct LightDepthVolume {
 
 /// The light-depth volume toward `towardLight` (light_depth.comp), computed now and not cached
 /// (the environment's lobes resample it into their light volumes and drop it).
+/// `across`: voxels between the grid's rows across the beam (light_grid.h; lights take
+/// lightGridAcross of the volume, the environment's lobes kLightGridSpacing).
 std::shared_ptr<LightDepthVolume> computeLightDepth(GpuDevice& device, const GpuVolume& volume, const Vec3d& towardLight,
                                                    const RenderSettings& march, RenderStats& stats,
-                                                   const WorkBudget& budget = WorkBudget());
+                                                   const WorkBudget& budget = WorkBudget(), double across = kLightGridSpacing);
 
 /// The light-depth volume of `light` (light_depth.comp), from the cache or computed now, in
 /// chunks checked against `budget` (a pass stopped early caches nothing). Needs current occupancy.

@@ -65,6 +65,7 @@ void GpuVolume::upload(const Volume& volume) {
         t.extinction = uploadRgb(volume.extinction(), d, "extinction");
         m_extinctionHash = hash;
         m_extinctionIsGrey = Volume::isGrey(ext);
+        m_maxExtinction = maxComponent(Volume::range(ext).second);
         m_extinctionVersion = g_nextVersion++;
         t.occupancy = gl::createTexture(GL_TEXTURE_3D, "occupancy");
         glTextureStorage3D(t.occupancy.id(), 1, GL_R32F, m_brickDims.x, m_brickDims.y, m_brickDims.z);

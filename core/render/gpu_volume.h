@@ -35,6 +35,8 @@ public:
     bool extinctionIsGrey() const { return m_extinctionIsGrey; }
     /// Largest emission value (any channel), for bounding what a ray can still gather.
     float maxEmission() const { return m_maxEmission; }
+    /// Largest extinction value (any channel, per world unit).
+    float maxExtinction() const { return m_maxExtinction; }
     unsigned extinctionTexture() const;
     unsigned albedoTexture() const;
     unsigned emissionTexture() const;
@@ -59,6 +61,7 @@ private:
     std::shared_ptr<const RefractiveGrid> m_refraction;
     size_t m_extinctionHash = 0;  // to detect unchanged extinction on re-upload
     float m_maxEmission = 0;
+    float m_maxExtinction = 0;
     bool m_extinctionIsGrey = true;
     uint64_t m_extinctionVersion = 0;
     uint64_t m_occupancyVersion = 0;

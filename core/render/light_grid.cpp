@@ -6,7 +6,15 @@
 
 namespace volstyle::core {
 
-LightGrid makeLightGrid(Int3 volumeDims, const Mat4& indexFromWorld, const Vec3d& towardLight) {
+double maxVoxelDepth(double maxExtinction, const Mat4& worldFromIndex) {
+    double edge = 0;
+    for (int a = 0; a < 3; ++a) edge = std::max(edge, length(worldFromIndex.applyVector(Vec3d(a == 0, a == 1, a == 2))));
+    return maxExtinction * edge;
+}
+
+double lightGridAcross(double voxelDepth) { return voxelDepth >= kDenseVoxelDepth ? 0.5 * kLightGridSpacing : kLightGridSpacing; }
+
+LightGrid makeLightGrid(Int3 volumeDims, const Mat4& indexFromWorld, const Vec3d& towardLight, double across, double along) {
     // An orthonormal frame in index space: w toward the light, u and v across the beam.
     const Vec3d w = normalize(indexFromWorld.applyVector(towardLight));
     const int minor = std::abs(w.x) <= std::abs(w.y) && std::abs(w.x) <= std::abs(w.z) ? 0 : (std::abs(w.y) <= std::abs(w.z) ? 1 : 2);
@@ -25,25 +33,25 @@ LightGrid makeLightGrid(Int3 volumeDims, const Mat4& indexFromWorld, const Vec3d
     }
     // Anchor nodes at multiples of the spacing from index 0: across the beam from below, along it
     // from the light side (the first node of a row lies on or beyond the box, where the depth is 0).
-    const double h = kLightGridSpacing;
-    const double u0 = std::floor(lo.x / h) * h, v0 = std::floor(lo.y / h) * h, wTop = std::ceil(hi.z / h) * h;
+    const double h = across, hz = along;
+    const double u0 = std::floor(lo.x / h) * h, v0 = std::floor(lo.y / h) * h, wTop = std::ceil(hi.z / hz) * hz;
     LightGrid g;
     g.dims = {int(std::ceil((hi.x - u0) / h)) + 1, int(std::ceil((hi.y - v0) / h)) + 1,
-              int(std::ceil((wTop - lo.z) / h)) + 1};
+              int(std::ceil((wTop - lo.z) / hz)) + 1};
 
     // grid = ((p·u − u0)/h, (p·v − v0)/h, (wTop − p·w)/h); its inverse from the orthonormal frame.
     Mat4& f = g.gridFromIndex;
     for (int c = 0; c < 3; ++c) {
         f(0, c) = uAxis[c] / h;
         f(1, c) = vAxis[c] / h;
-        f(2, c) = -w[c] / h;
+        f(2, c) = -w[c] / hz;
     }
-    f(0, 3) = -u0 / h, f(1, 3) = -v0 / h, f(2, 3) = wTop / h;
+    f(0, 3) = -u0 / h, f(1, 3) = -v0 / h, f(2, 3) = wTop / hz;
     Mat4& b = g.indexFromGrid;
     for (int r = 0; r < 3; ++r) {
         b(r, 0) = uAxis[r] * h;
         b(r, 1) = vAxis[r] * h;
-        b(r, 2) = -w[r] * h;
+        b(r, 2) = -w[r] * hz;
         b(r, 3) = u0 * uAxis[r] + v0 * vAxis[r] + wTop * w[r];
     }
     return g;

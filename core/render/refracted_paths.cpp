@@ -32,6 +32,7 @@ std::shared_ptr<const RefractedPaths> refractedPaths(GpuDevice& device, const Gp
     gpu->start = gl::createBuffer(paths.start.size() * sizeof(uint32_t), paths.start.data(), 0, "path-start");
     gpu->vertices = gl::createBuffer(std::max<size_t>(paths.vertices.size(), 1) * sizeof(PathVertex),
                                      paths.vertices.empty() ? nullptr : paths.vertices.data(), 0, "path-vertices");
+    gpu->exits = gl::createBuffer(paths.exitDirection.size() * 4 * sizeof(float), paths.exitDirection.data(), 0, "path-exits");
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory for the refracted rays' paths");
     gpu->vertexCount = paths.vertices.size();
     gpu->bytes = paths.bytes();
@@ -43,6 +44,7 @@ std::shared_ptr<const RefractedPaths> refractedPaths(GpuDevice& device, const Gp
 void bindRefractedPaths(const RefractedPaths& paths) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingPathStart, paths.start.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingPathVertex, paths.vertices.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingPathExit, paths.exits.id());
 }
 
 }  // namespace volstyle::core

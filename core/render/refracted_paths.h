@@ -19,6 +19,7 @@ namespace volstyle::core {
 struct RefractedPaths {
     gl::Buffer start;     ///< uint per pixel + 1 (layout::kBindingPathStart)
     gl::Buffer vertices;  ///< vec4 (index-space xyz, arc length t) (layout::kBindingPathVertex)
+    gl::Buffer exits;     ///< vec4 per pixel: the world direction its ray leaves in (layout::kBindingPathExit)
     size_t vertexCount = 0;
     size_t bytes = 0;
     double traceMs = 0;

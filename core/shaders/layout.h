@@ -26,6 +26,15 @@ VS_CONSTANT(int, kWorkgroup2D, 8);   /* render kernel: 8x8 pixels */
 VS_CONSTANT(int, kWorkgroup3D, 4);   /* volume kernels: 4x4x4 voxels */
 VS_CONSTANT(int, kBrickSize, 8);     /* occupancy brick edge, in voxels */
 VS_CONSTANT(int, kLightSlots, 4);    /* light-depth volumes bound at once */
+/* Optical depth toward a light at a sample (common/lighting.glsl lightDepthAt, issue #34): marched
+ * from the sample itself over its first node spans, then read from the light-depth grid. The march
+ * covers at least kLightMarchMinNodes of the grid's along-beam spacing, goes on while a span held
+ * at least kLightMarchDenseSpan optical depth, for at most kLightMarchMaxSpans spans past the
+ * first node plane, and stops once kLightMarchOpaque is gathered (e^-12 ≈ 6e-6 of the light left). */
+VS_CONSTANT(float, kLightMarchMinNodes, 1.0);
+VS_CONSTANT(int, kLightMarchMaxSpans, 8);
+VS_CONSTANT(float, kLightMarchDenseSpan, 0.05);
+VS_CONSTANT(float, kLightMarchOpaque, 12.0);
 
 /* Kinds of solver unknowns (VOLSTYLE_UNKNOWN in project.comp; core::Unknown takes these values)
  * and bases (VOLSTYLE_BASIS; core::BasisType). Macros: GLSL compares them in #if. */
@@ -69,7 +78,8 @@ VS_CONSTANT(int, kWorkgroup1D, 256);
 VS_CONSTANT(int, kBindingIndexList, 7);
 /* Refracted view rays (common/march.glsl, VOLSTYLE_CURVED; core/render/refracted_paths.h). */
 VS_CONSTANT(int, kBindingPathStart, 8);   /* SSBO uint[pixels + 1]: pixel p's vertices are [start[p], start[p+1]) */
-VS_CONSTANT(int, kBindingPathVertex, 9);  /* SSBO vec4[]: index-space position, arc length from the eye (world) */    /* SSBO uint[]: the elements a vector kernel touches (VOLSTYLE_INDEXED) */
+VS_CONSTANT(int, kBindingPathVertex, 9);  /* SSBO vec4[]: index-space position, arc length from the eye (world) */
+VS_CONSTANT(int, kBindingPathExit, 10);   /* SSBO vec4[pixels]: the world direction each ray leaves in (w 0: it misses) */    /* SSBO uint[]: the elements a vector kernel touches (VOLSTYLE_INDEXED) */
 
 /* Everything a march needs: camera, grid, lighting. World-space t parameterises rays. */
 struct MarchParams {

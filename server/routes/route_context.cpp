@@ -64,9 +64,10 @@ void replyImage(httplib::Response& res, const core::Image& image, protocol::Imag
     res.set_content(core::encodeImage(image, protocol::imageFormatName(format), save), protocol::imageMimeType(format));
 }
 
-void replyImage(httplib::Response& res, const core::RenderLayers& render, protocol::ImageFormat format, double exposure) {
+void replyImage(httplib::Response& res, const core::RenderLayers& render, protocol::ImageFormat format, double exposure,
+                bool exrHalf) {
     if (format != protocol::ImageFormat::Exr) return replyImage(res, render.beauty, format, exposure);
-    res.set_content(core::encodeExrLayers(core::exrLayersOf(render)), protocol::imageMimeType(format));
+    res.set_content(core::encodeExrLayers(core::exrLayersOf(render), exrHalf), protocol::imageMimeType(format));
 }
 
 }  // namespace volstyle::server

@@ -63,7 +63,8 @@ void reply(httplib::Response& res, int status, const nlohmann::json& body);
 /// Encodes `image` (PNG: sRGB with `exposure` stops; EXR: linear) as the answer.
 void replyImage(httplib::Response& res, const core::Image& image, protocol::ImageFormat format, double exposure = 0);
 /// A render as PNG (the beauty, sRGB with `exposure` stops) or layered EXR (docs/FORMATS.md).
-void replyImage(httplib::Response& res, const core::RenderLayers& render, protocol::ImageFormat format, double exposure = 0);
+void replyImage(httplib::Response& res, const core::RenderLayers& render, protocol::ImageFormat format, double exposure = 0,
+                bool exrHalf = true);
 
 // Each file registers the routes of one resource.
 void addSystemRoutes(RouteContext& c);   ///< health, schema, scenes

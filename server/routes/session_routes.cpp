@@ -71,11 +71,12 @@ void addSessionRoutes(RouteContext& c) {
             const core::Image beauty = c.service.renderTranslucent(*s, request.camera, request.translucent, &medium);
             if (request.format != protocol::ImageFormat::Exr) return replyImage(res, beauty, request.format, request.exposure);
             // As single scattering's: the medium premultiplied, and the picture as a layer.
-            res.set_content(core::encodeExrLayers({{"", &medium}, {"beauty", &beauty}}), protocol::imageMimeType(request.format));
+            res.set_content(core::encodeExrLayers({{"", &medium}, {"beauty", &beauty}}, request.exrHalf),
+                            protocol::imageMimeType(request.format));
             return;
         }
         replyImage(res, c.service.render(*s, request.camera, request.format == protocol::ImageFormat::Exr), request.format,
-                   request.exposure);
+                   request.exposure, request.exrHalf);
     });
 }
 

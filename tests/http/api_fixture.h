@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -37,6 +38,9 @@ protected:
         try {
             m_server = std::make_unique<server::HttpServer>(opt);
         } catch (const GpuError& e) {
+            const char* required = std::getenv("VOLSTYLE_GL_REQUIRED");  // .ci/run: fail, never skip
+            if (required && std::string(required) != "" && std::string(required) != "0")
+                GTEST_FAIL() << "no EGL/OpenGL 4.5 context (VOLSTYLE_GL_REQUIRED): " << e.what();
             GTEST_SKIP() << "no EGL/OpenGL 4.5 context: " << e.what();
         }
         m_port = m_server->bind();

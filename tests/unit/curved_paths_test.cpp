@@ -4,6 +4,8 @@
 // nothing (no RefractiveGrid at all).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -140,4 +142,60 @@ TEST(CurvedPaths, AViewsPathsAreTracedPerPixel) {
     PathTracing tiny;
     tiny.maxBytes = 64;
     EXPECT_THROW(traceViewPaths(*grid, c, tiny), OverBudget);
+}
+
+TEST(CurvedPaths, EveryRayLeavesALuneburgLensInTheRightDirection) {
+    // Issue #34: a sampled Luneburg lens (64³, n = √(2 − (r/R)²)) seen by a camera of 160² pixels.
+    // Each ray's exit direction (the one the background is looked up in) against an independent
+    // tracer of the same sampled field: RK4 at a sixth of a voxel on the trilinear index and its
+    // exact gradient (indexFieldOf), from where the ray enters the box to where it leaves. The
+    // worst pixel, not only the median: the direction was differenced from the last piece's
+    // float32 ends, and where a ray left the box near a vertex that piece was ~1e-5 voxels long
+    // (1 pixel in 4,000–27,000 was 0.057 rad off: a speck of the wrong colour).
+    const double R = 0.8;
+    const Volume lens = luneburgLens(64, R);
+    const auto grid = RefractiveGrid::of(lens);
+    ASSERT_TRUE(grid);
+    Camera cam;
+    cam.eye = {0.05, 0.1, 3.2};
+    cam.target = {0, 0, 0};
+    cam.fovYDeg = 34;
+    cam.width = cam.height = 160;
+    const auto t0 = std::chrono::steady_clock::now();
+    const ViewPaths paths = traceViewPaths(*grid, cam);
+    std::printf("[ measured ] traced %d² rays in %.0f ms, %zu vertices\n", cam.width, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count(), paths.vertices.size());
+    const IndexField field = indexFieldOf(lens);
+    const double box = 1 + 1.0 / 64;  // the voxels' box: [-1 - h/2, 1 + h/2]³ for 64 voxels over [-1, 1]
+    std::vector<double> errors, rim;
+    for (int y = 0; y < cam.height; ++y)
+        for (int x = 0; x < cam.width; ++x) {
+            const auto& e = paths.exitDirection[size_t(y) * size_t(cam.width) + size_t(x)];
+            const Vec3d dir = cam.rayDirection(x, y);
+            const Vec3d got = e[3] > 0 ? Vec3d(e[0], e[1], e[2]) : dir;
+            // Straight to the box (n = 1 outside), then the ray equation until it leaves.
+            double tIn = 0;
+            for (int a = 0; a < 3; ++a)
+                if (dir[a] != 0) tIn = std::max(tIn, std::min((-box - cam.eye[a]) / dir[a], (box - cam.eye[a]) / dir[a]));
+            const Vec3d start = cam.eye + dir * (tIn + 1e-9);
+            const auto states = traceRay(field, start, dir, 2.0 / 64 / 6, 20, RayScheme::RungeKutta4, [&](const RayState& s) {
+                return std::abs(s.x.x) > box || std::abs(s.x.y) > box || std::abs(s.x.z) > box;
+            });
+            const Vec3d want = normalize(states.back().v);
+            const double err = std::acos(std::clamp(dot(normalize(got), want), -1.0, 1.0));
+            // The straight line's closest approach to the lens's centre: within two voxels of R the
+            // ray grazes the rim, where the sampled index's gradient jumps (n = 1 outside).
+            const double b = length(cross(cam.eye, dir));
+            (std::abs(b - R) < 2 * 2.0 / 64 ? rim : errors).push_back(err);
+        }
+    std::sort(errors.begin(), errors.end());
+    const double median = errors[errors.size() / 2], p9999 = errors[size_t(0.9999 * double(errors.size() - 1))], worst = errors.back();
+    std::sort(rim.begin(), rim.end());
+    std::printf("[ measured ] Luneburg 64³, %zu rays: exit direction off by median %.5f, p99.99 %.5f, worst %.5f rad; "
+                "%zu grazing the rim: median %.5f, worst %.5f\n", errors.size(), median, p9999, worst, rim.size(), rim[rim.size() / 2], rim.back());
+    EXPECT_LE(median, 0.004);
+    EXPECT_LE(worst, 0.05);
+    // Rays grazing the rim are ill-conditioned for any tracer: there the sampled index's gradient
+    // jumps, and tracers at a half, a quarter and a sixth of a voxel disagree among themselves by
+    // up to 0.27 rad. Their median is held, not their worst.
+    EXPECT_LE(rim[rim.size() / 2], 0.004);
 }

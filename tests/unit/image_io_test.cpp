@@ -76,6 +76,39 @@ TEST(ImageIo, ExrIsLinearAndExact) {
     EXPECT_EQ(back.image.rgba, img.rgba);
 }
 
+TEST(ImageIo, ARendersExrMeansThePictureItShows) {
+    // Issue #34: a volstyle render's EXR holds the medium alone (premultiplied) with its
+    // background and transmittance layers; as a target it is RGB + T·background with weight 1.
+    auto dir = test::scratchDir();
+    Image medium = gradient(5, 4), background(5, 4), transmittance(5, 4), other(5, 4);
+    for (size_t i = 0; i < medium.pixelCount(); ++i)
+        for (size_t c = 0; c < 4; ++c) {
+            background.rgba[4 * i + c] = 0.25f + 0.5f * float(c);
+            transmittance.rgba[4 * i + c] = float(i % 5) / 5.0f + 0.01f * float(c);
+            other.rgba[4 * i + c] = 9;
+        }
+    medium.pixel(2, 1)[3] = 0.3f;  // coverage, not a weight
+    for (bool half : {true, false}) {
+        saveExrLayers((dir / "render.exr").string(), {{"", &medium}, {"background", &background}, {"emission", &other}, {"transmittance", &transmittance}}, half);
+        const LoadedImage loaded = loadImage((dir / "render.exr").string());
+        ASSERT_TRUE(loaded.isRender());
+        const Image picture = pictureOf(loaded);
+        const float tolerance = half ? 2e-3f : 1e-6f;
+        for (size_t i = 0; i < medium.pixelCount(); ++i) {
+            for (size_t c = 0; c < 3; ++c)
+                EXPECT_NEAR(picture.rgba[4 * i + c], medium.rgba[4 * i + c] + transmittance.rgba[4 * i + c] * background.rgba[4 * i + c],
+                            tolerance * 4);
+            EXPECT_EQ(picture.rgba[4 * i + 3], 1.0f);
+        }
+        EXPECT_NEAR(loaded.image.pixel(2, 1)[3], 0.3f, tolerance) << "loadImage itself keeps the file's RGBA";
+    }
+    // Without both layers an EXR keeps its meaning: RGB, and alpha as the weight.
+    saveExrLayers((dir / "plain.exr").string(), {{"", &medium}, {"background", &background}}, false);
+    const LoadedImage plain = loadImage((dir / "plain.exr").string());
+    EXPECT_FALSE(plain.isRender());
+    EXPECT_EQ(pictureOf(plain).rgba, medium.rgba);
+}
+
 TEST(ImageIo, ExposureScalesPngOnly) {
     auto dir = test::scratchDir();
     Image img(1, 1);

@@ -37,11 +37,12 @@ bool beginViewMarch(ivec2 pix, vec3 dir, out RayMarch m) {
 #endif
 }
 
-// The direction pixel pix's ray leaves in (for the background): its last piece's.
+// The direction pixel pix's ray leaves in (for the background): carried from the tracer
+// (curved_paths.h ViewPaths::exitDirection), not differenced from the last piece's two ends.
 vec3 exitDirection(ivec2 pix, vec3 dir) {
 #if VOLSTYLE_CURVED
-    ivec2 span = pathOf(pix);
-    if (span.y - span.x >= 2) return worldDirection(pathVertex[span.y - 1].xyz - pathVertex[span.y - 2].xyz);
+    vec4 exit = pathExit[pix.y * u.imageSize.x + pix.x];
+    if (exit.w > 0.0) return exit.xyz;
 #endif
     return dir;
 }

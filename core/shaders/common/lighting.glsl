@@ -28,10 +28,52 @@ float phaseFunction(float cosTheta) { return phaseValue(u.phase.x, u.phase.y, co
 // (not the transmittance) is exact for slabs, where the depth is linear.
 layout(binding = kUnitLightDepth0) uniform sampler3D s_lightDepth[kLightSlots];
 
-// τ_l(p): the optical depth from index-space point p toward light l.
+// τ_l(p): the optical depth from index-space point p toward light l. Near p it is marched from p
+// itself: the grid cannot follow a dense medium's rise within a node (up to 4 optical depths a
+// voxel, issue #34: 31% off on a dense backlit cloud), and what a sample sees is decided there.
+// The march runs toward the light to the node planes across the beam (planes c = const of the
+// grid), for at least kLightMarchMinNodes, on while the last span was dense, and then adds the
+// grid's depth on the plane it stopped at (bilinear there). A ray that leaves the voxels' box on
+// the way needs no grid; one that has gathered kLightMarchOpaque is dark. Thin media pay 2–4
+// samples, dense ones up to 2·(kLightMarchMaxSpans + 1) at a step of 0.5 voxel.
 vec3 lightDepthAt(int l, vec3 p) {
-    vec3 g = (u.lightGridFromIndex[l] * vec4(p, 1.0)).xyz;
-    return fetchTrilinear(s_lightDepth[l], stencilOn(g, u.lightGridDims[l].xyz));
+    mat4 gridFromIndex = u.lightGridFromIndex[l];
+    vec3 g = (gridFromIndex * vec4(p, 1.0)).xyz;
+    vec3 row = vec3(gridFromIndex[0][2], gridFromIndex[1][2], gridFromIndex[2][2]);  // ∇(grid z): away from the light
+    float nodesPerIndex2 = dot(row, row);
+    vec3 toLight = -row / nodesPerIndex2;  // index-space step of one node toward the light
+    float nodeVoxels = inversesqrt(nodesPerIndex2);
+    float worldPerNode = nodeVoxels / length(mat3(u.indexFromWorld) * u.lightDirection[l].xyz);
+    float stepsPerNode = nodeVoxels / u.march.x;
+    float exitNodes = max(intersectVolumeBox(p, toLight).y, 0.0);
+
+    vec3 tau = vec3(0.0);
+    float s0 = 0.0, s1 = g.z - floor(g.z);  // this span: [s0, s1] nodes toward the light from p
+    float gridAt = -1.0;                    // where the grid takes over (nodes from p), if it does
+    for (int k = 0; k <= kLightMarchMaxSpans; ++k) {
+        float s1Box = min(s1, exitNodes);
+        vec3 span = vec3(0.0);
+        if (s1Box > s0) {
+            // A span of a whole node is 1 node only up to float rounding of s0 and s1: the tolerance
+            // keeps its count of segments from flipping (and the float64 oracle in step).
+            int count = max(1, int(ceil((s1Box - s0) * stepsPerNode - 1e-3)));
+            float ds = (s1Box - s0) / float(count);
+            for (int i = 0; i < count; ++i) span += fetchTrilinear(s_extinction, stencilAt(p + (s0 + (float(i) + 0.5) * ds) * toLight));
+            span *= ds * worldPerNode;
+        }
+        tau += span;
+        if (exitNodes <= s1 || min(tau.r, min(tau.g, tau.b)) >= kLightMarchOpaque) break;
+        if (k == kLightMarchMaxSpans || (s1 >= kLightMarchMinNodes && max3(span) < kLightMarchDenseSpan)) {
+            gridAt = s1;
+            break;
+        }
+        s0 = s1;
+        s1 += 1.0;
+    }
+    // On the node plane the grid is exact along the beam.
+    if (gridAt >= 0.0)
+        tau += max(fetchTrilinear(s_lightDepth[l], stencilOn(vec3(g.xy, g.z - gridAt), u.lightGridDims[l].xyz)), vec3(0.0));
+    return tau;
 }
 
 #endif
@@ -41,10 +83,24 @@ vec3 lightDepthAt(int l, vec3 p) {
 // (V_l = 1: no occluders).
 vec3 inScattering(vec3 p, vec3 dir) {
     vec3 sum = vec3(0.0);
+    // Unrolled by hand, so each light's texture is named by a constant: lightDepthAt's loops keep
+    // compilers from unrolling a loop over the lights, and indexing the sampler array with its
+    // counter made Mesa 22's llvmpipe read the background plate as black (two lights or more).
+#define VOLSTYLE_LIGHT_TERM(l) \
+    sum += phaseFunction(dot(u.lightDirection[l].xyz, -dir)) * u.lightIrradiance[l].rgb * exp(-lightDepthAt(l, p))
 #if VOLSTYLE_NUM_LIGHTS > 0
-    for (int l = 0; l < VOLSTYLE_NUM_LIGHTS; ++l)
-        sum += phaseFunction(dot(u.lightDirection[l].xyz, -dir)) * u.lightIrradiance[l].rgb * exp(-lightDepthAt(l, p));
+    VOLSTYLE_LIGHT_TERM(0);
 #endif
+#if VOLSTYLE_NUM_LIGHTS > 1
+    VOLSTYLE_LIGHT_TERM(1);
+#endif
+#if VOLSTYLE_NUM_LIGHTS > 2
+    VOLSTYLE_LIGHT_TERM(2);
+#endif
+#if VOLSTYLE_NUM_LIGHTS > 3
+    VOLSTYLE_LIGHT_TERM(3);
+#endif
+#undef VOLSTYLE_LIGHT_TERM
 #if VOLSTYLE_HAS_LOBES
     sum += lobeInScattering(p, dir);
 #endif

@@ -28,6 +28,9 @@ layout(std430, binding = kBindingPathStart) readonly buffer b_PathStart {
 layout(std430, binding = kBindingPathVertex) readonly buffer b_PathVertex {
     vec4 pathVertex[];  // xyz: index-space position; w: length along the path from the eye (world)
 };
+layout(std430, binding = kBindingPathExit) readonly buffer b_PathExit {
+    vec4 pathExit[];  // per pixel: xyz the world direction its ray leaves in; w 0 when it misses
+};
 #endif
 
 struct Segments {
