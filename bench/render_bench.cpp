@@ -72,7 +72,8 @@ std::vector<LightRow> benchLightVolumes(Renderer& renderer, const std::vector<in
                 renderer.render(volume, pixel, l, {}, &stats);
                 if (r > 0) ms.push_back(stats.lightMs);
             }
-            const LightGrid g = makeLightGrid(cloud.dims(), cloud.worldFromIndex().inverseAffine(), normalize(dir));
+            const double across = lightGridAcross(maxVoxelDepth(maxComponent(Volume::range(cloud.extinction()).second), cloud.worldFromIndex()));
+            const LightGrid g = makeLightGrid(cloud.dims(), cloud.worldFromIndex().inverseAffine(), normalize(dir), across);
             rows.push_back({res, name, bench::median(ms), g.dims, double(g.dims.volume()) * 4 / (1 << 20)});  // R32F: grey cloud
             std::cerr << "l" << std::flush;
         }

@@ -152,10 +152,10 @@ V3<S> LightDepthGrid<S>::at(const V3<S>& p) const {
 
 template <typename S>
 LightDepthLookup<S>::LightDepthLookup(const Volume& volume, const Vec3d& lightDirection, double stepVoxels,
-                                      LightDepthMethod method, bool gridOnly)
-    : m_volume(volume), m_direction(lightDirection), m_step(stepVoxels), m_method(method), m_gridOnly(gridOnly) {
-    if (method == LightDepthMethod::Grid)
-        m_grid = lightDepthGrid<S>(volume, lightDirection, stepVoxels, gridOnly ? kLightGridSpacing : 0.0);
+                                      LightDepthMethod method)
+    : m_volume(volume), m_direction(lightDirection), m_step(stepVoxels), m_method(method) {
+    if (method == LightDepthMethod::Grid) m_grid = lightDepthGrid<S>(volume, lightDirection, stepVoxels);
+    if (method == LightDepthMethod::GridAlone) m_grid = lightDepthGrid<S>(volume, lightDirection, stepVoxels, kLightGridSpacing);
     if (method == LightDepthMethod::VoxelCentres) {
         const Int3 n = volume.dims();
         m_voxelCentres.assign(volume.voxelCount() * 3, S(0));
@@ -172,7 +172,8 @@ LightDepthLookup<S>::LightDepthLookup(const Volume& volume, const Vec3d& lightDi
 template <typename S>
 V3<S> LightDepthLookup<S>::at(const V3<S>& p) const {
     switch (m_method) {
-        case LightDepthMethod::Grid: return m_gridOnly ? m_grid.interpolated(p) : m_grid.at(p);
+        case LightDepthMethod::Grid: return m_grid.at(p);
+        case LightDepthMethod::GridAlone: return m_grid.interpolated(p);
         case LightDepthMethod::Exact: return opticalDepthToLight<S>(m_volume, p, m_direction, m_step);
         case LightDepthMethod::VoxelCentres: return trilinear<S>(m_voxelCentres, m_volume.dims(), p);
     }
@@ -201,7 +202,8 @@ struct LobesRef {
             direction.push_back(basis.directions[size_t(i)]);
             irradiance.push_back(radiance[size_t(i)] * omega[size_t(i)]);
             // As lobe_volumes.cpp: the grid alone, rows a voxel apart (no march from each node).
-            const LightDepthLookup<S> depth(volume, basis.directions[size_t(i)], stepVoxels, method, /*gridOnly=*/true);
+            const LightDepthLookup<S> depth(volume, basis.directions[size_t(i)], stepVoxels,
+                                            method == LightDepthMethod::Grid ? LightDepthMethod::GridAlone : method);
             std::vector<S> t(size_t(dims.volume()) * 3);
             for (int k = 0; k < dims.z; ++k)
                 for (int j = 0; j < dims.y; ++j)

@@ -13,7 +13,8 @@ namespace volstyle::core::cpu_ref {
 
 /// How the oracle gets the optical depth toward a light at a sample point p.
 enum class LightDepthMethod {
-    Grid,          ///< as the GL path: light_depth.comp's light-aligned grid, trilinear between nodes
+    Grid,          ///< as the GL path: a march from p over its first node spans, then the light-aligned grid
+    GridAlone,     ///< the grid alone, rows a voxel apart, trilinear (before issue #34; the lobes' volumes)
     Exact,         ///< a march from p itself to the box (the quantity the grids approximate)
     VoxelCentres,  ///< a march from every voxel centre, trilinear between them (before issue #10)
 };
@@ -53,9 +54,7 @@ LightDepthGrid<Scalar> lightDepthGrid(const Volume& volume, const Vec3d& lightDi
 template <typename Scalar>
 class LightDepthLookup {
 public:
-    /// `gridOnly`: Grid reads the grid alone (rows a voxel apart), as the environment's lobes do.
-    LightDepthLookup(const Volume& volume, const Vec3d& lightDirection, double stepVoxels, LightDepthMethod method,
-                     bool gridOnly = false);
+    LightDepthLookup(const Volume& volume, const Vec3d& lightDirection, double stepVoxels, LightDepthMethod method);
     Vec3T<Scalar> at(const Vec3T<Scalar>& p) const;
 
 private:
@@ -63,8 +62,7 @@ private:
     Vec3d m_direction;
     double m_step;
     LightDepthMethod m_method;
-    bool m_gridOnly;
-    LightDepthGrid<Scalar> m_grid;        // Grid
+    LightDepthGrid<Scalar> m_grid;        // Grid, GridAlone
     std::vector<Scalar> m_voxelCentres;   // VoxelCentres: 3 per voxel
 };
 

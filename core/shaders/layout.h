@@ -32,8 +32,8 @@ VS_CONSTANT(int, kLightSlots, 4);    /* light-depth volumes bound at once */
  * at least kLightMarchDenseSpan optical depth, for at most kLightMarchMaxSpans spans past the
  * first node plane, and stops once kLightMarchOpaque is gathered (e^-12 ≈ 6e-6 of the light left). */
 VS_CONSTANT(float, kLightMarchMinNodes, 1.0);
-VS_CONSTANT(int, kLightMarchMaxSpans, 8);
-VS_CONSTANT(float, kLightMarchDenseSpan, 0.05);
+VS_CONSTANT(int, kLightMarchMaxSpans, 3);
+VS_CONSTANT(float, kLightMarchDenseSpan, 0.1);
 VS_CONSTANT(float, kLightMarchOpaque, 12.0);
 
 /* Kinds of solver unknowns (VOLSTYLE_UNKNOWN in project.comp; core::Unknown takes these values)

@@ -23,22 +23,6 @@ layout(binding = kImageUnitOut, rgba32f) uniform writeonly image3D img_lightDept
 // Past this optical depth the light is e^-64 ≈ 1.6e-28: nothing left to attenuate.
 const float kOpaqueDepth = 64.0;
 
-// The corners of the voxel cell last sampled: a row samples each cell about 1 / u.march.x times
-// in a row, so the 8 fetches are shared by those samples (the values fetchTrilinear reads).
-struct CellCache {
-    ivec3 i0;
-    Corners corners;
-};
-
-vec3 extinctionAt(inout CellCache cache, vec3 p) {
-    Stencil s = stencilAt(p);
-    if (s.i0 != cache.i0) {
-        cache.i0 = s.i0;
-        cache.corners = fetchCorners(s_extinction, s);
-    }
-    return interpolateCorners(cache.corners, s.f);
-}
-
 // Where the ray o + t·d leaves the occupancy brick holding p if that brick is empty (σ = 0
 // throughout it, apron included); otherwise -1e30 (rays reversed toward the light run at
 // negative t). p must lie in the voxels' box.
@@ -123,8 +107,7 @@ void main() {
     // depth held 0 on nodes before the entry and on rows missing the box, so points within a node
     // of a face mixed in zeros (a sun-lit slab came out 2–12% too bright).
     float tStar = lightSideCrossing(o, d, float(cFirst - n.z), float(cLast + n.z));
-    CellCache cache;
-    cache.i0 = ivec3(-1);
+    CellCache cache = emptyCellCache();
 
     // Nodes after t*, away from the light.
     int c0 = max(cFirst, int(ceil(tStar)));

@@ -58,6 +58,8 @@ vec3 lightDepthAt(int l, vec3 p) {
             // keeps its count of segments from flipping (and the float64 oracle in step).
             int count = max(1, int(ceil((s1Box - s0) * stepsPerNode - 1e-3)));
             float ds = (s1Box - s0) / float(count);
+            // (A cache of the cell's corners, as light_depth.comp keeps, saved nothing here on
+            // llvmpipe: 1015 against 998 ms a 128³ frame.)
             for (int i = 0; i < count; ++i) span += fetchTrilinear(s_extinction, stencilAt(p + (s0 + (float(i) + 0.5) * ds) * toLight));
             span *= ds * worldPerNode;
         }
