@@ -190,6 +190,10 @@ ViewRenderQuery ViewRenderQuery::fromQuery(const QueryParams& params) {
         if (!v) r.fail("?exposure", "must be a finite number of stops, got '" + *text + "'");
         else q.exposure = *v;
     }
+    if (auto text = lastValue(params, "exr_type")) {
+        if (*text == "float") q.exrHalf = false;
+        else if (*text != "half") r.fail("?exr_type", "must be 'half' or 'float', got '" + *text + "'");
+    }
     r.throwIfErrors();
     return q;
 }

@@ -112,6 +112,7 @@ struct SolveRequest {
 /// GET …/views/{vid}/render.{png,exr}?exposure=STOPS.
 struct ViewRenderQuery {
     double exposure = 0;
+    bool exrHalf = true;  ///< ?exr_type=half (default) or float
     static ViewRenderQuery fromQuery(const QueryParams& params);
 };
 

@@ -52,7 +52,8 @@ void addViewRoutes(RouteContext& c) {
         auto s = c.service.find(req.matches[1]);
         auto query = protocol::ViewRenderQuery::fromQuery(req.params);
         const auto format = req.matches[3] == "png" ? protocol::ImageFormat::Png : protocol::ImageFormat::Exr;
-        replyImage(res, c.service.renderView(*s, req.matches[2], format == protocol::ImageFormat::Exr), format, query.exposure);
+        replyImage(res, c.service.renderView(*s, req.matches[2], format == protocol::ImageFormat::Exr), format, query.exposure,
+                   query.exrHalf);
     });
 }
 

@@ -80,8 +80,10 @@ TEST_F(Api, ARendersExrAsATargetIsThePictureItShows) {
                            "application/json");
     ASSERT_EQ(v->status, 201) << v->body;
     const std::string view = json::parse(v->body)["id"];
-    auto exr = client().Get((base + "/views/" + view + "/render.exr").c_str());
+    auto exr = client().Get((base + "/views/" + view + "/render.exr?exr_type=float").c_str());
     ASSERT_EQ(exr->status, 200);
+    EXPECT_GT(exr->body.size(), client().Get((base + "/views/" + view + "/render.exr").c_str())->body.size() * 3 / 2) << "float, not half";
+    expectError(client().Get((base + "/views/" + view + "/render.exr?exr_type=int").c_str()), 400, "invalid_argument");
     auto put = client().Put((base + "/views/" + view + "/target").c_str(), exr->body, "image/x-exr");
     ASSERT_EQ(put->status, 200) << put->body;
     const core::LoadedImage rendered = core::loadImageFromMemory(exr->body.data(), exr->body.size(), "render");
