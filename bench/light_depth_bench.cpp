@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "core/cpu_ref/agreement.h"
 #include "core/cpu_ref/reference_renderer.h"
 #include "core/volume/builtin_scenes.h"
 
@@ -28,27 +29,9 @@ namespace {
 /// The built-in scene scaled so that its densest voxel holds `voxelDepth` optical depths (0: as it is).
 Volume sceneOf(const char* name, int res, double voxelDepth) {
     Volume v = makeBuiltinScene(name, res);
-    if (voxelDepth > 0) {
-        const double peak = maxComponent(Volume::range(v.extinction()).second);
-        const double voxel = length(v.worldFromIndex().applyVector({1, 0, 0}));
-        for (float& s : v.extinction()) s = float(s * voxelDepth / (peak * voxel));
-    }
+    if (voxelDepth > 0) cpu_ref::scaleToVoxelDepth(v, voxelDepth);
     for (float& a : v.ensureAlbedo()) a = 0.9f;
     return v;
-}
-
-struct Errors {
-    double sumRatio, rms;
-};
-
-Errors compare(const Image& a, const Image& exact) {
-    double sa = 0, se = 0, num = 0, den = 0;
-    for (size_t i = 0; i < exact.pixelCount(); ++i)
-        for (int c = 0; c < 3; ++c) {
-            const double x = a.rgba[4 * i + size_t(c)], y = exact.rgba[4 * i + size_t(c)];
-            sa += x, se += y, num += (x - y) * (x - y), den += y * y;
-        }
-    return {sa / se, std::sqrt(num / den)};
 }
 
 }  // namespace
@@ -85,13 +68,13 @@ int main(int argc, char** argv) {
             const Image exact = cpu_ref::renderReference<double>(v, cam, l, 0.5, cpu_ref::LightDepthMethod::Exact, 0.05);
             std::printf("| %s %d³ | %.2f | %s |", sc.name, sc.res, voxelDepth, sunName);
             for (const auto& [schemeName, method] : schemes) {
-                const Errors e = compare(cpu_ref::renderReference<double>(v, cam, l, 0.5, method), exact);
-                std::printf(" %.4f / %.2f%% |", e.sumRatio, 100 * e.rms);
+                const cpu_ref::Agreement e = cpu_ref::agreement(cpu_ref::renderReference<double>(v, cam, l, 0.5, method), exact);
+                std::printf(" %.4f / %.2f%% |", e.sumRatio, 100 * e.relativeRms);
                 char line[320];
                 std::snprintf(line, sizeof line,
                               "{\"bench\":\"light_depth\",\"scene\":\"%s\",\"resolution\":%d,\"voxel_depth\":%.3f,\"sun\":\"%s\",\"scheme\":\"%s\","
                               "\"sum_ratio\":%.5f,\"relative_rms\":%.5f}",
-                              sc.name, sc.res, voxelDepth, sunName, schemeName, e.sumRatio, e.rms);
+                              sc.name, sc.res, voxelDepth, sunName, schemeName, e.sumRatio, e.relativeRms);
                 json.push_back(line);
             }
             std::printf("\n");

@@ -40,13 +40,13 @@ V3<S> trilinear(const std::vector<T>& g, Int3 n, const V3<S>& p, int stride = 3)
     return r;
 }
 
-/// [tEnter, tExit] of o + t d against the voxels' box [-0.5, n-0.5]³.
+/// [tEnter, tExit] of o + t d against the voxels' box [-0.5, n-0.5]³, grown by `margin` voxels.
 template <typename S>
-std::pair<S, S> intersectBox(const V3<S>& o, const V3<S>& d, Int3 n) {
+std::pair<S, S> intersectBox(const V3<S>& o, const V3<S>& d, Int3 n, S margin = S(0)) {
     S lo = -std::numeric_limits<S>::max(), hi = std::numeric_limits<S>::max();
     for (int a = 0; a < 3; ++a) {
         S inv = S(1) / (d[a] == 0 ? S(1e-30) : d[a]);
-        S t0 = (S(-0.5) - o[a]) * inv, t1 = (S(n[a]) - S(0.5) - o[a]) * inv;
+        S t0 = (S(-0.5) - margin - o[a]) * inv, t1 = (S(n[a]) - S(0.5) + margin - o[a]) * inv;
         lo = std::max(lo, std::min(t0, t1));
         hi = std::min(hi, std::max(t0, t1));
     }

@@ -79,13 +79,7 @@ LightDepthGrid<S> lightDepthGrid(const Volume& volume, const Vec3d& lightDirecti
             };
             // As light_depth.comp: the nodes within a cell diagonal of the box, the depth extended
             // past the box from where the row crosses the planes of its light-side faces (t*).
-            S tLo = -std::numeric_limits<S>::max(), tHi = std::numeric_limits<S>::max();
-            for (int k = 0; k < 3; ++k) {
-                const S inv = S(1) / (d[k] == 0 ? S(1e-30) : d[k]);
-                const S t0 = (S(-0.5) - reach - o[k]) * inv, t1 = (S(n[k]) - S(0.5) + reach - o[k]) * inv;
-                tLo = std::max(tLo, std::min(t0, t1));
-                tHi = std::min(tHi, std::max(t0, t1));
-            }
+            const auto [tLo, tHi] = intersectBox(o, d, n, reach);
             if (tLo >= tHi) continue;
             const int cFirst = std::max(0, int(std::floor(tLo))), cLast = std::min(m.z - 1, int(std::ceil(tHi)));
             S tStar = S(cFirst - m.z);

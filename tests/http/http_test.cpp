@@ -72,36 +72,6 @@ TEST_F(Api, RendersPngAndExr) {
     expectError(client().Post(("/api/v1/sessions/" + id + "/render").c_str(), body.dump(), "application/json"), 400, "invalid_argument");
 }
 
-TEST_F(Api, ARendersExrAsATargetIsThePictureItShows) {
-    // Issue #34: a view's own render EXR uploaded as its target means RGB + T·background with
-    // weight 1 — as its PNG render shows it — not the medium alone weighted by its coverage.
-    const std::string id = createSession(), base = "/api/v1/sessions/" + id;
-    auto v = client().Post((base + "/views").c_str(), R"({"camera":{"eye":[0,0,3],"target":[0,0,0],"width":24,"height":20}})",
-                           "application/json");
-    ASSERT_EQ(v->status, 201) << v->body;
-    const std::string view = json::parse(v->body)["id"];
-    auto exr = client().Get((base + "/views/" + view + "/render.exr?exr_type=float").c_str());
-    ASSERT_EQ(exr->status, 200);
-    EXPECT_GT(exr->body.size(), client().Get((base + "/views/" + view + "/render.exr").c_str())->body.size() * 3 / 2) << "float, not half";
-    expectError(client().Get((base + "/views/" + view + "/render.exr?exr_type=int").c_str()), 400, "invalid_argument");
-    auto put = client().Put((base + "/views/" + view + "/target").c_str(), exr->body, "image/x-exr");
-    ASSERT_EQ(put->status, 200) << put->body;
-    const core::LoadedImage rendered = core::loadImageFromMemory(exr->body.data(), exr->body.size(), "render");
-    const core::Image picture = core::pictureOf(rendered);
-    auto back = client().Get((base + "/views/" + view + "/target.png").c_str());
-    ASSERT_EQ(back->status, 200) << back->body;
-    const core::Image target = core::loadImageFromMemory(back->body.data(), back->body.size(), "target").image;
-    double worst = 0, background = 0;
-    for (size_t i = 0; i < picture.pixelCount(); ++i) {
-        for (size_t c = 0; c < 3; ++c)
-            worst = std::max(worst, double(std::abs(target.rgba[4 * i + c] - std::min(1.0f, picture.rgba[4 * i + c]))));
-        EXPECT_EQ(target.rgba[4 * i + 3], 1.0f) << "weight 1, not coverage";
-        background = std::max(background, double(rendered.background.rgba[4 * i]));
-    }
-    EXPECT_GT(background, 0.05) << "the session's background shows through";
-    EXPECT_LE(worst, 0.01) << "the stored target is the picture (8-bit sRGB: 0.01)";
-}
-
 TEST_F(Api, LightingRoundTripAndValidation) {
     std::string id = createSession();
     json l = {{"sun", {{"direction", {0, 1, 0}}, {"irradiance", {2, 2, 2}}}}, {"background", {0, 0, 0}}};

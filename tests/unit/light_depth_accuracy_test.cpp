@@ -13,6 +13,7 @@
 #include <cmath>
 #include <iostream>
 
+#include "core/cpu_ref/agreement.h"
 #include "core/cpu_ref/reference_renderer.h"
 #include "core/volume/builtin_scenes.h"
 
@@ -40,25 +41,9 @@ struct Bounds {
 /// The built-in scene scaled so that its densest voxel holds `voxelDepth` optical depths.
 Volume denseScene(const char* name, int res, double voxelDepth) {
     Volume v = makeBuiltinScene(name, res);
-    const double peak = maxComponent(Volume::range(v.extinction()).second);
-    const double voxel = length(v.worldFromIndex().applyVector({1, 0, 0}));
-    for (float& s : v.extinction()) s = float(s * voxelDepth / (peak * voxel));
+    cpu_ref::scaleToVoxelDepth(v, voxelDepth);
     for (float& a : v.ensureAlbedo()) a = 0.9f;
     return v;
-}
-
-struct Errors {
-    double sumRatio, rms;
-};
-
-Errors compare(const Image& a, const Image& exact) {
-    double sa = 0, se = 0, num = 0, den = 0;
-    for (size_t i = 0; i < exact.pixelCount(); ++i)
-        for (int c = 0; c < 3; ++c) {
-            const double x = a.rgba[4 * i + c], y = exact.rgba[4 * i + c];
-            sa += x, se += y, num += (x - y) * (x - y), den += y * y;
-        }
-    return {sa / se, std::sqrt(num / den)};
 }
 
 void expectAccurate(const char* scene, int res, double voxelDepth, Bounds bounds, Bounds grazing) {
@@ -76,13 +61,13 @@ void expectAccurate(const char* scene, int res, double voxelDepth, Bounds bounds
         const Image grid = cpu_ref::renderReference<double>(v, cam, l, step, cpu_ref::LightDepthMethod::Grid);
         // The exact light integral: its own march at 0.05 voxel from every sample.
         const Image exact = cpu_ref::renderReference<double>(v, cam, l, step, cpu_ref::LightDepthMethod::Exact, 0.05);
-        const Errors e = compare(grid, exact);
+        const cpu_ref::Agreement e = cpu_ref::agreement(grid, exact);
         std::cout << "[ measured ] " << scene << " " << res << "³, " << voxelDepth << " optical depths a voxel, sun " << sun.name
-                  << ": sum " << e.sumRatio << ", relative RMS " << e.rms << "\n";
-        ::testing::Test::RecordProperty(std::string(scene) + "_" + sun.name + "_rms", std::to_string(e.rms));
+                  << ": sum " << e.sumRatio << ", relative RMS " << e.relativeRms << "\n";
+        ::testing::Test::RecordProperty(std::string(scene) + "_" + sun.name + "_rms", std::to_string(e.relativeRms));
         const Bounds b = sun.grazing ? grazing : bounds;
         EXPECT_NEAR(e.sumRatio, 1.0, b.sum) << scene << " " << sun.name;
-        EXPECT_LE(e.rms, b.rms) << scene << " " << sun.name;
+        EXPECT_LE(e.relativeRms, b.rms) << scene << " " << sun.name;
     }
 }
 

@@ -82,16 +82,12 @@ CellCache emptyCellCache() {
 }
 
 vec3 extinctionAt(inout CellCache cache, vec3 p) {
-#if VOLSTYLE_HW_FILTER
-    return fetchTrilinear(s_extinction, stencilAt(p));
-#else
     Stencil s = stencilAt(p);
     if (s.i0 != cache.i0) {
         cache.i0 = s.i0;
         cache.corners = fetchCorners(s_extinction, s);
     }
     return interpolateCorners(cache.corners, s.f);
-#endif
 }
 
 // Ray (o + t d) against the voxels' box, in index space: [tEnter, tExit], empty if x > y.
