@@ -23,11 +23,21 @@ async function openShafts(browser, url, fail, viewport) {
   page.on('pageerror', (e) => console.error('page error:', e.message));
   await page.goto(url);
   await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('session ready'), null, { timeout: 60000 });
-  await page.click('#mode-shafts');
+  // On a loaded machine a click can land while the layout still shifts: click until the mode took.
+  for (let k = 0; k < 5; ++k) {
+    await page.click('#mode-shafts');
+    try {
+      await page.waitForFunction(() => document.getElementById('mode-shafts').classList.contains('selected') &&
+                                        document.getElementById('status').textContent.startsWith('light shafts'), null, { timeout: 5000 });
+      break;
+    } catch (e) {
+      console.error(`the shafts mode did not open on click ${k + 1} (status: ${await page.textContent('#status')}); again`);
+    }
+  }
   const revision = () => page.evaluate(() => Number(document.getElementById('shafts-frame').dataset.revision || 0));
   const newFrame = async (after, what) => {
     try {
-      await page.waitForFunction((a) => Number(document.getElementById('shafts-frame').dataset.revision || 0) > a, after, { timeout: 60000 });
+      await page.waitForFunction((a) => Number(document.getElementById('shafts-frame').dataset.revision || 0) > a, after, { timeout: 120000 });
     } catch (e) {
       await fail(`no new frame after ${what} (still revision ${await revision()}; status: ${await page.textContent('#status')})`);
     }
