@@ -31,6 +31,8 @@ enum class ErrorCode {
     TooManyStreams,      ///< the client (or the server) holds its limit of open event streams
     TooManyConnections,  ///< the client holds its limit of open connections
     OverBudget,          ///< a render stopped at the server's time budget
+    Overloaded,          ///< the server's queue or memory budget is full: retry after Retry-After seconds
+    OutOfBudget,         ///< the session's or the server's memory budget cannot hold what was sent
     Interrupted,         ///< the server stopped while the job was queued or running
     GpuError,            ///< the GL context or driver failed
     ShaderCompileError,  ///< a kernel did not compile (a bug or a driver problem)
@@ -60,6 +62,8 @@ inline constexpr ErrorCodeInfo kErrorCodes[] = {
     {ErrorCode::TooManyStreams, "too_many_streams", 429},
     {ErrorCode::TooManyConnections, "too_many_connections", 429},
     {ErrorCode::OverBudget, "over_budget", 422},
+    {ErrorCode::Overloaded, "overloaded", 503},
+    {ErrorCode::OutOfBudget, "memory_budget", 507},
     {ErrorCode::Interrupted, "interrupted", 500},
     {ErrorCode::GpuError, "gpu_error", 500},
     {ErrorCode::ShaderCompileError, "shader_compile_error", 500},

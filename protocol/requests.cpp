@@ -61,6 +61,8 @@ RenderRequest RenderRequest::fromJson(const nlohmann::json& j, const RequestLimi
             else if (f) r.fail("/format", "must be 'png' or 'exr'");
         }
         if (j.contains("exposure")) q.exposure = r.number(j["exposure"], "/exposure").value_or(0);
+        if (!(q.exposure >= -kMaxExposureStops && q.exposure <= kMaxExposureStops))
+            r.fail("/exposure", "must be in [-30, 30] stops");
         if (j.contains("exr_type")) {
             const auto t = r.string(j["exr_type"], "/exr_type");
             if (t == "float") q.exrHalf = false;
@@ -129,7 +131,7 @@ FramesRenderRequest FramesRenderRequest::fromJson(const nlohmann::json& j, const
         if (!j.contains("camera")) r.fail("/camera", "is required");
         else q.camera = readCamera(r, j, "/camera", limits);
         if (j.contains("exposure")) q.exposure = r.number(j["exposure"], "/exposure").value_or(0);
-        if (!(q.exposure >= -30 && q.exposure <= 30)) r.fail("/exposure", "must be in [-30, 30] stops");
+        if (!(q.exposure >= -kMaxExposureStops && q.exposure <= kMaxExposureStops)) r.fail("/exposure", "must be in [-30, 30] stops");
     }
     r.throwIfErrors();
     return q;
@@ -188,6 +190,7 @@ ViewRenderQuery ViewRenderQuery::fromQuery(const QueryParams& params) {
     if (auto text = lastValue(params, "exposure")) {
         auto v = parseWhole<double>(*text);
         if (!v) r.fail("?exposure", "must be a finite number of stops, got '" + *text + "'");
+        else if (!(*v >= -kMaxExposureStops && *v <= kMaxExposureStops)) r.fail("?exposure", "must be in [-30, 30] stops, got '" + *text + "'");
         else q.exposure = *v;
     }
     if (auto text = lastValue(params, "exr_type")) {

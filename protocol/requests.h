@@ -61,6 +61,10 @@ struct RenderRequest {
     static RenderRequest fromJson(const nlohmann::json& j, const RequestLimits& limits);
 };
 
+/// Exposure in stops, either way: 2^±30 covers any picture; beyond it every pixel is black or
+/// white (and 2^1e308 is infinite).
+constexpr double kMaxExposureStops = 30;
+
 /// The largest frame number of an animation (10 minutes at 60 fps and then some).
 constexpr int kMaxFrameNumber = 99999;
 

@@ -69,7 +69,10 @@ core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::stri
         if (j.contains("lights") && r.object(j["lights"], path + "/lights", {"lobes", "domain", "rounds", "background"})) {
             const auto& l = j["lights"];
             if (l.contains("background")) o.lights.background = r.boolean(l["background"], path + "/lights/background").value_or(false);
-            if (l.contains("lobes")) o.lights.lobes = r.integer(l["lobes"], path + "/lights/lobes").value_or(o.lights.lobes);
+            if (l.contains("lobes")) {  // 0 is what leaving it out means: sent, it must be a count
+                o.lights.lobes = r.integer(l["lobes"], path + "/lights/lobes").value_or(o.lights.lobes);
+                if (o.lights.lobes == 0) r.fail(path + "/lights/lobes", "must be in [1, 256] (leave it out for the lighting's own count)");
+            }
             if (l.contains("rounds")) o.lights.rounds = r.integer(l["rounds"], path + "/lights/rounds").value_or(o.lights.rounds);
             if (l.contains("domain")) {
                 auto d = r.string(l["domain"], path + "/lights/domain");
@@ -118,6 +121,7 @@ core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::stri
         if (j.contains("views")) {
             o.views.clear();
             if (!j["views"].is_array()) r.fail(path + "/views", "must be an array of view ids");
+            else if (j["views"].empty()) r.fail(path + "/views", "names no view; leave it out to solve every view with a target");
             else
                 for (size_t i = 0; i < j["views"].size(); ++i)
                     if (auto s = r.string(j["views"][i], path + "/views/" + std::to_string(i))) o.views.push_back(*s);

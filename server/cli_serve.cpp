@@ -40,6 +40,8 @@ const CommandSpec kServe{
         {"max-mesh-vertices", "N", "vertices of an occluder mesh, and of a session's meshes together; default 4000000"},
         {"max-voxels", "N", "largest volume, voxels; default 16777216 (256^3)"},
         {"max-json-kib", "N", "largest JSON body, KiB; default 1024"},
+        {"session-memory-mib", "N", "decoded frames, versions, meshes and images one session may hold, MiB (507 past it); default 2048"},
+        {"memory-mib", "N", "the same for all sessions together, MiB; default 8192"},
     },
     "  volstyle serve --port 8080\n"};
 
@@ -71,6 +73,8 @@ int runServe(const std::vector<std::string>& argv) {
     opt.maxMeshVertices = size_t(wholeNumber(args, "max-mesh-vertices", double(opt.maxMeshVertices), 3, 1e8));
     opt.volumeLimits.maxVoxels = int64_t(wholeNumber(args, "max-voxels", double(opt.volumeLimits.maxVoxels), 1, 1e10));
     opt.maxJsonBytes = size_t(wholeNumber(args, "max-json-kib", double(opt.maxJsonBytes >> 10), 1, 1 << 20)) << 10;
+    opt.memory.perSession = size_t(wholeNumber(args, "session-memory-mib", double(opt.memory.perSession >> 20), 1, 1 << 24)) << 20;
+    opt.memory.total = size_t(wholeNumber(args, "memory-mib", double(opt.memory.total >> 20), 1, 1 << 24)) << 20;
     // This process's own image, even if the file on disk is replaced while it runs (a rebuild or
     // an upgrade: the soak saw uploads fail while the binary was relinked). posix_spawn execs in
     // the child, whose /proc/self/exe is still this binary.

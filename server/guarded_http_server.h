@@ -11,14 +11,26 @@
 ///    answered 429 with the body `refusal()` returns, and closed);
 ///  - an idle keep-alive connection is closed after `idleSeconds`, and stop() is noticed within
 ///    kPollSliceMs;
-///  - connections get TCP_NODELAY (small answers otherwise wait for a delayed ACK).
+///  - connections get TCP_NODELAY (small answers otherwise wait for a delayed ACK);
+///  - (issue #35) the listen backlog is `listenBacklog`, not the library's 5 (a burst of 100 new
+///    connections was reset by the kernel, unanswered and unlogged); connections beyond
+///    `maxQueuedConnections` waiting for a worker are answered 503 with Retry-After at once;
+///  - (issue #35) each request's head is read ahead (MSG_PEEK) and checked before the library
+///    parses it: a malformed request line, an unknown method, a NUL or an encoded '/' in the path,
+///    over `maxHeaderCount` headers or `maxHeadBytes` bytes get ONE answer (400, 414 or 431) and
+///    the connection closes (the library answered 400 and read the rest of the head as new
+///    requests: two or three status lines for one request).
 
 #include <httplib.h>
 
+#include <condition_variable>
+#include <deque>
 #include <functional>
 #include <map>
 #include <mutex>
 #include <string>
+#include <thread>
+#include <vector>
 
 namespace volstyle::server {
 
@@ -29,29 +41,61 @@ struct ConnectionLimits {
     double writeSeconds = 5;             ///< a write that cannot proceed for this long closes the connection
     int maxConnectionsPerClient = 24;
     int maxRequestsPerConnection = 100;
+    int listenBacklog = 1024;            ///< connections the kernel holds before accept (Linux caps it at somaxconn)
+    size_t maxQueuedConnections = 512;   ///< accepted connections waiting for a worker; beyond: 503
+    int retryAfterSeconds = 2;           ///< the Retry-After of a 503 or 429 refusal
+    size_t maxHeadBytes = 32 << 10;      ///< request line and headers together (over: 431)
+    int maxHeaderCount = 100;            ///< header lines (over: 431)
+    size_t maxTargetBytes = 8192;        ///< the request target (over: 414)
+};
+
+/// Why a connection or request is refused before any route sees it.
+enum class Refusal {
+    ClientConnections,  ///< 429: the client holds maxConnectionsPerClient
+    Overloaded,         ///< 503: maxQueuedConnections wait for a worker
+    MalformedRequest,   ///< 400: the request line or a header line does not parse, or the path is unsafe
+    TargetTooLong,      ///< 414
+    HeadTooLarge,       ///< 431: too many header lines or bytes
 };
 
 class GuardedHttpServer : public httplib::Server {
 public:
-    explicit GuardedHttpServer(ConnectionLimits limits = {}) : m_limits(limits) {}
+    explicit GuardedHttpServer(ConnectionLimits limits = {});
+    ~GuardedHttpServer() override;
     const ConnectionLimits& connectionLimits() const { return m_limits; }
-    /// The JSON body of the 429 sent to a client over its connection limit.
-    std::function<std::string(const std::string& client)> refusal;
+    /// The JSON body of a refusal (the SPEC's error body; `detail` says what was wrong), and the
+    /// place to log it: refused connections never reach the library's logger.
+    std::function<std::string(Refusal why, const std::string& client, const std::string& detail)> refusal;
+
+    /// bind_to_port (port 0: bind_to_any_port) with the listen backlog raised to listenBacklog;
+    /// the port, or -1 when the address cannot be bound.
+    int bindWithBacklog(const std::string& host, int port);
+    /// Workers serving connections (an open event stream holds one).
+    void setWorkerThreads(size_t threads);
 
     static constexpr int kPollSliceMs = 100;
 
 private:
+    class SheddingPool;
+
     bool process_and_close_socket(socket_t sock) override;
     /// Counts a connection of `client`; false if it holds its limit already.
     bool admit(const std::string& client);
     void leave(const std::string& client);
-    void refuse(socket_t sock, const std::string& client);
+    /// Sends one refusal with `Connection: close` (best effort, never blocking).
+    void refuse(socket_t sock, const std::string& client, Refusal why, const std::string& detail);
     /// Waits up to idleSeconds for the next request's first byte (false: idle, closed or stopping).
     bool awaitRequest(socket_t sock) const;
 
     ConnectionLimits m_limits;
     std::mutex m_mutex;
     std::map<std::string, int> m_open;  ///< connections by client address
+    socket_t m_listenSocket = INVALID_SOCKET;
 };
+
+/// Checks a request's head (request line and headers, up to and including the blank line) as
+/// GuardedHttpServer does before parsing; empty when it may be parsed, else the refusal's detail
+/// with `why` set. Pure, for tests.
+std::string checkRequestHead(const std::string& head, const ConnectionLimits& limits, Refusal& why);
 
 }  // namespace volstyle::server

@@ -44,6 +44,7 @@ ServiceLimits serviceLimits(const ServerOptions& o) {
     l.renderBudgetSeconds = o.renderBudgetSeconds;
     l.vdbReader.executable = o.vdbReader;
     l.finishedJobsKept = o.finishedJobsKept;
+    l.memory = o.memory;
     return l;
 }
 
@@ -100,10 +101,9 @@ HttpServer::HttpServer(ServerOptions options) {
 HttpServer::~HttpServer() { stop(); }
 
 int HttpServer::bind() {
-    if (m->opt.port == 0) return m->http.bind_to_any_port(m->opt.host);
-    if (!m->http.bind_to_port(m->opt.host, m->opt.port))
-        throw IoError("serve: cannot listen on " + m->opt.host + ":" + std::to_string(m->opt.port) + " (in use?)");
-    return m->opt.port;
+    const int port = m->http.bindWithBacklog(m->opt.host, m->opt.port);
+    if (port <= 0) throw IoError("serve: cannot listen on " + m->opt.host + ":" + std::to_string(m->opt.port) + " (in use?)");
+    return port;
 }
 
 void HttpServer::listen() { m->http.listen_after_bind(); }
@@ -111,17 +111,28 @@ void HttpServer::stop() { m->http.stop(); }
 
 void HttpServer::Impl::addMiddleware() {
     http.set_payload_max_length(opt.maxUploadBytes + (1 << 20));
-    http.refusal = [this](const std::string& client) {
+    // Connections and requests refused before routing: the SPEC body, and a log line each (the
+    // library's logger never sees them).
+    http.refusal = [this](Refusal why, const std::string& client, const std::string& detail) {
         const std::string id = fmt::format("{:08x}", ++requestCounter);
-        spdlog::warn("refused a connection from {}: it holds {} already (id={})", client,
-                     opt.connections.maxConnectionsPerClient, id);
-        return protocol::toText(protocol::errorBody(protocol::ErrorCode::TooManyConnections,
-                                                    "this client holds " + std::to_string(opt.connections.maxConnectionsPerClient) +
-                                                        " open connections (the limit); close some, or reuse them with keep-alive",
-                                                    {}, id));
+        protocol::ErrorCode code = protocol::ErrorCode::InvalidArgument;
+        std::string message = detail;
+        if (why == Refusal::ClientConnections) {
+            code = protocol::ErrorCode::TooManyConnections;
+            message = "this client holds " + std::to_string(opt.connections.maxConnectionsPerClient) +
+                      " open connections (the limit); close some, or reuse them with keep-alive";
+        } else if (why == Refusal::Overloaded) {
+            code = protocol::ErrorCode::Overloaded;
+            message = "the server is over its queue (" + detail + "); retry after " +
+                      std::to_string(opt.connections.retryAfterSeconds) + " s";
+        } else if (why == Refusal::TargetTooLong || why == Refusal::HeadTooLarge) {
+            code = protocol::ErrorCode::TooLarge;
+        }
+        spdlog::warn("refused a {} from {}: {} (id={})", why == Refusal::ClientConnections || why == Refusal::Overloaded ? "connection" : "request",
+                     client, message, id);
+        return protocol::toText(protocol::errorBody(code, message, {}, id));
     };
-    const size_t threads = size_t(std::max(opt.httpThreads, opt.maxEventStreams + 4));
-    http.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+    http.setWorkerThreads(size_t(std::max(opt.httpThreads, opt.maxEventStreams + 4)));
 
     // Request ids, timing, and the bearer token on /api when one is set.
     http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {

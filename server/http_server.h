@@ -9,6 +9,7 @@
 
 #include "core/volume/volume.h"
 #include "server/guarded_http_server.h"
+#include "server/memory_budget.h"
 
 namespace volstyle::server {
 
@@ -23,6 +24,7 @@ struct ServerOptions {
     size_t maxUploadBytes = size_t(512) << 20;  ///< images and VDBs: 512 MiB
     int maxImageSide = 4096;
     core::VolumeLimits volumeLimits;
+    MemoryLimits memory;             ///< decoded bytes per session and in all (memory_budget.h)
     /// Vertices of one occluder mesh, and of all a session's meshes together (triangles: twice).
     size_t maxMeshVertices = 4'000'000;
     int httpThreads = 48;            ///< HTTP worker threads (an open event stream holds one)

@@ -10,6 +10,7 @@
 
 #include "core/base/errors.h"
 #include "server/cli.h"
+#include "server/mesh_reader.h"
 #include "server/vdb_reader.h"
 
 namespace {
@@ -81,6 +82,7 @@ int main(int argc, char** argv) {
         if (command == "solve") return volstyle::server::runSolve(args);
         if (command == "serve") return volstyle::server::runServe(args);
         if (command == "read-vdb") return volstyle::server::runReadVdb(args);  // the server's child reader
+        if (command == "read-mesh") return volstyle::server::runReadMesh(args);  // the server's child mesh reader
         std::cerr << "volstyle: unknown command '" << command << "'\n" << usage();
         return 2;
     } catch (const volstyle::InvalidArgument& e) {

@@ -42,7 +42,7 @@ std::string readFile(const fs::path& p) {
 
 }  // namespace
 
-Persistence::Persistence(fs::path dir) : m_dir(std::move(dir)) {
+Persistence::Persistence(fs::path dir, MeshReader readMesh) : m_dir(std::move(dir)), m_readMesh(std::move(readMesh)) {
     std::error_code ec;
     fs::create_directories(m_dir / "sessions", ec);
     fs::create_directories(m_dir / "jobs", ec);
@@ -329,7 +329,7 @@ void Persistence::restoreStylizer(Session& s, const fs::path& dir) {
         if (format.rfind("tmp-", 0) == 0) continue;  // an unfinished write (atomicWrite's temporary)
         try {
             const std::string bytes = readFile(entry.path());
-            auto mesh = std::make_shared<const core::Mesh>(core::loadMeshFromMemory(bytes, format));
+            auto mesh = std::make_shared<const core::Mesh>(m_readMesh ? m_readMesh(bytes, format) : core::loadMeshFromMemory(bytes, format));
             s.stylizer.meshes[entry.path().stem().string()] = {format, std::move(mesh), bytes.size()};
         } catch (const std::exception& e) {
             damage(file, e.what());

@@ -18,6 +18,7 @@
 /// again before a version is read back or sent.
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -37,7 +38,10 @@ struct QuarantineEntry {
 
 class Persistence {
 public:
-    explicit Persistence(std::filesystem::path dir);
+    /// Stored meshes are read again with `readMesh` (the server's child reader: a stored file is
+    /// as untrusted as it was when it was uploaded); empty: in this process.
+    using MeshReader = std::function<core::Mesh(const std::string& bytes, const std::string& format)>;
+    explicit Persistence(std::filesystem::path dir, MeshReader readMesh = {});
 
     /// Writes session.json and any version not on disk yet (marking it stored). Call with the
     /// session's mutex held.
@@ -97,6 +101,7 @@ private:
     /// lobes' radiances as they were last written.
     void restoreLighting(Session& s, const std::filesystem::path& dir, const nlohmann::json& lighting);
     std::filesystem::path m_dir;
+    MeshReader m_readMesh;
 };
 
 }  // namespace volstyle::server

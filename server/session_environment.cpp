@@ -47,6 +47,7 @@ EnvironmentMapInfo SessionService::setEnvironmentMap(Session& s, const std::stri
     slot.reset();
     std::lock_guard lock(s.mutex);
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+    m_memory.check(s, map->rgba.size() * sizeof(float), s.environmentMap ? s.environmentMap->rgba.size() * sizeof(float) : 0, "the environment map");
     if (m_persist) m_persist->saveSessionFile(s.id, kEnvironmentFile, bytes);
     // The lighting that names the old map names the new one.
     core::Lighting& l = s.lighting;

@@ -1,11 +1,18 @@
 // Renders of a session on the GL thread (SPEC §3 "Concurrency", §9): single scattering, the
 // translucent preview, a view (with its plate) and a running job's preview, all under the render
 // budget.
+#include <fmt/format.h>
+
 #include "core/render/renderer.h"
 #include "core/translucent/translucent_renderer.h"
 #include "server/session_service.h"
 
 namespace volstyle::server {
+
+/// Texels the translucent slices fill per second on llvmpipe's two cores (TranslucentRenderer::
+/// estimatedTexels; measured by tests/probe's 4096² case: 89 slices of 4096² + 2 × 4096² in 60 s,
+/// 8e7/s, halved for a slower machine of the kind).
+constexpr double kTranslucentTexelsPerSecond = 4e7;
 
 using protocol::ApiError;
 using protocol::ErrorCode;
@@ -60,6 +67,20 @@ core::RenderLayers SessionService::render(Session& s, const core::Camera& camera
 core::Image SessionService::renderTranslucent(Session& s, const core::Camera& camera, const core::TranslucentSettings& settings,
                                               core::Image* medium) {
     const core::Lighting l = lighting(s);
+    // Estimated before it holds the GL thread (a 4096² render with a 4096² light buffer at 0.05
+    // voxel slices ran 106 s, and every other session waited): the bound of every slice filling
+    // the image and the light buffer, at the slower of this machine kind's measured rates.
+    Int3 dims;
+    {
+        std::lock_guard lock(s.mutex);
+        dims = s.volume.dims();
+    }
+    const double seconds = core::TranslucentRenderer::estimatedTexels(dims, camera, settings) / kTranslucentTexelsPerSecond;
+    if (m_limits.renderBudgetSeconds > 0 && seconds > m_limits.renderBudgetSeconds)
+        throw ApiError(ErrorCode::OverBudget,
+                       fmt::format("this translucent render could take up to {:.0f} s, over the render budget of {:g} s (volstyle serve "
+                                   "--render-budget); use fewer pixels, a smaller light_buffer or a larger slice_spacing",
+                                   seconds, m_limits.renderBudgetSeconds));
     return m_gl.run([&](core::GpuDevice& device) {
         const std::shared_ptr<core::GpuVolume> gpu = lockedSessionGpu(s);
         if (!m_translucent) m_translucent = std::make_unique<core::TranslucentRenderer>(device);

@@ -15,6 +15,7 @@
 #include "core/translucent/translucent_renderer.h"
 #include "core/stylize/stylizer.h"
 #include "core/volume/builtin_scenes.h"
+#include "server/mesh_reader.h"
 
 namespace volstyle::server {
 namespace {
@@ -33,8 +34,15 @@ SessionView& findView(Session& s, const std::string& id) {
 SessionService::SessionService(ServiceLimits limits, const std::string& dataDir)
     : m_limits(std::move(limits)), m_sessions(m_limits.maxSessions) {
     if (!dataDir.empty()) {
-        m_persist = std::make_unique<Persistence>(dataDir);
-        for (auto& s : m_persist->loadSessions()) m_sessions.restore(s);
+        m_persist = std::make_unique<Persistence>(dataDir, [this](const std::string& bytes, const std::string& format) {
+            core::MeshLimits limits = m_limits.meshLimits;
+            limits.maxFileBytes = std::max(limits.maxFileBytes, bytes.size());  // accepted once: the file limit may have changed since
+            return loadUntrustedMesh(bytes, format, limits, m_limits.vdbReader);
+        });
+        for (auto& s : m_persist->loadSessions()) {
+            m_memory.recount(*s);
+            m_sessions.restore(s);
+        }
         for (auto& j : m_persist->loadJobs()) m_jobs.restore(j);
         pruneJobs();
         spdlog::info("restored {} session(s) from '{}'", m_sessions.size(), dataDir);
@@ -69,6 +77,7 @@ SessionService::~SessionService() {
 void SessionService::saved(Session& s) {
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
     if (m_persist) m_persist->saveSession(s);
+    m_memory.recount(s);  // what it holds now, whatever changed
 }
 
 void SessionService::saved(const Job& j) {
@@ -104,6 +113,7 @@ std::shared_ptr<Session> SessionService::create(const protocol::CreateSessionReq
     auto s = std::make_shared<Session>();
     s->created = isoNow();
     s->scene = request.scene;
+    m_memory.checkNew(size_t(request.resolution) * request.resolution * request.resolution * 9 * sizeof(float), "a new session");
     s->volume = core::makeBuiltinScene(request.builtinName(), request.resolution);  // InvalidArgument lists the scenes
     s->lighting = core::defaultLighting();
     s->versions.add(1);
@@ -126,6 +136,7 @@ void SessionService::remove(const std::string& id) {
     {
         std::lock_guard lock(s->mutex);
         s->removed = true;  // from now on nothing writes it back or caches a GPU copy
+        m_memory.forget(*s);
         jobs = s->jobs;
         if (m_persist) m_persist->removeSession(s->id);
     }
@@ -228,6 +239,9 @@ SessionView SessionService::setViewImage(Session& s, const std::string& viewId, 
     slot.reset();
     std::lock_guard lock(s.mutex);
     SessionView& v = findView(s, viewId);  // views keep their camera: the header check still holds
+    const std::optional<core::Image>& held = kind == ViewImage::Target ? v.target : v.weights;
+    const size_t replaced = kind == ViewImage::Background ? (v.background ? v.background->rgba.size() : 0) : (held ? held->rgba.size() : 0);
+    m_memory.check(s, image.rgba.size() * sizeof(float), replaced * sizeof(float), "the " + std::string(viewImageName(kind)) + " of " + v.id);
     if (m_persist) m_persist->saveViewImage(s.id, v.id, viewImageName(kind), image);
     switch (kind) {
         case ViewImage::Target: v.target = std::move(image); break;

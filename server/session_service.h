@@ -23,6 +23,7 @@
 #include "protocol/requests.h"
 #include "server/gl_worker.h"
 #include "server/job_store.h"
+#include "server/memory_budget.h"
 #include "server/persistence.h"
 #include "server/session_store.h"
 #include "server/vdb_reader.h"
@@ -57,6 +58,8 @@ struct ServiceLimits {
     /// GPU memory for the parts one solve leaves for the next (core/solve/solve_cache.h), shared by
     /// every session: the keys name content, not sessions. 0: every solve starts cold.
     size_t solveCacheBytes = size_t(1) << 30;
+    /// Decoded bytes a session, and all sessions, may hold (memory_budget.h; over: 507).
+    MemoryLimits memory;
 };
 
 enum class ViewImage { Target, Weights, Background };
@@ -315,6 +318,7 @@ private:
     std::counting_semaphore<> m_decodeSlots{kConcurrentDecodes};
 
     ServiceLimits m_limits;
+    MemoryBudget m_memory{m_limits.memory};
     std::unique_ptr<core::Renderer> m_renderer;  ///< GL thread only
     std::unique_ptr<core::Stylizer> m_stylizer;  ///< GL thread only
     std::unique_ptr<core::TranslucentRenderer> m_translucent;  ///< GL thread only; created on first use

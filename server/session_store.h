@@ -70,6 +70,8 @@ struct Session {
     /// Set by DELETE: work still queued for the session neither caches GPU copies nor writes it
     /// back to disk (it answers not_found instead).
     bool removed = false;
+    /// What the server's MemoryBudget charges it (memory_budget.h; kept with the budget's lock).
+    size_t chargedBytes = 0;
     std::mutex mutex;                      ///< guards the fields above
 };
 

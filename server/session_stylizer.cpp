@@ -10,6 +10,7 @@
 #include "core/stylize/keyframes.h"
 #include "core/stylize/stylizer.h"
 #include "core/stylize/tf_anchors.h"
+#include "server/mesh_reader.h"
 #include "server/session_service.h"
 
 namespace volstyle::server {
@@ -176,10 +177,11 @@ OccluderMeshInfo SessionService::putOccluderMesh(Session& s, const std::string& 
     {
         DecodeSlot slot(m_decodeSlots);
         try {
-            uploaded.mesh = std::make_shared<const core::Mesh>(core::loadMeshFromMemory(bytes, uploaded.format, limits));
+            uploaded.mesh = std::make_shared<const core::Mesh>(loadUntrustedMesh(bytes, uploaded.format, limits, m_limits.vdbReader));
         } catch (const LimitExceeded& e) {
             throw ApiError(ErrorCode::TooLarge, std::string(e.what()) +
-                                                    (limits.maxVertices < m_limits.meshLimits.maxVertices
+                                                    (limits.maxVertices < m_limits.meshLimits.maxVertices &&
+                                                             std::string(e.what()).find("vertices") != std::string::npos
                                                          ? " (the session's other meshes hold " +
                                                                std::to_string(m_limits.meshLimits.maxVertices - limits.maxVertices) +
                                                                " of its " + std::to_string(m_limits.meshLimits.maxVertices) + " vertices)"
@@ -190,6 +192,12 @@ OccluderMeshInfo SessionService::putOccluderMesh(Session& s, const std::string& 
     }
     std::lock_guard lock(s.mutex);
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+    {
+        const auto bytesOf = [](const core::Mesh& m) { return (m.positions.size() + m.normals.size()) * sizeof(Vec3) + m.indices.size() * sizeof(uint32_t); };
+        const auto old = s.stylizer.meshes.find(name);
+        m_memory.check(s, bytesOf(*uploaded.mesh), old != s.stylizer.meshes.end() && old->second.mesh ? bytesOf(*old->second.mesh) : 0,
+                       "the mesh '" + name + "'");
+    }
     if (m_persist) {
         if (auto old = s.stylizer.meshes.find(name); old != s.stylizer.meshes.end() && old->second.format != uploaded.format)
             m_persist->removeSessionFile(s.id, meshFile(name, old->second.format));
@@ -232,6 +240,8 @@ TransferImageInfo SessionService::setTransferImage(Session& s, const std::string
     auto image = std::make_shared<const core::Image>(std::move(loaded.image));
     std::lock_guard lock(s.mutex);
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+    m_memory.check(s, image->rgba.size() * sizeof(float),
+                   s.stylizer.transferImage ? s.stylizer.transferImage->rgba.size() * sizeof(float) : 0, "the transfer function");
     const bool used = s.stylizer.usesTransferImage();
     core::StylizerScene scene = s.stylizer.scene;
     if (used) {  // the scene must stay valid with it (key frames' TFs share a size)
@@ -309,6 +319,7 @@ StylizerPick SessionService::pickStylizer(Session& s, const protocol::StylizerPi
     core::StylizeSettings settings;
     settings.readShadowMaps = false;
     settings.pick = core::StylizeSettings::Pixel{q.x, q.y};
+    settings.pickOnly = true;  // the frame and its AOVs come back 1×1: the picked pixel at (0, 0)
     const core::StylizedFrame f = stylizeOnGl(scene, settings);
     StylizerPick pick;
     if (!scene.keyframes.empty() && scene.keyframes.front().transferFunction) {
@@ -317,10 +328,10 @@ StylizerPick SessionService::pickStylizer(Session& s, const protocol::StylizerPi
     }
     const core::TransferFunction tf = pick.key >= 0 ? *scene.keyframes[size_t(pick.key)].transferFunction
                                                     : scene.transferFunction.value_or(core::TransferFunction{});
-    const core::TfPosition at = core::tfPositionAt(tf, f, q.x, q.y);
+    const core::TfPosition at = core::tfPositionAt(tf, f, 0, 0);
     pick.x = q.x, pick.y = q.y;
     pick.vBar = at.vBar, pick.depth = at.depth;
-    pick.distance = f.linearDepth.pixel(q.x, q.y)[0];
+    pick.distance = f.linearDepth.pixel(0, 0)[0];
     pick.occluder = f.pickedOccluder;
     if (pick.occluder >= 0) pick.occluderName = scene.occluders[size_t(pick.occluder)].name;
     pick.position = cam.eye + cam.rayDirection(q.x, q.y) * pick.distance;

@@ -99,6 +99,7 @@ int SessionService::revert(Session& s, int version) {
     int now = 0;
     {
         std::lock_guard lock(s.mutex);
+        m_memory.check(s, old.memoryBytes(), 0, "reverting to version " + std::to_string(version));
         stale = commitVersion(s, std::move(old));  // undo is a new version with the old content: nothing is lost
         now = s.version;
     }
@@ -117,6 +118,7 @@ int SessionService::editVolume(Session& s, const std::function<void(core::Volume
     int now = 0;
     {
         std::lock_guard lock(s.mutex);
+        m_memory.check(s, volume.memoryBytes(), 0, "the edited volume");
         stale = commitVersion(s, std::move(volume));
         now = s.version;
     }
@@ -144,6 +146,7 @@ void SessionService::uploadVdb(Session& s, const std::string& bytes) {
     std::shared_ptr<core::GpuVolume> stale;
     {
         std::lock_guard lock(s.mutex);
+        m_memory.check(s, v.memoryBytes(), 0, "the uploaded volume");
         s.scene = "upload";  // the session no longer shows its first scene (saved with the version)
         stale = commitVersion(s, std::move(v));
     }

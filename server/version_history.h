@@ -47,6 +47,12 @@ public:
     /// Versions not on disk yet (persistence writes them).
     std::vector<int> unstored() const;
     size_t inMemoryCount() const { return m_memory.size(); }
+    /// Bytes the older versions held in memory take.
+    size_t memoryBytes() const {
+        size_t n = 0;
+        for (const auto& [_, v] : m_memory) n += v->memoryBytes();
+        return n;
+    }
 
 private:
     /// Drops stored older versions from memory except the most recently used one.

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <iterator>
 #include <sstream>
+#include <vector>
 
 #include "core/base/errors.h"
 
@@ -112,28 +113,82 @@ void requireKnownFormat(const std::string& extension, const std::string& what) {
         throw InvalidArgument(what + ": mesh format '" + extension + "' is not one of obj, ply, gltf, glb");
 }
 
+/// Bytes of one PLY scalar type (0: not a type PLY defines).
+double plyTypeBytes(const std::string& t) {
+    if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+    if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32") return 4;
+    if (t == "double" || t == "float64") return 8;
+    return 0;
+}
+
 /// A PLY header's element counts against the bytes present: assimp allocates what the header
-/// claims before reading (a 200-byte file claiming 10⁸ vertices took 1.3 GB).
-void checkPlyHeader(const std::string& head, size_t fileBytes, const std::string& what, const MeshLimits& limits) {
-    std::istringstream in(head);
-    std::string line;
-    size_t vertices = 0, faces = 0;
-    while (std::getline(in, line) && line.rfind("end_header", 0) != 0) {
-        std::istringstream words(line);
-        std::string keyword, kind;
-        size_t count = 0;
-        if (words >> keyword >> kind >> count && keyword == "element") {
-            if (kind == "vertex") vertices = count;
-            if (kind == "face") faces = count;
+/// claims before reading (a 200-byte file claiming 10⁸ vertices took 1.3 GB). Lines end with LF,
+/// CRLF or CR alone (a CR-only header once hid its counts from this check); counts are read as
+/// decimal text, so 2⁶⁴ + 10⁹ is a huge count, not a wrapped one or an unread one. Each element
+/// needs at least its properties' bytes (binary) or two characters a value (ASCII); a face list
+/// at least three indices.
+void checkPlyHeader(const std::string& bytes, const std::string& what, const MeshLimits& limits) {
+    const size_t headEnd = std::min<size_t>(bytes.size(), 64 * 1024);
+    bool binary = false, ended = false;
+    size_t at = 0, bodyStart = bytes.size();
+    struct Element {
+        std::string name;
+        double count = 0, minBytes = 0;
+    };
+    std::vector<Element> elements;
+    while (at < headEnd) {
+        size_t end = bytes.find_first_of("\r\n", at);
+        if (end == std::string::npos) end = headEnd;
+        std::istringstream words(bytes.substr(at, end - at));
+        at = end + (bytes.compare(end, 2, "\r\n") == 0 ? 2 : 1);
+        std::string keyword;
+        words >> keyword;
+        if (keyword == "end_header") {
+            ended = true;
+            bodyStart = std::min(at, bytes.size());
+            break;
+        }
+        if (keyword == "format") {
+            std::string f;
+            words >> f;
+            binary = f.rfind("binary", 0) == 0;
+        } else if (keyword == "element") {
+            Element e;
+            std::string digits;
+            words >> e.name >> digits;
+            if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos)
+                throw InvalidArgument(what + ": the PLY element '" + e.name + "' has the count '" + digits.substr(0, 40) + "', not a number");
+            e.count = digits.size() > 18 ? 1e300 : double(std::stoull(digits));
+            elements.push_back(e);
+        } else if (keyword == "property" && !elements.empty()) {
+            std::string type, countType, itemType;
+            words >> type;
+            double b = 0;
+            if (type == "list") {
+                words >> countType >> itemType;
+                b = binary ? plyTypeBytes(countType) + 3 * plyTypeBytes(itemType) : 8;  // "3 0 1 2"
+            } else {
+                b = binary ? plyTypeBytes(type) : 2;  // "0 "
+            }
+            elements.back().minBytes += b;
         }
     }
-    if (vertices > limits.maxVertices || faces > limits.maxTriangles)
-        throw LimitExceeded(what + " declares " + std::to_string(vertices) + " vertices and " + std::to_string(faces) +
-                            " faces, over the limits");
-    // Every vertex needs at least 3 bytes (binary: 3 floats = 12), every face at least 4.
-    if (vertices * 3 + faces * 4 > fileBytes)
-        throw InvalidArgument(what + " is truncated: its header declares " + std::to_string(vertices) + " vertices and " +
-                              std::to_string(faces) + " faces, more than its " + std::to_string(fileBytes) + " bytes hold");
+    if (!ended) throw InvalidArgument(what + ": the PLY header has no end_header line within its first 64 KiB");
+    double vertices = 0, faces = 0, need = 0;
+    for (const auto& e : elements) {
+        if (e.name == "vertex") vertices = e.count;
+        if (e.name == "face") faces = e.count;
+        need += e.count * std::max(e.minBytes, 1.0);
+    }
+    const auto text = [](double x) { return x >= 1e18 ? std::string("over 10^18") : std::to_string(uint64_t(x)); };
+    if (vertices > double(limits.maxVertices) || faces > double(limits.maxTriangles))
+        throw LimitExceeded(what + " declares " + text(vertices) + " vertices and " + text(faces) + " faces, over the limits (" +
+                            std::to_string(limits.maxVertices) + " vertices, " + std::to_string(limits.maxTriangles) + " faces)");
+    const double body = double(bytes.size() - bodyStart);
+    if (need > body)
+        throw InvalidArgument(what + " is truncated: its header declares " + text(vertices) + " vertices and " + text(faces) +
+                              " faces, which need at least " + text(need) + " bytes; " + text(body) + " follow the header");
 }
 
 std::string lowerExtension(const std::string& path) {
@@ -160,9 +215,8 @@ Mesh loadMesh(const std::string& path, const MeshLimits& limits) {
     requireKnownFormat(lowerExtension(path), quoted(path));
     if (lowerExtension(path) == "ply") {
         std::ifstream in(path, std::ios::binary);
-        std::string head(size_t(std::min<uintmax_t>(bytes, 64 * 1024)), '\0');
-        in.read(head.data(), std::streamsize(head.size()));
-        checkPlyHeader(head, size_t(bytes), quoted(path), limits);
+        const std::string all{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+        checkPlyHeader(all, quoted(path), limits);
     }
     Assimp::Importer importer;
     configure(importer);
@@ -188,7 +242,7 @@ Mesh loadMeshFromMemory(const std::string& bytes, const std::string& extension, 
         throw LimitExceeded(what + " is " + std::to_string(bytes.size()) + " bytes, over the limit of " +
                             std::to_string(limits.maxFileBytes));
     requireKnownFormat(extension, what);
-    if (extension == "ply") checkPlyHeader(bytes.substr(0, 64 * 1024), bytes.size(), what, limits);
+    if (extension == "ply") checkPlyHeader(bytes, what, limits);
     Assimp::Importer importer;
     configure(importer);
     // ReadFileFromMemory serves the bytes and hands every other name (a glTF buffer's or image's

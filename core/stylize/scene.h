@@ -172,6 +172,9 @@ struct StylizeSettings {
         int x = 0, y = 0;
     };
     std::optional<Pixel> pick = std::nullopt;
+    /// With `pick`: read back only the picked pixel — the frame and every AOV come back 1×1,
+    /// holding that pixel (a click on a 4096² frame once read back 1.3 GB of images for it).
+    bool pickOnly = false;
     void validate() const;
 };
 

@@ -60,6 +60,10 @@ Image readChannelPlane(const std::vector<float>& plane, int w, int h, int channe
     return img;
 }
 
+/// Frame buffers up to this size stay allocated for the next frame (a 1080p frame's are 33 MB);
+/// larger ones are freed once read.
+constexpr size_t kKeptFrameBytes = size_t(64) << 20;
+
 }  // namespace
 
 struct Stylizer::Gpu {
@@ -203,11 +207,18 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     // rendered without the TF (and with its AOVs) and the TF applied to it.
     StylizeSettings withAovs = settings;
     withAovs.readAovs = true;
+    withAovs.pickOnly = false;  // the anchors read the AOVs where they are
     StylizedFrame f = renderPass(s, withAovs);
     const auto t = Clock::now();
     for (auto& [tf, w] : tfs) resolveAnchors(tf, scene, f);
     f.transferFunction = blended();
     applyTransferFunction(*f.transferFunction, f);
+    if (settings.pick && settings.pickOnly)
+        for (Image* img : {&f.frame, &f.scattering, &f.averageVisibility, &f.linearDepth}) {
+            Image one(1, 1);
+            std::copy_n(img->pixel(settings.pick->x, settings.pick->y), 4, one.rgba.data());
+            *img = std::move(one);
+        }
     const double ms = msSince(t);
     f.shadeMs += ms, f.totalMs += ms;
     return f;
@@ -426,9 +437,24 @@ StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSett
     out.shadeMs = msSince(t);
     out.shadeGpuMs = shadeTimer.elapsedMs();
     t = Clock::now();
-    out.frame = Image(cam.width, cam.height);
-    glGetNamedBufferSubData(m_gpu->pixels.id(), 0, GLsizeiptr(bytes), out.frame.rgba.data());
-    if (settings.readAovs) {
+    if (settings.pick && settings.pickOnly) {
+        // One pixel of the frame and of each AOV plane (the planes are RGBA, rows bottom-up as
+        // the frame's: the same offset in each).
+        const size_t at = (size_t(settings.pick->y) * size_t(cam.width) + size_t(settings.pick->x)) * 4 * sizeof(float);
+        const auto pixelOf = [&](const gl::Buffer& buffer, size_t plane) {
+            Image img(1, 1);
+            glGetNamedBufferSubData(buffer.id(), GLintptr(plane * bytes + at), GLsizeiptr(4 * sizeof(float)), img.rgba.data());
+            return img;
+        };
+        out.frame = pixelOf(m_gpu->pixels, 0);
+        out.scattering = readChannelPlane(pixelOf(m_gpu->layers, 0).rgba, 1, 1, 0, false);
+        out.averageVisibility = readChannelPlane(pixelOf(m_gpu->layers, 0).rgba, 1, 1, 3, true);
+        out.linearDepth = readChannelPlane(pixelOf(m_gpu->layers, 1).rgba, 1, 1, 0, true);
+    } else {
+        out.frame = Image(cam.width, cam.height);
+        glGetNamedBufferSubData(m_gpu->pixels.id(), 0, GLsizeiptr(bytes), out.frame.rgba.data());
+    }
+    if (settings.readAovs && !(settings.pick && settings.pickOnly)) {
         std::vector<float> plane(pixelCount * 4);
         glGetNamedBufferSubData(m_gpu->layers.id(), 0, GLsizeiptr(bytes), plane.data());
         out.scattering = readChannelPlane(plane, cam.width, cam.height, 0, false);
@@ -454,6 +480,11 @@ StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSett
         out.modifiedShadowMap = mapImage(shadow);
     }
     out.readbackMs = msSince(t);
+    if (bytes > kKeptFrameBytes) {  // a one-off large frame: its buffers go back now, not at the next frame
+        m_gpu->pixels = {};
+        m_gpu->layers = {};
+        m_gpu->pixelBytes = 0;
+    }
     out.totalMs = msSince(t0);
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory while stylizing");
     return out;

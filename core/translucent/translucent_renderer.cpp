@@ -298,9 +298,13 @@ Image TranslucentRenderer::render(GpuVolume& volume, const Camera& cam, const Li
         glDrawArrays(GL_TRIANGLE_FAN, 0, GLsizei(polygon.size()));
     };
 
+    // The budget (and a cancel) is checked every few slices: as many as fill about 4M texels, so
+    // a 4096² render stops within a slice of its budget, not 16 slices (9 s) past it.
+    const double sliceTexels = double(cam.width) * cam.height + 2.0 * settings.lightBufferSize * settings.lightBufferSize;
+    const int checkEvery = std::clamp(int(4e6 / sliceTexels), 1, 16);
     int drawn = 0;
     for (int k = 0; k < slices; ++k) {
-        if (budget.bounded() && k % 16 == 0) {
+        if (budget.bounded() && k % checkEvery == 0) {
             glFinish();  // the time spent is the GPU's
             budget.check("the translucent slices", double(k) / slices);
         }
@@ -360,6 +364,13 @@ Image TranslucentRenderer::render(GpuVolume& volume, const Camera& cam, const Li
         statsOut->totalMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     }
     return out;
+}
+
+double TranslucentRenderer::estimatedTexels(Int3 dims, const Camera& camera, const TranslucentSettings& settings) {
+    const double diagonal = std::sqrt(double(dims.x) * dims.x + double(dims.y) * dims.y + double(dims.z) * dims.z);
+    const double slices = std::ceil(diagonal / std::max(settings.sliceSpacing, 1e-6));
+    const double light = double(settings.lightBufferSize);
+    return slices * (double(camera.width) * camera.height + 2 * light * light);  // direct and indirect light
 }
 
 }  // namespace volstyle::core

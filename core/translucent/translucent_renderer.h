@@ -35,6 +35,11 @@ public:
     Image render(GpuVolume& volume, const Camera& camera, const Lighting& lighting, const TranslucentSettings& settings,
                  TranslucentStats* stats = nullptr, Image* medium = nullptr, const WorkBudget& budget = WorkBudget());
 
+    /// An upper bound on the texels a render fills: every slice covering the whole image and the
+    /// whole light buffer (the slices are the box's diagonal over the spacing, in voxels). With a
+    /// measured rate it keeps a render that cannot finish within a budget from starting.
+    static double estimatedTexels(Int3 dims, const Camera& camera, const TranslucentSettings& settings);
+
 private:
     GpuDevice& m_device;
     struct Targets;

@@ -1,5 +1,7 @@
 #include "core/volume/vdb_grid_roles.h"
 
+#include "core/base/errors.h"
+
 #include <cctype>
 
 namespace volstyle::core::vdb_role {
@@ -35,8 +37,15 @@ std::vector<float> denseOfVolume(const Volume& v, Role role) {
 std::optional<std::pair<int, std::string>> frameOfGridName(const std::string& name) {
     size_t digits = name.size();
     while (digits > 0 && std::isdigit(static_cast<unsigned char>(name[digits - 1]))) --digits;
-    if (digits == name.size() || digits < 2 || (name[digits - 1] != '.' && name[digits - 1] != '_') || name.size() - digits > 6) return std::nullopt;
-    return std::make_pair(std::stoi(name.substr(digits)), name.substr(0, digits - 1));
+    if (digits == name.size()) return std::nullopt;
+    // "density.-1": a frame number with a sign (once dropped in silence, with a 200).
+    const bool negative = digits >= 2 && name[digits - 1] == '-' && (name[digits - 2] == '.' || name[digits - 2] == '_');
+    const size_t sep = negative ? digits - 2 : digits - 1;
+    if (digits < 2 || (name[sep] != '.' && name[sep] != '_') || sep == 0) return std::nullopt;
+    if (negative || name.size() - digits > 6)  // "density.4294967301": once dropped, or wrapped to frame 5
+        throw InvalidArgument("grid '" + name.substr(0, 80) + "' names frame " + name.substr(sep + 1, 24) +
+                              ", outside 0.." + std::to_string(kMaxGridFrame) + " (frame numbers are whole, 0 or more)");
+    return std::make_pair(std::stoi(name.substr(digits)), name.substr(0, sep));
 }
 
 }  // namespace volstyle::core::vdb_role

@@ -28,8 +28,13 @@ float absentValue(Role role);
 /// The dense RGB grid of the volume for a role (the refractive index repeated in R, G and B).
 std::vector<float> denseOfVolume(const Volume& v, Role role);
 
+/// The largest frame number a grid's name or `frame` metadata may carry (the server allows fewer).
+constexpr int kMaxGridFrame = 999999;
+
 /// The frame a grid name ending in `.N` or `_N` (at most 6 digits, after at least one character)
-/// stamps it with, and the name without the number; nothing for any other name.
+/// stamps it with, and the name without the number; nothing for any other name. A name that
+/// stamps a frame out of range (`density.-1`, `density.4294967301`) throws InvalidArgument
+/// naming it: such a grid was once dropped in silence, or its number wrapped.
 std::optional<std::pair<int, std::string>> frameOfGridName(const std::string& name);
 
 }  // namespace volstyle::core::vdb_role

@@ -294,8 +294,15 @@ Volume volumeFromGrids(FileContents file, const std::string& path, const VolumeL
 /// The frame a grid belongs to in a file that holds a whole animation — an integer `frame`
 /// metadata entry, or a name ending in `.N` or `_N` — and its name without the number.
 std::optional<std::pair<int, std::string>> frameOfGrid(const openvdb::GridBase& grid) {
-    if (auto m = grid.getMetadata<openvdb::Int32Metadata>("frame")) return std::make_pair(int(m->value()), grid.getName());
-    if (auto m = grid.getMetadata<openvdb::Int64Metadata>("frame")) return std::make_pair(int(m->value()), grid.getName());
+    // An integer out of range is refused by name: int64 4294967301 once wrapped to frame 5.
+    const auto stamped = [&](int64_t n) {
+        if (n < 0 || n > vdb_role::kMaxGridFrame)
+            throw InvalidArgument("grid " + quoted(grid.getName()) + " has the frame metadata " + std::to_string(n) + ", outside 0.." +
+                                  std::to_string(vdb_role::kMaxGridFrame));
+        return std::make_pair(int(n), grid.getName());
+    };
+    if (auto m = grid.getMetadata<openvdb::Int32Metadata>("frame")) return stamped(m->value());
+    if (auto m = grid.getMetadata<openvdb::Int64Metadata>("frame")) return stamped(m->value());
     return frameOfGridName(grid.getName());
 }
 

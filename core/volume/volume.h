@@ -57,6 +57,12 @@ public:
     const std::shared_ptr<const VdbSource>& vdbSource() const { return m_vdbSource; }
     void setVdbSource(std::shared_ptr<const VdbSource> source) { m_vdbSource = std::move(source); }
 
+    /// Bytes its grids take in memory.
+    size_t memoryBytes() const {
+        return (m_extinction.size() + m_albedo.size() + m_emission.size() + (m_refractiveIndex ? m_refractiveIndex->size() : 0)) *
+               sizeof(float);
+    }
+
     bool hasAlbedo() const { return !m_albedo.empty(); }
     bool hasEmission() const { return !m_emission.empty(); }
     /// Allocates the albedo (filled with `value`) or emission (0) grid if absent.

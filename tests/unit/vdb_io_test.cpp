@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <random>
 #include <set>
 
@@ -425,4 +426,61 @@ TEST(VdbIo, TheExampleFramesMakeOneFileOnOneGrid) {
         EXPECT_TRUE(v.worldFromIndex() == alone.worldFromIndex());
         EXPECT_EQ(v.extinction(), alone.extinction()) << f;
     }
+}
+
+TEST(VdbIo, NanInAnEmissionOrAlbedoGridIsRejectedByName) {
+    // Issue #35: an emission or albedo grid holding NaN was reported accepted. Checked here where
+    // the NaN is active inside the extinction's box, and where it is the grid's background there.
+    auto dir = test::scratchDir();
+    openvdb::initialize();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (const char* name : {"emission", "albedo"}) {
+        for (bool background : {false, true}) {
+            auto density = openvdb::FloatGrid::create(0.0f);
+            density->setName("density");
+            for (int i = 0; i < 4; ++i) density->tree().setValue(openvdb::Coord(i, 0, 0), 1.0f);
+            auto rgb = openvdb::Vec3SGrid::create(background ? openvdb::Vec3s(nan, 0, 0) : openvdb::Vec3s(0.5f));
+            rgb->tree().setValue(openvdb::Coord(0, 0, 0), openvdb::Vec3s(0.5f));
+            if (!background) rgb->tree().setValue(openvdb::Coord(2, 0, 0), openvdb::Vec3s(0.5f, nan, 0.5f));
+            auto scalar = openvdb::FloatGrid::create(background ? nan : 0.5f);  // a grey grid
+            scalar->tree().setValue(openvdb::Coord(0, 0, 0), 0.5f);
+            if (!background) scalar->tree().setValue(openvdb::Coord(2, 0, 0), nan);
+            for (openvdb::GridBase::Ptr grid : {openvdb::GridBase::Ptr(rgb), openvdb::GridBase::Ptr(scalar)}) {
+                grid->setName(name);
+                const std::string path = (dir / "nan.vdb").string();
+                openvdb::io::File(path).write({density, grid});
+                try {
+                    loadVdb(path);
+                    ADD_FAILURE() << "loaded a NaN " << name << (background ? " background" : " voxel") << " in a " << grid->valueType();
+                } catch (const InvalidArgument& e) {
+                    EXPECT_NE(std::string(e.what()).find(std::string("grid '") + name + "'"), std::string::npos) << e.what();
+                }
+            }
+        }
+    }
+}
+
+TEST(VdbIo, FrameNumbersOutOfRangeAreRefusedNamingTheGridNotWrappedOrDropped) {
+    auto dir = test::scratchDir();
+    openvdb::initialize();
+    const auto fileWith = [&](const std::string& name, std::optional<int64_t> metadata) {
+        auto density = openvdb::FloatGrid::create(0.0f);
+        density->setName(name);
+        density->tree().setValue(openvdb::Coord(0, 0, 0), 1.0f);
+        if (metadata) density->insertMeta("frame", openvdb::Int64Metadata(*metadata));
+        const std::string path = (dir / "frames.vdb").string();
+        openvdb::io::File(path).write({density});
+        return path;
+    };
+    for (const auto& [name, metadata] : std::vector<std::pair<std::string, std::optional<int64_t>>>{
+             {"density.-1", std::nullopt}, {"density.4294967301", std::nullopt}, {"density", 4294967301}, {"density", -3}}) {
+        try {
+            const auto frames = loadVdbFrames(fileWith(name, metadata));
+            ADD_FAILURE() << name << " gave " << frames.size() << " frame(s), the first " << (frames.empty() ? -1 : frames.begin()->first);
+        } catch (const InvalidArgument& e) {
+            EXPECT_NE(std::string(e.what()).find("'" + name + "'"), std::string::npos) << e.what();
+        }
+    }
+    EXPECT_EQ(loadVdbFrames(fileWith("density.12", std::nullopt)).begin()->first, 12) << "a frame in range still reads";
+    EXPECT_EQ(loadVdbFrames(fileWith("density", 99)).begin()->first, 99);
 }

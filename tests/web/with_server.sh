@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# with_server.sh BINARY COMMAND… — starts `volstyle serve` on a free loopback port with a fresh
+# with_server.sh BINARY COMMAND… — starts `volstyle serve` (with $VOLSTYLE_SERVE_ARGS, if set) on a free loopback port with a fresh
 # data directory, runs COMMAND with VOLSTYLE_URL set (e.g. http://127.0.0.1:41234), then stops
 # the server. Exits 77 (CTest skip) when COMMAND's prerequisites are missing (checked by COMMAND).
 set -euo pipefail
@@ -8,7 +8,7 @@ shift
 root=$(cd "$(dirname "$0")/../.." && pwd)
 data=$(mktemp -d)
 out=$(mktemp)
-"$binary" serve --port 0 --data-dir "$data" --web-dir "$root/web" > "$out" 2>&1 &
+"$binary" serve --port 0 --data-dir "$data" --web-dir "$root/web" ${VOLSTYLE_SERVE_ARGS:-} > "$out" 2>&1 &
 server=$!
 trap 'kill $server 2>/dev/null; wait $server 2>/dev/null; rm -rf "$data" "$out"' EXIT
 port=
@@ -18,5 +18,5 @@ for _ in $(seq 100); do
   sleep 0.1
 done
 [ -n "$port" ] || { echo "the server did not start:"; cat "$out"; exit 1; }
-export VOLSTYLE_URL="http://127.0.0.1:$port" VOLSTYLE_DATA="$data" VOLSTYLE_ROOT="$root" VOLSTYLE_BINARY="$binary"
+export VOLSTYLE_URL="http://127.0.0.1:$port" VOLSTYLE_DATA="$data" VOLSTYLE_ROOT="$root" VOLSTYLE_BINARY="$binary" VOLSTYLE_SERVER_PID="$server"
 "$@"
