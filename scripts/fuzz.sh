@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzes every parser at the door with libFuzzer (issue #9): request bodies, request targets
-# (paths and query strings), uploaded images and uploaded VDBs (tests/fuzz/fuzz_*.cpp).
-#   scripts/fuzz.sh [SECONDS] [HARNESS ...]     default: 600 s each, all four; 0: the last run's report
+# (paths and query strings), uploaded images, VDBs and meshes (tests/fuzz/fuzz_*.cpp).
+#   scripts/fuzz.sh [SECONDS] [HARNESS ...]     default: 600 s each, all seven; 0: the last run's report
 # Builds the harnesses with clang + ASan + UBSan in build-fuzz/, runs each in fork mode for
 # SECONDS (two at a time on this machine's cores), merges new coverage into tests/fuzz/corpus/,
 # keeps crash inputs in build-fuzz/artifacts/, and prints a table of executions, coverage and
@@ -12,7 +12,7 @@ cd "$(dirname "$0")/.."
 seconds="${1:-600}"
 shift || true
 harnesses=("$@")
-[ ${#harnesses[@]} -gt 0 ] || harnesses=(requests query image vdb)
+[ ${#harnesses[@]} -gt 0 ] || harnesses=(requests query image vdb mesh_obj mesh_ply mesh_gltf)
 
 bash scripts/install_deps.sh clang-14 libclang-rt-14-dev
 launcher=()
@@ -65,7 +65,7 @@ for name in "${harnesses[@]}"; do
     first=$(grep -E '^ +#[0-9]+ ' <<<"$report" |
       grep -vE '__sanitizer|fuzzer::|__asan|__ubsan|__interceptor|in (memcpy|memmove|memset|malloc|calloc|realloc|free|operator new|operator delete)|libstdc\+\+|libc\.so|ld-linux' |
       head -1 || true)
-    if grep -qiE 'openvdb|tbb|blosc|OpenImageIO|OpenEXR|Imf_|Iex|libtiff|libpng|libjpeg' <<<"$first"; then
+    if grep -qiE 'openvdb|tbb|blosc|OpenImageIO|OpenEXR|Imf_|Iex|libtiff|libpng|libjpeg|assimp|Assimp' <<<"$first"; then
       theirs=$((theirs + 1))
     else
       ours=$((ours + 1))

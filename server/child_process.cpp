@@ -63,20 +63,21 @@ ChildOutcome runChild(const std::vector<std::string>& argv, double seconds) {
     return out;
 }
 
-void throwChildFailure(const ChildOutcome& o, const std::string& what, const std::string& library, double seconds) {
+void throwChildFailure(const ChildOutcome& o, const std::string& what, const std::string& reader, const std::string& library,
+                       double seconds) {
     if (o.timedOut)
         throw InvalidArgument("reading " + what + " took over " + fmt::format("{:g}", seconds) + " s; the file is damaged or too complex");
     if (WIFSIGNALED(o.waitStatus))
-        throw IoError("reading " + what + " crashed the " + library + " reader (signal " + std::to_string(WTERMSIG(o.waitStatus)) +
+        throw IoError("reading " + what + " crashed the " + reader + " reader (signal " + std::to_string(WTERMSIG(o.waitStatus)) +
                       ", inside " + library + "): the file is damaged or malicious");
     const int code = WIFEXITED(o.waitStatus) ? WEXITSTATUS(o.waitStatus) : -1;
     if (code == kChildLoads) return;
     if (code == kChildOverLimits) throw LimitExceeded(o.errors);
     if (code == kChildInvalid) throw InvalidArgument(o.errors);
-    if (code == kChildUnreadable) throw IoError(o.errors.empty() ? "the " + library + " reader failed on " + what : o.errors);
+    if (code == kChildUnreadable) throw IoError(o.errors.empty() ? "the " + reader + " reader failed on " + what : o.errors);
     // Any other status is an abnormal end (a sanitizer build reports a library's own memory
     // errors and exits 66, for one): a crash of the reader, without its stderr in the answer.
-    throw IoError("reading " + what + " crashed the " + library + " reader (exit status " + std::to_string(code) + ", inside " +
+    throw IoError("reading " + what + " crashed the " + reader + " reader (exit status " + std::to_string(code) + ", inside " +
                   library + "): the file is damaged or malicious");
 }
 

@@ -24,8 +24,9 @@ ChildOutcome runChild(const std::vector<std::string>& argv, double seconds);
 
 /// Throws what a reader child's outcome means: LimitExceeded (kChildOverLimits), InvalidArgument
 /// (kChildInvalid, or over its time), IoError (kChildUnreadable, or it crashed inside `library`
-/// reading `what`); returns on kChildLoads.
-void throwChildFailure(const ChildOutcome& outcome, const std::string& what, const std::string& library, double seconds);
+/// reading `what`); returns on kChildLoads. `reader` names the reader ("VDB"), `library` what it runs.
+void throwChildFailure(const ChildOutcome& outcome, const std::string& what, const std::string& reader, const std::string& library,
+                       double seconds);
 
 /// The child's side: caps its address space at `mib` MiB (not under ASan/TSan, which reserve
 /// terabytes of shadow memory).

@@ -92,7 +92,7 @@ core::Mesh loadUntrustedMesh(const std::string& bytes, const std::string& format
     const std::vector<std::string> argv{reader.executable, "read-mesh", in.path, "--format", format, "--out", out.path,
                                         "--max-vertices", std::to_string(limits.maxVertices), "--max-triangles",
                                         std::to_string(limits.maxTriangles), "--max-memory-mib", std::to_string(reader.maxAddressSpaceMiB)};
-    throwChildFailure(runChild(argv, reader.seconds), "the uploaded mesh", "assimp", reader.seconds);
+    throwChildFailure(runChild(argv, reader.seconds), "the uploaded mesh", "mesh", "assimp", reader.seconds);
     return readMesh(out.path, limits);
 }
 

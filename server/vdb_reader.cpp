@@ -16,7 +16,7 @@ void checkInChild(const std::string& path, const core::VolumeLimits& limits, con
     std::vector<std::string> argv{reader.executable, "read-vdb", path, "--max-voxels", std::to_string(limits.maxVoxels),
                                   "--max-memory-mib", std::to_string(reader.maxAddressSpaceMiB)};
     if (frames) argv.push_back("--frames");
-    throwChildFailure(runChild(argv, reader.seconds), path, "OpenVDB", reader.seconds);
+    throwChildFailure(runChild(argv, reader.seconds), path, "VDB", "OpenVDB", reader.seconds);
 }
 
 }  // namespace

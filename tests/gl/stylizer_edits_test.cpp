@@ -8,6 +8,8 @@
 #include <cmath>
 #include <iostream>
 #include <random>
+#include <utility>
+#include <vector>
 
 #include "core/stylize/shadow_edits.h"
 #include "core/stylize/stylizer.h"
@@ -252,4 +254,29 @@ TEST(Stylizer, AMovingCameraChangesTheEditedVisibilityInProportion) {
     }
     EXPECT_GT(change[1], 0.0);
     EXPECT_NEAR(change[1] / change[0], 4.0, 2.0) << "V̄ changes in proportion to the motion";
+}
+
+TEST(Stylizer, APickReadsBackOnlyItsPixelAndItIsTheFramesPixel) {
+    // Issue #35: a pick on a 4096² frame read the whole frame back (7.5 GB peak for one pixel).
+    // With pickOnly the frame and its AOVs come back 1×1, holding exactly the full frame's pixel.
+    VOLSTYLE_REQUIRE_GL();
+    const StylizerScene scene = smallForest(true);
+    Stylizer stylizer(test::device());
+    const StylizedFrame full = stylizer.render(scene, {});
+    for (const auto& [x, y] : std::vector<std::pair<int, int>>{{0, 0}, {120, 70}, {239, 134}, {17, 101}}) {
+        StylizeSettings settings;
+        settings.readShadowMaps = false;
+        settings.pick = StylizeSettings::Pixel{x, y};
+        settings.pickOnly = true;
+        const StylizedFrame one = stylizer.render(scene, settings);
+        ASSERT_EQ(one.frame.width, 1);
+        ASSERT_EQ(one.averageVisibility.height, 1);
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_EQ(one.frame.pixel(0, 0)[c], full.frame.pixel(x, y)[c]) << x << "," << y << " channel " << c;
+            EXPECT_EQ(one.scattering.pixel(0, 0)[c], full.scattering.pixel(x, y)[c]) << x << "," << y;
+        }
+        EXPECT_EQ(one.averageVisibility.pixel(0, 0)[0], full.averageVisibility.pixel(x, y)[0]) << x << "," << y;
+        EXPECT_EQ(one.linearDepth.pixel(0, 0)[0], full.linearDepth.pixel(x, y)[0]) << x << "," << y;
+        EXPECT_GE(one.pickedOccluder, -1);
+    }
 }

@@ -1,0 +1,4 @@
+// libFuzzer harness: an uploaded PLY mesh (fuzz_mesh.h).
+#include "fuzz_mesh.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) { return fuzzMesh(data, size, "ply"); }
