@@ -60,10 +60,10 @@ for name in "${harnesses[@]}"; do
   for crash in build-fuzz/artifacts/"$name"/*; do
     [ -f "$crash" ] || continue
     case "$(basename "$crash")" in slow-unit-*) slow=$((slow + 1)); continue ;; esac
-    report=$(build-fuzz/bin/fuzz_"$name" -artifact_prefix=build-fuzz/replay- -rss_limit_mb=4096 -malloc_limit_mb=4096 "$crash" 2>&1 || true)
+    report=$(build-fuzz/bin/fuzz_"$name" -artifact_prefix=build-fuzz/replay- -rss_limit_mb=4096 -malloc_limit_mb=4096 -timeout=30 "$crash" 2>&1 || true)
     # The first frame outside the sanitizer and fuzzer runtimes, libc and libstdc++ decides.
     first=$(grep -E '^ +#[0-9]+ ' <<<"$report" |
-      grep -vE '__sanitizer|fuzzer::|__asan|__ubsan|__interceptor|in (memcpy|memmove|memset|malloc|calloc|realloc|free|operator new|operator delete)|libstdc\+\+|libc\.so|ld-linux' |
+      grep -vE '__sanitizer|fuzzer::|__asan|__ubsan|__interceptor|in (memcpy|memmove|memset|malloc|calloc|realloc|free|operator new|operator delete)|libstdc\+\+|libc\.so|ld-linux|nptl/|signal/|stdlib/abort|in (raise|abort|__pthread_kill)' |
       head -1 || true)
     if grep -qiE 'openvdb|tbb|blosc|OpenImageIO|OpenEXR|Imf_|Iex|libtiff|libpng|libjpeg|assimp|Assimp' <<<"$first"; then
       theirs=$((theirs + 1))

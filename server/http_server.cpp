@@ -25,6 +25,9 @@ bool constantTimeEquals(const std::string& a, const std::string& b) {
     return diff == 0;
 }
 
+/// Retry-After of a 503 when the server's memory budget is full (sessions are deleted by people).
+constexpr int kRetryAfterMemorySeconds = 30;
+
 thread_local Clock::time_point t_requestStart;
 thread_local std::string t_requestId;
 
@@ -153,6 +156,7 @@ void HttpServer::Impl::addMiddleware() {
         if (protocol::httpStatus(e.code) >= 500)
             spdlog::error("request {}: {}: {}", t_requestId, protocol::errorName(e.code), e.message);
         replyError(res, e.code, e.message, e.details);
+        if (e.code == protocol::ErrorCode::Overloaded) res.set_header("Retry-After", std::to_string(kRetryAfterMemorySeconds));
     });
     // Errors the HTTP library raises itself (no route, a body over the payload limit, a URI or
     // headers too long, a bad range or request line) get the SPEC body too.

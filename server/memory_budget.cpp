@@ -40,9 +40,9 @@ void MemoryBudget::checkTotals(size_t sessionNow, size_t sessionCharged, size_t 
     std::lock_guard lock(m_mutex);
     const size_t others = m_total - std::min(m_total, sessionCharged);
     if (others + projected > m_limits.total && projected > sessionNow)
-        throw ApiError(ErrorCode::OutOfBudget,
+        throw ApiError(ErrorCode::Overloaded,  // the server's state, not this client's: 503 with Retry-After
                        fmt::format("{} would bring the server's sessions to {} (decoded), over the server's memory budget of {}; "
-                                   "retry once other sessions are deleted (volstyle serve --memory-mib)",
+                                   "retry later, once other sessions are deleted (volstyle serve --memory-mib)",
                                    what, mib(others + projected), mib(m_limits.total)));
 }
 

@@ -4,8 +4,10 @@
 /// #35). An 8.8 KB VDB holding one 256³ tile is 201 MB once dense: uploaded as frame after frame it
 /// grew the server by 200 MB a frame until the allocator refused (the 1,000-frame limit allowed
 /// ~200 GB). Now each addition — a frame, a volume version, a mesh, a view's image, an environment
-/// map — is charged by its decoded size before it is stored, and refused with 507 memory_budget
-/// naming the budget, what the session (or the server) holds and the limit; what is refused or
+/// map — is charged by its decoded size before it is stored, and refused naming the budget, what
+/// the session (or the server) holds and the limit: 507 memory_budget past the session's budget
+/// (the client must delete something), 503 overloaded with Retry-After past the server's (other
+/// sessions may free memory); what is refused or
 /// deleted is released. The charge is recounted from the session itself after every change
 /// (SessionService::saved), so it cannot drift from what is held.
 

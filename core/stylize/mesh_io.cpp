@@ -122,59 +122,86 @@ double plyTypeBytes(const std::string& t) {
     return 0;
 }
 
-/// A PLY header's element counts against the bytes present: assimp allocates what the header
-/// claims before reading (a 200-byte file claiming 10⁸ vertices took 1.3 GB). Lines end with LF,
-/// CRLF or CR alone (a CR-only header once hid its counts from this check); counts are read as
-/// decimal text, so 2⁶⁴ + 10⁹ is a huge count, not a wrapped one or an unread one. Each element
-/// needs at least its properties' bytes (binary) or two characters a value (ASCII); a face list
-/// at least three indices.
+/// A PLY header line's words, split on spaces and tabs only.
+std::vector<std::string> plyWords(const std::string& line) {
+    std::vector<std::string> words;
+    for (size_t at = 0; at < line.size();) {
+        const size_t start = line.find_first_not_of(" \t", at);
+        if (start == std::string::npos) break;
+        const size_t end = std::min(line.find_first_of(" \t", start), line.size());
+        words.push_back(line.substr(start, end - start));
+        at = end;
+    }
+    return words;
+}
+
+/// A PLY header, checked line by line against the grammar and its element counts against the
+/// bytes present: assimp allocates what the header claims before reading (a 200-byte file
+/// claiming 10⁸ vertices took 1.3 GB), and loops forever on headers it half-understands
+/// (fuzz_mesh_ply: an `end_header` behind a vertical tab). Lines end with LF, CRLF or CR alone (a
+/// CR-only header once hid its counts from this check); a line is `ply`, `format`, `comment`,
+/// `obj_info`, `element NAME COUNT`, `property TYPE NAME`, `property list TYPE TYPE NAME` or
+/// `end_header`, nothing else; counts are read as decimal text, so 2⁶⁴ + 10⁹ is a huge count, not
+/// a wrapped or an unread one. Each element needs at least its properties' bytes (binary) or two
+/// characters a value (ASCII); a face list at least three indices.
 void checkPlyHeader(const std::string& bytes, const std::string& what, const MeshLimits& limits) {
     const size_t headEnd = std::min<size_t>(bytes.size(), 64 * 1024);
-    bool binary = false, ended = false;
+    bool binary = false, ended = false, formatSeen = false;
     size_t at = 0, bodyStart = bytes.size();
     struct Element {
         std::string name;
         double count = 0, minBytes = 0;
     };
     std::vector<Element> elements;
-    while (at < headEnd) {
+    const auto refuse = [&](int number, const std::string& line, const std::string& why) {
+        std::string shown;
+        for (char c : line.substr(0, 60)) shown += (c >= 0x20 && c < 0x7f) ? c : '?';
+        throw InvalidArgument(what + ": PLY header line " + std::to_string(number) + " ('" + shown + "') " + why);
+    };
+    std::string newline;  // the first line's ending; every header line must end alike
+    for (int number = 1; at < headEnd && !ended; ++number) {
         size_t end = bytes.find_first_of("\r\n", at);
-        if (end == std::string::npos) end = headEnd;
-        std::istringstream words(bytes.substr(at, end - at));
-        at = end + (bytes.compare(end, 2, "\r\n") == 0 ? 2 : 1);
-        std::string keyword;
-        words >> keyword;
-        if (keyword == "end_header") {
+        if (end == std::string::npos || end > headEnd) end = headEnd;
+        const std::string line = bytes.substr(at, end - at);
+        const std::string ending = bytes.compare(end, 2, "\r\n") == 0 ? "\r\n" : bytes.substr(std::min(end, bytes.size()), 1);
+        if (newline.empty()) newline = ending;
+        else if (ending != newline) refuse(number, line, "ends its line unlike the first line (mixed line endings loop assimp)");
+        at = end + ending.size();
+        for (char c : line)
+            if (static_cast<unsigned char>(c) < 0x20 && c != '\t') refuse(number, line, "holds a control character");
+        const std::vector<std::string> w = plyWords(line);
+        const std::string keyword = w.empty() ? "" : w[0];
+        if (number == 1) {
+            if (line != "ply") refuse(number, line, "is not 'ply'");
+        } else if (keyword == "comment" || keyword == "obj_info") {
+        } else if (keyword == "format") {
+            if (formatSeen || w.size() != 3 || w[2] != "1.0" ||
+                (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian"))
+                refuse(number, line, formatSeen ? "is a second format line" : "is not 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+            binary = w[1] != "ascii";
+            formatSeen = true;
+        } else if (keyword == "element") {
+            if (w.size() != 3 || w[2].find_first_not_of("0123456789") != std::string::npos)
+                refuse(number, line, "is not 'element NAME COUNT'");
+            elements.push_back({w[1], w[2].size() > 18 ? 1e300 : double(std::stoull(w[2])), 0});
+        } else if (keyword == "property" && !elements.empty()) {
+            double b = 0;
+            if (w.size() == 5 && w[1] == "list" && plyTypeBytes(w[2]) > 0 && plyTypeBytes(w[3]) > 0)
+                b = binary ? plyTypeBytes(w[2]) + 3 * plyTypeBytes(w[3]) : 8;  // "3 0 1 2"
+            else if (w.size() == 3 && plyTypeBytes(w[1]) > 0)
+                b = binary ? plyTypeBytes(w[1]) : 2;  // "0 "
+            else
+                refuse(number, line, "is not 'property TYPE NAME' or 'property list TYPE TYPE NAME' with PLY's types");
+            elements.back().minBytes += b;
+        } else if (line.substr(0, line.find_last_not_of(" \t") + 1) == "end_header") {
             ended = true;
             bodyStart = std::min(at, bytes.size());
-            break;
-        }
-        if (keyword == "format") {
-            std::string f;
-            words >> f;
-            binary = f.rfind("binary", 0) == 0;
-        } else if (keyword == "element") {
-            Element e;
-            std::string digits;
-            words >> e.name >> digits;
-            if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos)
-                throw InvalidArgument(what + ": the PLY element '" + e.name + "' has the count '" + digits.substr(0, 40) + "', not a number");
-            e.count = digits.size() > 18 ? 1e300 : double(std::stoull(digits));
-            elements.push_back(e);
-        } else if (keyword == "property" && !elements.empty()) {
-            std::string type, countType, itemType;
-            words >> type;
-            double b = 0;
-            if (type == "list") {
-                words >> countType >> itemType;
-                b = binary ? plyTypeBytes(countType) + 3 * plyTypeBytes(itemType) : 8;  // "3 0 1 2"
-            } else {
-                b = binary ? plyTypeBytes(type) : 2;  // "0 "
-            }
-            elements.back().minBytes += b;
+        } else {
+            refuse(number, line, "is not a line PLY's header may hold");
         }
     }
     if (!ended) throw InvalidArgument(what + ": the PLY header has no end_header line within its first 64 KiB");
+    if (!formatSeen) throw InvalidArgument(what + ": the PLY header has no format line");
     double vertices = 0, faces = 0, need = 0;
     for (const auto& e : elements) {
         if (e.name == "vertex") vertices = e.count;

@@ -144,7 +144,7 @@ TEST_F(StylizerApi, MeshUploadsAreCheckedAndRefusalsChangeNothing) {
         {"floor", std::string("\x00\x01\x02\x03garbage\xff", 12), 422, "unsupported_media", "could not be read"},
         {"floor", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", 422, "unsupported_media", "finite"},
         {"floor", "ply\nformat ascii 1.0\nelement vertex 100000000\nproperty float x\nend_header\n", 413, "too_large", "vertices"},
-        {"floor", "glTF\x02\x00\x00\x00truncated", 422, "unsupported_media", "could not be read"},
+        {"floor", "glTF\x02\x00\x00\x00truncated", 422, "unsupported_media", "shorter than its 20-byte header"},
         {"floor", std::string(70 * 1024, 'v'), 413, "too_large", "upload limit"},
         {"bad*name", kQuadObj, 400, "invalid_argument", "mesh name"},
     };

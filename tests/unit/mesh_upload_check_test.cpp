@@ -5,6 +5,9 @@
 #include <sys/resource.h>
 
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "core/base/errors.h"
@@ -132,12 +135,20 @@ TEST(MeshUploadCheck, PlyHeadersAreHeldToTheirBytesWhateverTheLineEndings) {
                "0 0 0" + nl + "1 0 0" + nl + "0 1 0" + nl + "3 0 1 2" + nl;
     };
     for (const std::string nl : {"\n", "\r\n", "\r"}) {
+        EXPECT_EQ(core::loadMeshFromMemory(ply("3", nl), "ply").triangleCount(), 1u) << "one ending throughout is fine";
         EXPECT_THROW(core::loadMeshFromMemory(ply("3000000", nl), "ply"), InvalidArgument) << "a 3M-vertex claim in ~200 bytes";
         EXPECT_THROW(core::loadMeshFromMemory(ply("1000000000", nl), "ply"), LimitExceeded);
         EXPECT_THROW(core::loadMeshFromMemory(ply("18446744074709551616", nl), "ply"), LimitExceeded) << "2^64 + 10^9: not wrapped";
         EXPECT_THROW(core::loadMeshFromMemory(ply("-5", nl), "ply"), InvalidArgument);
     }
-    EXPECT_EQ(core::loadMeshFromMemory(ply("3", "\n"), "ply").triangleCount(), 1u);
+    // Found by fuzz_mesh_ply: headers on which assimp's parser never returns.
+    std::string mixed = ply("3", "\n");
+    mixed.replace(mixed.find("\nend_header"), 1, "\r");
+    EXPECT_THROW(core::loadMeshFromMemory(mixed, "ply"), InvalidArgument) << "mixed line endings";
+    std::string version = ply("3", "\n");
+    version.replace(version.find("1.0"), 3, "5.0");
+    EXPECT_THROW(core::loadMeshFromMemory(version, "ply"), InvalidArgument) << "format version 5.0";
+    EXPECT_THROW(core::loadMeshFromMemory("ply\n\vend_header\n", "ply"), InvalidArgument) << "end_header behind a vertical tab";
 }
 
 TEST(MeshReader, UploadsAreParsedInTheChildAndComeBackWhole) {
@@ -151,4 +162,54 @@ TEST(MeshReader, UploadsAreParsedInTheChildAndComeBackWhole) {
     // The child's refusals keep their kind: 413 for limits, 422 for damage.
     EXPECT_THROW(server::loadUntrustedMesh(gltf(doubling(24)), "gltf", {}, reader), LimitExceeded);
     EXPECT_THROW(server::loadUntrustedMesh("v 0 0 0\nv 1 0 0\n", "obj", {}, reader), InvalidArgument);
+}
+
+TEST(MeshReader, APlyThatAbortedAssimpIsRefusedByItsHeader) {
+    // Found by fuzz_mesh_ply: a binary PLY whose header breaks off mid-line ("...yrp\noperty float
+    // z") tripped an ai_assert inside assimp 5.2.5's triangulation (Debian builds it with asserts:
+    // abort()); in the server's process that upload ended the server. The header grammar now
+    // refuses it before assimp sees it (and the child reader would contain the abort).
+    std::ifstream f(std::string(VOLSTYLE_SOURCE_DIR) + "/tests/data/hostile/assimp-ply-abort.ply", std::ios::binary);
+    const std::string bytes{std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+    ASSERT_EQ(bytes.size(), 218u);
+    server::VdbReaderOptions reader;
+    reader.executable = VOLSTYLE_BINARY;
+    try {
+        server::loadUntrustedMesh(bytes, "ply", {}, reader);
+        FAIL() << "expected InvalidArgument";
+    } catch (const InvalidArgument& e) {
+        EXPECT_NE(std::string(e.what()).find("PLY header line 6 ('operty float z')"), std::string::npos) << e.what();
+    }
+}
+
+TEST(MeshReader, APlyBodyThatAbortsAssimpIsARefusedUploadNotADeadServer) {
+    // Found by fuzz_mesh_ply after the header grammar: a well-formed ASCII header over a body with
+    // a NUL and a quote in it trips the same ai_assert (abort) in assimp's triangulation. Only the
+    // child reader can contain this one.
+    std::ifstream f(std::string(VOLSTYLE_SOURCE_DIR) + "/tests/data/hostile/assimp-ply-body-abort.ply", std::ios::binary);
+    const std::string bytes{std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+    ASSERT_EQ(bytes.size(), 180u);
+    EXPECT_NO_THROW(protocol::checkMeshUpload(bytes, "ply", {}));
+    server::VdbReaderOptions reader;
+    reader.executable = VOLSTYLE_BINARY;
+    try {
+        server::loadUntrustedMesh(bytes, "ply", {}, reader);
+        FAIL() << "expected IoError";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("crashed the mesh reader (signal 6, inside assimp)"), std::string::npos) << e.what();
+    }
+}
+
+TEST(MeshReader, AReaderThatCrashesIsARefusedUploadNotACrash) {
+    const std::string script = (std::filesystem::temp_directory_path() / "volstyle-fake-mesh-reader").string();
+    std::ofstream(script) << "#!/bin/sh\nkill -ABRT $$\n";
+    std::filesystem::permissions(script, std::filesystem::perms::owner_all);
+    server::VdbReaderOptions reader;
+    reader.executable = script;
+    try {
+        server::loadUntrustedMesh(gltf("[{\"mesh\":0}]"), "gltf", {}, reader);
+        FAIL() << "expected IoError";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("crashed the mesh reader (signal 6, inside assimp)"), std::string::npos) << e.what();
+    }
 }
