@@ -12,6 +12,9 @@
 #include <chrono>
 #include <cstring>
 
+#include "server/request_head.h"
+#include "server/shedding_pool.h"
+
 namespace volstyle::server {
 namespace {
 
@@ -109,8 +112,6 @@ void closeSocket(socket_t sock) {
     ::close(sock);
 }
 
-thread_local bool t_shedding = false;  ///< this connection arrived over the queue limit
-
 const char* reasonPhrase(int status) {
     switch (status) {
         case 400: return "Bad Request";
@@ -130,83 +131,6 @@ int statusOf(Refusal why) {
         case Refusal::HeadTooLarge: return 431;
     }
     return 400;
-}
-
-/// A refused connection is closed only once the client had time to read the answer: closing a
-/// socket with unread request bytes sends a reset, and the client may lose the answer with it.
-/// One thread reads and discards what such sockets still receive, closing each at end of input
-/// or after kLingerSeconds.
-class Lingerer {
-public:
-    ~Lingerer() {
-        {
-            std::lock_guard lock(m_mutex);
-            m_stop = true;
-        }
-        m_wake.notify_all();
-        if (m_thread.joinable()) m_thread.join();
-        for (const auto& e : m_sockets) ::close(e.sock);
-    }
-    void add(socket_t sock) {
-        ::shutdown(sock, SHUT_WR);  // the answer is complete: the client sees end of input
-        std::lock_guard lock(m_mutex);
-        if (m_stop || m_sockets.size() >= kMaxLingering) {
-            ::close(sock);
-            return;
-        }
-        m_sockets.push_back({sock, SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(
-                                                            std::chrono::duration<double>(kLingerSeconds))});
-        if (!m_thread.joinable()) m_thread = std::thread([this] { run(); });
-        m_wake.notify_one();
-    }
-
-private:
-    static constexpr double kLingerSeconds = 2;
-    static constexpr size_t kMaxLingering = 1024;
-    struct Entry {
-        socket_t sock;
-        SteadyClock::time_point deadline;
-    };
-    void run() {
-        std::array<char, 16384> sink{};
-        std::unique_lock lock(m_mutex);
-        while (!m_stop) {
-            if (m_sockets.empty()) {
-                m_wake.wait(lock, [this] { return m_stop || !m_sockets.empty(); });
-                continue;
-            }
-            std::vector<pollfd> polls;
-            for (const auto& e : m_sockets) polls.push_back({e.sock, POLLIN, 0});
-            lock.unlock();
-            ::poll(polls.data(), polls.size(), 50);
-            std::vector<socket_t> done;
-            const auto now = SteadyClock::now();
-            for (const auto& p : polls) {
-                bool finished = false;
-                if (p.revents & (POLLIN | POLLHUP | POLLERR)) {
-                    const ssize_t n = ::recv(p.fd, sink.data(), sink.size(), MSG_DONTWAIT);
-                    finished = n == 0 || (n < 0 && errno != EAGAIN && errno != EINTR);
-                }
-                if (finished) done.push_back(p.fd);
-            }
-            lock.lock();
-            std::erase_if(m_sockets, [&](const Entry& e) {
-                if (e.deadline > now && std::find(done.begin(), done.end(), e.sock) == done.end()) return false;
-                ::close(e.sock);
-                return true;
-            });
-        }
-    }
-    std::mutex m_mutex;
-    std::condition_variable m_wake;
-    std::vector<Entry> m_sockets;
-    bool m_stop = false;
-    std::thread m_thread;
-};
-
-Lingerer& lingerer() {
-    static Lingerer l;
-    return l;
 }
 
 /// Reads ahead (without consuming) until the request's head ends, `maxBytes` are waiting, the
@@ -244,117 +168,7 @@ std::string peekHead(socket_t sock, size_t maxBytes, double seconds, const httpl
     }
 }
 
-bool isTokenChar(char c) {
-    return std::isalnum(static_cast<unsigned char>(c)) || std::strchr("!#$%&'*+-.^_`|~", c) != nullptr;
-}
-
-/// `text` cut to 60 characters with control and non-ASCII bytes as '?', for messages.
-std::string printable(std::string_view text) {
-    std::string out;
-    for (char c : text.substr(0, 60)) out += (c >= 0x20 && c < 0x7f) ? c : '?';
-    return text.size() > 60 ? out + "…" : out;
-}
-
 }  // namespace
-
-std::string checkRequestHead(const std::string& head, const ConnectionLimits& limits, Refusal& why) {
-    if (head.size() > limits.maxHeadBytes) {
-        why = Refusal::HeadTooLarge;
-        return "the request's head is over " + std::to_string(limits.maxHeadBytes) + " bytes (the limit)";
-    }
-    why = Refusal::MalformedRequest;
-    const size_t lineEnd = head.find("\r\n");
-    const std::string_view line = std::string_view(head).substr(0, lineEnd);
-    const size_t sp1 = line.find(' '), sp2 = sp1 == std::string_view::npos ? sp1 : line.find(' ', sp1 + 1);
-    if (sp2 == std::string_view::npos || line.find(' ', sp2 + 1) != std::string_view::npos)
-        return "the request line '" + printable(line) + "' is not 'METHOD /path HTTP/1.1'";
-    const std::string_view method = line.substr(0, sp1), target = line.substr(sp1 + 1, sp2 - sp1 - 1),
-                           version = line.substr(sp2 + 1);
-    static const char* const kMethods[] = {"GET", "HEAD", "POST", "PUT", "DELETE", "OPTIONS", "PATCH"};
-    if (std::find(std::begin(kMethods), std::end(kMethods), method) == std::end(kMethods))
-        return "the method '" + printable(method) + "' is not one this API serves (GET, HEAD, POST, PUT, DELETE, OPTIONS, PATCH)";
-    if (version != "HTTP/1.1" && version != "HTTP/1.0") return "the protocol '" + printable(version) + "' is not HTTP/1.1 or HTTP/1.0";
-    if (target.size() > limits.maxTargetBytes) {
-        why = Refusal::TargetTooLong;
-        return "the request target is " + std::to_string(target.size()) + " bytes, over the limit of " +
-               std::to_string(limits.maxTargetBytes);
-    }
-    if (target.empty() || target[0] != '/') return "the request target '" + printable(target) + "' does not start with '/'";
-    for (char c : target)
-        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return "the request target holds a control character";
-    std::string path(target.substr(0, target.find('?')));
-    for (char& c : path) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (path.find("%00") != std::string::npos) return "the path holds an encoded NUL (%00)";
-    if (path.find("%2f") != std::string::npos || path.find("%5c") != std::string::npos)
-        return "the path holds an encoded '/' or '\\' (%2F, %5C): no id or file name holds one";
-    int headers = 0;
-    for (size_t at = lineEnd + 2; at < head.size();) {
-        const size_t end = head.find("\r\n", at);
-        if (end == std::string::npos || end == at) break;  // the blank line ends the head
-        const std::string_view h = std::string_view(head).substr(at, end - at);
-        const size_t colon = h.find(':');
-        if (colon == std::string_view::npos || colon == 0 ||
-            !std::all_of(h.begin(), h.begin() + long(colon), isTokenChar))
-            return "the header line '" + printable(h) + "' is not 'Name: value'";
-        if (++headers > limits.maxHeaderCount) {
-            why = Refusal::HeadTooLarge;
-            return "the request has over " + std::to_string(limits.maxHeaderCount) + " headers (the limit)";
-        }
-        at = end + 2;
-    }
-    return {};
-}
-
-/// httplib's TaskQueue with a bound: a connection that finds `maxQueued` others waiting for a
-/// worker is answered at once, on the accepting thread (a 503, see process_and_close_socket).
-class GuardedHttpServer::SheddingPool final : public httplib::TaskQueue {
-public:
-    SheddingPool(size_t threads, size_t maxQueued) : m_maxQueued(maxQueued) {
-        for (size_t i = 0; i < threads; ++i) m_workers.emplace_back([this] { work(); });
-    }
-    void enqueue(std::function<void()> fn) override {
-        {
-            std::lock_guard lock(m_mutex);
-            if (m_jobs.size() < m_maxQueued) {
-                m_jobs.push_back(std::move(fn));
-                m_wake.notify_one();
-                return;
-            }
-        }
-        t_shedding = true;
-        fn();
-        t_shedding = false;
-    }
-    void shutdown() override {
-        {
-            std::lock_guard lock(m_mutex);
-            m_stop = true;
-        }
-        m_wake.notify_all();
-        for (auto& t : m_workers) t.join();
-    }
-
-private:
-    void work() {
-        for (;;) {
-            std::function<void()> fn;
-            {
-                std::unique_lock lock(m_mutex);
-                m_wake.wait(lock, [this] { return m_stop || !m_jobs.empty(); });
-                if (m_jobs.empty()) return;  // stopping, and nothing is left
-                fn = std::move(m_jobs.front());
-                m_jobs.pop_front();
-            }
-            fn();
-        }
-    }
-    size_t m_maxQueued;
-    std::mutex m_mutex;
-    std::condition_variable m_wake;
-    std::deque<std::function<void()>> m_jobs;
-    std::vector<std::thread> m_workers;
-    bool m_stop = false;
-};
 
 GuardedHttpServer::GuardedHttpServer(ConnectionLimits limits) : m_limits(limits) {
     setWorkerThreads(8);
@@ -402,7 +216,7 @@ void GuardedHttpServer::refuse(socket_t sock, const std::string& client, Refusal
     const std::string answer = head + "Content-Length: " + std::to_string(body.size()) + "\r\n\r\n" + body;
     // Never blocking: a small answer fits the socket's send buffer.
     ::send(sock, answer.data(), answer.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
-    lingerer().add(sock);
+    closeAfterAnswer(sock);
 }
 
 bool GuardedHttpServer::awaitRequest(socket_t sock) const {
@@ -414,7 +228,7 @@ bool GuardedHttpServer::process_and_close_socket(socket_t sock) {
     std::string client;
     int port = 0;
     socketAddress(sock, true, client, port);
-    if (t_shedding) {
+    if (SheddingPool::shedNow()) {
         refuse(sock, client, Refusal::Overloaded,
                std::to_string(m_limits.maxQueuedConnections) + " connections are waiting for a worker");
         return false;

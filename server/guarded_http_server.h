@@ -19,44 +19,19 @@
 ///    parses it: a malformed request line, an unknown method, a NUL or an encoded '/' in the path,
 ///    over `maxHeaderCount` headers or `maxHeadBytes` bytes get ONE answer (400, 414 or 431) and
 ///    the connection closes (the library answered 400 and read the rest of the head as new
-///    requests: two or three status lines for one request).
+///    requests: two or three status lines for one request). The check is request_head.h; the
+///    bounded worker queue and the lingering close of refused sockets are shedding_pool.h.
 
 #include <httplib.h>
 
-#include <condition_variable>
-#include <deque>
 #include <functional>
 #include <map>
 #include <mutex>
 #include <string>
-#include <thread>
-#include <vector>
+
+#include "server/connection_limits.h"
 
 namespace volstyle::server {
-
-struct ConnectionLimits {
-    double headerSeconds = 10;           ///< the allowance of a request's reads before any byte counts
-    double minBytesPerSecond = 64 << 10; ///< each byte received extends the allowance by 1/this
-    double idleSeconds = 5;              ///< a keep-alive connection waits this long for its next request
-    double writeSeconds = 5;             ///< a write that cannot proceed for this long closes the connection
-    int maxConnectionsPerClient = 24;
-    int maxRequestsPerConnection = 100;
-    int listenBacklog = 1024;            ///< connections the kernel holds before accept (Linux caps it at somaxconn)
-    size_t maxQueuedConnections = 512;   ///< accepted connections waiting for a worker; beyond: 503
-    int retryAfterSeconds = 2;           ///< the Retry-After of a 503 or 429 refusal
-    size_t maxHeadBytes = 32 << 10;      ///< request line and headers together (over: 431)
-    int maxHeaderCount = 100;            ///< header lines (over: 431)
-    size_t maxTargetBytes = 8192;        ///< the request target (over: 414)
-};
-
-/// Why a connection or request is refused before any route sees it.
-enum class Refusal {
-    ClientConnections,  ///< 429: the client holds maxConnectionsPerClient
-    Overloaded,         ///< 503: maxQueuedConnections wait for a worker
-    MalformedRequest,   ///< 400: the request line or a header line does not parse, or the path is unsafe
-    TargetTooLong,      ///< 414
-    HeadTooLarge,       ///< 431: too many header lines or bytes
-};
 
 class GuardedHttpServer : public httplib::Server {
 public:
@@ -76,8 +51,6 @@ public:
     static constexpr int kPollSliceMs = 100;
 
 private:
-    class SheddingPool;
-
     bool process_and_close_socket(socket_t sock) override;
     /// Counts a connection of `client`; false if it holds its limit already.
     bool admit(const std::string& client);
@@ -92,10 +65,5 @@ private:
     std::map<std::string, int> m_open;  ///< connections by client address
     socket_t m_listenSocket = INVALID_SOCKET;
 };
-
-/// Checks a request's head (request line and headers, up to and including the blank line) as
-/// GuardedHttpServer does before parsing; empty when it may be parsed, else the refusal's detail
-/// with `why` set. Pure, for tests.
-std::string checkRequestHead(const std::string& head, const ConnectionLimits& limits, Refusal& why);
 
 }  // namespace volstyle::server

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "server/guarded_http_server.h"
+#include "server/request_head.h"
 
 using namespace volstyle::server;
 
