@@ -13,7 +13,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium                                                 # the browser end-to-end test
   ffmpeg                                                   # stylizer sequences as video files
-  python3 iproute2                                         # the hostile probe; ss reads a listen backlog in a test
+  python3 iproute2 strace                                  # the hostile probe; ss reads a listen backlog; strace traces fsyncs in a test
 )
 packages+=("$@")  # extra packages a script needs (scripts/fuzz.sh: clang)
 # Node and npm for the browser test: the machine's own if present (Debian's would clash with it).

@@ -1,8 +1,6 @@
 #include "server/persistence.h"
 
-#include <fcntl.h>
 #include <spdlog/spdlog.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <fstream>
@@ -17,6 +15,7 @@
 #include "protocol/render_json.h"
 #include "protocol/stylize_json.h"
 #include "server/responses.h"
+#include "server/store/data_dir.h"
 
 namespace volstyle::server {
 namespace {
@@ -24,14 +23,8 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-/// Flushes a written file to disk before it is renamed into place.
-void syncFile(const fs::path& p) {
-    int fd = ::open(p.c_str(), O_RDONLY);
-    if (fd >= 0) {
-        ::fsync(fd);
-        ::close(fd);
-    }
-}
+/// A temporary file a write left behind when the server stopped (store::atomicWrite's names).
+bool isUnfinishedWrite(const fs::path& p) { return p.filename().string().find(".tmp-") != std::string::npos; }
 
 std::string readFile(const fs::path& p) {
     std::ifstream f(p, std::ios::binary);
@@ -49,25 +42,7 @@ Persistence::Persistence(fs::path dir, MeshReader readMesh) : m_dir(std::move(di
     if (ec) throw IoError("serve: cannot create the data directory '" + m_dir.string() + "': " + ec.message());
 }
 
-void Persistence::atomicWrite(const fs::path& path, const std::string& bytes) {
-    fs::create_directories(path.parent_path());
-    const fs::path tmp = path.string() + ".tmp-" + SessionStore::newId().substr(0, 8);
-    int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (fd < 0) throw IoError("cannot write '" + tmp.string() + "'");
-    size_t done = 0;
-    while (done < bytes.size()) {
-        ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-        if (n <= 0) {
-            ::close(fd);
-            fs::remove(tmp);
-            throw IoError("cannot write '" + tmp.string() + "' (disk full?)");
-        }
-        done += size_t(n);
-    }
-    ::fsync(fd);
-    ::close(fd);
-    fs::rename(tmp, path);
-}
+void Persistence::atomicWrite(const fs::path& path, const std::string& bytes) { store::atomicWrite(path, bytes); }
 
 void Persistence::saveSession(Session& s) {
     const fs::path dir = sessionDir(s.id);
@@ -75,11 +50,7 @@ void Persistence::saveSession(Session& s) {
         std::shared_ptr<const core::Volume> older;
         if (n != s.version && !(older = s.versions.inMemory(n))) continue;  // cannot happen: unstored ones stay in memory
         const fs::path vdb = dir / versionFile(n);
-        fs::create_directories(vdb.parent_path());
-        const fs::path tmp = vdb.string() + ".tmp.vdb";
-        core::saveVdb(tmp.string(), n == s.version ? s.volume : *older);
-        syncFile(tmp);
-        fs::rename(tmp, vdb);
+        store::atomicWriteWith(vdb, [&](const fs::path& tmp) { core::saveVdb(tmp.string(), n == s.version ? s.volume : *older); });
         s.versions.markStored(n, fs::file_size(vdb));
     }
     json bytes = json::object(), damaged = json::array();
@@ -165,14 +136,10 @@ std::vector<QuarantineEntry> Persistence::quarantine() const {
 
 void Persistence::saveViewImage(const std::string& session, const std::string& view, const std::string& kind,
                                 const core::Image& image) {
-    const fs::path dir = sessionDir(session) / "views" / view;
-    fs::create_directories(dir);
-    const fs::path tmp = dir / (kind + ".tmp.exr"), path = dir / (kind + ".exr");
     core::SaveOptions opt;
     opt.halfFloat = false;  // exact
-    core::saveImage(tmp.string(), image, opt);
-    syncFile(tmp);
-    fs::rename(tmp, path);
+    store::atomicWriteWith(sessionDir(session) / "views" / view / (kind + ".exr"),
+                           [&](const fs::path& tmp) { core::saveImage(tmp.string(), image, opt); });
 }
 
 void Persistence::removeViewImage(const std::string& session, const std::string& view, const std::string& kind) {
@@ -197,9 +164,8 @@ void Persistence::removeJob(const std::string& job) {
 }
 
 void Persistence::saveFrame(const std::string& session, int frame, const core::Volume& volume) {
-    const fs::path dir = sessionDir(session) / "frames";
-    fs::create_directories(dir);
-    core::saveVdb((dir / (std::to_string(frame) + ".vdb")).string(), volume);  // a temporary file renamed into place
+    store::atomicWriteWith(sessionDir(session) / "frames" / (std::to_string(frame) + ".vdb"),
+                           [&](const fs::path& tmp) { core::saveVdb(tmp.string(), volume); });
 }
 
 void Persistence::removeFrame(const std::string& session, int frame) {
@@ -326,7 +292,7 @@ void Persistence::restoreStylizer(Session& s, const fs::path& dir) {
     for (const auto& entry : fs::directory_iterator(dir / "stylizer" / "occluders", ec)) {
         const std::string file = "stylizer/occluders/" + entry.path().filename().string();
         const std::string format = entry.path().extension().string().substr(entry.path().extension().empty() ? 0 : 1);
-        if (format.rfind("tmp-", 0) == 0) continue;  // an unfinished write (atomicWrite's temporary)
+        if (isUnfinishedWrite(entry.path())) continue;  // an unfinished write (atomicWrite's temporary)
         try {
             const std::string bytes = readFile(entry.path());
             auto mesh = std::make_shared<const core::Mesh>(m_readMesh ? m_readMesh(bytes, format) : core::loadMeshFromMemory(bytes, format));
@@ -449,7 +415,7 @@ std::vector<std::shared_ptr<Job>> Persistence::loadJobs() {
     std::vector<fs::directory_entry> entries;
     for (auto& [time, entry] : byTime) entries.push_back(std::move(entry));
     for (const auto& entry : entries) {
-        if (entry.path().extension() != ".json") continue;
+        if (entry.path().extension() != ".json" || isUnfinishedWrite(entry.path())) continue;
         try {
             json j = json::parse(readFile(entry.path()));
             auto job = std::make_shared<Job>();

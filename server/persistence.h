@@ -1,7 +1,8 @@
 #pragma once
 /// \file persistence.h
 /// Durability (SPEC §3): every change to a session or job is written to the data directory before
-/// the answer is sent — atomically (temporary file, fsync, rename) — and everything is restored
+/// the answer is sent — atomically and durably (store/data_dir.h: temporary file, fsync, rename,
+/// fsync of the folder; every step's failure an IoError) — and everything is restored
 /// when the server starts. Jobs that were queued or running when the server stopped read
 /// `failed` with code `interrupted`.
 ///
