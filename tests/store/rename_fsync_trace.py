@@ -30,6 +30,20 @@ def png(width, height, rgba):
             chunk(b'IDAT', zlib.compress(rows)) + chunk(b'IEND', b''))
 
 
+def children(pid):
+    """The processes whose parent is `pid` (from /proc)."""
+    out = []
+    for entry in os.listdir('/proc'):
+        if entry.isdigit():
+            try:
+                stat = open('/proc/%s/stat' % entry).read()
+                if int(stat[stat.rindex(')') + 2:].split()[1]) == pid:
+                    out.append(int(entry))
+            except (OSError, ValueError):
+                pass
+    return out
+
+
 def main():
     binary = os.path.abspath(sys.argv[1])
     if not shutil.which('strace'):
@@ -37,7 +51,7 @@ def main():
         return 1
     work = tempfile.mkdtemp()
     data, trace, log = os.path.join(work, 'data'), os.path.join(work, 'trace.txt'), os.path.join(work, 'server.log')
-    server = subprocess.Popen(['strace', '-f', '-y', '-qq', '-e', 'trace=rename,renameat,renameat2,fsync', '-o', trace,
+    server = subprocess.Popen(['strace', '-f', '--seccomp-bpf', '-y', '-qq', '-e', 'trace=rename,renameat,renameat2,fsync', '-o', trace,
                                binary, 'serve', '--port', '0', '--data-dir', data, '--web-dir', work],
                               stdout=open(log, 'w'), stderr=subprocess.STDOUT)
     try:
@@ -63,6 +77,7 @@ def main():
                 raise RuntimeError('%s %s: %d %s' % (method, path, r.status, out[:200]))
             return out
 
+        t0 = time.monotonic()
         sid = json.loads(call('POST', '/sessions', {'scene': 'builtin:cloud', 'resolution': 16}))['id']
         base = '/sessions/' + sid
         vid = json.loads(call('POST', base + '/views', {'camera': {'eye': [0, 0, 3], 'target': [0, 0, 0], 'width': 8, 'height': 8}}))['id']
@@ -77,12 +92,17 @@ def main():
             if json.loads(call('GET', '/jobs/' + job))['state'] not in ('queued', 'running'):
                 break
             time.sleep(0.1)
+        print('[ measured ] writes made in %.1f s' % (time.monotonic() - t0))
     finally:
-        server.send_signal(signal.SIGINT)
+        t1 = time.monotonic()
+        # The server is strace's child: stop it (strace leaves with it).
+        for pid in children(server.pid):
+            os.kill(pid, signal.SIGTERM)
         try:
             server.wait(60)
         except subprocess.TimeoutExpired:
             server.kill()
+        print('[ measured ] the server stopped %.1f s after SIGTERM' % (time.monotonic() - t1))
     # 1234  rename("/d/sessions/x/session.json.tmp-1a2b3c4d", "/d/sessions/x/session.json") = 0
     # 1234  fsync(7</d/sessions/x>) = 0
     rename = re.compile(r'^(\d+)\s+rename(?:at2?)?\(.*"([^"]+)"(?:, \w+)?\) = 0')
