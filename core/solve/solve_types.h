@@ -4,6 +4,7 @@
 /// shaders compile against (core/shaders/layout.h), so C++ and GLSL agree by construction.
 
 #include "core/shaders/layout.h"
+#include "core/volume/basis.h"  // BasisType: the unknown grid's basis
 
 namespace volstyle::core {
 
@@ -15,11 +16,6 @@ enum class Unknown {
     Extinction = VOLSTYLE_UNKNOWN_EXTINCTION,
 };
 
-/// Basis functions of the unknown grid: box (nearest voxel) or trilinear (hat functions),
-/// VOLSTYLE_BASIS in project.comp.
-enum class BasisType { Box = VOLSTYLE_BASIS_BOX, Trilinear = VOLSTYLE_BASIS_TRILINEAR };
-
 static_assert(int(Unknown::Emission) == VOLSTYLE_UNKNOWN_EMISSION && int(Unknown::Extinction) == VOLSTYLE_UNKNOWN_EXTINCTION);
-static_assert(int(BasisType::Trilinear) == VOLSTYLE_BASIS_TRILINEAR);
 
 }  // namespace volstyle::core

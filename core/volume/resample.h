@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "core/math/vec.h"
-#include "core/solve/solve_types.h"
+#include "core/volume/basis.h"
 
 namespace volstyle::core {
 
