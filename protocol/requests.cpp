@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <sstream>
 
 #include "protocol/render_json.h"
 #include "protocol/solve_json.h"
@@ -150,8 +151,21 @@ RevertRequest RevertRequest::fromJson(const nlohmann::json& j) {
 
 SetLightingRequest SetLightingRequest::fromJson(const nlohmann::json& j) { return {lightingFromJson(j)}; }
 
-SolveRequest SolveRequest::fromJson(const nlohmann::json& j, const RequestLimits& limits) {
-    SolveRequest q{solveOptionsFromJson(j)};
+SolveRequest SolveRequest::fromJson(const nlohmann::json& j, const RequestLimits& limits, const Vec3d* background) {
+    SolveRequest q;
+    try {
+        q.options = solveOptionsFromJson(j);
+    } catch (const ValidationError& e) {
+        // An extinction solve without L_m: the session's background is a good start. Decided by the
+        // field's absence, not by the wording of the problem.
+        if (!background || !j.is_object() || j.contains("medium_radiance")) throw;
+        std::ostringstream hint;  // %g-like: six significant digits
+        hint << "; e.g. the background's, \"medium_radiance\": [" << background->x << ", " << background->y << ", " << background->z << "]";
+        auto details = e.details();
+        for (auto& d : details)
+            if (d.path == "/medium_radiance") d.message += hint.str();
+        throw ValidationError(details);
+    }
     if (q.options.resolution && q.options.resolution->volume() > limits.maxSolveVoxels) {
         const Int3 r = *q.options.resolution;
         const std::string message = std::to_string(r.x) + "x" + std::to_string(r.y) + "x" + std::to_string(r.z) +

@@ -110,7 +110,9 @@ struct SetLightingRequest {
 /// maxSolveVoxels is too_large (413).
 struct SolveRequest {
     core::SolveOptions options;
-    static SolveRequest fromJson(const nlohmann::json& j, const RequestLimits& limits);
+    /// `background`, if given (the session's background colour), is offered as a starting value
+    /// when an extinction solve leaves out "medium_radiance".
+    static SolveRequest fromJson(const nlohmann::json& j, const RequestLimits& limits, const Vec3d* background = nullptr);
 };
 
 /// GET …/views/{vid}/render.{png,exr}?exposure=STOPS.

@@ -68,18 +68,8 @@ void replyFile(httplib::Response& res, const std::filesystem::path& path, const 
 void addJobRoutes(RouteContext& c) {
     c.http.Post(kSessionPath + "/solve", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);
-        protocol::SolveRequest request;
-        try {
-            request = protocol::SolveRequest::fromJson(c.body(req), c.limits);
-        } catch (const protocol::ValidationError& e) {
-            // An extinction solve without L_m: suggest the session's background, a good start.
-            const Vec3d b = c.service.lighting(*s).background.color;
-            auto details = e.details();
-            for (auto& d : details)
-                if (d.path == "/medium_radiance" && d.message.rfind("is required", 0) == 0)
-                    d.message += fmt::format("; e.g. the background's, \"medium_radiance\": [{:g}, {:g}, {:g}]", b.x, b.y, b.z);
-            throw protocol::ValidationError(details);
-        }
+        const Vec3d background = c.service.lighting(*s).background.color;  // offered when L_m is left out
+        const protocol::SolveRequest request = protocol::SolveRequest::fromJson(c.body(req), c.limits, &background);
         reply(res, 202, {{"job", c.service.startSolve(s, request.options)->id}});
     });
     c.http.Get(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {

@@ -82,3 +82,28 @@ TEST(Requests, SessionSceneAndResolution) {
     EXPECT_EQ(problemPaths([&] { protocol::CreateSessionRequest::fromJson(json{{"scene", "/etc/passwd"}, {"resolution", 4}}, limits); }),
               (std::vector<std::string>{"/scene", "/resolution"}));
 }
+
+TEST(Requests, AnExtinctionSolveWithoutMediumRadianceIsOfferedTheBackground) {
+    // The hint once came from the route matching the message's words ("is required"); now the
+    // parser adds it when the field is absent, whatever the message says.
+    const json j = {{"unknowns", {"extinction"}}};
+    const Vec3d background{0.25, 0.5, 0.75};
+    for (const bool offered : {false, true}) {
+        try {
+            protocol::SolveRequest::fromJson(j, {}, offered ? &background : nullptr);
+            FAIL() << "an extinction solve needs medium_radiance";
+        } catch (const protocol::ValidationError& e) {
+            ASSERT_EQ(e.details().size(), 1u);
+            EXPECT_EQ(e.details()[0].path, "/medium_radiance");
+            const bool hinted = e.details()[0].message.find("e.g. the background's, \"medium_radiance\": [0.25, 0.5, 0.75]") != std::string::npos;
+            EXPECT_EQ(hinted, offered) << e.details()[0].message;
+        }
+    }
+    // A wrong value is not "left out": no hint.
+    try {
+        protocol::SolveRequest::fromJson({{"unknowns", {"extinction"}}, {"medium_radiance", {-1, 0, 0}}}, {}, &background);
+        FAIL() << "a negative L_m";
+    } catch (const protocol::ValidationError& e) {
+        EXPECT_EQ(e.details()[0].message.find("e.g."), std::string::npos) << e.details()[0].message;
+    }
+}
