@@ -180,8 +180,7 @@ OccluderMeshInfo SessionService::putOccluderMesh(Session& s, const std::string& 
             uploaded.mesh = std::make_shared<const core::Mesh>(loadUntrustedMesh(bytes, uploaded.format, limits, m_limits.vdbReader));
         } catch (const LimitExceeded& e) {
             throw ApiError(ErrorCode::TooLarge, std::string(e.what()) +
-                                                    (limits.maxVertices < m_limits.meshLimits.maxVertices &&
-                                                             std::string(e.what()).find("vertices") != std::string::npos
+                                                    (limits.maxVertices < m_limits.meshLimits.maxVertices
                                                          ? " (the session's other meshes hold " +
                                                                std::to_string(m_limits.meshLimits.maxVertices - limits.maxVertices) +
                                                                " of its " + std::to_string(m_limits.meshLimits.maxVertices) + " vertices)"
