@@ -7,6 +7,14 @@
 #include "protocol/render_json.h"
 
 namespace volstyle::protocol {
+
+std::shared_ptr<const core::Mesh> builtinMesh(const std::string& ref) {
+    static const core::StylizerScene forest = core::builtinForest();
+    if (ref.rfind(kBuiltinMeshPrefix, 0) != 0) return nullptr;
+    for (const core::Occluder& o : forest.occluders)
+        if (kBuiltinMeshPrefix + o.name == ref) return o.mesh;
+    return nullptr;
+}
 namespace {
 
 

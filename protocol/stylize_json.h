@@ -29,6 +29,14 @@
 
 namespace volstyle::protocol {
 
+/// Where a mesh reference points: the built-in meshes are builtin:forest/ground and
+/// builtin:forest/trees; any other reference names an uploaded mesh.
+inline const std::string kBuiltinMeshPrefix = "builtin:forest/";
+
+/// The built-in mesh `ref` names (builtin:forest/ground, builtin:forest/trees, built once and
+/// shared); null for any other.
+std::shared_ptr<const core::Mesh> builtinMesh(const std::string& ref);
+
 struct StylizerSceneRequest {
     core::StylizerScene scene;          ///< occluders with empty meshes, in file order
     std::vector<std::string> meshRefs;  ///< each occluder's `mesh`

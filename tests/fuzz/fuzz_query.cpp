@@ -11,7 +11,7 @@
 #include "protocol/error_body.h"
 #include "protocol/requests.h"
 #include "protocol/validation.h"
-#include "server/routes/route_context.h"
+#include "server/http/routes/route_context.h"
 
 using namespace volstyle;
 using namespace volstyle::protocol;

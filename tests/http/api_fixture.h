@@ -17,7 +17,7 @@
 
 #include "core/base/errors.h"
 #include "core/image/image_io.h"
-#include "server/http_server.h"
+#include "server/http/http_server.h"
 
 namespace volstyle::test {
 

@@ -13,7 +13,7 @@
 #include "core/base/errors.h"
 #include "core/image/image_io.h"
 #include "core/volume/vdb_io.h"
-#include "server/http_server.h"
+#include "server/http/http_server.h"
 
 #include "api_fixture.h"
 

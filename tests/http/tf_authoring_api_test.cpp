@@ -9,7 +9,7 @@
 #include "core/stylize/tf_anchors.h"
 #include "protocol/stylize_json.h"
 #include "../common/image_compare.h"
-#include "server/video_encoder.h"
+#include "server/runtime/video_encoder.h"
 #include "stylizer_fixture.h"
 
 namespace volstyle::test {

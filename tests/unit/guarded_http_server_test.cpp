@@ -14,8 +14,8 @@
 #include <thread>
 #include <vector>
 
-#include "server/guarded_http_server.h"
-#include "server/request_head.h"
+#include "server/http/guarded_http_server.h"
+#include "server/http/request_head.h"
 
 using namespace volstyle::server;
 

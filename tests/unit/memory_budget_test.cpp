@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include "protocol/error_code.h"
-#include "server/memory_budget.h"
-#include "server/session_store.h"
+#include "server/service/memory_budget.h"
+#include "server/state/session_store.h"
 
 using namespace volstyle;
 using namespace volstyle::server;

@@ -13,7 +13,7 @@
 #include "core/base/errors.h"
 #include "core/stylize/mesh_io.h"
 #include "protocol/mesh_upload_check.h"
-#include "server/mesh_reader.h"
+#include "server/runtime/mesh_reader.h"
 #include "test_files.h"
 
 using namespace volstyle;

@@ -10,7 +10,7 @@
 #include "core/base/errors.h"
 #include "core/volume/builtin_scenes.h"
 #include "core/volume/vdb_io.h"
-#include "server/vdb_reader.h"
+#include "server/runtime/vdb_reader.h"
 
 using namespace volstyle;
 namespace fs = std::filesystem;

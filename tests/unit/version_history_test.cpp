@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "core/volume/builtin_scenes.h"
-#include "server/version_history.h"
+#include "server/state/version_history.h"
 
 using namespace volstyle;
 using server::VersionHistory;

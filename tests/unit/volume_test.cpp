@@ -5,7 +5,7 @@
 
 #include "core/base/errors.h"
 #include "core/volume/builtin_scenes.h"
-#include "server/scene_source.h"
+#include "cli/scene_source.h"
 
 using namespace volstyle;
 using namespace volstyle::core;
@@ -78,10 +78,10 @@ TEST(BuiltinScenes, ClearErrors) {
 }
 
 TEST(SceneSource, ParsesBuiltinSpecs) {
-    EXPECT_EQ(server::loadScene("builtin:cube:16").dims(), (Int3{16, 16, 16}));
-    EXPECT_THROW(server::loadScene("builtin:cube:abc"), InvalidArgument);
-    EXPECT_THROW(server::loadScene("builtin:cube:16x"), InvalidArgument);
-    EXPECT_THROW(server::loadScene("/nonexistent.vdb"), IoError);
+    EXPECT_EQ(cli::loadScene("builtin:cube:16").dims(), (Int3{16, 16, 16}));
+    EXPECT_THROW(cli::loadScene("builtin:cube:abc"), InvalidArgument);
+    EXPECT_THROW(cli::loadScene("builtin:cube:16x"), InvalidArgument);
+    EXPECT_THROW(cli::loadScene("/nonexistent.vdb"), IoError);
 }
 
 TEST(BuiltinScenes, TheCloudsShortcutsChangeNoVoxel) {

@@ -1,0 +1,60 @@
+// A session's animation (issue #16, docs/ANIMATION.md): PUT/GET/DELETE …/frames/{n}[.vdb],
+// GET …/frames, POST …/animate (the key-frame solve, a job), POST …/frames/render (a job
+// rendering every frame to PNG).
+#include "server/http/responses.h"
+#include "server/http/routes/route_context.h"
+
+namespace volstyle::server {
+namespace {
+
+const std::string kFramePath = kSessionPath + R"(/frames/([0-9]{1,5}))";
+
+nlohmann::json framesJson(Session& s) {
+    std::lock_guard lock(s.mutex);
+    nlohmann::json list = nlohmann::json::array();
+    for (const auto& [n, f] : s.frames) {
+        int views = 0;
+        for (const auto& v : s.views) views += v.frame == n ? 1 : 0;
+        const Int3 d = f.volume.dims();
+        list.push_back({{"frame", n}, {"dims", {d.x, d.y, d.z}}, {"solved", f.solved}, {"views", views}});
+    }
+    return list;
+}
+
+}  // namespace
+
+void addFrameRoutes(RouteContext& c) {
+    putUpload(c, kFramePath, [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
+        auto s = c.service.find(req.matches[1]);
+        c.service.uploadFrame(*s, std::stoi(req.matches[2]), bytes);
+        reply(res, 200, framesJson(*s));
+    });
+    // One VDB holding the whole animation (grids stamped with their frames): every frame at once.
+    putUpload(c, kSessionPath + "/frames", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
+        auto s = c.service.find(req.matches[1]);
+        c.service.uploadFrames(*s, bytes);
+        reply(res, 200, framesJson(*s));
+    });
+    c.http.Get(kSessionPath + "/frames", [&c](const httplib::Request& req, httplib::Response& res) {
+        reply(res, 200, framesJson(*c.service.find(req.matches[1])));
+    });
+    c.http.Get(kFramePath + R"(\.vdb)", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        res.set_content(c.service.downloadFrame(*s, std::stoi(req.matches[2])), "application/octet-stream");
+    });
+    c.http.Delete(kFramePath, [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        c.service.removeFrame(*s, std::stoi(req.matches[2]));
+        reply(res, 200, framesJson(*s));
+    });
+    c.http.Post(kSessionPath + "/animate", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        reply(res, 202, {{"job", c.service.startAnimate(s, protocol::AnimateRequest::fromJson(c.body(req)))->id}});
+    });
+    c.http.Post(kSessionPath + "/frames/render", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        reply(res, 202, {{"job", c.service.startFramesRender(s, protocol::FramesRenderRequest::fromJson(c.body(req), c.limits))->id}});
+    });
+}
+
+}  // namespace volstyle::server

@@ -1,0 +1,98 @@
+// Jobs: POST /sessions/{sid}/solve, GET/DELETE /jobs/{jid}, GET …/events (SSE),
+// GET …/preview/{vid}.png; a sequence's GET …/frames/{i}.png and …/video.mp4.
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+
+#include "server/http/routes/route_context.h"
+#include "server/runtime/video_encoder.h"
+
+namespace volstyle::server {
+namespace {
+
+/// How long an event stream waits for news before checking whether its client is still there.
+constexpr auto kEventPoll = std::chrono::milliseconds(500);
+
+/// Ends a chunked answer. cpp-httplib writes the last chunk from a function-local static string
+/// built on the first end; its initialisation guard is inside the uninstrumented library, so
+/// ThreadSanitizer saw two streams ending at once as a race on that string. The first end runs
+/// under std::call_once, whose completion every later end synchronises with (only the first end
+/// can wait, and only for that one write).
+void endChunkedAnswer(httplib::DataSink& sink) {
+    static std::once_flag first;
+    bool ended = false;
+    std::call_once(first, [&] {
+        sink.done();
+        ended = true;
+    });
+    if (!ended) sink.done();
+}
+
+/// Streams a job's events from the first: every one written so far, then each as it comes; the
+/// stream ends after the final event (the job's state flips before that event is queued, so the
+/// events decide, not the state).
+void streamEvents(httplib::Response& res, std::shared_ptr<Job> job, StreamLimiter& streams, const std::string& client) {
+    streams.acquire(client);  // released when the response is destroyed, however the stream ends
+    res.set_header("Cache-Control", "no-cache");
+    res.set_chunked_content_provider("text/event-stream", [job, sent = size_t(0)](size_t, httplib::DataSink& sink) mutable {
+        std::unique_lock lock(job->mutex);
+        job->changed.wait_for(lock, kEventPoll, [&] { return job->events.size() > sent; });
+        bool final = false;
+        while (sent < job->events.size()) {
+            const auto& [event, data] = job->events[sent++];
+            final = protocol::isFinal(event);
+            std::string message = std::string("event: ") + protocol::jobEventName(event) + "\ndata: " + protocol::toText(data) + "\n\n";
+            lock.unlock();
+            if (!sink.write(message.data(), message.size())) return false;  // the client left
+            lock.lock();
+        }
+        if (final) {
+            lock.unlock();
+            endChunkedAnswer(sink);
+        }
+        return true;
+    }, [&streams, client](bool) { streams.release(client); });
+}
+
+/// A file as the answer's body (frames and videos are small enough to send whole).
+void replyFile(httplib::Response& res, const std::filesystem::path& path, const char* mime) {
+    std::ifstream in(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    res.set_content(std::move(bytes), mime);
+}
+
+}  // namespace
+
+void addJobRoutes(RouteContext& c) {
+    c.http.Post(kSessionPath + "/solve", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        const Vec3d background = c.service.lighting(*s).background.color;  // offered when L_m is left out
+        const protocol::SolveRequest request = protocol::SolveRequest::fromJson(c.body(req), c.limits, &background);
+        reply(res, 202, {{"job", c.service.startSolve(s, request.options)->id}});
+    });
+    c.http.Get(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {
+        reply(res, 200, c.service.job(req.matches[1])->toJson());
+    });
+    c.http.Delete(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {
+        auto job = c.service.job(req.matches[1]);
+        c.service.cancel(*job);
+        reply(res, 202, job->toJson());
+    });
+    c.http.Get(kJobPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
+        streamEvents(res, c.service.job(req.matches[1]), c.streams, req.remote_addr);
+    });
+    // A sequence job's files (issue #15): its frames and its video.
+    c.http.Get(kJobPath + R"(/frames/([0-9]{1,6})\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
+        replyFile(res, c.service.jobFile(req.matches[1], sequenceFrameName(std::stoul(req.matches[2]))), "image/png");
+    });
+    c.http.Get(kJobPath + R"(/video\.mp4)", [&c](const httplib::Request& req, httplib::Response& res) {
+        replyFile(res, c.service.jobFile(req.matches[1], "video.mp4"), "video/mp4");
+    });
+    c.http.Get(kJobPath + R"(/preview/(v[0-9]+)\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
+        replyImage(res, c.service.renderPreview(req.matches[1], req.matches[2]), protocol::ImageFormat::Png);
+    });
+}
+
+}  // namespace volstyle::server

@@ -1,0 +1,78 @@
+#pragma once
+/// \file route_context.h
+/// What every route file shares: the httplib server to register on, the session service to
+/// call, the request limits, and the helpers that read a body and write an answer. Handlers are
+/// about twenty lines: parse a protocol request, call the service, reply.
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include <functional>
+#include <map>
+#include <mutex>
+#include <string>
+
+#include "core/image/image.h"
+#include "core/render/renderer.h"
+#include "protocol/requests.h"
+#include "server/service/session_service.h"
+
+namespace volstyle::server {
+
+/// Open event streams, by client address: each holds an HTTP worker thread until its job ends,
+/// so they are bounded per client and in all, below the pool's size (/health always has threads).
+class StreamLimiter {
+public:
+    StreamLimiter(int maxTotal, int maxPerClient) : m_maxTotal(maxTotal), m_maxPerClient(maxPerClient) {}
+    /// Counts a new stream of `client`; ApiError too_many_streams (429) over a limit.
+    void acquire(const std::string& client);
+    void release(const std::string& client);
+
+private:
+    std::mutex m_mutex;
+    std::map<std::string, int> m_open;
+    int m_total = 0;
+    const int m_maxTotal, m_maxPerClient;
+};
+
+struct RouteContext {
+    httplib::Server& http;
+    SessionService& service;
+    protocol::RequestLimits limits;
+    size_t maxJsonBytes = 1 << 20;
+    StreamLimiter& streams;
+
+    /// The JSON body ({} when empty): 413 over maxJsonBytes, 400 invalid_json.
+    nlohmann::json body(const httplib::Request& req) const;
+};
+
+/// Path patterns (regular expressions; the groups are the ids).
+inline const std::string kApi = "/api/v1";
+inline const std::string kSessionPath = kApi + R"(/sessions/([0-9a-f]+))";
+inline const std::string kViewPath = kSessionPath + R"(/views/(v[0-9]+))";
+inline const std::string kJobPath = kApi + R"(/jobs/([0-9a-f]+))";
+
+/// Registers PUT `pattern` for a binary upload (a VDB or an image): `handler(req, res, bytes)`.
+/// The body is read whatever its Content-Type — curl's --data-binary sends
+/// application/x-www-form-urlencoded, which cpp-httplib would parse as a form and refuse over
+/// 8 KiB with an empty 413 — and the readers recognise the bytes by their magic numbers.
+void putUpload(RouteContext& c, const std::string& pattern,
+               std::function<void(const httplib::Request&, httplib::Response&, const std::string&)> handler);
+
+void reply(httplib::Response& res, int status, const nlohmann::json& body);
+/// Encodes `image` (PNG: sRGB with `exposure` stops; EXR: linear) as the answer.
+void replyImage(httplib::Response& res, const core::Image& image, protocol::ImageFormat format, double exposure = 0);
+/// A render as PNG (the beauty, sRGB with `exposure` stops) or layered EXR (docs/FORMATS.md).
+void replyImage(httplib::Response& res, const core::RenderLayers& render, protocol::ImageFormat format, double exposure = 0,
+                bool exrHalf = true);
+
+// Each file registers the routes of one resource.
+void addSystemRoutes(RouteContext& c);   ///< health, schema, scenes
+void addSessionRoutes(RouteContext& c);  ///< sessions, lighting, renders
+void addVolumeRoutes(RouteContext& c);   ///< volume upload, download, revert
+void addFrameRoutes(RouteContext& c);    ///< an animation's frames, its key-frame solve and frame render
+void addViewRoutes(RouteContext& c);     ///< views, targets, weights, view renders
+void addJobRoutes(RouteContext& c);      ///< solve, jobs, events, previews
+void addStylizerRoutes(RouteContext& c); ///< the stylizer's scene, meshes, TF, frames, live stream
+
+}  // namespace volstyle::server

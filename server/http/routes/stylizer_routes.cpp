@@ -1,0 +1,187 @@
+// A session's light-shaft stylizer (SPEC §7 "API"): GET/PUT …/stylizer (the scene),
+// GET …/stylizer/occluders, PUT/DELETE …/stylizer/occluders/{name} (mesh files),
+// PUT/DELETE …/stylizer/tf and GET …/stylizer/tf.png (the uploaded TF image), GET …/stylizer/transfer_function.png (the
+// TF the scene applies, its layers compiled), POST …/stylizer/undo
+// and …/redo, POST …/stylizer/pick (a pixel's TF position) and …/constraints (a TF constraint
+// clicked into the scene), POST …/stylizer/sequence (a job rendering the camera path), POST …/stylizer/frame
+// (a frame or AOV), GET …/stylizer/events (the live stream: SSE `frame` events whose URLs,
+// GET …/stylizer/frames/{revision}.jpeg, hold each new revision's frame).
+#include <fmt/format.h>
+
+#include "core/image/image_io.h"
+#include "core/stylize/stylizer.h"
+#include "core/stylize/stylizer_files.h"
+#include "protocol/error_body.h"
+#include "protocol/stylize_json.h"
+#include "server/http/routes/route_context.h"
+
+namespace volstyle::server {
+namespace {
+
+using protocol::ApiError;
+using protocol::ErrorCode;
+
+/// How long the live stream waits for a change before checking that its client is still there,
+/// and how often it then says so (an SSE comment keeps proxies from closing an idle stream).
+constexpr auto kLivePoll = std::chrono::milliseconds(500);
+constexpr int kPollsPerKeepAlive = 30;
+
+const std::string kStylizerPath = kSessionPath + "/stylizer";
+
+nlohmann::json meshJson(const OccluderMeshInfo& m) {
+    return {{"name", m.name},
+            {"format", m.format},
+            {"vertices", m.vertices},
+            {"triangles", m.triangles},
+            {"file_bytes", m.fileBytes},
+            {"bounds", {{m.boundsLo.x, m.boundsLo.y, m.boundsLo.z}, {m.boundsHi.x, m.boundsHi.y, m.boundsHi.z}}},
+            {"used", m.used}};
+}
+
+/// The scene as its JSON, its revision in the ETag (the body round-trips through PUT).
+void replyScene(httplib::Response& res, const StylizerSnapshot& s) {
+    res.set_header("ETag", fmt::format("\"r{}\"", s.revision));
+    reply(res, 200, protocol::stylizerSceneToJson(s.scene, s.meshRefs));
+}
+
+nlohmann::json pickJson(const StylizerPick& p) {
+    return {{"x", p.x}, {"y", p.y}, {"v_bar", p.vBar}, {"depth", p.depth}, {"distance", p.distance},
+            {"occluder", p.occluderName.empty() ? nlohmann::json() : nlohmann::json(p.occluderName)},
+            {"position", {p.position.x, p.position.y, p.position.z}}};
+}
+
+std::string frameUrl(const std::string& session, uint64_t revision) {
+    return fmt::format("{}/sessions/{}/stylizer/frames/{}.jpeg", kApi, session, revision);
+}
+
+std::string sseEvent(const char* event, const nlohmann::json& data) {
+    return std::string("event: ") + event + "\ndata: " + protocol::toText(data) + "\n\n";
+}
+
+/// The live stream: a `frame` event for the stylizer's revision now and for each later one (a
+/// burst of changes renders only the newest), `failed` for a revision that could not render, and
+/// the stream ends when the session is deleted.
+void streamLiveFrames(RouteContext& c, httplib::Response& res, std::shared_ptr<Session> s, const std::string& client) {
+    c.streams.acquire(client);
+    res.set_header("Cache-Control", "no-cache");
+    res.set_chunked_content_provider(
+        "text/event-stream",
+        [&c, s, sent = uint64_t(0), idle = 0](size_t, httplib::DataSink& sink) mutable {
+            std::string message;
+            try {
+                if (auto f = c.service.nextLiveFrame(*s, sent, kLivePoll)) {
+                    sent = f->revision;
+                    idle = 0;
+                    message = sseEvent("frame", {{"revision", f->revision}, {"url", frameUrl(s->id, f->revision)},
+                                                 {"width", f->width}, {"height", f->height}, {"render_ms", f->renderMs}});
+                } else if (++idle % kPollsPerKeepAlive == 0) {
+                    message = ": still here\n\n";
+                }
+            } catch (...) {
+                const protocol::ErrorReport e = protocol::describeException(std::current_exception());
+                if (e.code == ErrorCode::NotFound) {  // the session was deleted
+                    const std::string end = sseEvent("closed", {{"reason", e.message}});
+                    sink.write(end.data(), end.size());
+                    sink.done();
+                    return true;
+                }
+                sent = c.service.stylizer(*s).revision;  // wait for the next change
+                message = sseEvent("failed", {{"revision", sent}, {"error", protocol::errorBody(e.code, e.message, e.details, "")["error"]}});
+            }
+            if (!message.empty() && !sink.write(message.data(), message.size())) return false;  // the client left
+            return sink.is_writable();
+        },
+        [&c, client](bool) { c.streams.release(client); });
+}
+
+}  // namespace
+
+void addStylizerRoutes(RouteContext& c) {
+    c.http.Get(kStylizerPath, [&c](const httplib::Request& req, httplib::Response& res) {
+        replyScene(res, c.service.stylizer(*c.service.find(req.matches[1])));
+    });
+    c.http.Put(kStylizerPath, [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        if (req.body.find_first_not_of(" \t\r\n") == std::string::npos)  // a mistake, not "the defaults"
+            throw ApiError(ErrorCode::InvalidArgument, "the body is empty; send the scene (GET …/stylizer gives the current one)");
+        auto request = protocol::stylizerSceneFromJson(c.body(req), "", protocol::SceneSource::Api);
+        replyScene(res, c.service.setStylizerScene(*s, request));
+    });
+    for (auto [route, redo] : {std::pair{"/undo", false}, std::pair{"/redo", true}})
+        c.http.Post(kStylizerPath + route, [&c, redo](const httplib::Request& req, httplib::Response& res) {
+            replyScene(res, c.service.undoStylizer(*c.service.find(req.matches[1]), redo));
+        });
+    c.http.Post(kStylizerPath + "/pick", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        reply(res, 200, pickJson(c.service.pickStylizer(*s, protocol::StylizerPickRequest::fromJson(c.body(req), c.limits, false))));
+    });
+    c.http.Post(kStylizerPath + "/constraints", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        const AddedTfConstraint a = c.service.addTfConstraint(*s, protocol::StylizerPickRequest::fromJson(c.body(req), c.limits, true));
+        res.set_header("ETag", fmt::format("\"r{}\"", a.revision));
+        nlohmann::json body = {{"revision", a.revision}, {"layer", a.layer}, {"index", a.index},
+                               {"constraint", protocol::tfConstraintToJson(a.constraint)}, {"pick", pickJson(a.pick)}};
+        if (a.key >= 0) body["key"] = a.key;
+        reply(res, 200, body);
+    });
+    c.http.Post(kStylizerPath + "/sequence", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        reply(res, 202, {{"job", c.service.startSequence(s, protocol::StylizerSequenceRequest::fromJson(c.body(req)))->id}});
+    });
+    c.http.Get(kStylizerPath + "/occluders", [&c](const httplib::Request& req, httplib::Response& res) {
+        nlohmann::json list = nlohmann::json::array();
+        for (const auto& m : c.service.occluderMeshes(*c.service.find(req.matches[1]))) list.push_back(meshJson(m));
+        reply(res, 200, list);
+    });
+    putUpload(c, kStylizerPath + "/occluders/([^/]+)", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
+        auto s = c.service.find(req.matches[1]);
+        reply(res, 200, meshJson(c.service.putOccluderMesh(*s, req.matches[2], bytes)));
+    });
+    c.http.Delete(kStylizerPath + "/occluders/([^/]+)", [&c](const httplib::Request& req, httplib::Response& res) {
+        c.service.removeOccluderMesh(*c.service.find(req.matches[1]), req.matches[2]);
+        res.status = 204;
+    });
+    putUpload(c, kStylizerPath + "/tf", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
+        const TransferImageInfo t = c.service.setTransferImage(*c.service.find(req.matches[1]), bytes);
+        reply(res, 200, {{"width", t.width}, {"height", t.height}, {"channels", t.channels}, {"used", t.used}});
+    });
+    c.http.Get(kStylizerPath + R"(/tf\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
+        core::SaveOptions save;
+        save.writeAlpha = true;
+        res.set_content(core::encodeImage(c.service.transferImage(*c.service.find(req.matches[1])), "png", save), "image/png");
+    });
+    c.http.Get(kStylizerPath + R"(/transfer_function\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
+        core::SaveOptions save;
+        save.writeAlpha = true;
+        save.data = true;  // the TF's values as they are (it multiplies linear radiance)
+        res.set_content(core::encodeImage(c.service.compiledTransferFunction(*c.service.find(req.matches[1])), "png", save), "image/png");
+    });
+    c.http.Delete(kStylizerPath + "/tf", [&c](const httplib::Request& req, httplib::Response& res) {
+        c.service.removeTransferImage(*c.service.find(req.matches[1]));
+        res.status = 204;
+    });
+    c.http.Post(kStylizerPath + "/frame", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        const auto request = protocol::StylizerFrameRequest::fromJson(c.body(req), c.limits);
+        const core::StylizedFrame f = c.service.stylize(*s, request);
+        res.set_header("X-Render-Ms", fmt::format("{:.1f}", f.totalMs));
+        const core::SaveOptions save =
+            core::stylizerSaveOptions(request.output, request.format == protocol::ImageFormat::Exr ? 0 : request.exposure);
+        res.set_content(core::encodeImage(f.output(request.output), protocol::imageFormatName(request.format), save),
+                        protocol::imageMimeType(request.format));
+    });
+    c.http.Get(kStylizerPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
+        streamLiveFrames(c, res, c.service.find(req.matches[1]), req.remote_addr);
+    });
+    c.http.Get(kStylizerPath + R"(/frames/([0-9]+)\.jpeg)", [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        const uint64_t revision = std::stoull(req.matches[2].str().substr(0, 19));
+        auto f = c.service.liveFrame(*s, revision);
+        if (!f) throw ApiError(ErrorCode::NotFound, "the live stream holds no frame of revision " + std::to_string(revision) +
+                                                        " (a newer one replaced it; follow …/stylizer/events)");
+        res.set_header("Cache-Control", "private, max-age=3600");  // a revision's frame never changes
+        res.set_content(f->bytes, "image/jpeg");
+    });
+}
+
+}  // namespace volstyle::server

@@ -1,0 +1,32 @@
+// GET /health, /schema.json, /scenes, /quarantine.
+#include "core/volume/builtin_scenes.h"
+#include "protocol/validation.h"
+#include "protocol/build_version.h"
+#include "server/http/routes/route_context.h"
+
+namespace volstyle::server {
+
+void addSystemRoutes(RouteContext& c) {
+    c.http.Get(kApi + "/health", [&c](const httplib::Request&, httplib::Response& res) {
+        const auto& caps = c.service.capabilities();
+        reply(res, 200, {{"status", "ok"}, {"version", protocol::versionString()}, {"api", protocol::kApiVersion},
+                         {"gl_renderer", caps.renderer}, {"gl_version", caps.version}});
+    });
+    c.http.Get(kApi + "/schema.json", [](const httplib::Request&, httplib::Response& res) {
+        res.set_content(protocol::kSchemaV1, "application/schema+json");
+    });
+    c.http.Get(kApi + "/scenes", [](const httplib::Request&, httplib::Response& res) {
+        nlohmann::json list = nlohmann::json::array();
+        for (const auto& s : core::builtinScenes()) list.push_back({{"name", s.name}, {"description", s.description}});
+        reply(res, 200, list);
+    });
+    // Files (or whole sessions) found damaged in the data directory and moved aside, with why.
+    c.http.Get(kApi + "/quarantine", [&c](const httplib::Request&, httplib::Response& res) {
+        nlohmann::json list = nlohmann::json::array();
+        for (const auto& q : c.service.quarantine())
+            list.push_back({{"session", q.session}, {"file", q.file}, {"reason", q.reason}, {"time", q.time}});
+        reply(res, 200, list);
+    });
+}
+
+}  // namespace volstyle::server

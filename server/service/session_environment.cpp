@@ -1,0 +1,77 @@
+// The session's environment map (SPEC §8, docs/LIGHTING.md): a lat-long image uploaded with
+// PUT …/environment that the lighting names "session" — as the background, as the map the
+// environment light's lobes are fitted to, or both.
+#include "core/base/errors.h"
+#include "core/image/image_io.h"
+#include "core/render/environment_lobes.h"
+#include "server/service/session_service.h"
+
+namespace volstyle::server {
+namespace {
+
+using protocol::ApiError;
+using protocol::ErrorCode;
+
+const std::string kEnvironmentFile = "environment.image";
+
+bool namesMap(const core::Lighting& l, const core::Image* map) {
+    return map && (l.background.environment.get() == map || l.environment.map.get() == map);
+}
+
+}  // namespace
+
+std::optional<EnvironmentMapInfo> environmentMapInfo(const Session& s) {
+    if (!s.environmentMap) return std::nullopt;
+    return EnvironmentMapInfo{s.environmentMap->width, s.environmentMap->height, namesMap(s.lighting, s.environmentMap.get())};
+}
+
+EnvironmentMapInfo SessionService::setEnvironmentMap(Session& s, const std::string& bytes) {
+    checkUploadSize(bytes, "the environment map");
+    std::optional<DecodeSlot> slot;
+    core::Image image;
+    try {
+        image = core::loadImageFromMemory(bytes.data(), bytes.size(), "the environment map", m_limits.maxImageSide,
+                                          [&](int width, int height) {
+                                              if (std::abs(width - 2 * height) > 1)  // before decoding the pixels
+                                                  throw ApiError(ErrorCode::InvalidArgument,
+                                                                 "a latitude-longitude map is twice as wide as high; this one is " +
+                                                                     std::to_string(width) + "x" + std::to_string(height));
+                                              slot.emplace(m_decodeSlots);
+                                          }).image;
+    } catch (const Error& e) {
+        throw ApiError(ErrorCode::UnsupportedMedia, e.what());  // undecodable, or over the side limit
+    }
+    if (std::string why = core::latLongMapProblem(image); !why.empty()) throw ApiError(ErrorCode::InvalidArgument, "the environment map: " + why);
+    for (size_t i = 0; i < image.pixelCount(); ++i) image.rgba[4 * i + 3] = 1;  // radiance: alpha means nothing
+    auto map = std::make_shared<const core::Image>(std::move(image));
+    slot.reset();
+    std::lock_guard lock(s.mutex);
+    if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+    m_memory.check(s, map->rgba.size() * sizeof(float), s.environmentMap ? s.environmentMap->rgba.size() * sizeof(float) : 0, "the environment map");
+    if (m_persist) m_persist->saveSessionFile(s.id, kEnvironmentFile, bytes);
+    // The lighting that names the old map names the new one.
+    core::Lighting& l = s.lighting;
+    if (s.environmentMap && l.background.environment == s.environmentMap) l.background.environment = map;
+    if (s.environmentMap && l.environment.map == s.environmentMap) l.environment.map = map;
+    s.environmentMap = map;
+    saved(s);
+    return *environmentMapInfo(s);
+}
+
+std::shared_ptr<const core::Image> SessionService::environmentMap(Session& s) const {
+    std::lock_guard lock(s.mutex);
+    if (!s.environmentMap) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no environment map uploaded");
+    return s.environmentMap;
+}
+
+void SessionService::removeEnvironmentMap(Session& s) {
+    std::lock_guard lock(s.mutex);
+    if (!s.environmentMap) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no environment map uploaded");
+    if (namesMap(s.lighting, s.environmentMap.get()))
+        throw ApiError(ErrorCode::Busy, "the lighting names the environment map (\"session\"); PUT a lighting without it first");
+    if (m_persist) m_persist->removeSessionFile(s.id, kEnvironmentFile);
+    s.environmentMap.reset();
+    saved(s);
+}
+
+}  // namespace volstyle::server

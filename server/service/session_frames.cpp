@@ -1,0 +1,259 @@
+// The session's animation (issue #16, docs/ANIMATION.md): frames uploaded as VDBs, views tied to
+// frames, the key-frame solve as a job (core/solve/keyframe_solver.h) and a job rendering every
+// frame to PNG.
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/base/errors.h"
+#include "core/image/image_io.h"
+#include "core/render/gpu_volume.h"
+#include "core/render/renderer.h"
+#include "core/solve/keyframe_solver.h"
+#include "core/volume/vdb_io.h"
+#include "server/store/persistence.h"
+#include "server/service/session_service.h"
+#include "server/runtime/video_encoder.h"
+
+namespace volstyle::server {
+namespace {
+
+using protocol::ApiError;
+using protocol::ErrorCode;
+using protocol::JobEvent;
+using protocol::JobState;
+
+/// An animation's frames at most (each a volume in memory).
+constexpr size_t kMaxFrames = 1000;
+
+SessionFrame& frameOf(Session& s, int n) {
+    auto it = s.frames.find(n);
+    if (it == s.frames.end()) throw ApiError(ErrorCode::NotFound, "the session has no frame " + std::to_string(n));
+    return it->second;
+}
+
+}  // namespace
+
+void SessionService::uploadFrame(Session& s, int n, const std::string& bytes) {
+    if (n < 0 || n > protocol::kMaxFrameNumber)
+        throw ApiError(ErrorCode::InvalidArgument, "frame numbers are in [0, " + std::to_string(protocol::kMaxFrameNumber) + "]");
+    core::Volume v = readUploadedVdb(bytes);
+    core::velocityOf(v);  // a velocity grid that cannot be read is refused now, not in the solve
+    std::lock_guard lock(s.mutex);
+    storeFrame(s, n, std::move(v));
+    saved(s);
+}
+
+std::vector<int> SessionService::uploadFrames(Session& s, const std::string& bytes) {
+    std::map<int, core::Volume> frames = readUploadedVdbFrames(bytes);
+    for (auto& [n, v] : frames) {
+        if (n < 0 || n > protocol::kMaxFrameNumber)
+            throw ApiError(ErrorCode::InvalidArgument, "frame numbers are in [0, " + std::to_string(protocol::kMaxFrameNumber) + "]");
+        core::velocityOf(v);
+    }
+    std::vector<int> numbers;
+    std::lock_guard lock(s.mutex);
+    // All or nothing: every frame is checked (against the session's frames and the file's first)
+    // before any is stored.
+    size_t added = 0;
+    for (const auto& [n, v] : frames) {
+        storeFrameChecks(s, n, v);
+        if (!(v.dims() == frames.begin()->second.dims()) || !(v.worldFromIndex() == frames.begin()->second.worldFromIndex()))
+            throw ApiError(ErrorCode::InvalidArgument, fmt::format("frames {} and {} of the file lie on different grids: an animation's frames "
+                                                                   "share one grid (dims and transform); resample them first",
+                                                                   frames.begin()->first, n));
+        added += s.frames.count(n) ? 0 : 1;
+    }
+    if (s.frames.size() + added > kMaxFrames)
+        throw ApiError(ErrorCode::TooLarge, fmt::format("the session would hold {} frames, over the limit of {}", s.frames.size() + added, kMaxFrames));
+    size_t adding = 0, freeing = 0;
+    for (const auto& [n, v] : frames) {
+        adding += v.memoryBytes();
+        if (s.frames.count(n)) freeing += s.frames.at(n).volume.memoryBytes();
+    }
+    m_memory.check(s, adding, freeing, fmt::format("the file's {} frames", frames.size()));
+    for (auto& [n, v] : frames) {
+        numbers.push_back(n);
+        storeFrame(s, n, std::move(v));
+    }
+    saved(s);
+    return numbers;
+}
+
+void SessionService::storeFrame(Session& s, int n, core::Volume v) {
+    storeFrameChecks(s, n, v);
+    m_memory.check(s, v.memoryBytes(), s.frames.count(n) ? s.frames.at(n).volume.memoryBytes() : 0, "frame " + std::to_string(n));
+    if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+    if (m_persist) m_persist->saveFrame(s.id, n, v);
+    s.frames[n] = {std::move(v), false};
+}
+
+void SessionService::storeFrameChecks(const Session& s, int n, const core::Volume& v) {
+    if (!s.frames.count(n) && s.frames.size() >= kMaxFrames)
+        throw ApiError(ErrorCode::TooLarge, "the session holds " + std::to_string(kMaxFrames) + " frames already");
+    for (const auto& [m, f] : s.frames)
+        if (m != n && (!(f.volume.dims() == v.dims()) || !(f.volume.worldFromIndex() == v.worldFromIndex())))
+            throw ApiError(ErrorCode::InvalidArgument,
+                           fmt::format("frame {} is {}x{}x{} on another grid than frame {} ({}x{}x{}): an animation's frames share one grid "
+                                       "(dims and transform); resample them first",
+                                       n, v.dims().x, v.dims().y, v.dims().z, m, f.volume.dims().x, f.volume.dims().y, f.volume.dims().z));
+}
+
+void SessionService::removeFrame(Session& s, int n) {
+    std::lock_guard lock(s.mutex);
+    frameOf(s, n);
+    s.frames.erase(n);
+    if (m_persist) m_persist->removeFrame(s.id, n);
+    saved(s);
+}
+
+std::string SessionService::downloadFrame(Session& s, int n) {
+    core::Volume v;
+    {
+        std::lock_guard lock(s.mutex);
+        v = frameOf(s, n).volume;
+    }
+    return vdbBytes(v);
+}
+
+std::shared_ptr<Job> SessionService::startAnimate(const std::shared_ptr<Session>& session, const protocol::AnimateRequest& q) {
+    {
+        std::lock_guard lock(session->mutex);
+        if (session->frames.empty()) throw ApiError(ErrorCode::InvalidArgument, "the session has no frames: PUT …/frames/{n} first");
+        bool anyKey = false;
+        for (const auto& v : session->views)
+            if (v.frame && v.target) {
+                if (!session->frames.count(*v.frame))
+                    throw ApiError(ErrorCode::InvalidArgument, "view '" + v.id + "' is on frame " + std::to_string(*v.frame) + ", which the session does not have");
+                anyKey = true;
+            }
+        if (!anyKey) throw ApiError(ErrorCode::InvalidArgument, "no view of a frame has a target: add views with \"frame\" and paint them");
+    }
+    auto job = queueJob(*session);
+    m_gl.submit([this, job, session, q](core::GpuDevice& device) {
+        runJob(*job, [&] { runAnimate(*job, *session, q, device); });
+        finishJob(*job);
+    });
+    return job;
+}
+
+void SessionService::runAnimate(Job& job, Session& s, const protocol::AnimateRequest& q, core::GpuDevice& device) {
+    // The key frames: the frames with painted views (copied under the lock; solved off it).
+    std::vector<core::KeyFrame> keys;
+    std::map<int, core::Volume> frames;
+    core::Lighting lighting;
+    {
+        std::lock_guard lock(s.mutex);
+        lighting = s.lighting;
+        for (const auto& [n, f] : s.frames) frames[n] = f.volume;
+        std::map<int, std::vector<core::SolveView>> views;
+        for (const auto& v : s.views)
+            if (v.frame && v.target && s.frames.count(*v.frame)) views[*v.frame].push_back({v.id, v.camera, *v.target, v.weights, v.background});
+        for (auto& [n, list] : views) keys.push_back({n, frames[n], std::move(list), {}});
+    }
+    for (auto& k : keys) {
+        k.velocity = core::velocityOf(k.volume);
+        for (float& x : k.velocity) x = float(x / q.fps);
+    }
+    core::KeyFrameOptions o;
+    o.solve.unknown = q.albedo ? core::Unknown::Albedo : core::Unknown::Emission;
+    o.solve.maxIterations = q.maxIterations;
+    o.temporal = q.temporal;
+    o.sweeps = q.sweeps;
+    o.followFlow = q.followFlow;
+    core::KeyFrameReport report;
+    int steps = 0;
+    const int total = q.sweeps * int(keys.size());
+    const auto solved = core::solveKeyFrames(device, keys, lighting, o, &report, [&](int sweep, int k) {
+        if (job.cancel) throw ApiError(ErrorCode::Cancelled, fmt::format("cancelled at sweep {} of {}", sweep + 1, q.sweeps));
+        const nlohmann::json progress = {{"sweep", sweep + 1}, {"sweeps", q.sweeps}, {"key_frame", keys[size_t(k)].frame},
+                                         {"step", ++steps}, {"steps", total}};
+        {
+            std::lock_guard lock(job.mutex);
+            job.progress = progress;
+        }
+        job.emit(JobEvent::Progress, progress);
+        m_gl.runShortTasks(device);
+    });
+    // Every frame from the key frames, stored (and written) as solved.
+    for (auto& [n, v] : frames)
+        (q.albedo ? v.ensureAlbedo() : v.ensureEmission()) = core::frameFromKeys(keys, solved, o.solve.unknown, n, o.followFlow);
+    nlohmann::json keyNumbers = nlohmann::json::array(), frameNumbers = nlohmann::json::array();
+    for (const auto& k : keys) keyNumbers.push_back(k.frame);
+    {
+        std::lock_guard lock(s.mutex);
+        for (auto& [n, v] : frames) {
+            if (!s.frames.count(n)) continue;  // removed while the job ran
+            if (m_persist && !s.removed) m_persist->saveFrame(s.id, n, v);
+            s.frames[n] = {std::move(v), true};
+            frameNumbers.push_back(n);
+        }
+        if (!s.removed) saved(s);
+    }
+    spdlog::info("job {}: {} key frames solved, {} frames stored", job.id, keys.size(), frameNumbers.size());
+    std::lock_guard lock(job.mutex);
+    job.state = JobState::Done;
+    job.result = {{"key_frames", keyNumbers}, {"frames", frameNumbers}, {"change_per_sweep", report.change}};
+}
+
+std::shared_ptr<Job> SessionService::startFramesRender(const std::shared_ptr<Session>& session, const protocol::FramesRenderRequest& q) {
+    {
+        std::lock_guard lock(session->mutex);
+        if (session->frames.empty()) throw ApiError(ErrorCode::InvalidArgument, "the session has no frames: PUT …/frames/{n} first");
+    }
+    auto job = queueJob(*session);
+    m_gl.submit([this, job, session, q](core::GpuDevice& device) {
+        runJob(*job, [&] {
+            std::map<int, core::Volume> frames;
+            core::Lighting lighting;
+            {
+                std::lock_guard lock(session->mutex);
+                for (const auto& [n, f] : session->frames) frames[n] = f.volume;
+                lighting = session->lighting;
+            }
+            const std::filesystem::path dir = jobFilesDir(job->id);
+            std::filesystem::create_directories(dir);
+            core::Renderer renderer(device);
+            core::SaveOptions save;
+            save.exposure = q.exposure;
+            nlohmann::json urls = nlohmann::json::array(), numbers = nlohmann::json::array();
+            size_t i = 0;
+            for (const auto& [n, v] : frames) {
+                if (job->cancel) throw ApiError(ErrorCode::Cancelled, fmt::format("cancelled after {} of {} frames", i, frames.size()));
+                core::GpuVolume gpu(v);
+                // Each frame under the render budget, and a cancel stops it within a chunk of its
+                // march (three 4096² frames once ran 360 s, deaf to a cancel at 300 s).
+                const WorkBudget budget(m_limits.renderBudgetSeconds, &job->cancel);
+                core::Image picture;
+                try {
+                    picture = renderer.render(gpu, q.camera, lighting, {}, nullptr, budget);
+                } catch (const Cancelled&) {
+                    throw ApiError(ErrorCode::Cancelled, fmt::format("cancelled during frame {} ({} of {} done)", n, i, frames.size()));
+                } catch (const OverBudget& e) {
+                    throw ApiError(ErrorCode::OverBudget, fmt::format("frame {}: {}", n, e.what()));
+                }
+                core::saveImage((dir / sequenceFrameName(i)).string(), picture, save);
+                urls.push_back(jobFileUrl(job->id, "frames/" + std::to_string(i) + ".png"));
+                numbers.push_back(n);
+                const nlohmann::json progress = {{"frame", n}, {"done", i + 1}, {"frames", frames.size()}, {"url", urls.back()}};
+                {
+                    std::lock_guard lock(job->mutex);
+                    job->progress = progress;
+                }
+                job->emit(JobEvent::Progress, progress);
+                m_gl.runShortTasks(device);
+                ++i;
+            }
+            std::lock_guard lock(job->mutex);
+            job->state = JobState::Done;
+            job->result = {{"frames", numbers}, {"frame_urls", urls}};
+        });
+        finishJob(*job);
+    });
+    return job;
+}
+
+}  // namespace volstyle::server

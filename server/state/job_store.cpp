@@ -1,0 +1,93 @@
+#include "server/state/job_store.h"
+
+#include <algorithm>
+
+#include "protocol/error_body.h"
+#include "server/state/session_store.h"
+
+namespace volstyle::server {
+
+void Job::setState(protocol::JobState s) {
+    std::lock_guard lock(mutex);
+    state = s;
+}
+
+void Job::fail(protocol::JobState s, protocol::ErrorCode code, const std::string& message,
+               const std::vector<protocol::FieldError>& details) {
+    std::lock_guard lock(mutex);
+    state = s;
+    error = protocol::errorBody(code, message, details, "")["error"];
+}
+
+void Job::emit(protocol::JobEvent event, nlohmann::json data) {
+    {
+        std::lock_guard lock(mutex);
+        events.emplace_back(event, std::move(data));
+    }
+    changed.notify_all();
+}
+
+nlohmann::json Job::toJson() const {
+    std::lock_guard lock(mutex);
+    return {{"id", id},
+            {"session", session},
+            {"state", protocol::jobStateName(state)},
+            {"progress", progress},
+            {"result", result},
+            {"error", error}};
+}
+
+std::shared_ptr<Job> JobStore::add(const std::string& session) {
+    auto job = std::make_shared<Job>();
+    job->id = SessionStore::newId();
+    job->session = session;
+    std::lock_guard lock(m_mutex);
+    job->sequence = ++m_sequence;
+    m_jobs[job->id] = job;
+    return job;
+}
+
+void JobStore::restore(std::shared_ptr<Job> job) {
+    std::lock_guard lock(m_mutex);
+    job->sequence = ++m_sequence;
+    m_jobs[job->id] = std::move(job);
+}
+
+std::vector<std::shared_ptr<Job>> JobStore::prune(size_t keep) {
+    std::lock_guard lock(m_mutex);
+    std::vector<std::shared_ptr<Job>> finished;
+    for (const auto& [id, j] : m_jobs) {
+        std::lock_guard jl(j->mutex);
+        if (j->isFinished()) finished.push_back(j);
+    }
+    if (finished.size() <= keep) return {};
+    std::sort(finished.begin(), finished.end(), [](const auto& a, const auto& b) { return a->sequence < b->sequence; });
+    finished.resize(finished.size() - keep);
+    for (const auto& j : finished) m_jobs.erase(j->id);
+    return finished;
+}
+
+std::shared_ptr<Job> JobStore::find(const std::string& id) const {
+    std::lock_guard lock(m_mutex);
+    auto it = m_jobs.find(id);
+    return it == m_jobs.end() ? nullptr : it->second;
+}
+
+size_t JobStore::pending(const std::string& session) const {
+    std::lock_guard lock(m_mutex);
+    size_t n = 0;
+    for (const auto& [id, j] : m_jobs) {
+        std::lock_guard jl(j->mutex);
+        n += j->session == session && !j->isFinished() ? 1 : 0;
+    }
+    return n;
+}
+
+std::vector<std::shared_ptr<Job>> JobStore::all() const {
+    std::lock_guard lock(m_mutex);
+    std::vector<std::shared_ptr<Job>> out;
+    for (const auto& [id, j] : m_jobs) out.push_back(j);
+    return out;
+}
+
+}  // namespace volstyle::server

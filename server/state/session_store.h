@@ -1,0 +1,111 @@
+#pragma once
+/// \file session_store.h
+/// Editing sessions held by the server: the volume (and its GPU copy, owned by the GL thread),
+/// the lighting, and bookkeeping. Ids are 128 random bits in hex (unguessable, SPEC §3).
+
+#include <condition_variable>
+#include <map>
+#include <optional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "core/render/gpu_volume.h"
+#include "core/render/params.h"
+#include "core/volume/volume.h"
+#include "protocol/error_code.h"
+#include "server/state/stylizer_state.h"
+#include "server/state/version_history.h"
+
+namespace volstyle::server {
+
+/// A file of a session found unreadable and moved to the quarantine (persistence.h).
+struct DamagedFile {
+    std::string file;    ///< relative to the session's directory, e.g. "versions/3.vdb"
+    std::string reason;
+};
+
+/// A view of a session: a camera, and the painted target (alpha = weight), weights and background
+/// plate once uploaded.
+struct SessionView {
+    std::string id;  ///< "v1", "v2", …
+    core::Camera camera;
+    std::optional<core::Image> target;
+    std::optional<core::Image> weights;
+    /// The background plate (SPEC §1): what this view sees behind the volume, replacing the
+    /// lighting's background in its renders and solves. Shared: renders hold it, never copy it.
+    std::shared_ptr<const core::Image> background = nullptr;
+    /// The frame of the session's animation this view shows (issue #16), or none: the session's
+    /// volume. Views of frames are solved by POST …/animate, not POST …/solve.
+    std::optional<int> frame = std::nullopt;
+};
+
+/// A frame of the session's animation (issue #16): its volume as uploaded, or as the last
+/// POST …/animate left it (`solved`).
+struct SessionFrame {
+    core::Volume volume;
+    bool solved = false;
+};
+
+struct Session {
+    std::string id;
+    std::string created;  ///< ISO 8601, UTC
+    std::string scene;    ///< where the volume came from
+    core::Volume volume;
+    int version = 1;
+    VersionHistory versions;               ///< every committed version, for revert and download
+    std::vector<DamagedFile> damaged;      ///< files of the session found unreadable (quarantined)
+    std::vector<SessionView> views;
+    int nextView = 1;
+    std::map<int, SessionFrame> frames;    ///< the animation's frames by number (docs/ANIMATION.md)
+    std::vector<std::string> jobs;
+    core::Lighting lighting;
+    /// The uploaded lat-long map (PUT …/environment) that the lighting names "session"
+    /// (its background.environment and environment.map point at it).
+    std::shared_ptr<const core::Image> environmentMap;
+    std::shared_ptr<core::GpuVolume> gpu;  ///< created and destroyed on the GL thread
+    StylizerState stylizer = defaultStylizer();
+    std::condition_variable stylizerChanged;  ///< notified (with `mutex`) when its revision moves
+    /// Set by DELETE: work still queued for the session neither caches GPU copies nor writes it
+    /// back to disk (it answers not_found instead).
+    bool removed = false;
+    /// What the server's MemoryBudget charges it (memory_budget.h; kept with the budget's lock).
+    size_t chargedBytes = 0;
+    std::mutex mutex;                      ///< guards the fields above
+};
+
+struct EnvironmentMapInfo {
+    int width = 0, height = 0;
+    bool used = false;  ///< the lighting names it (background or environment light)
+};
+/// The session's environment map, if any (call with its lock held).
+std::optional<EnvironmentMapInfo> environmentMapInfo(const Session& s);
+
+/// Now, as ISO 8601 UTC ("2026-12-02T03:37:32Z").
+std::string isoNow();
+
+/// The answer when the server holds `max` sessions already.
+protocol::ApiError tooManySessions(size_t max);
+
+class SessionStore {
+public:
+    explicit SessionStore(size_t maxSessions) : m_max(maxSessions) {}
+    /// Adds a session with a fresh id; throws ApiError too_many_sessions when full (checked under
+    /// the store's lock, so concurrent creates cannot pass the limit).
+    std::shared_ptr<Session> add(std::shared_ptr<Session> s);
+    void restore(std::shared_ptr<Session> s);  ///< keeps its id (restart)
+    std::shared_ptr<Session> find(const std::string& id) const;  ///< nullptr if unknown
+    std::shared_ptr<Session> remove(const std::string& id);      ///< nullptr if unknown
+    std::vector<std::shared_ptr<Session>> all() const;
+    size_t size() const;
+
+    static std::string newId();
+
+private:
+    size_t m_max;
+    mutable std::mutex m_mutex;
+    std::map<std::string, std::shared_ptr<Session>> m_sessions;
+};
+
+}  // namespace volstyle::server

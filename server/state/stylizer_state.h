@@ -1,0 +1,84 @@
+#pragma once
+/// \file stylizer_state.h
+/// A session's light-shaft stylizer (SPEC §7 "API"): the scene with its meshes resolved, the
+/// occluder meshes and the transfer-function image uploaded to it, a revision that counts every
+/// change (the live stream renders each revision once), and the newest live frame. Every session
+/// has one, opened on builtin:forest. Guarded by the session's mutex.
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/image/image.h"
+#include "core/stylize/scene.h"
+#include "protocol/stylize_json.h"
+
+namespace volstyle::server {
+
+/// An occluder mesh uploaded to PUT …/stylizer/occluders/{name}.
+struct UploadedMesh {
+    std::string format;  ///< obj, ply, gltf or glb: the stored file's extension
+    std::shared_ptr<const core::Mesh> mesh;
+    size_t fileBytes = 0;
+};
+
+/// A frame of the live stream, encoded, with the revision it shows.
+struct LiveFrame {
+    uint64_t revision = 0;
+    std::string bytes;  ///< JPEG
+    int width = 0, height = 0;
+    double renderMs = 0;
+};
+
+struct StylizerState {
+    core::StylizerScene scene;          ///< what frames render: meshes and the TF image attached
+    std::vector<std::string> meshRefs;  ///< each occluder's `mesh`, as the client wrote it
+    std::map<std::string, UploadedMesh> meshes;
+    std::shared_ptr<const core::Image> transferImage;  ///< PUT …/stylizer/tf; null: none
+    uint64_t revision = 1;
+    LiveFrame live;  ///< revision 0: none yet
+    /// Earlier scenes (as their JSON, oldest first) for POST …/stylizer/undo, and the ones undone
+    /// for …/redo; a new scene clears the redo stack. At most kStylizerUndoDepth each.
+    std::vector<nlohmann::json> undo, redo;
+    /// The session volume's σt grid for a heterogeneous medium, made once per volume version.
+    std::shared_ptr<const core::DensityGrid> density;
+    int densityVersion = 0;
+
+    /// Whether the scene's occluders use the uploaded mesh `name` (it cannot be deleted then).
+    bool uses(const std::string& name) const;
+    /// Whether the scene's TF shows the uploaded TF image (an image TF or an image layer).
+    bool usesTransferImage() const;
+
+    /// Vertices of every uploaded mesh together (bounded per session).
+    size_t uploadedVertices() const;
+};
+
+inline constexpr size_t kStylizerUndoDepth = 64;
+inline constexpr size_t kStylizerUndoBytes = size_t(4) << 20;  ///< each stack's JSON at most (the newest entry always kept)
+
+/// Shadow-map lookups per second on llvmpipe's two cores (1920×1080 × 1024 naive steps took
+/// 6.4–20 s on two machines of this kind, bench/stylizer: the slower one), for the estimate that
+/// keeps a frame within the render budget before it holds the GL thread.
+inline constexpr double kStylizerLookupsPerSecond = 1.0e8;
+
+/// The stylizer of a new session: builtin:forest (its meshes built once and shared).
+StylizerState defaultStylizer();
+
+/// Puts a new uploaded TF image into `scene`'s TFs where they show it (compiling their layers again).
+void attachTransferImage(core::StylizerScene& scene, const std::shared_ptr<const core::Image>& image);
+
+/// Whether `name` may name an uploaded mesh: 1–64 of A–Z a–z 0–9 _ . - (it is a file name on disk).
+bool isMeshName(const std::string& name);
+
+/// The scene `request` describes, its meshes looked up in `state`'s uploads and the built-in ones
+/// and its transfer function given the uploaded image and compiled when it is layers. Throws
+/// protocol::ValidationError naming /occluders/i/mesh (no such mesh), /transfer_function (no image
+/// uploaded) and the problems of the TF's layers.
+/// `sessionVolume` gives a heterogeneous medium without a box the volume's bounds (no volume: the
+/// box is required).
+core::StylizerScene resolveStylizerScene(const StylizerState& state, const protocol::StylizerSceneRequest& request,
+                                         const core::Volume* sessionVolume = nullptr);
+
+}  // namespace volstyle::server

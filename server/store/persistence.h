@@ -1,0 +1,108 @@
+#pragma once
+/// \file persistence.h
+/// Durability (SPEC §3): every change to a session or job is written to the data directory before
+/// the answer is sent — atomically and durably (store/data_dir.h: temporary file, fsync, rename,
+/// fsync of the folder; every step's failure an IoError) — and everything is restored
+/// when the server starts. Jobs that were queued or running when the server stopped read
+/// `failed` with code `interrupted`.
+///
+/// Layout: DIR/sessions/<sid>/session.json, versions/<N>.vdb, views/<vid>/{target,weights,background}.exr,
+/// frames/<n>.vdb (an animation's frames);
+/// DIR/jobs/<jid>.json; DIR/quarantine/.
+///
+/// Damage (issue #9): a file found unreadable is moved to DIR/quarantine/<sid>/<file> beside a
+/// `<file>.reason.json`, and only what it held is lost: a damaged old version stays listed as
+/// damaged, a damaged target leaves its view without one, a damaged current version falls back
+/// to the newest readable one. A session whose session.json is unreadable (or that has no
+/// readable version) moves whole to DIR/quarantine/<sid>/session/. Versions are not read on
+/// start (only the current one is): their sizes, recorded when written, are checked instead, and
+/// again before a version is read back or sent.
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "server/state/job_store.h"
+#include "server/state/session_store.h"
+
+namespace volstyle::server {
+
+/// What the quarantine holds: a file of a session, or a whole session (`file` empty).
+struct QuarantineEntry {
+    std::string session;
+    std::string file;
+    std::string reason;
+    std::string time;  ///< ISO 8601, UTC
+};
+
+class Persistence {
+public:
+    /// Stored meshes are read again with `readMesh` (the server's child reader: a stored file is
+    /// as untrusted as it was when it was uploaded); empty: in this process.
+    using MeshReader = std::function<core::Mesh(const std::string& bytes, const std::string& format)>;
+    explicit Persistence(std::filesystem::path dir, MeshReader readMesh = {});
+
+    /// Writes session.json and any version not on disk yet (marking it stored). Call with the
+    /// session's mutex held.
+    void saveSession(Session& s);
+    void saveViewImage(const std::string& session, const std::string& view, const std::string& kind, const core::Image& image);
+    void removeViewImage(const std::string& session, const std::string& view, const std::string& kind);
+    void removeView(const std::string& session, const std::string& view);
+    void removeSession(const std::string& session);
+    /// The stylizer (stylizer/scene.json, stylizer/occluders/NAME.EXT, stylizer/tf.image): the
+    /// scene as JSON; uploaded files as they were sent.
+    void saveStylizerScene(const std::string& session, const nlohmann::json& scene, uint64_t revision);
+    /// The stylizer's undo and redo stacks (arrays of scenes), apart from the scene: written only
+    /// when they change (not for each frame of a played path).
+    void saveStylizerHistory(const std::string& session, const nlohmann::json& undo, const nlohmann::json& redo);
+    /// An uploaded file as it was sent (the stylizer's, environment.image), atomically.
+    void saveSessionFile(const std::string& session, const std::string& file, const std::string& bytes);
+    void removeSessionFile(const std::string& session, const std::string& file);
+    /// A frame of the session's animation (frames/<n>.vdb), atomically; removeFrame deletes it.
+    void saveFrame(const std::string& session, int frame, const core::Volume& volume);
+    void removeFrame(const std::string& session, int frame);
+    void saveJob(const Job& job);
+    void removeJob(const std::string& job);  ///< its record and its files
+    /// The folder of a job's files (a sequence's frames and video).
+    std::filesystem::path jobFilesDir(const std::string& job) const { return m_dir / "jobs" / job; }
+
+    /// The bytes of a stored version's file, unchanged (IoError if missing or not the size it
+    /// was written with).
+    std::string readVersionFile(const std::string& session, int version, std::uintmax_t expectedBytes) const;
+    /// A stored version read back (IoError if it is damaged).
+    core::Volume loadVersion(const std::string& session, int version, std::uintmax_t expectedBytes) const;
+    /// Moves a session's file (relative to its directory) to the quarantine with its reason.
+    void quarantineFile(const std::string& session, const std::string& file, const std::string& reason);
+    std::vector<QuarantineEntry> quarantine() const;
+
+    std::vector<std::shared_ptr<Session>> loadSessions();
+    /// Loads jobs; unfinished ones become failed/interrupted (and are written back).
+    std::vector<std::shared_ptr<Job>> loadJobs();
+
+    /// Writes `bytes` to `path` atomically: a temporary file beside it, fsync, rename.
+    static void atomicWrite(const std::filesystem::path& path, const std::string& bytes);
+    static std::string versionFile(int version) { return "versions/" + std::to_string(version) + ".vdb"; }
+
+private:
+    std::filesystem::path sessionDir(const std::string& id) const { return m_dir / "sessions" / id; }
+    void quarantineSession(const std::filesystem::path& dir, const std::string& reason);
+    /// Restores one session directory; throws if nothing of it is usable.
+    std::shared_ptr<Session> loadSession(const std::filesystem::path& dir);
+    /// Restores the versions listed in session.json; the current one is read (or the newest
+    /// readable one, if it is damaged). Throws if no version is readable.
+    void restoreVersions(Session& s, const nlohmann::json& j);
+    /// Restores the stylizer's uploads, scene and revision; a damaged file is quarantined and only
+    /// what it held is lost: an occluder whose mesh is gone is dropped, a transfer function whose
+    /// image is gone is dropped, an unreadable scene is builtin:forest again (each recorded as damage).
+    void restoreStylizer(Session& s, const std::filesystem::path& dir);
+    /// Restores the environment map (environment.image) and the lighting that may name it; a
+    /// damaged map is quarantined and the lighting falls back to the background colour and the
+    /// lobes' radiances as they were last written.
+    void restoreLighting(Session& s, const std::filesystem::path& dir, const nlohmann::json& lighting);
+    std::filesystem::path m_dir;
+    MeshReader m_readMesh;
+};
+
+}  // namespace volstyle::server
