@@ -133,7 +133,7 @@ std::shared_ptr<Job> SessionService::startAnimate(const std::shared_ptr<Session>
         if (!anyKey) throw ApiError(ErrorCode::InvalidArgument, "no view of a frame has a target: add views with \"frame\" and paint them");
     }
     auto job = queueJob(*session);
-    m_gl.submit([this, job, session, q](core::GpuDevice& device) {
+    m_gl->submit([this, job, session, q](core::GpuDevice& device) {
         runJob(*job, [&] { runAnimate(*job, *session, q, device); });
         finishJob(*job);
     });
@@ -176,7 +176,7 @@ void SessionService::runAnimate(Job& job, Session& s, const protocol::AnimateReq
             job.progress = progress;
         }
         job.emit(JobEvent::Progress, progress);
-        m_gl.runShortTasks(device);
+        m_gl->runShortTasks(device);
     });
     // Every frame from the key frames, stored (and written) as solved.
     for (auto& [n, v] : frames)
@@ -205,7 +205,7 @@ std::shared_ptr<Job> SessionService::startFramesRender(const std::shared_ptr<Ses
         if (session->frames.empty()) throw ApiError(ErrorCode::InvalidArgument, "the session has no frames: PUT …/frames/{n} first");
     }
     auto job = queueJob(*session);
-    m_gl.submit([this, job, session, q](core::GpuDevice& device) {
+    m_gl->submit([this, job, session, q](core::GpuDevice& device) {
         runJob(*job, [&] {
             std::map<int, core::Volume> frames;
             core::Lighting lighting;
@@ -244,7 +244,7 @@ std::shared_ptr<Job> SessionService::startFramesRender(const std::shared_ptr<Ses
                     job->progress = progress;
                 }
                 job->emit(JobEvent::Progress, progress);
-                m_gl.runShortTasks(device);
+                m_gl->runShortTasks(device);
                 ++i;
             }
             std::lock_guard lock(job->mutex);

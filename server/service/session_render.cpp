@@ -44,7 +44,7 @@ core::Lighting SessionService::viewLighting(Session& s, const SessionView& v) {
 
 core::RenderLayers SessionService::renderOnGl(Session& s, const core::Camera& camera, const core::Lighting& lighting,
                                               bool layers) {
-    return m_gl.run([&](core::GpuDevice& device) {
+    return m_gl->run([&](core::GpuDevice& device) {
         const std::shared_ptr<core::GpuVolume> gpu = lockedSessionGpu(s);  // a commit meanwhile frees it after us
         return renderBudgeted(device, *gpu, camera, lighting, layers);
     });
@@ -81,7 +81,7 @@ core::Image SessionService::renderTranslucent(Session& s, const core::Camera& ca
                        fmt::format("this translucent render could take up to {:.0f} s, over the render budget of {:g} s (volstyle serve "
                                    "--render-budget); use fewer pixels, a smaller light_buffer or a larger slice_spacing",
                                    seconds, m_limits.renderBudgetSeconds));
-    return m_gl.run([&](core::GpuDevice& device) {
+    return m_gl->run([&](core::GpuDevice& device) {
         const std::shared_ptr<core::GpuVolume> gpu = lockedSessionGpu(s);
         if (!m_translucent) m_translucent = std::make_unique<core::TranslucentRenderer>(device);
         return m_translucent->render(*gpu, camera, l, settings, nullptr, medium, WorkBudget(m_limits.renderBudgetSeconds));
@@ -99,7 +99,7 @@ core::Image SessionService::renderPreview(const std::string& jobId, const std::s
     const SessionView v = view(*s, viewId);
     const core::Camera camera = v.camera;
     const core::Lighting light = viewLighting(*s, v);
-    return m_gl.run([&](core::GpuDevice& device) {
+    return m_gl->run([&](core::GpuDevice& device) {
         std::shared_ptr<core::GpuVolume> preview;
         {
             std::lock_guard lock(j->mutex);

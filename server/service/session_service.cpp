@@ -15,6 +15,7 @@
 #include "core/translucent/translucent_renderer.h"
 #include "core/stylize/stylizer.h"
 #include "core/volume/builtin_scenes.h"
+#include "server/runtime/gl_worker.h"
 #include "server/runtime/mesh_reader.h"
 
 namespace volstyle::server {
@@ -31,8 +32,8 @@ SessionView& findView(Session& s, const std::string& id) {
 
 }  // namespace
 
-SessionService::SessionService(ServiceLimits limits, const std::string& dataDir)
-    : m_limits(std::move(limits)), m_sessions(m_limits.maxSessions) {
+SessionService::SessionService(ServiceLimits limits, const std::string& dataDir, std::unique_ptr<GlExecutor> gl)
+    : m_limits(std::move(limits)), m_sessions(m_limits.maxSessions), m_gl(gl ? std::move(gl) : std::make_unique<GlWorker>()) {
     if (!dataDir.empty()) {
         m_persist = std::make_unique<Persistence>(dataDir, [this](const std::string& bytes, const std::string& format) {
             core::MeshLimits limits = m_limits.meshLimits;
@@ -56,7 +57,17 @@ SessionService::~SessionService() {
     // then free every GPU object on the GL thread while the context lives: the last short task
     // runs before the worker drains the cancelled solves, which create nothing on the way out.
     for (auto& j : m_jobs.all()) j->cancel = true;
-    m_gl.run([this](core::GpuDevice&) {
+    try {
+        if (m_gl->used()) freeGpuObjects();  // nothing to free when nothing ever ran on GL
+    } catch (const std::exception& e) {
+        spdlog::debug("shutting down: the GPU objects were not freed on the GL thread: {}", e.what());
+    }
+    std::error_code ec;
+    if (!m_scratch.empty()) std::filesystem::remove_all(m_scratch, ec);
+}
+
+void SessionService::freeGpuObjects() {
+    m_gl->run([this](core::GpuDevice&) {
         for (auto& s : m_sessions.all()) {
             std::lock_guard lock(s->mutex);
             s->gpu.reset();
@@ -70,8 +81,6 @@ SessionService::~SessionService() {
         m_translucent.reset();
         m_solveCache.reset();
     });
-    std::error_code ec;
-    if (!m_scratch.empty()) std::filesystem::remove_all(m_scratch, ec);
 }
 
 void SessionService::saved(Session& s) {
@@ -141,9 +150,19 @@ void SessionService::remove(const std::string& id) {
         if (m_persist) m_persist->removeSession(s->id);
     }
     s->stylizerChanged.notify_all();  // its live streams end
+    bool holdsGpu = false;
+    {
+        std::lock_guard lock(s->mutex);
+        holdsGpu = s->gpu != nullptr;
+    }
     for (const auto& jid : jobs)
-        if (auto j = m_jobs.find(jid)) j->cancel = true;
-    m_gl.run([this, s](core::GpuDevice&) {
+        if (auto j = m_jobs.find(jid)) {
+            j->cancel = true;
+            std::lock_guard lock(j->mutex);
+            holdsGpu |= j->preview != nullptr;
+        }
+    if (!holdsGpu) return;  // nothing for the GL thread to free
+    m_gl->run([this, s](core::GpuDevice&) {
         std::lock_guard lock(s->mutex);
         s->gpu.reset();
         dropPreviews(*s);
@@ -336,7 +355,7 @@ std::shared_ptr<Job> SessionService::startSolve(const std::shared_ptr<Session>& 
         if (!problems.empty()) throw protocol::ValidationError(problems);
     }
     auto job = queueJob(s);
-    m_gl.submit([this, job, session, options](core::GpuDevice& device) { runSolve(job, session, options, device); });
+    m_gl->submit([this, job, session, options](core::GpuDevice& device) { runSolve(job, session, options, device); });
     return job;
 }
 

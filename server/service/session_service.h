@@ -2,7 +2,7 @@
 /// \file session_service.h
 /// What the API does to sessions, views, volume versions and solve jobs, without HTTP: route
 /// handlers parse a protocol request and call one method here. Every change is on disk
-/// (Persistence) before the method returns; GL work runs on the GL thread (GlWorker); a session's
+/// (Persistence) before the method returns; GL work runs on the GL thread (a GlExecutor: the server's GlWorker, or a test's fake); a session's
 /// lock is never held while waiting for the GL thread (a finishing solve needs it).
 
 #include <chrono>
@@ -21,7 +21,7 @@
 #include "core/volume/volume.h"
 #include "protocol/render_json.h"
 #include "protocol/requests.h"
-#include "server/runtime/gl_worker.h"
+#include "server/runtime/gl_executor.h"
 #include "server/state/job_store.h"
 #include "server/service/memory_budget.h"
 #include "server/store/persistence.h"
@@ -110,11 +110,12 @@ struct TransferImageInfo {
 
 class SessionService {
 public:
-    /// Restores sessions and jobs from `dataDir` (empty: in memory only) and starts the GL thread.
-    SessionService(ServiceLimits limits, const std::string& dataDir);
+    /// Restores sessions and jobs from `dataDir` (empty: in memory only). GL work goes to `gl`;
+    /// none given: the service starts its own GL thread (GlWorker).
+    SessionService(ServiceLimits limits, const std::string& dataDir, std::unique_ptr<GlExecutor> gl = nullptr);
     ~SessionService();  ///< frees GPU copies on the GL thread, then stops it
 
-    const core::gl::Capabilities& capabilities() const { return m_gl.capabilities(); }
+    const core::gl::Capabilities& capabilities() const { return m_gl->capabilities(); }
 
     // Sessions.
     std::shared_ptr<Session> create(const protocol::CreateSessionRequest& request);
@@ -231,7 +232,13 @@ public:
     std::filesystem::path jobFile(const std::string& jobId, const std::string& name) const;
     void cancel(Job& job) { job.cancel = true; }
 
+    /// For tests that race two edits: called (without the session's lock) between the moment a
+    /// volume edit copied the volume and the moment it commits.
+    void setVolumeEditHook(std::function<void()> hook) { m_volumeEditHook = std::move(hook); }
+
 private:
+    /// On the GL thread: frees every session's GPU copy, every job's preview and the engines.
+    void freeGpuObjects();
     void checkUploadSize(const std::string& bytes, const std::string& what) const;
     /// Copies the volume, edits the copy off the lock and commits it as a new version; its number.
     int editVolume(Session& s, const std::function<void(core::Volume&)>& edit);
@@ -335,7 +342,8 @@ private:
     std::mutex m_jobRecords;  ///< orders writing a job's record against forgetting it
     std::unique_ptr<Persistence> m_persist;  ///< null: in memory only
     std::filesystem::path m_scratch;          ///< job files without a data directory (removed at exit)
-    GlWorker m_gl;
+    std::unique_ptr<GlExecutor> m_gl;
+    std::function<void()> m_volumeEditHook;
 };
 
 }  // namespace volstyle::server

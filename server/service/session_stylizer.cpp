@@ -305,7 +305,7 @@ core::StylizedFrame SessionService::stylizeOnGl(const core::StylizerScene& scene
                                    "use fewer pixels, {}a smaller shadow map or shorter dilations",
                                    seconds, m_limits.renderBudgetSeconds,
                                    settings.method == core::VisibilityMethod::Naive ? "fewer steps or the accelerated method, " : ""));
-    return m_gl.run([&](core::GpuDevice& device) { return stylizerEngine(device).render(scene, settings); });
+    return m_gl->run([&](core::GpuDevice& device) { return stylizerEngine(device).render(scene, settings); });
 }
 
 core::StylizedFrame SessionService::stylize(Session& s, const protocol::StylizerFrameRequest& request) {

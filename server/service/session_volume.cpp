@@ -90,7 +90,7 @@ std::vector<QuarantineEntry> SessionService::quarantine() const {
 }
 
 void SessionService::release(std::shared_ptr<core::GpuVolume> gpu) {
-    if (gpu) m_gl.run([gpu = std::move(gpu)](core::GpuDevice&) mutable { gpu.reset(); });
+    if (gpu) m_gl->run([gpu = std::move(gpu)](core::GpuDevice&) mutable { gpu.reset(); });
 }
 
 int SessionService::revert(Session& s, int version) {
@@ -109,15 +109,23 @@ int SessionService::revert(Session& s, int version) {
 
 int SessionService::editVolume(Session& s, const std::function<void(core::Volume&)>& edit) {
     core::Volume volume;
+    int base = 0;
     {
         std::lock_guard lock(s.mutex);
         volume = s.volume;
+        base = s.version;
     }
     edit(volume);  // off the lock: O(voxels)
+    if (m_volumeEditHook) m_volumeEditHook();
     std::shared_ptr<core::GpuVolume> stale;
     int now = 0;
     {
         std::lock_guard lock(s.mutex);
+        // Another change committed while this edit ran off the lock: committing the copy would
+        // silently drop that change (a lost update), so the stale edit is refused instead.
+        if (s.version != base)
+            throw ApiError(ErrorCode::Busy, "the volume changed (version " + std::to_string(base) + " → " + std::to_string(s.version) +
+                                                ") while this edit ran; send it again to apply it to version " + std::to_string(s.version));
         m_memory.check(s, volume.memoryBytes(), 0, "the edited volume");
         stale = commitVersion(s, std::move(volume));
         now = s.version;

@@ -93,7 +93,7 @@ void SessionService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s,
                 }
                 job.emit(JobEvent::Preview, {{"iteration", p.iteration}, {"urls", urls}});
             }
-            m_gl.runShortTasks(device);  // renders waiting for the GL thread run between iterations
+            m_gl->runShortTasks(device);  // renders waiting for the GL thread run between iterations
         },
         &job.cancel);
     int version = 0;
@@ -121,7 +121,7 @@ void SessionService::solveLightsAndCommit(Job& job, const std::shared_ptr<Sessio
             job.progress = progress;
         }
         job.emit(JobEvent::Progress, progress);
-        m_gl.runShortTasks(device);  // renders waiting for the GL thread run between iterations
+        m_gl->runShortTasks(device);  // renders waiting for the GL thread run between iterations
     };
     nlohmann::json result;
     std::optional<core::Volume> volume;

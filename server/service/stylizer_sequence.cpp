@@ -62,7 +62,7 @@ std::shared_ptr<Job> SessionService::startSequence(const std::shared_ptr<Session
                                                           "pixels or a smaller shadow map",
                                                           seconds, m_limits.renderBudgetSeconds));
     auto job = queueJob(*session);
-    m_gl.submit([this, job, scene, times, q](core::GpuDevice& device) {
+    m_gl->submit([this, job, scene, times, q](core::GpuDevice& device) {
         runJob(*job, [&] { runSequence(*job, scene, times, q, device); });
         finishJob(*job);
     });
@@ -92,7 +92,7 @@ void SessionService::runSequence(Job& job, const core::StylizerScene& scene, con
             job.progress = progress;
         }
         job.emit(JobEvent::Progress, progress);
-        m_gl.runShortTasks(device);  // frames and renders other clients wait for
+        m_gl->runShortTasks(device);  // frames and renders other clients wait for
     }
     nlohmann::json result = {{"frames", times.size()}, {"fps", q.fps}, {"start", times.front()}, {"end", times.back()},
                              {"frame_urls", urls}, {"render_ms", totalMs}};

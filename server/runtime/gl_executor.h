@@ -1,0 +1,56 @@
+#pragma once
+/// \file gl_executor.h
+/// Where a service's GL work runs (SPEC §3 Concurrency): closures that get the GpuDevice. The
+/// server's is GlWorker (its one GL thread); tests of the services give a fake that has no GL
+/// context at all (tests/service/fake_gl_executor.h), so everything a service does without the
+/// GPU is tested without one. Exceptions travel back to the caller.
+
+#include <atomic>
+#include <functional>
+#include <future>
+#include <memory>
+
+#include "core/gl/context.h"
+#include "core/gpu/gpu_device.h"
+
+namespace volstyle::server {
+
+class GlExecutor {
+public:
+    virtual ~GlExecutor() = default;
+
+    /// Runs a short `task(device)` (a render, a release) on the GL thread and returns its
+    /// result (or rethrows its exception). Short tasks also run between a long task's iterations.
+    template <typename F>
+    auto run(F&& task) -> decltype(task(std::declval<core::GpuDevice&>())) {
+        using R = decltype(task(std::declval<core::GpuDevice&>()));
+        auto job = std::make_shared<std::packaged_task<R(core::GpuDevice&)>>(std::forward<F>(task));
+        auto result = job->get_future();
+        m_used = true;
+        post([job](core::GpuDevice& r) { (*job)(r); }, /*isLong=*/false);
+        return result.get();
+    }
+
+    /// Queues a long task (a solve) and returns at once; long tasks run one after another.
+    void submit(std::function<void(core::GpuDevice&)> task) {
+        m_used = true;
+        post(std::move(task), /*isLong=*/true);
+    }
+
+    /// Whether any task was ever given to it (a service that never used GL has nothing to free).
+    bool used() const { return m_used; }
+
+    /// From inside a long task (on the GL thread): runs the short tasks waiting now.
+    virtual void runShortTasks(core::GpuDevice& device) = 0;
+
+    virtual const core::gl::Capabilities& capabilities() const = 0;
+
+protected:
+    /// Queues `task`; throws (GpuError) when it cannot run at all.
+    virtual void post(std::function<void(core::GpuDevice&)> task, bool isLong) = 0;
+
+private:
+    std::atomic<bool> m_used{false};
+};
+
+}  // namespace volstyle::server

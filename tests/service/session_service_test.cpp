@@ -1,0 +1,290 @@
+// The session service without GL (issue #36): a FakeGlExecutor stands in for the GL thread, so
+// creation, views, versions, the stylizer's scene and undo, jobs, persistence and recovery are
+// tested without a GL context, and every test asserts that it needed none.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <mutex>
+#include <thread>
+
+#include "core/image/image_io.h"
+#include "core/translucent/perturbation.h"
+#include "protocol/stylize_json.h"
+#include "server/service/session_service.h"
+#include "tests/service/fake_gl_executor.h"
+
+namespace volstyle {
+namespace {
+
+namespace fs = std::filesystem;
+using protocol::ApiError;
+using protocol::ErrorCode;
+using server::Session;
+using server::SessionService;
+
+/// A data folder of its own, removed afterwards.
+struct TempDir {
+    fs::path path;
+    TempDir() {
+        path = fs::temp_directory_path() / ("volstyle-service-test-" + server::SessionStore::newId());
+        fs::create_directories(path);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        fs::remove_all(path, ec);
+    }
+};
+
+class ServiceTest : public ::testing::Test {
+protected:
+    std::unique_ptr<SessionService> makeService(const std::string& dataDir = "") {
+        server::ServiceLimits limits;
+        limits.maxQueuedJobs = 2;
+        return std::make_unique<SessionService>(limits, dataDir, std::make_unique<test::FakeGlExecutor>(counts));
+    }
+    static protocol::CreateSessionRequest smallCloud() {
+        protocol::CreateSessionRequest r;
+        r.scene = "builtin:cloud";
+        r.resolution = 16;
+        return r;
+    }
+    static core::Camera smallCamera() {
+        core::Camera c;
+        c.width = c.height = 8;
+        return c;
+    }
+    static std::string targetPng(float value) {
+        core::Image target(8, 8);
+        for (float& v : target.rgba) v = value;
+        core::SaveOptions exact;
+        exact.halfFloat = false;
+        return core::encodeImage(target, "exr", exact);
+    }
+    /// The session's current volume (a copy, under its lock).
+    static core::Volume volumeOf(Session& s) {
+        std::lock_guard lock(s.mutex);
+        return s.volume;
+    }
+    static int versionOf(Session& s) {
+        std::lock_guard lock(s.mutex);
+        return s.version;
+    }
+    void TearDown() override { EXPECT_EQ(counts->shortTasks, allowedShortTasks) << "a GL-free operation posted work to the GL thread"; }
+
+    int allowedShortTasks = 0;  ///< a service that queued a job frees GPU objects when it stops
+    std::shared_ptr<test::FakeGlExecutor::Counts> counts = std::make_shared<test::FakeGlExecutor::Counts>();
+};
+
+core::Perturbation someNoise(uint32_t seed) {
+    core::Perturbation p;
+    p.propertyAmplitude = 0.5;
+    p.seed = seed;
+    return p;
+}
+
+TEST_F(ServiceTest, CreatesFindsAndRemovesSessions) {
+    auto service = makeService();
+    auto s = service->create(smallCloud());
+    EXPECT_EQ(service->find(s->id), s);
+    EXPECT_EQ(versionOf(*s), 1);
+    EXPECT_EQ(volumeOf(*s).dims(), (Int3{16, 16, 16}));
+    service->remove(s->id);
+    try {
+        service->find(s->id);
+        FAIL() << "a removed session was found";
+    } catch (const ApiError& e) {
+        EXPECT_EQ(e.code(), ErrorCode::NotFound);
+    }
+}
+
+TEST_F(ServiceTest, ViewsHoldTheirTargetsUntilRemoved) {
+    auto service = makeService();
+    auto s = service->create(smallCloud());
+    const server::SessionView v = service->addView(*s, smallCamera());
+    EXPECT_EQ(v.id, "v1");
+    EXPECT_FALSE(v.target.has_value());
+    const server::SessionView withTarget = service->setViewImage(*s, v.id, server::ViewImage::Target, targetPng(0.5f));
+    ASSERT_TRUE(withTarget.target.has_value());
+    EXPECT_EQ(withTarget.target->width, 8);
+    EXPECT_FALSE(service->removeViewImage(*s, v.id, server::ViewImage::Target).target.has_value());
+    service->removeView(*s, v.id);
+    EXPECT_THROW(service->view(*s, v.id), ApiError);
+    EXPECT_EQ(service->addView(*s, smallCamera()).id, "v2");  // ids are never reused
+}
+
+TEST_F(ServiceTest, EditsAreVersionsAndRevertIsANewVersion) {
+    auto service = makeService();
+    auto s = service->create(smallCloud());
+    const std::vector<float> first = volumeOf(*s).extinction();
+    EXPECT_EQ(service->perturb(*s, someNoise(3)), 2);
+    const std::vector<float> edited = volumeOf(*s).extinction();
+    EXPECT_NE(edited, first);
+    EXPECT_EQ(service->revert(*s, 1), 3);  // nothing is lost: the edit stays version 2
+    EXPECT_EQ(volumeOf(*s).extinction(), first);
+    EXPECT_EQ(service->revert(*s, 2), 4);
+    EXPECT_EQ(volumeOf(*s).extinction(), edited);
+    try {
+        service->revert(*s, 9);
+        FAIL() << "a version that does not exist was reverted to";
+    } catch (const ApiError& e) {
+        EXPECT_EQ(e.code(), ErrorCode::NotFound);
+    }
+}
+
+// Issue #36, lost updates: an edit copies the volume, works off the lock, then commits. A change
+// committed in between must not be silently overwritten by the stale copy.
+TEST_F(ServiceTest, AnEditRacedByAnotherChangeIsRefusedNotLost) {
+    auto service = makeService();
+    auto s = service->create(smallCloud());
+    ASSERT_EQ(service->perturb(*s, someNoise(1)), 2);
+    const std::vector<float> original = [&] {
+        service->revert(*s, 1);  // version 3: the original content
+        return volumeOf(*s).extinction();
+    }();
+    // While edit A (noise 5) works on its copy of version 3, edit B (revert to version 2) commits.
+    std::vector<float> committedByB;
+    bool raced = false;
+    service->setVolumeEditHook([&] {
+        if (raced) return;
+        raced = true;
+        std::thread other([&] { EXPECT_EQ(service->revert(*s, 2), 4); });  // another request's thread
+        other.join();
+        committedByB = volumeOf(*s).extinction();
+    });
+    try {
+        service->perturb(*s, someNoise(5));
+        FAIL() << "the stale edit was committed over version 4";
+    } catch (const ApiError& e) {
+        EXPECT_EQ(e.code(), ErrorCode::Busy);  // 409
+        EXPECT_NE(std::string(e.what()).find("version 3 → 4"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(versionOf(*s), 4);
+    EXPECT_EQ(volumeOf(*s).extinction(), committedByB);  // B's change stands
+    EXPECT_NE(committedByB, original);
+    // Sent again, the edit applies to version 4.
+    service->setVolumeEditHook({});
+    EXPECT_EQ(service->perturb(*s, someNoise(5)), 5);
+}
+
+// Two edits racing for real, many times. Each edit scales the extinction by its own noise
+// factor (1 + a·n(x), no displacement), so the factors commute: the current volume must be the
+// first one times the factor of every edit that was acknowledged. A lost update drops a factor.
+TEST_F(ServiceTest, ConcurrentEditsNeverLoseAnAcknowledgedOne) {
+    auto service = makeService();
+    auto s = service->create(smallCloud());
+    const core::Volume first = volumeOf(*s);
+    std::mutex mutex;
+    std::vector<uint32_t> acknowledged;
+    std::atomic<int> refused{0};
+    auto editor = [&](uint32_t seedBase) {
+        for (uint32_t i = 0; i < 8; ++i) try {
+                service->perturb(*s, someNoise(seedBase + i));
+                std::lock_guard lock(mutex);
+                acknowledged.push_back(seedBase + i);
+            } catch (const ApiError& e) {
+                EXPECT_EQ(e.code(), ErrorCode::Busy);
+                ++refused;
+            }
+    };
+    std::thread a(editor, 10), b(editor, 100);
+    a.join(), b.join();
+    EXPECT_EQ(int(acknowledged.size()) + refused, 16);
+    EXPECT_EQ(versionOf(*s), 1 + int(acknowledged.size()));
+    core::Volume expected = first;
+    for (uint32_t seed : acknowledged) expected = core::perturbVolume(expected, someNoise(seed));
+    const std::vector<float> got = volumeOf(*s).extinction();
+    ASSERT_EQ(got.size(), expected.extinction().size());
+    double worst = 0;
+    for (size_t i = 0; i < got.size(); ++i)
+        worst = std::max(worst, std::abs(double(got[i]) - expected.extinction()[i]) / (1e-6 + std::abs(expected.extinction()[i])));
+    EXPECT_LT(worst, 1e-4) << acknowledged.size() << " edits acknowledged, " << refused << " refused";
+}
+
+TEST_F(ServiceTest, StylizerScenesUndoAndRedo) {
+    auto service = makeService();
+    auto s = service->create(smallCloud());
+    const server::StylizerSnapshot first = service->stylizer(*s);
+    nlohmann::json j = protocol::stylizerSceneToJson(first.scene, first.meshRefs);
+    j["occluders"][1]["manipulation"] = {{"closing", {{"radius_px", 3}, {"shape", "box"}}}};
+    const server::StylizerSnapshot changed = service->setStylizerScene(*s, protocol::stylizerSceneFromJson(j, "", protocol::SceneSource::Api));
+    EXPECT_GT(changed.revision, first.revision);
+    EXPECT_EQ(changed.scene.occluders[1].manipulation.closingRadius, 3);
+    const server::StylizerSnapshot undone = service->undoStylizer(*s, false);
+    EXPECT_EQ(undone.scene.occluders[1].manipulation.closingRadius, first.scene.occluders[1].manipulation.closingRadius);
+    const server::StylizerSnapshot redone = service->undoStylizer(*s, true);
+    EXPECT_EQ(redone.scene.occluders[1].manipulation.closingRadius, 3);
+    try {
+        service->undoStylizer(*s, true);
+        FAIL() << "a redo with nothing to redo";
+    } catch (const ApiError& e) {
+        EXPECT_EQ(e.code(), ErrorCode::Busy);
+    }
+}
+
+TEST_F(ServiceTest, SolvesQueueUpToTheLimitWithoutTouchingGl) {
+    auto service = makeService();
+    auto s = service->create(smallCloud());
+    core::SolveOptions options;
+    try {
+        service->startSolve(s, options);
+        FAIL() << "a solve without targets was queued";
+    } catch (const ApiError& e) {
+        EXPECT_EQ(e.code(), ErrorCode::InvalidArgument);
+    }
+    const auto v = service->addView(*s, smallCamera());
+    service->setViewImage(*s, v.id, server::ViewImage::Target, targetPng(0.25f));
+    auto job = service->startSolve(s, options);
+    EXPECT_EQ(job->state, protocol::JobState::Queued);
+    EXPECT_EQ(service->job(job->id), job);
+    service->startSolve(s, options);
+    try {
+        service->startSolve(s, options);
+        FAIL() << "a third job was queued over the limit of 2";
+    } catch (const ApiError& e) {
+        EXPECT_EQ(e.code(), ErrorCode::TooManyJobs);
+    }
+    EXPECT_EQ(counts->longTasks, 2);
+    EXPECT_EQ(counts->shortTasks, 0);
+    allowedShortTasks = 1;  // the service's shutdown, which frees what the jobs might have made
+}
+
+// Everything above, written to a data folder and read back by a new service (a restart).
+TEST_F(ServiceTest, ARestartRestoresEveryRecord) {
+    TempDir dir;
+    std::string id;
+    std::vector<float> current;
+    nlohmann::json sceneJson;
+    uint64_t revision = 0;
+    {
+        auto service = makeService(dir.path.string());
+        auto s = service->create(smallCloud());
+        id = s->id;
+        const auto v = service->addView(*s, smallCamera());
+        service->setViewImage(*s, v.id, server::ViewImage::Target, targetPng(0.75f));
+        service->perturb(*s, someNoise(7));
+        current = volumeOf(*s).extinction();
+        const server::StylizerSnapshot first = service->stylizer(*s);
+        nlohmann::json j = protocol::stylizerSceneToJson(first.scene, first.meshRefs);
+        j["occluders"][0]["manipulation"] = {{"closing", {{"radius_px", 2}}}};
+        const auto changed = service->setStylizerScene(*s, protocol::stylizerSceneFromJson(j, "", protocol::SceneSource::Api));
+        sceneJson = protocol::stylizerSceneToJson(changed.scene, changed.meshRefs);
+        revision = changed.revision;
+    }
+    auto service = makeService(dir.path.string());
+    auto s = service->find(id);
+    EXPECT_EQ(versionOf(*s), 2);
+    EXPECT_EQ(volumeOf(*s).extinction(), current);  // bit for bit
+    const server::SessionView v = service->view(*s, "v1");
+    ASSERT_TRUE(v.target.has_value());
+    EXPECT_EQ(v.target->pixel(3, 3)[3], 0.75f);  // float EXR: exact
+    const server::StylizerSnapshot restored = service->stylizer(*s);
+    EXPECT_EQ(restored.revision, revision);
+    EXPECT_EQ(protocol::stylizerSceneToJson(restored.scene, restored.meshRefs), sceneJson);
+    EXPECT_EQ(service->undoStylizer(*s, false).scene.occluders[0].manipulation.closingRadius, 0);  // the undo history too
+    EXPECT_EQ(service->revert(*s, 1), 3);  // version 1 is read back from its file
+}
+
+}  // namespace
+}  // namespace volstyle
