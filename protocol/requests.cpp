@@ -9,6 +9,11 @@
 
 namespace volstyle::protocol {
 
+std::string exposureProblem(double stops) {
+    if (stops >= -kMaxExposureStops && stops <= kMaxExposureStops) return "";
+    return "must be in [-" + std::to_string(int(kMaxExposureStops)) + ", " + std::to_string(int(kMaxExposureStops)) + "] stops";
+}
+
 const char* imageFormatName(ImageFormat f) { return f == ImageFormat::Png ? "png" : f == ImageFormat::Jpeg ? "jpeg" : "exr"; }
 const char* imageMimeType(ImageFormat f) {
     return f == ImageFormat::Png ? "image/png" : f == ImageFormat::Jpeg ? "image/jpeg" : "image/x-exr";
@@ -62,8 +67,7 @@ RenderRequest RenderRequest::fromJson(const nlohmann::json& j, const RequestLimi
             else if (f) r.fail("/format", "must be 'png' or 'exr'");
         }
         if (j.contains("exposure")) q.exposure = r.number(j["exposure"], "/exposure").value_or(0);
-        if (!(q.exposure >= -kMaxExposureStops && q.exposure <= kMaxExposureStops))
-            r.fail("/exposure", "must be in [-30, 30] stops");
+        if (auto why = exposureProblem(q.exposure); !why.empty()) r.fail("/exposure", why);
         if (j.contains("exr_type")) {
             const auto t = r.string(j["exr_type"], "/exr_type");
             if (t == "float") q.exrHalf = false;
@@ -132,7 +136,7 @@ FramesRenderRequest FramesRenderRequest::fromJson(const nlohmann::json& j, const
         if (!j.contains("camera")) r.fail("/camera", "is required");
         else q.camera = readCamera(r, j, "/camera", limits);
         if (j.contains("exposure")) q.exposure = r.number(j["exposure"], "/exposure").value_or(0);
-        if (!(q.exposure >= -kMaxExposureStops && q.exposure <= kMaxExposureStops)) r.fail("/exposure", "must be in [-30, 30] stops");
+        if (auto why = exposureProblem(q.exposure); !why.empty()) r.fail("/exposure", why);
     }
     r.throwIfErrors();
     return q;
@@ -204,7 +208,7 @@ ViewRenderQuery ViewRenderQuery::fromQuery(const QueryParams& params) {
     if (auto text = lastValue(params, "exposure")) {
         auto v = parseWhole<double>(*text);
         if (!v) r.fail("?exposure", "must be a finite number of stops, got '" + *text + "'");
-        else if (!(*v >= -kMaxExposureStops && *v <= kMaxExposureStops)) r.fail("?exposure", "must be in [-30, 30] stops, got '" + *text + "'");
+        else if (auto why = exposureProblem(*v); !why.empty()) r.fail("?exposure", why + ", got '" + *text + "'");
         else q.exposure = *v;
     }
     if (auto text = lastValue(params, "exr_type")) {

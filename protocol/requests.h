@@ -64,6 +64,9 @@ struct RenderRequest {
 /// Exposure in stops, either way: 2^±30 covers any picture; beyond it every pixel is black or
 /// white (and 2^1e308 is infinite).
 constexpr double kMaxExposureStops = 30;
+/// The one check of an exposure (every request that takes one; the schema says the same):
+/// "must be in [-30, 30] stops", or empty.
+std::string exposureProblem(double stops);
 
 /// The largest frame number of an animation (10 minutes at 60 fps and then some).
 constexpr int kMaxFrameNumber = 99999;

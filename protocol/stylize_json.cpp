@@ -66,11 +66,11 @@ double boundedNumber(JsonReader& r, const nlohmann::json& j, const std::string& 
 core::Manipulation manipulationFromJson(JsonReader& r, const nlohmann::json& j, const std::string& path) {
     core::Manipulation m;
     if (!r.object(j, path, {"closing", "dilation", "holes"})) return m;
+    // Types here; ranges in core::Manipulation::check() alone (reported below, with their paths).
     if (j.contains("closing") && r.object(j["closing"], path + "/closing", {"radius_px", "shape"})) {
         const auto& c = j["closing"];
         if (!c.contains("radius_px")) r.fail(path + "/closing/radius_px", "is required");
         else m.closingRadius = r.integer(c["radius_px"], path + "/closing/radius_px").value_or(0);
-        if (m.closingRadius < 0 || m.closingRadius > 64) r.check(path + "/closing", "radius_px", "must be in [0, 64]");
         const std::string shape = c.contains("shape") ? r.string(c["shape"], path + "/closing/shape").value_or("disc") : "disc";
         if (shape == "box") m.closingShape = core::MorphShape::Box;
         else if (shape != "disc") r.fail(path + "/closing/shape", "must be 'disc' or 'box', got '" + shape + "'");
@@ -79,32 +79,24 @@ core::Manipulation manipulationFromJson(JsonReader& r, const nlohmann::json& j, 
     if (j.contains("dilation") && r.object(j["dilation"], dp, {"length", "erosion_px"})) {
         const auto& d = j["dilation"];
         if (!d.contains("length")) r.fail(dp + "/length", "is required (world units)");
-        else m.dilationLength = boundedNumber(r, d["length"], dp + "/length", 0, 1e6, 0);
-        if (d.contains("erosion_px")) {
-            m.erosionPx = r.integer(d["erosion_px"], dp + "/erosion_px").value_or(0);
-            if (m.erosionPx < 0 || m.erosionPx > 64) r.check(dp, "erosion_px", "must be in [0, 64]"), m.erosionPx = 0;
-        }
+        else m.dilationLength = r.number(d["length"], dp + "/length").value_or(0);
+        if (d.contains("erosion_px")) m.erosionPx = r.integer(d["erosion_px"], dp + "/erosion_px").value_or(0);
     }
     const std::string hp = path + "/holes";
     if (j.contains("holes") && r.object(j["holes"], hp, {"frequency", "probability", "seed", "speed", "octaves", "persistence"})) {
         const auto& h = j["holes"];
         if (!h.contains("probability")) r.fail(hp + "/probability", "is required (the share of the shadow that becomes holes)");
-        else m.holeProbability = boundedNumber(r, h["probability"], hp + "/probability", 0, 1, 0);
-        if (h.contains("frequency")) {
-            m.holeFrequency = boundedNumber(r, h["frequency"], hp + "/frequency", 0, 1e6, m.holeFrequency);
-            if (!(m.holeFrequency > 0)) r.fail(hp + "/frequency", "must be > 0"), m.holeFrequency = 0.3;
-        }
+        else m.holeProbability = r.number(h["probability"], hp + "/probability").value_or(0);
+        if (h.contains("frequency")) m.holeFrequency = r.number(h["frequency"], hp + "/frequency").value_or(m.holeFrequency);
         if (h.contains("seed")) m.holeSeed = uint32_t(boundedNumber(r, h["seed"], hp + "/seed", 0, 4294967295.0, 1));
         if (h.contains("seed") && !h["seed"].is_number_integer() && !h["seed"].is_number_unsigned()) r.fail(hp + "/seed", "must be an integer");
-        if (h.contains("speed")) m.holeSpeed = boundedNumber(r, h["speed"], hp + "/speed", -1e6, 1e6, 0);
-        if (h.contains("octaves")) {
-            m.holeOctaves = r.integer(h["octaves"], hp + "/octaves").value_or(5);
-            if (m.holeOctaves < 1 || m.holeOctaves > 8) r.check(hp, "octaves", "must be in [1, 8]"), m.holeOctaves = 5;
-        }
-        if (h.contains("persistence")) {
-            m.holePersistence = boundedNumber(r, h["persistence"], hp + "/persistence", 0, 1, 0.5);
-            if (!(m.holePersistence > 0)) r.fail(hp + "/persistence", "must be > 0"), m.holePersistence = 0.5;
-        }
+        if (h.contains("speed")) m.holeSpeed = r.number(h["speed"], hp + "/speed").value_or(0);
+        if (h.contains("octaves")) m.holeOctaves = r.integer(h["octaves"], hp + "/octaves").value_or(m.holeOctaves);
+        if (h.contains("persistence")) m.holePersistence = r.number(h["persistence"], hp + "/persistence").value_or(m.holePersistence);
+    }
+    for (const core::FieldProblem& p : m.check()) {
+        const auto slash = p.field.rfind('/');
+        r.check(path + "/" + p.field.substr(0, slash), p.field.substr(slash + 1), p.message);  // not where the type already failed
     }
     return m;
 }
@@ -377,7 +369,10 @@ void readFrameOptions(JsonReader& r, const nlohmann::json& j, core::StylizerOutp
             else r.fail("/aov", "must be one of frame, " + std::string(kStylizerAovNames) + "; got '" + *name + "'");
         }
     }
-    if (j.contains("exposure")) exposure = boundedNumber(r, j["exposure"], "/exposure", -64, 64, 0);
+    if (j.contains("exposure")) {
+        exposure = r.number(j["exposure"], "/exposure").value_or(0);
+        if (auto why = exposureProblem(exposure); !why.empty()) r.fail("/exposure", why), exposure = 0;
+    }
     if (j.contains("method")) {
         auto m = r.string(j["method"], "/method");
         if (m == "naive") settings.method = core::VisibilityMethod::Naive;

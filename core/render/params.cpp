@@ -4,6 +4,7 @@
 #include <deque>
 #include <mutex>
 #include <numbers>
+#include <sstream>
 
 #include "core/base/errors.h"
 
@@ -188,10 +189,16 @@ Camera framingCamera(const std::pair<Vec3d, Vec3d>& worldBounds) {
     return c;
 }
 
+std::optional<FieldProblem> stepProblem(double stepVoxels) {
+    if (stepVoxels >= kMinStepVoxels && stepVoxels <= kMaxStepVoxels) return std::nullopt;
+    std::ostringstream m;
+    m << "must be in [" << kMinStepVoxels << ", " << kMaxStepVoxels << "] voxels, got " << stepVoxels;
+    return FieldProblem{"step", m.str()};
+}
+
 void RenderSettings::validate() const {
     std::vector<FieldProblem> out;
-    if (!(stepVoxels >= 0.01 && stepVoxels <= 16))
-        out.push_back({"step", "must be in [0.01, 16] voxels, got " + std::to_string(stepVoxels)});
+    if (auto p = stepProblem(stepVoxels)) out.push_back(*p);
     if (!(terminationThreshold >= 0 && terminationThreshold < 1))
         out.push_back({"termination_threshold", "must be in [0, 1)"});
     throwIfAny("render", out);

@@ -143,6 +143,13 @@ Camera defaultCamera();
 /// sphere fills the frame: any volume is in view, whatever its size and place.
 Camera framingCamera(const std::pair<Vec3d, Vec3d>& worldBounds);
 
+/// The march step's range, in voxels, for every march (renders, solves, previews): the one
+/// place it is stated (stepProblem; the schema's solve_options.step says the same, checked by
+/// tests/unit/schema_limits_test.cpp). Finer than 0.05 multiplies a solve's rows past any use.
+inline constexpr double kMinStepVoxels = 0.05, kMaxStepVoxels = 8;
+/// The problem with a march step (field "step"), if any.
+std::optional<FieldProblem> stepProblem(double stepVoxels);
+
 struct RenderSettings {
     double stepVoxels = 0.5;        ///< march step, in voxels of the extinction grid
     bool skipEmptySpace = true;     ///< jump over occupancy bricks with zero extinction

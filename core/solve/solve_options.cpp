@@ -41,7 +41,7 @@ std::vector<FieldProblem> SolveOptions::check() const {
     if (coarseIterations < 0 || coarseIterations > 1000) out.push_back({"coarse_iterations", "must be in [0, 1000]"});
     if (!(visibleChange >= 0) || !std::isfinite(visibleChange)) out.push_back({"visible_change", "must be a finite number >= 0"});
     if (!(tolerance >= 0 && tolerance < 1)) out.push_back({"tolerance", "must be in [0, 1)"});
-    if (!(stepVoxels >= 0.05 && stepVoxels <= 8)) out.push_back({"step", "must be in [0.05, 8] voxels"});
+    if (auto p = stepProblem(stepVoxels)) out.push_back(*p);
     if (resolution && (resolution->x < 1 || resolution->y < 1 || resolution->z < 1 || resolution->x > 1024 ||
                        resolution->y > 1024 || resolution->z > 1024))
         out.push_back({"resolution", "each size must be in [1, 1024]"});

@@ -107,7 +107,8 @@ struct MorphPass {
 }  // namespace
 
 void closeDepthBuffer(GpuDevice& device, gl::Buffer& depth, int n, int radius, MorphShape shape) {
-    if (radius < 0 || radius > 256) throw InvalidArgument("closing radius must be in [0, 256] texels");
+    if (radius < 0 || radius > kMaxClosingRadiusPx)  // the scene's range (Manipulation::check)
+        throw InvalidArgument("closing radius must be in [0, " + std::to_string(kMaxClosingRadiusPx) + "] texels");
     if (radius == 0) return;
     const size_t bytes = sizeof(float) * size_t(n) * n;
     gl::Buffer a = gl::createBuffer(bytes, nullptr, 0, "morphology-a"), b = gl::createBuffer(bytes, nullptr, 0, "morphology-b");

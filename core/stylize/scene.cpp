@@ -118,6 +118,25 @@ void StylizerScene::checkTfCompileWork() const {
                               " (about 8 s): use smaller sizes, fewer diffusion layers or fewer keys with TFs");
 }
 
+std::vector<FieldProblem> Manipulation::check() const {
+    std::vector<FieldProblem> out;
+    const auto whole = [](double v) { return std::to_string(static_cast<long long>(v)); };
+    if (closingRadius < 0 || closingRadius > kMaxClosingRadiusPx)
+        out.push_back({"closing/radius_px", "must be in [0, " + whole(kMaxClosingRadiusPx) + "]"});
+    if (!(dilationLength >= 0 && dilationLength <= kMaxDilationLength))
+        out.push_back({"dilation/length", "must be in [0, " + whole(kMaxDilationLength) + "]"});
+    if (erosionPx < 0 || erosionPx > kMaxErosionPx) out.push_back({"dilation/erosion_px", "must be in [0, " + whole(kMaxErosionPx) + "]"});
+    if (!(holeProbability >= 0 && holeProbability <= 1)) out.push_back({"holes/probability", "must be in [0, 1]"});
+    if (!(holeFrequency > 0 && holeFrequency <= kMaxHoleFrequency))
+        out.push_back({"holes/frequency", "must be in (0, " + whole(kMaxHoleFrequency) + "]"});
+    if (!(std::abs(holeSpeed) <= kMaxHoleSpeed))
+        out.push_back({"holes/speed", "must be in [-" + whole(kMaxHoleSpeed) + ", " + whole(kMaxHoleSpeed) + "]"});
+    if (holeOctaves < kMinHoleOctaves || holeOctaves > kMaxHoleOctaves)
+        out.push_back({"holes/octaves", "must be in [" + whole(kMinHoleOctaves) + ", " + whole(kMaxHoleOctaves) + "]"});
+    if (!(holePersistence > 0 && holePersistence <= 1)) out.push_back({"holes/persistence", "must be in (0, 1]"});
+    return out;
+}
+
 void StylizerScene::validate() const {
     for (const Occluder& o : occluders) {
         try {
@@ -130,19 +149,8 @@ void StylizerScene::validate() const {
             for (int c = 0; c < 4; ++c)
                 if (!(std::abs(o.worldFromObject(row, c)) <= 1e9))
                     throw InvalidArgument("occluder '" + o.name + "': transform entries must be within ±1e9");
-        if (o.manipulation.closingRadius < 0 || o.manipulation.closingRadius > 64)
-            throw InvalidArgument("occluder '" + o.name + "': closing radius_px must be in [0, 64]");
-        const Manipulation& m = o.manipulation;
-        if (!(m.dilationLength >= 0 && m.dilationLength <= 1e6))
-            throw InvalidArgument("occluder '" + o.name + "': dilation length must be in [0, 1e6]");
-        if (m.erosionPx < 0 || m.erosionPx > 64) throw InvalidArgument("occluder '" + o.name + "': erosion_px must be in [0, 64]");
-        if (!(m.holeProbability >= 0 && m.holeProbability <= 1))
-            throw InvalidArgument("occluder '" + o.name + "': hole probability must be in [0, 1]");
-        if (!(m.holeFrequency > 0 && m.holeFrequency <= 1e6))
-            throw InvalidArgument("occluder '" + o.name + "': hole frequency must be in (0, 1e6]");
-        if (!(std::abs(m.holeSpeed) <= 1e6)) throw InvalidArgument("occluder '" + o.name + "': hole speed must be in [-1e6, 1e6]");
-        if (m.holeOctaves < 1 || m.holeOctaves > 8 || !(m.holePersistence > 0 && m.holePersistence <= 1))
-            throw InvalidArgument("occluder '" + o.name + "': hole octaves must be in [1, 8] and persistence in (0, 1]");
+        if (const auto problems = o.manipulation.check(); !problems.empty())
+            throw InvalidArgument("occluder '" + o.name + "': manipulation " + problems.front().field + " " + problems.front().message);
     }
     for (int k = 0; k < 3; ++k)
         if (!(std::abs(light.direction[k]) <= 1e9)) throw InvalidArgument("/light/direction: must be within ±1e9");

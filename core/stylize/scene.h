@@ -39,7 +39,20 @@ struct Manipulation {
     int holeOctaves = 5;                    ///< Eq. 5 (the paper's Fig. 5 setting)
     double holePersistence = 0.5;
     bool any() const { return closingRadius > 0 || dilationLength > 0 || holeProbability > 0; }
+    /// Every value out of its range below, with its JSON field ("closing/radius_px",
+    /// "holes/octaves", …): the one place these ranges are checked (the API parser, the scene's
+    /// validate() and the schema test read them from here).
+    std::vector<FieldProblem> check() const;
 };
+
+/// The ranges of a Manipulation (SPEC §7 `manipulation`; the schema states the same, checked by
+/// tests/unit/schema_limits_test.cpp).
+inline constexpr int kMaxClosingRadiusPx = 64;   ///< texels of the shadow map
+inline constexpr int kMaxErosionPx = 64;
+inline constexpr double kMaxDilationLength = 1e6;  ///< world units
+inline constexpr double kMaxHoleFrequency = 1e6;   ///< cycles per world unit
+inline constexpr double kMaxHoleSpeed = 1e6;       ///< noise units per unit of scene time, either sign
+inline constexpr int kMinHoleOctaves = 1, kMaxHoleOctaves = 8;
 
 struct Occluder {
     std::string name;
