@@ -59,8 +59,9 @@ public:
     /// The current radiances (for previews; call from the progress callback).
     std::vector<Vec3d> currentRadiance() const;
 
+    struct State;  ///< internal to light_solver.cpp (its bounded CGLS problem reads it)
+
 private:
-    struct State;
     std::unique_ptr<State> m_state;
 };
 

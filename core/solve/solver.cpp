@@ -19,9 +19,6 @@ namespace {
 /// The recurrences' residuals drift in float32; every this many iterations they are recomputed
 /// from the unknowns (a CGLS restart).
 constexpr int kRestartEvery = 25;
-/// A carried-over direction is kept while p·s ≥ this fraction of ‖s‖² (a clear descent direction);
-/// below it, that channel restarts from its gradient.
-constexpr double kMinDescentFraction = 0.2;
 /// An iteration whose relative decrease is at most this counts as no decrease ...
 constexpr double kFlatDecrease = 1e-12;
 /// ... and this many in a row stop the solve as stagnated.
@@ -74,11 +71,24 @@ void Solver::State::applyAt() {
     if (opt.enforceBounds) ops.freeSet(a, s, bounds);
 }
 
-void Solver::State::restart(Vec3d& gamma) {
+Vec3d Solver::State::restart() {
     computeResiduals();  // from scratch: also clears the drift of the recurrences
-    applyAt();
-    gamma = precondition();
+    const Vec3d gamma = gradient();
     ops.copy(z, p);
+    return gamma;
+}
+
+Vec3d Solver::State::gradient() {
+    applyAt();
+    return precondition();
+}
+
+CglsSettings Solver::State::cglsSettings() const {
+    CglsSettings settings;
+    settings.enforceBounds = opt.enforceBounds;
+    settings.projected = opt.boundsMethod == BoundsMethod::Projected;
+    settings.restartEvery = kRestartEvery;
+    return settings;
 }
 
 void Solver::State::computeResiduals() {
@@ -127,44 +137,21 @@ std::vector<double> Solver::State::rmsPerView() {
     return out;
 }
 
-StepLength Solver::State::stepLength(const Vec3d& slope) {
-    // Along p: α = p·s / ‖A p‖² (the exact line minimum), cut where a bound is met.
+Vec3d Solver::State::curvature() {
     applyA(p, qImg, qLap);
     Vec3d delta = ops.dot(qImg, qImg);
     for (const auto& b : blocks) {
         if (b.cLap > 0) delta += ops.dot(qLap, qLap, b.range);
         if (b.cId > 0) delta += ops.dot(p, p, b.range) * (b.cId * b.cId);
     }
-    StepLength step;
-    if (opt.enforceBounds) step.toBound = ops.maxStep(a, p, bounds);
-    for (int c = 0; c < 3; ++c) {
-        step.alpha[c] = delta[c] > 0 && slope[c] > 0 ? slope[c] / delta[c] : 0.0;
-        step.hit[c] = step.toBound[c] < step.alpha[c];
-    }
-    return step;
+    return delta;
 }
 
-bool Solver::State::takeStep(const StepLength& step) {
-    ops.copy(a, aPrev);
-    if (!step.anyHit()) {
-        move(step.alpha, p, qImg, qLap);
-        return false;
-    }
-    if (opt.boundsMethod == BoundsMethod::Projected) return projectedStep(step);
-    Vec3d cut;
-    for (int c = 0; c < 3; ++c) cut[c] = step.hit[c] ? step.toBound[c] : step.alpha[c];
-    move(cut, p, qImg, qLap);
-    ops.clamp(a, bounds);  // rounding only
-    return true;
-}
+Vec3d Solver::State::stepToBound() { return ops.maxStep(a, p, bounds); }
 
-bool Solver::State::projectedStep(const StepLength& step) {
-    // The step leaves the box in some channel. Try the projected step a' = clamp(a + αp): it moves
-    // many variables at once (in channels that stay inside it is the plain CG step). Its residual
-    // needs A (a' − a), one more projection. Channels where a' lowers the objective keep it; the
-    // others take the step cut at the first bound, which always lowers it.
-    const Vec3d fBefore = objective();
-    ops.axpy(step.alpha, p, a);
+void Solver::State::moveProjected(const Vec3d& alpha) {
+    // a' = clamp(a + αp) from a = aPrev; its residual needs A (a' − a), one more projection.
+    ops.axpy(alpha, p, a);
     const bool byColumns = W->canForwardByColumns();
     if (byColumns) ops.copy(a, z);  // z is free until the next direction: a + αp before the clamp
     ops.clamp(a, bounds);
@@ -179,58 +166,17 @@ bool Solver::State::projectedStep(const StepLength& step) {
         ops.axpy(Vec3d(1.0), tmpU, z);  // ... + d = a' − (a + αp)
         W->forwardByColumns(z, dImg);
         ops.multiply(sqrtW, dImg);
-        ops.axpy(step.alpha, qImg, dImg);
+        ops.axpy(alpha, qImg, dImg);
         applyLaplacian(tmpU, dLap);
     } else {
         applyA(tmpU, dImg, dLap);
     }
     move(Vec3d(1.0), tmpU, dImg, dLap);
-    const Vec3d fProjected = objective();
-    Vec3d undo(0.0), cut(0.0);
-    for (int c = 0; c < 3; ++c) {
-        if (!step.hit[c] || fProjected[c] <= fBefore[c]) continue;
-        undo[c] = -1.0;  // reject the projected step in this channel
-        cut[c] = step.toBound[c];
-    }
-    const bool rejected = maxComponent(-undo) > 0;
-    if (rejected) {
-        move(undo, tmpU, dImg, dLap);
-        move(cut, p, qImg, qLap);
-    }
-    ops.clamp(a, bounds);  // rounding only: every move above stays inside
-    return rejected;
 }
 
-Vec3d Solver::State::nextDirection(int iteration, const Vec3d& gamma, Vec3d& slope) {
-    // New gradient and direction. Plain CGLS sets β = γ'/γ. When the free set changes the old
-    // direction is no longer conjugate; keep β only while p stays a clear descent direction, else
-    // restart that channel from its gradient. Steps use the exact line minimum p·s / ‖A p‖², so
-    // every step lowers the objective.
-    Vec3d gammaNew;
-    if (iteration % kRestartEvery == 0) {
-        restart(gammaNew);  // refreshes the recurrences' residuals from scratch
-        slope = gammaNew;
-        return gammaNew;
-    }
-    applyAt();
-    gammaNew = precondition();
-    const Vec3d ps = ops.dot(p, s);
-    Vec3d beta;
-    for (int c = 0; c < 3; ++c) {
-        beta[c] = gamma[c] > 0 ? gammaNew[c] / gamma[c] : 0.0;
-        if (gammaNew[c] + beta[c] * ps[c] < kMinDescentFraction * gammaNew[c]) beta[c] = 0.0;
-        slope[c] = gammaNew[c] + beta[c] * ps[c];
-    }
+void Solver::State::conjugate(const Vec3d& beta, bool freeOnly) {
     ops.xpby(z, beta, p);  // p = D² s + β p: preconditioned CGLS
-    if (opt.enforceBounds) {
-        // β p can still push a variable that sits at its bound outward: the step would stop at
-        // once (or project it back). Dropping those components keeps p a descent direction (s is
-        // 0 there, or points inward, so p·s only grows) and lets the step go its full length.
-        // On the CT slice of bench/solver_race: 4.3e-6 -> 6e-7 of the start after 100 iterations.
-        ops.freeSet(a, p, bounds);
-        slope = ops.dot(p, s);
-    }
-    return gammaNew;
+    if (freeOnly) ops.freeSet(a, p, bounds);
 }
 
 SolveProgress Solver::State::recordIteration(int iteration, double objective, Clock::time_point start,
@@ -291,9 +237,8 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
     st.viewRenders.clear();
     st.viewRenders.shrink_to_fit();
     if (st.opt.coarseIterations > 0 && !rep.local.active) st.warmStartFromCoarse(cancel);  // a re-solve starts where it is
-    Vec3d gamma;  // s·D²s, s = Aᵀr restricted to the free variables (‖s‖² unpreconditioned)
-    st.restart(gamma);
-    Vec3d slope = gamma;  // p·s: the objective's descent rate along p (= γ in plain CGLS)
+    BoundedCgls cgls(st, st.cglsSettings());
+    cgls.start();
     double f = st.totalObjective();
     rep.initialObjective = f;
     rep.objectiveHistory.push_back(f);
@@ -305,23 +250,21 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
         if (cancel && cancel->load()) throw Cancelled("solve cancelled after " + std::to_string(it - 1) + " iterations");
         const auto tIt = Clock::now();
         const ProjectorStats before = st.W->stats();
-        if (gamma.x <= 0 && gamma.y <= 0 && gamma.z <= 0) {
+        if (cgls.zeroGradient()) {
             rep.stopReason = StopReason::ZeroGradient;
             break;
         }
-        const StepLength step = st.stepLength(slope);
         // Radiance only: an extinction solve's residuals are optical depths.
         const bool watchChange = st.opt.visibleChange > 0 && st.opt.unknown != Unknown::Extinction;
         if (watchChange) st.ops.copy(st.rImg, st.rPrev);
-        const bool cutShort = st.takeStep(step);
-        const double fNew = st.totalObjective();
-        if (!std::isfinite(fNew)) {
-            st.ops.copy(st.aPrev, st.a);  // keep the last finite iterate
+        const CglsStep step = cgls.iterate(it);
+        if (!step.finite) {  // the iterate is the last finite one again
             rep.stopReason = StopReason::NumericalBreakdown;
             spdlog::warn("solve: objective became non-finite at iteration {}; keeping iteration {}", it, it - 1);
             break;
         }
-        gamma = st.nextDirection(it, gamma, slope);
+        const double fNew = sum(step.objective);
+        const bool cutShort = step.cutShort;
 
         const SolveProgress pr = st.recordIteration(it, fNew, t0, tIt, before);
         if (progress) progress(pr);

@@ -10,6 +10,7 @@
 #include "core/base/stopwatch.h"
 #include "core/gpu/gpu_device.h"
 #include "core/render/gpu_volume.h"
+#include "core/solve/bounded_cgls.h"
 #include "core/solve/gpu_vector.h"
 #include "core/solve/projector.h"
 #include "core/solve/reach.h"
@@ -30,15 +31,9 @@ struct BlockRegularizer {
     std::vector<float> targets;
 };
 
-/// Per channel: how far one step goes, and whether a bound cuts it short.
-struct StepLength {
-    Vec3d alpha;                ///< the exact line minimum p·s / ‖A p‖²
-    Vec3d toBound{1e300};       ///< the largest step inside the bounds
-    bool hit[3] = {false, false, false};
-    bool anyHit() const { return hit[0] || hit[1] || hit[2]; }
-};
-
-struct Solver::State {
+/// The volume solve as bounded CGLS sees it (bounded_cgls.h): the unknowns a, residuals
+/// [rImg; rLap; rId], gradient s, z = D² s and direction p, all on the GPU.
+struct Solver::State final : BoundedLeastSquares {
     GpuDevice& device;
     Volume volume;
     Lighting lighting;
@@ -113,19 +108,27 @@ struct Solver::State {
     void move(const Vec3d& step, const GpuVector& x, const GpuVector& img, const GpuVector& lap);
     void applyAt();  // s from rImg, rLap, rId
     Vec3d precondition();  // z = D² s; returns s·z (γ of preconditioned CGLS)
-    void restart(Vec3d& gamma);
     /// [rImg; rLap; rId] = b − A a, from scratch, over the vectors' supports.
     void computeResiduals();
-    Vec3d objective();
     double totalObjective();
     std::vector<double> rmsPerView();
 
-    // One iteration's named steps (solver.cpp).
-    StepLength stepLength(const Vec3d& slope);
-    /// Moves a along p; true when a bound cut some channel's step short of where it would go.
-    bool takeStep(const StepLength& step);
-    bool projectedStep(const StepLength& step);  ///< true when a channel rejected the projected step
-    Vec3d nextDirection(int iteration, const Vec3d& gamma, Vec3d& slope);
+    // Bounded CGLS's operations (bounded_cgls.h) on the GPU vectors (solver.cpp).
+    Vec3d restart() override;
+    Vec3d gradient() override;
+    Vec3d curvature() override;  // q = [qImg; qLap] = A p
+    Vec3d stepToBound() override;
+    void move(const Vec3d& t) override { move(t, p, qImg, qLap); }
+    void moveProjected(const Vec3d& alpha) override;  // d = [tmpU], A d = [dImg; dLap]
+    void undoProjected(const Vec3d& undo) override { move(-undo, tmpU, dImg, dLap); }
+    void clampToBounds() override { ops.clamp(a, bounds); }
+    Vec3d objective() override;
+    Vec3d slope() override { return ops.dot(p, s); }
+    void conjugate(const Vec3d& beta, bool freeOnly) override;
+    void keepIterate() override { ops.copy(a, aPrev); }
+    void restoreIterate() override { ops.copy(aPrev, a); }
+    CglsSettings cglsSettings() const;
+
     /// Adds the iteration to the report and returns its progress (with this iteration's times).
     SolveProgress recordIteration(int iteration, double objective, Clock::time_point start,
                                   Clock::time_point iterationStart, const ProjectorStats& before);
