@@ -3,12 +3,19 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
+#include <fstream>
 #include <random>
+#include <sstream>
 
 #include "core/base/errors.h"
+#include "protocol/validation.h"
+#include "server/state/session_store.h"
 
 namespace volstyle::server::store {
 namespace {
@@ -98,6 +105,78 @@ void durableRename(const fs::path& from, const fs::path& to) {
     if (::rename(from.c_str(), to.c_str()) != 0) throw IoError(why("move '" + from.string() + "' to", to));
     syncFolder(to.parent_path());
     if (from.parent_path() != to.parent_path()) syncFolder(from.parent_path());
+}
+
+bool isUnfinishedWrite(const fs::path& p) { return p.filename().string().find(".tmp-") != std::string::npos; }
+
+std::string readFile(const fs::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+}
+
+DataDir::DataDir(fs::path root) : m_root(std::move(root)) {
+    std::error_code ec;
+    fs::create_directories(m_root / "sessions", ec);
+    fs::create_directories(m_root / "jobs", ec);
+    if (ec) throw IoError("serve: cannot create the data directory '" + m_root.string() + "': " + ec.message());
+}
+
+void DataDir::writeReason(const fs::path& to, const std::string& session, const std::string& file, const std::string& reason) {
+    const nlohmann::json r = {{"session", session}, {"file", file}, {"reason", reason}, {"time", isoNow()}};
+    atomicWrite(to.string() + ".reason.json", protocol::toText(r, 2));
+}
+
+void DataDir::quarantineFile(const std::string& session, const std::string& file, const std::string& reason) {
+    const fs::path from = sessionDir(session) / file, to = m_root / "quarantine" / session / file;
+    std::error_code ec;
+    fs::create_directories(to.parent_path(), ec);
+    if (fs::exists(from)) fs::rename(from, to, ec);
+    writeReason(to, session, file, reason);
+    spdlog::error("quarantined session {}'s {}: {}", session, file, reason);
+}
+
+void DataDir::quarantineSession(const fs::path& dir, const std::string& reason) {
+    const std::string session = dir.filename().string();
+    const fs::path to = m_root / "quarantine" / session / "session";
+    std::error_code ec;
+    fs::create_directories(to.parent_path(), ec);
+    fs::remove_all(to, ec);  // an earlier quarantine of the same id
+    fs::rename(dir, to, ec);
+    if (ec) spdlog::error("restore: cannot move '{}' to the quarantine: {}", dir.string(), ec.message());
+    writeReason(to, session, "", reason);
+    spdlog::error("quarantined session {} whole: {}", session, reason);
+}
+
+void DataDir::quarantineJobRecord(const fs::path& record, const std::string& reason) {
+    // Out of the way, with its reason: a job record holds no work to lose.
+    const std::string file = record.filename().string();
+    const fs::path to = m_root / "quarantine" / "jobs" / file;
+    std::error_code ec;
+    fs::create_directories(to.parent_path(), ec);
+    fs::rename(record, to, ec);
+    writeReason(to, "", "jobs/" + file, reason);
+    spdlog::error("restore: quarantined job record '{}': {}", file, reason);
+}
+
+std::vector<QuarantineEntry> DataDir::quarantine() const {
+    std::vector<QuarantineEntry> out;
+    std::error_code ec;
+    const fs::path root = m_root / "quarantine";
+    if (!fs::exists(root, ec)) return out;
+    for (auto it = fs::recursive_directory_iterator(root, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        if (!it->is_regular_file() || !name.ends_with(".reason.json")) continue;
+        try {
+            const nlohmann::json j = nlohmann::json::parse(readFile(it->path()));
+            out.push_back({j.at("session"), j.at("file"), j.at("reason"), j.at("time")});
+        } catch (const std::exception&) {
+            out.push_back({"", fs::relative(it->path(), root).string(), "the reason file is unreadable", ""});
+        }
+    }
+    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.time < b.time; });
+    return out;
 }
 
 }  // namespace volstyle::server::store

@@ -17,6 +17,10 @@
 /// readable version) moves whole to DIR/quarantine/<sid>/session/. Versions are not read on
 /// start (only the current one is): their sizes, recorded when written, are checked instead, and
 /// again before a version is read back or sent.
+///
+/// The facade of server/store: DataDir (the atomic write and the quarantine) and one record type
+/// per feature with its own encoder — session_record.h (session.json and the files beside it),
+/// stylizer_record.h, job_record.h — so the disk format does not follow the API's answers.
 
 #include <filesystem>
 #include <functional>
@@ -26,16 +30,11 @@
 
 #include "server/state/job_store.h"
 #include "server/state/session_store.h"
+#include "server/store/data_dir.h"
 
 namespace volstyle::server {
 
-/// What the quarantine holds: a file of a session, or a whole session (`file` empty).
-struct QuarantineEntry {
-    std::string session;
-    std::string file;
-    std::string reason;
-    std::string time;  ///< ISO 8601, UTC
-};
+using store::QuarantineEntry;
 
 class Persistence {
 public:
@@ -66,7 +65,7 @@ public:
     void saveJob(const Job& job);
     void removeJob(const std::string& job);  ///< its record and its files
     /// The folder of a job's files (a sequence's frames and video).
-    std::filesystem::path jobFilesDir(const std::string& job) const { return m_dir / "jobs" / job; }
+    std::filesystem::path jobFilesDir(const std::string& job) const { return m_dir.jobsDir() / job; }
 
     /// The bytes of a stored version's file, unchanged (IoError if missing or not the size it
     /// was written with).
@@ -81,27 +80,13 @@ public:
     /// Loads jobs; unfinished ones become failed/interrupted (and are written back).
     std::vector<std::shared_ptr<Job>> loadJobs();
 
-    /// Writes `bytes` to `path` atomically: a temporary file beside it, fsync, rename.
-    static void atomicWrite(const std::filesystem::path& path, const std::string& bytes);
-    static std::string versionFile(int version) { return "versions/" + std::to_string(version) + ".vdb"; }
+    static std::string versionFile(int version);
 
 private:
-    std::filesystem::path sessionDir(const std::string& id) const { return m_dir / "sessions" / id; }
-    void quarantineSession(const std::filesystem::path& dir, const std::string& reason);
-    /// Restores one session directory; throws if nothing of it is usable.
+    std::filesystem::path sessionDir(const std::string& id) const { return m_dir.sessionDir(id); }
+    /// Restores one session folder (its record, files and stylizer); throws if nothing of it is usable.
     std::shared_ptr<Session> loadSession(const std::filesystem::path& dir);
-    /// Restores the versions listed in session.json; the current one is read (or the newest
-    /// readable one, if it is damaged). Throws if no version is readable.
-    void restoreVersions(Session& s, const nlohmann::json& j);
-    /// Restores the stylizer's uploads, scene and revision; a damaged file is quarantined and only
-    /// what it held is lost: an occluder whose mesh is gone is dropped, a transfer function whose
-    /// image is gone is dropped, an unreadable scene is builtin:forest again (each recorded as damage).
-    void restoreStylizer(Session& s, const std::filesystem::path& dir);
-    /// Restores the environment map (environment.image) and the lighting that may name it; a
-    /// damaged map is quarantined and the lighting falls back to the background colour and the
-    /// lobes' radiances as they were last written.
-    void restoreLighting(Session& s, const std::filesystem::path& dir, const nlohmann::json& lighting);
-    std::filesystem::path m_dir;
+    store::DataDir m_dir;
     MeshReader m_readMesh;
 };
 

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <thread>
 
@@ -284,6 +285,66 @@ TEST_F(ServiceTest, ARestartRestoresEveryRecord) {
     EXPECT_EQ(protocol::stylizerSceneToJson(restored.scene, restored.meshRefs), sceneJson);
     EXPECT_EQ(service->undoStylizer(*s, false).scene.occluders[0].manipulation.closingRadius, 0);  // the undo history too
     EXPECT_EQ(service->revert(*s, 1), 3);  // version 1 is read back from its file
+}
+
+// The job record: a job queued when the server stopped reads failed/interrupted after a restart.
+TEST_F(ServiceTest, AJobQueuedAtAStopIsInterruptedAfterTheRestart) {
+    TempDir dir;
+    std::string jobId;
+    {
+        auto service = makeService(dir.path.string());
+        auto s = service->create(smallCloud());
+        const auto v = service->addView(*s, smallCamera());
+        service->setViewImage(*s, v.id, server::ViewImage::Target, targetPng(0.25f));
+        jobId = service->startSolve(s, core::SolveOptions{})->id;
+    }
+    allowedShortTasks = 1;  // the first service's shutdown
+    auto service = makeService(dir.path.string());
+    auto job = service->job(jobId);
+    EXPECT_EQ(job->state, protocol::JobState::Failed);
+    EXPECT_EQ(job->error.at("code"), "interrupted");
+    // Written back: a third start reads the same.
+    auto again = makeService(dir.path.string());
+    EXPECT_EQ(again->job(jobId)->state, protocol::JobState::Failed);
+}
+
+// Damage: a view's image that does not read is quarantined and the view stays without it; a
+// record of a newer format is not guessed at: the session goes to the quarantine whole.
+TEST_F(ServiceTest, DamagedFilesGoToTheQuarantineAndOnlyWhatTheyHeldIsLost) {
+    TempDir dir;
+    std::string damagedView, newerFormat;
+    {
+        auto service = makeService(dir.path.string());
+        auto a = service->create(smallCloud());
+        const auto v = service->addView(*a, smallCamera());
+        service->setViewImage(*a, v.id, server::ViewImage::Target, targetPng(0.5f));
+        damagedView = a->id;
+        newerFormat = service->create(smallCloud())->id;
+    }
+    const fs::path sessions = dir.path / "sessions";
+    {
+        std::ofstream broken(sessions / damagedView / "views" / "v1" / "target.exr", std::ios::trunc);
+        broken << "not an EXR";
+    }
+    {
+        std::ifstream in(sessions / newerFormat / "session.json");
+        nlohmann::json record = nlohmann::json::parse(in);
+        record["format"] = 2;
+        std::ofstream(sessions / newerFormat / "session.json", std::ios::trunc) << record.dump();
+    }
+    auto service = makeService(dir.path.string());
+    auto s = service->find(damagedView);
+    EXPECT_EQ(service->view(*s, "v1").target, std::nullopt);
+    EXPECT_THROW(service->find(newerFormat), ApiError);
+    const auto quarantine = service->quarantine();
+    ASSERT_EQ(quarantine.size(), 2u);
+    bool sawImage = false, sawSession = false;
+    for (const auto& q : quarantine) {
+        sawImage |= q.session == damagedView && q.file == "views/v1/target.exr";
+        sawSession |= q.session == newerFormat && q.file.empty() && q.reason.find("newer") != std::string::npos;
+    }
+    EXPECT_TRUE(sawImage);
+    EXPECT_TRUE(sawSession);
 }
 
 }  // namespace

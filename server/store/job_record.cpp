@@ -1,0 +1,35 @@
+#include "server/store/job_record.h"
+
+#include "protocol/validation.h"
+
+namespace volstyle::server::store {
+
+using json = nlohmann::json;
+
+std::string encodeJobRecord(const Job& job) {
+    std::lock_guard lock(job.mutex);
+    const json j = {{"format", 1},      {"id", job.id},           {"session", job.session}, {"state", protocol::jobStateName(job.state)},
+                    {"progress", job.progress}, {"result", job.result}, {"error", job.error}};
+    return protocol::toText(j, 2);
+}
+
+std::shared_ptr<Job> decodeJobRecord(const std::string& text, bool& interrupted) {
+    const json j = json::parse(text);
+    if (j.value("format", 1) != 1) throw std::runtime_error("the record's format " + j.at("format").dump() + " is newer than this server's (1)");
+    auto job = std::make_shared<Job>();
+    job->id = j.at("id");
+    job->session = j.at("session");
+    const std::string state = j.at("state");
+    job->state = protocol::jobStateFromName(state).value_or(protocol::JobState::Running);
+    job->progress = j.at("progress");
+    job->result = j.at("result");
+    job->error = j.at("error");
+    interrupted = !job->isFinished();
+    if (interrupted)
+        job->fail(protocol::JobState::Failed, protocol::ErrorCode::Interrupted,
+                  "the server stopped while this job was " + state + "; the volume keeps its last committed version");
+    job->events.emplace_back(protocol::finalEvent(job->state), job->toJson());
+    return job;
+}
+
+}  // namespace volstyle::server::store
