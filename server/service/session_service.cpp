@@ -83,6 +83,27 @@ void SessionService::freeGpuObjects() {
     });
 }
 
+double SessionService::stylizerLookupsPerSecond() {
+    std::call_once(m_stylizerSpeedOnce, [this] {
+        double measured = 0;
+        try {
+            // Once, when the stylizer first starts on this device (not at every server start: a
+            // server that never stylizes should not pay for it).
+            measured = m_gl->run([this](core::GpuDevice& device) { return stylizerEngine(device).measureLookupsPerSecond(); });
+        } catch (const std::exception& e) {
+            spdlog::warn("the stylizer's speed could not be measured ({}); frames are estimated at {:g} lookups/s", e.what(),
+                         kMinStylizerLookupsPerSecond);
+        }
+        m_stylizerLookupsPerSecond = std::max(measured, kMinStylizerLookupsPerSecond);
+        spdlog::info("stylizer: {:.3g} lookups/s measured on this device; frame estimates use {:.3g}", measured, m_stylizerLookupsPerSecond);
+    });
+    return m_stylizerLookupsPerSecond;
+}
+
+double SessionService::stylizerSeconds(const core::StylizerScene& scene, const core::StylizeSettings& settings) {
+    return core::Stylizer::estimatedLookups(scene, settings) / stylizerLookupsPerSecond();
+}
+
 void SessionService::saved(Session& s) {
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
     if (m_persist) m_persist->saveSession(s);

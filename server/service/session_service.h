@@ -6,6 +6,7 @@
 /// lock is never held while waiting for the GL thread (a finishing solve needs it).
 
 #include <chrono>
+#include <mutex>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -321,6 +322,11 @@ private:
     /// On the GL thread: the one stylizer of the service (created on first use).
     core::Stylizer& stylizerEngine(core::GpuDevice& device);
     core::StylizedFrame stylizeOnGl(const core::StylizerScene& scene, const core::StylizeSettings& settings);
+    /// This device's stylizer speed (lookups per second) for frame estimates: measured on the GL
+    /// thread when the stylizer first starts, never below kMinStylizerLookupsPerSecond.
+    double stylizerLookupsPerSecond();
+    /// Seconds a stylizer frame of `scene` with `settings` is estimated to hold the GL thread.
+    double stylizerSeconds(const core::StylizerScene& scene, const core::StylizeSettings& settings);
 
     /// A slot of m_decodeSlots, held while an upload's pixels are decoded.
     struct DecodeSlot {
@@ -344,6 +350,8 @@ private:
     std::filesystem::path m_scratch;          ///< job files without a data directory (removed at exit)
     std::unique_ptr<GlExecutor> m_gl;
     std::function<void()> m_volumeEditHook;
+    std::once_flag m_stylizerSpeedOnce;
+    double m_stylizerLookupsPerSecond = 0;
 };
 
 }  // namespace volstyle::server

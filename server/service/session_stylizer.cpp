@@ -298,7 +298,7 @@ core::Stylizer& SessionService::stylizerEngine(core::GpuDevice& device) {
 
 core::StylizedFrame SessionService::stylizeOnGl(const core::StylizerScene& scene, const core::StylizeSettings& settings) {
     // Other sessions' frames and a solve's next iteration wait behind this one: estimate it first.
-    const double seconds = core::Stylizer::estimatedLookups(scene, settings) / kStylizerLookupsPerSecond;
+    const double seconds = stylizerSeconds(scene, settings);
     if (m_limits.renderBudgetSeconds > 0 && seconds > m_limits.renderBudgetSeconds)
         throw ApiError(ErrorCode::OverBudget,
                        fmt::format("this frame would take about {:.0f} s, over the render budget of {:g} s (volstyle serve --render-budget); "

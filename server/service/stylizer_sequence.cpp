@@ -56,7 +56,7 @@ std::shared_ptr<Job> SessionService::startSequence(const std::shared_ptr<Session
         throw ApiError(ErrorCode::InvalidArgument, "this server has no ffmpeg to encode a video; ask for the frames alone",
                        {{"/video", "no ffmpeg on the server"}});
     // Each frame holds the GL thread like a POST …/frame: the same budget, checked per frame now.
-    const double seconds = core::Stylizer::estimatedLookups(core::sceneAtTime(scene, times.front()), q.settings) / kStylizerLookupsPerSecond;
+    const double seconds = stylizerSeconds(core::sceneAtTime(scene, times.front()), q.settings);
     if (m_limits.renderBudgetSeconds > 0 && seconds > m_limits.renderBudgetSeconds)
         throw ApiError(ErrorCode::OverBudget, fmt::format("each frame would take about {:.0f} s, over the render budget of {:g} s; use fewer "
                                                           "pixels or a smaller shadow map",
