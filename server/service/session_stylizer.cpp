@@ -32,14 +32,13 @@ core::StylizerScene sceneFor(const core::StylizerScene& scene, const std::option
     return out;
 }
 
-/// Pushes a scene onto an undo or redo stack, dropping the oldest beyond its depth or its bytes
-/// (every change rewrites the stacks with the scene).
-void remember(std::vector<nlohmann::json>& stack, nlohmann::json scene) {
-    stack.push_back(std::move(scene));
+/// Pushes a scene onto an undo or redo stack, dropping the oldest beyond its depth or its bytes.
+void remember(std::vector<StylizerSceneEntry>& stack, StylizerSceneEntry entry) {
+    stack.push_back(std::move(entry));
     size_t bytes = 0;
-    for (const auto& j : stack) bytes += j.dump().size();
+    for (const auto& e : stack) bytes += e.bytes;
     while (stack.size() > 1 && (stack.size() > kStylizerUndoDepth || bytes > kStylizerUndoBytes)) {
-        bytes -= stack.front().dump().size();
+        bytes -= stack.front().bytes;
         stack.erase(stack.begin());
     }
 }
@@ -109,7 +108,7 @@ StylizerSnapshot SessionService::commitStylizerScene(Session& s, core::StylizerS
     before.erase("time"), after.erase("time");
     const bool step = before != after;
     if (step) {
-        remember(s.stylizer.undo, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs));
+        remember(s.stylizer.undo, currentSceneEntry(s.stylizer));
         s.stylizer.redo.clear();
     }
     s.stylizer.scene = std::move(scene);
@@ -130,10 +129,8 @@ StylizerSnapshot SessionService::undoStylizer(Session& s, bool redo) {
     auto& to = redo ? s.stylizer.undo : s.stylizer.redo;
     if (from.empty()) throw ApiError(ErrorCode::Busy, redo ? "nothing to redo" : "nothing to undo");
     core::StylizerScene scene;
-    protocol::StylizerSceneRequest request;
     try {
-        request = protocol::stylizerSceneFromJson(from.back(), "", protocol::SceneSource::Api);
-        scene = resolveStylizerScene(s.stylizer, request, &s.volume);
+        scene = resolveSceneEntry(s.stylizer, from.back());
         attachDensity(s, scene);
         scene.validate();
     } catch (const std::exception& e) {  // a mesh or the TF image it used was deleted since: dropped, the one before is next
@@ -141,10 +138,11 @@ StylizerSnapshot SessionService::undoStylizer(Session& s, bool redo) {
         throw ApiError(ErrorCode::Busy, std::string("the ") + (redo ? "next" : "previous") + " scene no longer resolves, so it was dropped (" +
                                             e.what() + "); try again for the one before it");
     }
-    remember(to, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs));
+    std::vector<std::string> meshRefs = from.back().meshRefs;
+    remember(to, currentSceneEntry(s.stylizer));
     from.pop_back();
     s.stylizer.scene = std::move(scene);
-    s.stylizer.meshRefs = request.meshRefs;
+    s.stylizer.meshRefs = std::move(meshRefs);
     stylizerChanged(s, true);
     return snapshotOf(s);
 }

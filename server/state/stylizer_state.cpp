@@ -55,6 +55,27 @@ StylizerState defaultStylizer() {
     return s;
 }
 
+StylizerSceneEntry currentSceneEntry(const StylizerState& state) {
+    StylizerSceneEntry entry{state.scene, state.meshRefs, protocol::stylizerSceneToJson(state.scene, state.meshRefs).dump().size()};
+    if (entry.scene.volume) entry.scene.volume->grid.reset();  // the session volume's: attached again when it is current
+    return entry;
+}
+
+core::StylizerScene resolveSceneEntry(const StylizerState& state, const StylizerSceneEntry& entry) {
+    core::StylizerScene scene = entry.scene;
+    for (size_t i = 0; i < entry.meshRefs.size() && i < scene.occluders.size(); ++i) {
+        const std::string& ref = entry.meshRefs[i];
+        if (auto builtin = protocol::builtinMesh(ref)) scene.occluders[i].mesh = builtin;
+        else if (auto it = state.meshes.find(ref); it != state.meshes.end()) scene.occluders[i].mesh = it->second.mesh;
+        else throw InvalidArgument("its occluder mesh '" + ref + "' was deleted");
+    }
+    const auto tfs = scene.transferFunctions();
+    const bool usesImage = std::any_of(tfs.begin(), tfs.end(), [](const core::TransferFunction* tf) { return showsImage(*tf); });
+    if (usesImage && !state.transferImage) throw InvalidArgument("its transfer-function image was deleted");
+    if (usesImage) attachTransferImage(scene, state.transferImage);
+    return scene;
+}
+
 bool isMeshName(const std::string& name) {
     if (name.empty() || name.size() > 64 || name == "." || name == "..") return false;
     return std::all_of(name.begin(), name.end(), [](char c) {

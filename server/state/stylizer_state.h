@@ -32,6 +32,15 @@ struct LiveFrame {
     double renderMs = 0;
 };
 
+/// A scene kept for undo or redo: the core value (its meshes and images shared, not copied), the
+/// mesh references as the client wrote them, and its size as the store writes it (the stacks'
+/// byte bound).
+struct StylizerSceneEntry {
+    core::StylizerScene scene;
+    std::vector<std::string> meshRefs;
+    size_t bytes = 0;
+};
+
 struct StylizerState {
     core::StylizerScene scene;          ///< what frames render: meshes and the TF image attached
     std::vector<std::string> meshRefs;  ///< each occluder's `mesh`, as the client wrote it
@@ -39,9 +48,9 @@ struct StylizerState {
     std::shared_ptr<const core::Image> transferImage;  ///< PUT …/stylizer/tf; null: none
     uint64_t revision = 1;
     LiveFrame live;  ///< revision 0: none yet
-    /// Earlier scenes (as their JSON, oldest first) for POST …/stylizer/undo, and the ones undone
-    /// for …/redo; a new scene clears the redo stack. At most kStylizerUndoDepth each.
-    std::vector<nlohmann::json> undo, redo;
+    /// Earlier scenes (oldest first) for POST …/stylizer/undo, and the ones undone for …/redo; a
+    /// new scene clears the redo stack. At most kStylizerUndoDepth each, and kStylizerUndoBytes.
+    std::vector<StylizerSceneEntry> undo, redo;
     /// The session volume's σt grid for a heterogeneous medium, made once per volume version.
     std::shared_ptr<const core::DensityGrid> density;
     int densityVersion = 0;
@@ -56,7 +65,7 @@ struct StylizerState {
 };
 
 inline constexpr size_t kStylizerUndoDepth = 64;
-inline constexpr size_t kStylizerUndoBytes = size_t(4) << 20;  ///< each stack's JSON at most (the newest entry always kept)
+inline constexpr size_t kStylizerUndoBytes = size_t(4) << 20;  ///< each stack's scenes as written, at most (the newest always kept)
 
 /// The least stylizer speed a frame's budget estimate assumes, in lookups per second: the device
 /// is measured when its stylizer first starts (core::Stylizer::measureLookupsPerSecond; llvmpipe
@@ -69,6 +78,14 @@ StylizerState defaultStylizer();
 
 /// Puts a new uploaded TF image into `scene`'s TFs where they show it (compiling their layers again).
 void attachTransferImage(core::StylizerScene& scene, const std::shared_ptr<const core::Image>& image);
+
+/// An undo entry of the state's scene now (its size measured by its JSON, as the store writes it).
+StylizerSceneEntry currentSceneEntry(const StylizerState& state);
+
+/// An undo entry made current again: its meshes looked up by reference among the uploads (a mesh
+/// uploaded again under its name is the new one) and the built-in ones, its TF image the uploaded
+/// one. Throws InvalidArgument naming what is gone (a deleted mesh, the TF image).
+core::StylizerScene resolveSceneEntry(const StylizerState& state, const StylizerSceneEntry& entry);
 
 /// Whether `name` may name an uploaded mesh: 1–64 of A–Z a–z 0–9 _ . - (it is a file name on disk).
 bool isMeshName(const std::string& name);

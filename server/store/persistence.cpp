@@ -101,7 +101,8 @@ void Persistence::saveStylizerScene(const std::string& session, const json& scen
     store::atomicWrite(sessionDir(session) / "stylizer" / "scene.json", store::encodeStylizerScene(scene, revision));
 }
 
-void Persistence::saveStylizerHistory(const std::string& session, const json& undo, const json& redo) {
+void Persistence::saveStylizerHistory(const std::string& session, const std::vector<StylizerSceneEntry>& undo,
+                                      const std::vector<StylizerSceneEntry>& redo) {
     store::atomicWrite(sessionDir(session) / "stylizer" / "history.json", store::encodeStylizerHistory(undo, redo));
 }
 

@@ -55,7 +55,7 @@ public:
     void saveStylizerScene(const std::string& session, const nlohmann::json& scene, uint64_t revision);
     /// The stylizer's undo and redo stacks (arrays of scenes), apart from the scene: written only
     /// when they change (not for each frame of a played path).
-    void saveStylizerHistory(const std::string& session, const nlohmann::json& undo, const nlohmann::json& redo);
+    void saveStylizerHistory(const std::string& session, const std::vector<StylizerSceneEntry>& undo, const std::vector<StylizerSceneEntry>& redo);
     /// An uploaded file as it was sent (the stylizer's, environment.image), atomically.
     void saveSessionFile(const std::string& session, const std::string& file, const std::string& bytes);
     void removeSessionFile(const std::string& session, const std::string& file);

@@ -17,7 +17,26 @@ std::string encodeStylizerScene(const json& scene, uint64_t revision) {
     return protocol::toText({{"format", 1}, {"revision", revision}, {"scene", scene}}, 2);
 }
 
-std::string encodeStylizerHistory(const json& undo, const json& redo) { return protocol::toText({{"undo", undo}, {"redo", redo}}); }
+std::string encodeStylizerHistory(const std::vector<StylizerSceneEntry>& undo, const std::vector<StylizerSceneEntry>& redo) {
+    const auto stack = [](const std::vector<StylizerSceneEntry>& entries) {
+        json out = json::array();
+        for (const auto& e : entries) out.push_back(protocol::stylizerSceneToJson(e.scene, e.meshRefs));
+        return out;
+    };
+    return protocol::toText({{"undo", stack(undo)}, {"redo", stack(redo)}});
+}
+
+namespace {
+
+/// An undo entry read back: the scene resolved against the uploads restored before it. Throws
+/// when it no longer resolves (the caller drops it, as an undo to it would).
+StylizerSceneEntry entryOf(const StylizerState& state, const json& scene) {
+    const protocol::StylizerSceneRequest request = protocol::stylizerSceneFromJson(scene, "", protocol::SceneSource::Api);
+    StylizerSceneEntry entry{resolveStylizerScene(state, request), request.meshRefs, scene.dump().size()};
+    return entry;
+}
+
+}  // namespace
 
 void restoreStylizerRecord(DataDir& data, Session& s, const fs::path& dir, const MeshReader& readMesh,
                            const std::function<void(const json& scene, uint64_t revision)>& saveScene) {
@@ -50,8 +69,12 @@ void restoreStylizerRecord(DataDir& data, Session& s, const fs::path& dir, const
     if (fs::exists(dir / "stylizer" / "history.json")) {  // a convenience: an unreadable one is dropped, not the scene
         try {
             const json h = json::parse(readFile(dir / "stylizer" / "history.json"));
-            for (const json& scene : h.at("undo")) s.stylizer.undo.push_back(scene);
-            for (const json& scene : h.at("redo")) s.stylizer.redo.push_back(scene);
+            for (auto [stack, name] : {std::pair{&s.stylizer.undo, "undo"}, std::pair{&s.stylizer.redo, "redo"}})
+                for (const json& scene : h.at(name)) try {
+                        stack->push_back(entryOf(s.stylizer, scene));
+                    } catch (const std::exception& e) {  // a deleted mesh's: an undo to it would drop it too
+                        spdlog::info("session {}: a stylizer {} step no longer resolves and was dropped: {}", s.id, name, e.what());
+                    }
         } catch (const std::exception& e) {
             s.stylizer.undo.clear(), s.stylizer.redo.clear();
             spdlog::warn("session {}: the stylizer's undo history is unreadable and was dropped: {}", s.id, e.what());

@@ -19,7 +19,8 @@ namespace volstyle::server::store {
 
 /// The scene record: {"format", "revision", "scene"} with the scene as `scene` JSON.
 std::string encodeStylizerScene(const nlohmann::json& scene, uint64_t revision);
-std::string encodeStylizerHistory(const nlohmann::json& undo, const nlohmann::json& redo);
+/// The undo and redo stacks: each entry's scene as the scene record writes it.
+std::string encodeStylizerHistory(const std::vector<StylizerSceneEntry>& undo, const std::vector<StylizerSceneEntry>& redo);
 
 using MeshReader = std::function<core::Mesh(const std::string& bytes, const std::string& format)>;
 

@@ -347,5 +347,30 @@ TEST_F(ServiceTest, DamagedFilesGoToTheQuarantineAndOnlyWhatTheyHeldIsLost) {
     EXPECT_TRUE(sawSession);
 }
 
+// The undo stacks hold core scenes (issue #36); one whose mesh was deleted since no longer
+// resolves: the undo to it answers 409 and drops it, and the one before it is next.
+TEST_F(ServiceTest, AnUndoToASceneWhoseMeshWasDeletedIsDropped) {
+    auto service = makeService();
+    auto s = service->create(smallCloud());
+    service->putOccluderMesh(*s, "tri", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const server::StylizerSnapshot forest = service->stylizer(*s);
+    nlohmann::json j = protocol::stylizerSceneToJson(forest.scene, forest.meshRefs);
+    j["occluders"][0]["mesh"] = "tri";
+    service->setStylizerScene(*s, protocol::stylizerSceneFromJson(j, "", protocol::SceneSource::Api));
+    service->setStylizerScene(*s, protocol::stylizerSceneFromJson(protocol::stylizerSceneToJson(forest.scene, forest.meshRefs), "",
+                                                                  protocol::SceneSource::Api));
+    service->removeOccluderMesh(*s, "tri");  // the current scene no longer uses it
+    try {
+        service->undoStylizer(*s, false);
+        FAIL() << "undid to a scene whose mesh is gone";
+    } catch (const ApiError& e) {
+        EXPECT_EQ(e.code(), ErrorCode::Busy);
+        EXPECT_NE(std::string(e.what()).find("'tri' was deleted"), std::string::npos) << e.what();
+    }
+    const server::StylizerSnapshot first = service->undoStylizer(*s, false);  // the forest as it was first
+    EXPECT_EQ(first.meshRefs, forest.meshRefs);
+    EXPECT_EQ(first.scene.occluders[0].mesh, forest.scene.occluders[0].mesh);  // the built-in mesh, shared
+}
+
 }  // namespace
 }  // namespace volstyle
