@@ -8,7 +8,9 @@
 #include <vector>
 
 #include "core/image/image.h"
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 
 namespace volstyle::bench {
 

@@ -20,7 +20,7 @@
 
 #include "../tests/common/stamped_cloud.h"
 #include "bench_util.h"
-#include "core/render/environment_lobes.h"
+#include "core/scene/environment_lobes.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/renderer.h"
 #include "core/base/errors.h"

@@ -87,13 +87,104 @@ void progressLine(bool quiet, const std::string& line) {
 
 const CommandSpec& animateCommand() { return kAnimate; }
 
+namespace {
+
+/// The frames first..last (a file each by a %d pattern, or one file holding them all) and their
+/// velocity in world units per frame; with `oneGrid`, every frame must share the first's grid.
+struct Frames {
+    std::vector<core::Volume> volumes;
+    std::vector<std::vector<float>> velocity;
+};
+
+Frames readFrames(const std::string& pattern, int first, int last, double fps, bool oneGrid) {
+    std::map<int, core::Volume> stamped;
+    const bool oneFile = pattern.find('%') == std::string::npos;
+    if (oneFile) {
+        stamped = core::loadVdbFrames(pattern);
+        if (stamped.empty())
+            throw InvalidArgument("'" + pattern + "' has no frame number (use %d or %04d) and holds no grids stamped with a frame "
+                                  "(density.12, vel_12, or a 'frame' metadata entry)");
+    }
+    Frames out;
+    auto& frames = out.volumes;
+    for (int f = first; f <= last; ++f) {
+        if (oneFile && !stamped.count(f)) throw InvalidArgument("'" + pattern + "' holds no frame " + std::to_string(f));
+        frames.push_back(oneFile ? std::move(stamped[f]) : core::loadVdb(frameName(pattern, f)));
+        std::vector<float> v = core::velocityOf(frames.back());
+        for (float& x : v) x = float(x / fps);
+        out.velocity.push_back(std::move(v));
+        if (oneGrid && (!(frames.back().dims() == frames[0].dims()) || !(frames.back().worldFromIndex() == frames[0].worldFromIndex())))
+            throw InvalidArgument("frame " + std::to_string(f) + " does not share frame " + std::to_string(first) +
+                                  "'s grid (dims and transform): resample the sequence onto one grid first");
+    }
+    return out;
+}
+
+/// Solves the key frames (the frames the views are on) and fills every frame from them; writes
+/// them to -o when given.
+void solveFrames(const Arguments& args, core::GpuDevice& device, Frames& in, std::vector<core::SolveView> views,
+                 const std::vector<int>& viewFrames, const core::Lighting& lighting, int first, int last) {
+    const bool quiet = args.has("quiet");
+    const auto t0 = Clock::now();
+    auto& frames = in.volumes;
+    std::map<int, std::vector<core::SolveView>> byFrame;
+    for (size_t i = 0; i < views.size(); ++i) byFrame[viewFrames[i]].push_back(std::move(views[i]));
+    core::KeyFrameOptions o;
+    o.solve.unknown = args.get("unknowns", "emission") == "emission" ? core::Unknown::Emission : core::Unknown::Albedo;
+    o.solve.maxIterations = int(args.number("iterations", 30));
+    o.temporal = args.number("temporal", 0.05);
+    o.sweeps = int(args.number("sweeps", 3));
+    o.followFlow = !args.has("no-flow");
+    o.solve.validate();
+    std::vector<core::KeyFrame> keys;
+    for (auto& [f, v] : byFrame) keys.push_back({f, frames[size_t(f - first)], std::move(v), in.velocity[size_t(f - first)]});
+    core::KeyFrameReport report;
+    const auto solved = core::solveKeyFrames(device, keys, lighting, o, &report, [&](int sweep, int k) {
+        progressLine(quiet, "sweep " + std::to_string(sweep + 1) + "/" + std::to_string(o.sweeps) + ": key frame " +
+                                std::to_string(keys[size_t(k)].frame));
+    });
+    // Every frame: a key frame's solution; between two, their blend; outside, the nearest carried.
+    for (int f = first; f <= last; ++f) {
+        core::Volume& frame = frames[size_t(f - first)];
+        (o.solve.unknown == core::Unknown::Emission ? frame.ensureEmission() : frame.ensureAlbedo()) =
+            core::frameFromKeys(keys, solved, o.solve.unknown, f, o.followFlow);
+    }
+    std::string changes;
+    for (double c : report.change) changes += (changes.empty() ? "" : ", ") + std::to_string(c);
+    progressLine(quiet, std::to_string(keys.size()) + " key frames solved in " + std::to_string(msSince(t0) / 1000) +
+                            " s; largest change per sweep: " + changes);
+    if (args.has("output"))
+        for (int f = first; f <= last; ++f) {
+            core::saveVdb(frameName(args.get("output"), f), frames[size_t(f - first)]);
+            progressLine(quiet, "wrote " + frameName(args.get("output"), f));
+        }
+}
+
+/// Renders every frame to --render (one camera: --camera, or framing the first frame).
+void renderFrames(const Arguments& args, core::GpuDevice& device, const std::vector<core::Volume>& frames, const core::Lighting& lighting,
+                  int first, int last) {
+    core::Camera camera = args.has("camera") ? fromFile(args.get("camera"), [](const nlohmann::json& j) { return protocol::cameraFromJson(j); })
+                                             : core::framingCamera(frames[0].worldBounds());
+    core::Renderer renderer(device);
+    core::SaveOptions save;
+    save.exposure = args.number("exposure", 0);
+    for (int f = first; f <= last; ++f) {
+        core::GpuVolume gpu(frames[size_t(f - first)]);
+        core::saveImage(frameName(args.get("render"), f), renderer.render(gpu, camera, lighting), save);
+        progressLine(args.has("quiet"), "frame " + std::to_string(f - first + 1) + "/" + std::to_string(last - first + 1) + ": " +
+                                            frameName(args.get("render"), f));
+    }
+}
+
+}  // namespace
+
 int runAnimate(const std::vector<std::string>& argv) {
     Arguments args = parseArguments(argv, kAnimate);
     if (printHelpIfAsked(args, kAnimate)) return 0;
     for (const char* required : {"frames", "range"})
         if (!args.has(required)) throw InvalidArgument(std::string("--") + required + " is required (volstyle animate --help)");
     const auto [first, last] = frameRange(args.get("range"));
-    const bool solve = args.has("views"), quiet = args.has("quiet");
+    const bool solve = args.has("views");
     if (args.has("output") && !solve) throw InvalidArgument("-o writes solved frames: it needs --views");
     if (!args.has("output") && !args.has("render")) throw InvalidArgument("nothing to do: give -o (with --views) or --render");
     const std::string unknownName = args.get("unknowns", "emission");
@@ -107,7 +198,6 @@ int runAnimate(const std::vector<std::string>& argv) {
         const std::string path = args.get("lighting");
         lighting = fromFile(path, [&](const nlohmann::json& j) { return lightingFromJsonFile(j, path); });
     }
-
     // The views first (a bad file is refused before any frame is read).
     std::vector<int> viewFrames;
     std::vector<core::SolveView> views;
@@ -117,82 +207,11 @@ int runAnimate(const std::vector<std::string>& argv) {
             if (viewFrames[i] < first || viewFrames[i] > last)
                 throw InvalidArgument("view '" + views[i].name + "' is on frame " + std::to_string(viewFrames[i]) + ", outside --range");
     }
-
-    // The frames (a file each, or one file holding them all), and their velocity in world units
-    // per frame.
-    const std::string pattern = args.get("frames");
-    std::map<int, core::Volume> stamped;
-    const bool oneFile = pattern.find('%') == std::string::npos;
-    if (oneFile) {
-        stamped = core::loadVdbFrames(pattern);
-        if (stamped.empty())
-            throw InvalidArgument("'" + pattern + "' has no frame number (use %d or %04d) and holds no grids stamped with a frame "
-                                  "(density.12, vel_12, or a 'frame' metadata entry)");
-    }
-    std::vector<core::Volume> frames;
-    std::vector<std::vector<float>> velocity;
-    for (int f = first; f <= last; ++f) {
-        if (oneFile && !stamped.count(f)) throw InvalidArgument("'" + pattern + "' holds no frame " + std::to_string(f));
-        frames.push_back(oneFile ? std::move(stamped[f]) : core::loadVdb(frameName(pattern, f)));
-        std::vector<float> v = core::velocityOf(frames.back());
-        for (float& x : v) x = float(x / fps);
-        velocity.push_back(std::move(v));
-        if (solve && (!(frames.back().dims() == frames[0].dims()) || !(frames.back().worldFromIndex() == frames[0].worldFromIndex())))
-            throw InvalidArgument("frame " + std::to_string(f) + " does not share frame " + std::to_string(first) +
-                                  "'s grid (dims and transform): resample the sequence onto one grid first");
-    }
-    progressLine(quiet, "read " + std::to_string(frames.size()) + " frames");
+    Frames frames = readFrames(args.get("frames"), first, last, fps, solve);
+    progressLine(args.has("quiet"), "read " + std::to_string(frames.volumes.size()) + " frames");
     auto device = core::GpuDevice::create();
-    const auto t0 = Clock::now();
-
-    if (solve) {
-        std::map<int, std::vector<core::SolveView>> byFrame;
-        for (size_t i = 0; i < views.size(); ++i) byFrame[viewFrames[i]].push_back(std::move(views[i]));
-        core::KeyFrameOptions o;
-        o.solve.unknown = unknownName == "emission" ? core::Unknown::Emission : core::Unknown::Albedo;
-        o.solve.maxIterations = int(args.number("iterations", 30));
-        o.temporal = args.number("temporal", 0.05);
-        o.sweeps = int(args.number("sweeps", 3));
-        o.followFlow = !args.has("no-flow");
-        o.solve.validate();
-        std::vector<core::KeyFrame> keys;
-        for (auto& [f, v] : byFrame) keys.push_back({f, frames[size_t(f - first)], std::move(v), velocity[size_t(f - first)]});
-        core::KeyFrameReport report;
-        const auto solved = core::solveKeyFrames(*device, keys, lighting, o, &report, [&](int sweep, int k) {
-            progressLine(quiet, "sweep " + std::to_string(sweep + 1) + "/" + std::to_string(o.sweeps) + ": key frame " +
-                                    std::to_string(keys[size_t(k)].frame));
-        });
-        // Every frame: a key frame's solution; between two, their blend; outside, the nearest carried.
-        for (int f = first; f <= last; ++f) {
-            core::Volume& frame = frames[size_t(f - first)];
-            (o.solve.unknown == core::Unknown::Emission ? frame.ensureEmission() : frame.ensureAlbedo()) =
-                core::frameFromKeys(keys, solved, o.solve.unknown, f, o.followFlow);
-        }
-        std::string changes;
-        for (double c : report.change) changes += (changes.empty() ? "" : ", ") + std::to_string(c);
-        progressLine(quiet, std::to_string(keys.size()) + " key frames solved in " + std::to_string(msSince(t0) / 1000) +
-                                " s; largest change per sweep: " + changes);
-        if (args.has("output"))
-            for (int f = first; f <= last; ++f) {
-                core::saveVdb(frameName(args.get("output"), f), frames[size_t(f - first)]);
-                progressLine(quiet, "wrote " + frameName(args.get("output"), f));
-            }
-    }
-
-    if (args.has("render")) {
-        core::Camera camera = args.has("camera") ? fromFile(args.get("camera"), [](const nlohmann::json& j) { return protocol::cameraFromJson(j); })
-                                                 : core::framingCamera(frames[0].worldBounds());
-        core::Renderer renderer(*device);
-        const double exposure = args.number("exposure", 0);
-        for (int f = first; f <= last; ++f) {
-            core::GpuVolume gpu(frames[size_t(f - first)]);
-            core::SaveOptions save;
-            save.exposure = exposure;
-            core::saveImage(frameName(args.get("render"), f), renderer.render(gpu, camera, lighting), save);
-            progressLine(quiet, "frame " + std::to_string(f - first + 1) + "/" + std::to_string(last - first + 1) + ": " +
-                                    frameName(args.get("render"), f));
-        }
-    }
+    if (solve) solveFrames(args, *device, frames, std::move(views), viewFrames, lighting, first, last);
+    if (args.has("render")) renderFrames(args, *device, frames.volumes, lighting, first, last);
     return 0;
 }
 

@@ -97,20 +97,10 @@ core::TranslucentSettings translucentSettings(const Arguments& args) {
 
 const CommandSpec& renderCommand() { return kRender; }
 
-int runRender(const std::vector<std::string>& argv) {
-    Arguments args = parseArguments(argv, kRender);
-    if (printHelpIfAsked(args, kRender)) return 0;
-    if (!args.has("scene")) throw InvalidArgument("--scene is required (volstyle render --help)");
-    const std::string output = imageOutputPath(args);
-    const std::string ext = fs::path(output).extension().string();
+namespace {
 
-    std::optional<core::Camera> camera;
-    if (args.has("camera")) camera = fromFile(args.get("camera"), [](const nlohmann::json& j) { return protocol::cameraFromJson(j); });
-    core::Lighting lighting = core::defaultLighting();
-    if (args.has("lighting")) {
-        const std::string path = args.get("lighting");
-        lighting = fromFile(path, [&](const nlohmann::json& j) { return lightingFromJsonFile(j, path); });
-    }
+/// The march settings of --step, --no-skip, --hw-filter, --exact-traversal and --no-refraction.
+core::RenderSettings renderSettings(const Arguments& args) {
     core::RenderSettings settings;
     settings.stepVoxels = args.number("step", settings.stepVoxels);
     settings.skipEmptySpace = !args.has("no-skip");
@@ -118,11 +108,11 @@ int runRender(const std::vector<std::string>& argv) {
     settings.exactTraversal = args.has("exact-traversal");
     settings.refraction = !args.has("no-refraction");
     settings.validate();
-    const double exposure = args.number("exposure", 0);
-    const std::string exrType = args.has("exr-type") ? args.get("exr-type") : "half";
-    if (exrType != "half" && exrType != "float") throw InvalidArgument("--exr-type must be half or float, got '" + exrType + "'");
-    if (args.has("exr-type") && ext != ".exr") throw InvalidArgument("--exr-type is for -o OUT.exr");
-    const bool exrHalf = exrType == "half";
+    return settings;
+}
+
+/// --mode: true for translucent; the flags of the other mode refused.
+bool translucentMode(const Arguments& args) {
     const std::string mode = args.has("mode") ? args.get("mode") : "single_scattering";
     if (mode != "single_scattering" && mode != "translucent")
         throw InvalidArgument("--mode must be single_scattering or translucent, got '" + mode + "'");
@@ -132,6 +122,72 @@ int runRender(const std::vector<std::string>& argv) {
     for (const char* flag : {"translucent", "slice-spacing", "blur-angle", "indirect-extinction", "transport", "surface-shading", "no-indirect",
                              "perturb", "perturb-extinction", "seed", "time"})
         if (!translucent && args.has(flag)) throw InvalidArgument(std::string("--") + flag + " needs --mode translucent");
+    return translucent;
+}
+
+/// How -o is written: EXR (half or float, --exr-type) with layers, or a picture with --exposure.
+struct Output {
+    std::string path;
+    bool exr = false, exrHalf = true;
+    core::SaveOptions picture;
+};
+
+Output outputOf(const Arguments& args) {
+    Output out;
+    out.path = imageOutputPath(args);
+    out.exr = fs::path(out.path).extension() == ".exr";
+    const std::string exrType = args.has("exr-type") ? args.get("exr-type") : "half";
+    if (exrType != "half" && exrType != "float") throw InvalidArgument("--exr-type must be half or float, got '" + exrType + "'");
+    if (args.has("exr-type") && !out.exr) throw InvalidArgument("--exr-type is for -o OUT.exr");
+    out.exrHalf = exrType == "half";
+    out.picture.exposure = args.number("exposure", 0);
+    return out;
+}
+
+void renderTranslucent(core::GpuDevice& device, core::GpuVolume& volume, const core::Camera& camera, const core::Lighting& lighting,
+                       const core::TranslucentSettings& options, const Output& output) {
+    core::TranslucentRenderer preview(device);
+    core::TranslucentStats stats;
+    core::Image medium;
+    const core::Image image = preview.render(volume, camera, lighting, options, &stats, &medium);
+    if (output.exr) core::saveExrLayers(output.path, {{"", &medium}, {"beauty", &image}}, output.exrHalf);
+    else core::saveImage(output.path, image, output.picture);
+    spdlog::info("rendered {}x{} translucent, {} slices, in {:.1f} ms on {}", camera.width, camera.height, stats.slices, stats.totalMs,
+                 device.capabilities().renderer);
+}
+
+void renderSingleScattering(core::GpuDevice& device, core::GpuVolume& volume, const core::Camera& camera, const core::Lighting& lighting,
+                            const core::RenderSettings& settings, const Output& output) {
+    const auto t0 = Clock::now();
+    core::Renderer renderer(device);
+    core::RenderStats stats;
+    if (output.exr) {
+        // Compositing-ready: premultiplied medium without the background, plus its layers.
+        const core::RenderLayers layers = renderer.renderLayers(volume, camera, lighting, settings, &stats);
+        core::saveExrLayers(output.path, core::exrLayersOf(layers), output.exrHalf);
+    } else {
+        core::saveImage(output.path, renderer.render(volume, camera, lighting, settings, &stats), output.picture);
+    }
+    spdlog::info("rendered {}x{} in {:.1f} ms on {} (light volumes {:.1f} ms, occupancy {:.1f} ms); written in {:.1f} ms", camera.width,
+                 camera.height, stats.totalMs, device.capabilities().renderer, stats.lightMs, stats.occupancyMs, msSince(t0) - stats.totalMs);
+}
+
+}  // namespace
+
+int runRender(const std::vector<std::string>& argv) {
+    Arguments args = parseArguments(argv, kRender);
+    if (printHelpIfAsked(args, kRender)) return 0;
+    if (!args.has("scene")) throw InvalidArgument("--scene is required (volstyle render --help)");
+    const Output output = outputOf(args);
+    std::optional<core::Camera> camera;
+    if (args.has("camera")) camera = fromFile(args.get("camera"), [](const nlohmann::json& j) { return protocol::cameraFromJson(j); });
+    core::Lighting lighting = core::defaultLighting();
+    if (args.has("lighting")) {
+        const std::string path = args.get("lighting");
+        lighting = fromFile(path, [&](const nlohmann::json& j) { return lightingFromJsonFile(j, path); });
+    }
+    const core::RenderSettings settings = renderSettings(args);
+    const bool translucent = translucentMode(args);
     const core::TranslucentSettings translucentOptions = translucent ? translucentSettings(args) : core::TranslucentSettings{};
 
     auto t0 = Clock::now();
@@ -142,39 +198,9 @@ int runRender(const std::vector<std::string>& argv) {
     t0 = Clock::now();
     auto device = core::GpuDevice::create();
     core::GpuVolume gpuVolume(volume);
-    core::Renderer renderer(*device);
     spdlog::debug("GL device created and volume uploaded in {:.1f} ms", msSince(t0));
-    t0 = Clock::now();
-    if (translucent) {
-        core::TranslucentRenderer preview(*device);
-        core::TranslucentStats tstats;
-        core::Image medium;
-        const core::Image image = preview.render(gpuVolume, *camera, lighting, translucentOptions, &tstats, &medium);
-        if (ext == ".exr") {
-            core::saveExrLayers(output, {{"", &medium}, {"beauty", &image}}, exrHalf);
-        } else {
-            core::SaveOptions save;
-            save.exposure = exposure;
-            core::saveImage(output, image, save);
-        }
-        spdlog::info("rendered {}x{} translucent, {} slices, in {:.1f} ms on {}", camera->width, camera->height, tstats.slices,
-                     tstats.totalMs, device->capabilities().renderer);
-        return 0;
-    }
-    core::RenderStats stats;
-    if (ext == ".exr") {
-        // Compositing-ready: premultiplied medium without the background, plus its layers.
-        const core::RenderLayers layers = renderer.renderLayers(gpuVolume, *camera, lighting, settings, &stats);
-        core::saveExrLayers(output, core::exrLayersOf(layers), exrHalf);
-    } else {
-        core::Image image = renderer.render(gpuVolume, *camera, lighting, settings, &stats);
-        core::SaveOptions save;
-        save.exposure = exposure;
-        core::saveImage(output, image, save);
-    }
-    spdlog::info("rendered {}x{} in {:.1f} ms on {} (light volumes {:.1f} ms, occupancy {:.1f} ms); written in {:.1f} ms",
-                 camera->width, camera->height, stats.totalMs, device->capabilities().renderer, stats.lightMs,
-                 stats.occupancyMs, msSince(t0) - stats.totalMs);
+    if (translucent) renderTranslucent(*device, gpuVolume, *camera, lighting, translucentOptions, output);
+    else renderSingleScattering(*device, gpuVolume, *camera, lighting, settings, output);
     return 0;
 }
 

@@ -18,7 +18,7 @@
 #include "core/base/errors.h"
 #include "core/gpu/gpu_device.h"
 #include "core/image/image_io.h"
-#include "core/render/environment_lobes.h"
+#include "core/scene/environment_lobes.h"
 #include "core/solve/combined_solve.h"
 #include "core/solve/light_solver.h"
 #include "core/solve/solver.h"

@@ -19,7 +19,9 @@
 #include <optional>
 #include <string>
 
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 #include "core/translucent/translucent_settings.h"
 #include "core/volume/glass_sphere.h"
 #include "protocol/validation.h"

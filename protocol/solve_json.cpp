@@ -14,110 +14,121 @@ std::optional<core::Unknown> parseUnknowns(const std::vector<std::string>& names
     return std::nullopt;
 }
 
+namespace {
+
+/// "unknowns": ["emission"] … or ["lights", …] (SPEC §8: alone, or with emission and/or albedo).
+void unknownsFromJson(JsonReader& r, const nlohmann::json& list, const std::string& path, core::SolveOptions& o) {
+    if (!list.is_array()) return r.fail(path, "must be an array such as [\"emission\", \"albedo\"]");
+    std::vector<std::string> names;
+    const size_t before = r.errors().size();
+    for (size_t i = 0; i < list.size(); ++i)
+        if (auto s = r.string(list[i], path + "/" + std::to_string(i))) names.push_back(*s);
+    const auto lights = std::find(names.begin(), names.end(), "lights");
+    o.lights.solve = lights != names.end();
+    if (o.lights.solve) names.erase(lights);
+    o.lights.withVolume = o.lights.solve && !names.empty();
+    if (o.lights.solve && names.empty()) {
+        o.unknown = core::Unknown::Emission;  // unused: the volume stays fixed
+    } else if (auto u = parseUnknowns(names)) {
+        o.unknown = *u;
+    } else if (r.errors().size() == before) {
+        r.fail(path, "must be [\"emission\"], [\"albedo\"], [\"emission\", \"albedo\"], [\"extinction\"] "
+                     "or [\"lights\"] (alone or with emission and/or albedo)");
+    }
+}
+
+/// "regularization": the shared weights, and per-unknown objects that start from them.
+void regularizationFromJson(JsonReader& r, const nlohmann::json& g, const std::string& p, core::SolveOptions& o) {
+    if (!r.object(g, p, {"laplacian", "l2", "toward_one", "emission", "albedo"})) return;
+    auto weights = [&](const nlohmann::json& w, const std::string& wp, core::Regularization& reg) {
+        if (w.contains("laplacian")) reg.laplacian = r.number(w["laplacian"], wp + "/laplacian").value_or(reg.laplacian);
+        if (w.contains("l2")) reg.l2 = r.number(w["l2"], wp + "/l2").value_or(reg.l2);
+        if (w.contains("toward_one")) reg.towardOne = r.number(w["toward_one"], wp + "/toward_one").value_or(reg.towardOne);
+    };
+    weights(g, p, o.regularization);
+    for (const char* name : {"emission", "albedo"}) {
+        if (!g.contains(name) || !r.object(g[name], p + "/" + name, {"laplacian", "l2", "toward_one"})) continue;
+        core::Regularization reg = o.regularization;
+        weights(g[name], p + "/" + name, reg);
+        (std::string(name) == "emission" ? o.emissionRegularization : o.albedoRegularization) = reg;
+    }
+}
+
+/// "lights": {"lobes", "domain", "rounds", "background"} of a light solve.
+void lightsFromJson(JsonReader& r, const nlohmann::json& l, const std::string& path, core::SolveOptions& o) {
+    if (!r.object(l, path, {"lobes", "domain", "rounds", "background"})) return;
+    if (l.contains("background")) o.lights.background = r.boolean(l["background"], path + "/background").value_or(false);
+    if (l.contains("lobes")) {  // 0 is what leaving it out means: sent, it must be a count
+        o.lights.lobes = r.integer(l["lobes"], path + "/lobes").value_or(o.lights.lobes);
+        if (o.lights.lobes == 0) r.fail(path + "/lobes", "must be in [1, 256] (leave it out for the lighting's own count)");
+    }
+    if (l.contains("rounds")) o.lights.rounds = r.integer(l["rounds"], path + "/rounds").value_or(o.lights.rounds);
+    if (l.contains("domain")) {
+        auto d = r.string(l["domain"], path + "/domain");
+        if (d == "sphere") o.lights.domain = core::LobeDomain::Sphere;
+        else if (d == "upper_hemisphere") o.lights.domain = core::LobeDomain::UpperHemisphere;
+        else if (d) r.fail(path + "/domain", "must be 'sphere' or 'upper_hemisphere'");
+    }
+}
+
+/// "resolution": {"emission"|"albedo"|"extinction": [nx, ny, nz]}, one grid for all.
+void resolutionFromJson(JsonReader& r, const nlohmann::json& j, const std::string& path, core::SolveOptions& o) {
+    if (!r.object(j, path, {"emission", "albedo", "extinction"})) return;
+    std::optional<Int3> res;
+    for (const auto& [key, value] : j.items()) {
+        const std::string p = path + "/" + key;
+        if (!value.is_array() || value.size() != 3 || !value[0].is_number_integer() || !value[1].is_number_integer() ||
+            !value[2].is_number_integer()) {
+            r.fail(p, "must be [nx, ny, nz] integers");
+            continue;
+        }
+        Int3 v{value[0].get<int>(), value[1].get<int>(), value[2].get<int>()};
+        if (res && !(*res == v)) r.fail(p, "emission and albedo are solved on one grid: give them the same resolution");
+        res = v;
+    }
+    if (res) o.resolution = res;
+}
+
+/// A string field that names one of two choices: `first` sets `flag` to `firstMeans`, `second`
+/// to the other.
+void choiceFromJson(JsonReader& r, const nlohmann::json& j, const std::string& path, const char* first, const char* second, bool firstMeans,
+                    bool& flag) {
+    auto v = r.string(j, path);
+    if (v == first) flag = firstMeans;
+    else if (v == second) flag = !firstMeans;
+    else if (v) r.fail(path, std::string("must be '") + first + "' or '" + second + "'");
+}
+
+/// The scalar fields; their ranges are SolveOptions::check()'s.
+void scalarsFromJson(JsonReader& r, const nlohmann::json& j, const std::string& path, core::SolveOptions& o) {
+    if (j.contains("max_iterations")) o.maxIterations = r.integer(j["max_iterations"], path + "/max_iterations").value_or(o.maxIterations);
+    if (j.contains("coarse_iterations")) o.coarseIterations = r.integer(j["coarse_iterations"], path + "/coarse_iterations").value_or(o.coarseIterations);
+    if (j.contains("visible_change")) o.visibleChange = r.number(j["visible_change"], path + "/visible_change").value_or(o.visibleChange);
+    if (j.contains("local_resolve")) o.localResolve = r.boolean(j["local_resolve"], path + "/local_resolve").value_or(o.localResolve);
+    if (j.contains("tolerance")) o.tolerance = r.number(j["tolerance"], path + "/tolerance").value_or(o.tolerance);
+    if (j.contains("step")) o.stepVoxels = r.number(j["step"], path + "/step").value_or(o.stepVoxels);
+    if (j.contains("medium_radiance")) o.mediumRadiance = r.vec3(j["medium_radiance"], path + "/medium_radiance");
+}
+
+}  // namespace
+
 core::SolveOptions solveOptionsFromJson(const nlohmann::json& j, const std::string& path, core::SolveOptions o) {
     JsonReader r;
     if (r.object(j, path, {"unknowns", "basis", "regularization", "max_iterations", "tolerance", "step", "traversal", "hull",
                            "resolution", "medium_radiance", "views", "coarse_iterations", "visible_change", "local_resolve",
                            "lights"})) {
-        if (j.contains("unknowns")) {
-            std::vector<std::string> names;
-            if (!j["unknowns"].is_array()) {
-                r.fail(path + "/unknowns", "must be an array such as [\"emission\", \"albedo\"]");
-            } else {
-                const size_t before = r.errors().size();
-                for (size_t i = 0; i < j["unknowns"].size(); ++i)
-                    if (auto s = r.string(j["unknowns"][i], path + "/unknowns/" + std::to_string(i))) names.push_back(*s);
-                // "lights" (SPEC §8) alone, or with emission and/or albedo.
-                const auto lights = std::find(names.begin(), names.end(), "lights");
-                o.lights.solve = lights != names.end();
-                if (o.lights.solve) names.erase(lights);
-                o.lights.withVolume = o.lights.solve && !names.empty();
-                if (o.lights.solve && names.empty()) {
-                    o.unknown = core::Unknown::Emission;  // unused: the volume stays fixed
-                } else if (auto u = parseUnknowns(names)) {
-                    o.unknown = *u;
-                } else if (r.errors().size() == before) {
-                    r.fail(path + "/unknowns", "must be [\"emission\"], [\"albedo\"], [\"emission\", \"albedo\"], [\"extinction\"] "
-                                               "or [\"lights\"] (alone or with emission and/or albedo)");
-                }
-            }
-        }
+        if (j.contains("unknowns")) unknownsFromJson(r, j["unknowns"], path + "/unknowns", o);
         if (j.contains("basis")) {
-            auto b = r.string(j["basis"], path + "/basis");
-            if (b == "trilinear") o.basis = core::BasisType::Trilinear;
-            else if (b == "box") o.basis = core::BasisType::Box;
-            else if (b) r.fail(path + "/basis", "must be 'trilinear' or 'box'");
+            bool trilinear = o.basis == core::BasisType::Trilinear;
+            choiceFromJson(r, j["basis"], path + "/basis", "trilinear", "box", true, trilinear);
+            o.basis = trilinear ? core::BasisType::Trilinear : core::BasisType::Box;
         }
-        if (j.contains("regularization") &&
-            r.object(j["regularization"], path + "/regularization", {"laplacian", "l2", "toward_one", "emission", "albedo"})) {
-            const auto& g = j["regularization"];
-            const std::string p = path + "/regularization";
-            auto weights = [&](const nlohmann::json& w, const std::string& wp, core::Regularization& reg) {
-                if (w.contains("laplacian")) reg.laplacian = r.number(w["laplacian"], wp + "/laplacian").value_or(reg.laplacian);
-                if (w.contains("l2")) reg.l2 = r.number(w["l2"], wp + "/l2").value_or(reg.l2);
-                if (w.contains("toward_one")) reg.towardOne = r.number(w["toward_one"], wp + "/toward_one").value_or(reg.towardOne);
-            };
-            weights(g, p, o.regularization);
-            // Per-unknown objects start from the shared weights and override some of them.
-            for (const char* name : {"emission", "albedo"}) {
-                if (!g.contains(name) || !r.object(g[name], p + "/" + name, {"laplacian", "l2", "toward_one"})) continue;
-                core::Regularization reg = o.regularization;
-                weights(g[name], p + "/" + name, reg);
-                (std::string(name) == "emission" ? o.emissionRegularization : o.albedoRegularization) = reg;
-            }
-        }
-        if (j.contains("lights") && r.object(j["lights"], path + "/lights", {"lobes", "domain", "rounds", "background"})) {
-            const auto& l = j["lights"];
-            if (l.contains("background")) o.lights.background = r.boolean(l["background"], path + "/lights/background").value_or(false);
-            if (l.contains("lobes")) {  // 0 is what leaving it out means: sent, it must be a count
-                o.lights.lobes = r.integer(l["lobes"], path + "/lights/lobes").value_or(o.lights.lobes);
-                if (o.lights.lobes == 0) r.fail(path + "/lights/lobes", "must be in [1, 256] (leave it out for the lighting's own count)");
-            }
-            if (l.contains("rounds")) o.lights.rounds = r.integer(l["rounds"], path + "/lights/rounds").value_or(o.lights.rounds);
-            if (l.contains("domain")) {
-                auto d = r.string(l["domain"], path + "/lights/domain");
-                if (d == "sphere") o.lights.domain = core::LobeDomain::Sphere;
-                else if (d == "upper_hemisphere") o.lights.domain = core::LobeDomain::UpperHemisphere;
-                else if (d) r.fail(path + "/lights/domain", "must be 'sphere' or 'upper_hemisphere'");
-            }
-        }
-        if (j.contains("max_iterations")) o.maxIterations = r.integer(j["max_iterations"], path + "/max_iterations").value_or(o.maxIterations);
-        if (j.contains("coarse_iterations"))
-            o.coarseIterations = r.integer(j["coarse_iterations"], path + "/coarse_iterations").value_or(o.coarseIterations);
-        if (j.contains("visible_change"))
-            o.visibleChange = r.number(j["visible_change"], path + "/visible_change").value_or(o.visibleChange);
-        if (j.contains("local_resolve"))
-            o.localResolve = r.boolean(j["local_resolve"], path + "/local_resolve").value_or(o.localResolve);
-        if (j.contains("tolerance")) o.tolerance = r.number(j["tolerance"], path + "/tolerance").value_or(o.tolerance);
-        if (j.contains("step")) o.stepVoxels = r.number(j["step"], path + "/step").value_or(o.stepVoxels);
-        if (j.contains("traversal")) {
-            auto t = r.string(j["traversal"], path + "/traversal");
-            if (t == "march") o.exactTraversal = false;
-            else if (t == "exact") o.exactTraversal = true;
-            else if (t) r.fail(path + "/traversal", "must be 'march' or 'exact'");
-        }
-        if (j.contains("hull")) {
-            auto h = r.string(j["hull"], path + "/hull");
-            if (h == "extinction") o.useHull = true;
-            else if (h == "none") o.useHull = false;
-            else if (h) r.fail(path + "/hull", "must be 'extinction' or 'none'");
-        }
-        if (j.contains("resolution") && r.object(j["resolution"], path + "/resolution", {"emission", "albedo", "extinction"})) {
-            std::optional<Int3> res;
-            for (const auto& [key, value] : j["resolution"].items()) {
-                const std::string p = path + "/resolution/" + key;
-                if (!value.is_array() || value.size() != 3 || !value[0].is_number_integer() || !value[1].is_number_integer() ||
-                    !value[2].is_number_integer()) {
-                    r.fail(p, "must be [nx, ny, nz] integers");
-                    continue;
-                }
-                Int3 v{value[0].get<int>(), value[1].get<int>(), value[2].get<int>()};
-                if (res && !(*res == v)) r.fail(p, "emission and albedo are solved on one grid: give them the same resolution");
-                res = v;
-            }
-            if (res) o.resolution = res;
-        }
-        if (j.contains("medium_radiance")) o.mediumRadiance = r.vec3(j["medium_radiance"], path + "/medium_radiance");
+        if (j.contains("regularization")) regularizationFromJson(r, j["regularization"], path + "/regularization", o);
+        if (j.contains("lights")) lightsFromJson(r, j["lights"], path + "/lights", o);
+        scalarsFromJson(r, j, path, o);
+        if (j.contains("traversal")) choiceFromJson(r, j["traversal"], path + "/traversal", "march", "exact", false, o.exactTraversal);
+        if (j.contains("hull")) choiceFromJson(r, j["hull"], path + "/hull", "extinction", "none", true, o.useHull);
+        if (j.contains("resolution")) resolutionFromJson(r, j["resolution"], path + "/resolution", o);
         if (j.contains("views")) {
             o.views.clear();
             if (!j["views"].is_array()) r.fail(path + "/views", "must be an array of view ids");

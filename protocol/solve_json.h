@@ -15,7 +15,7 @@
 
 #include <string>
 
-#include "core/solve/solve_options.h"
+#include "core/scene/solve_options.h"
 #include "protocol/validation.h"
 
 namespace volstyle::protocol {

@@ -156,4 +156,17 @@ nlohmann::json parseJsonBody(const std::string& body, size_t maxBytes) {
     }
 }
 
+/// A number at `path` within [lo, hi], or `fallback` (a failure is recorded).
+double boundedNumber(JsonReader& r, const nlohmann::json& j, const std::string& path, double lo, double hi, double fallback) {
+    auto v = r.number(j, path);
+    if (!v) return fallback;
+    if (!(*v >= lo && *v <= hi)) {
+        // Whole bounds print as integers ("[0, 150]", not "[0.0, 150.0]").
+        auto text = [](double v) { return v == std::floor(v) && std::abs(v) < 1e15 ? std::to_string(static_cast<long long>(v)) : nlohmann::json(v).dump(); };
+        r.fail(path, "must be in [" + text(lo) + ", " + text(hi) + "]");
+        return fallback;
+    }
+    return *v;
+}
+
 }  // namespace volstyle::protocol

@@ -63,6 +63,9 @@ private:
     std::vector<FieldError> m_errors;
 };
 
+/// A number at `path` within [lo, hi], or `fallback` (a failure is recorded: "must be in [lo, hi]").
+double boundedNumber(JsonReader& r, const nlohmann::json& j, const std::string& path, double lo, double hi, double fallback);
+
 /// JSON text of `j`. Invalid UTF-8 in any string (echoed from a request: a path, a field, a
 /// parser message) becomes U+FFFD instead of throwing: an answer must always be writable.
 std::string toText(const nlohmann::json& j, int indent = -1);

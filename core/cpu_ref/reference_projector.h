@@ -6,8 +6,10 @@
 #include <vector>
 
 #include "core/cpu_ref/reference_renderer.h"
-#include "core/render/params.h"
-#include "core/solve/solve_types.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
+#include "core/scene/solve_types.h"
 #include "core/volume/volume.h"
 
 namespace volstyle::core::cpu_ref {

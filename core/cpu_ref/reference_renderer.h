@@ -6,7 +6,9 @@
 
 #include "core/image/image.h"
 #include "core/render/light_grid.h"
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 #include "core/volume/volume.h"
 
 namespace volstyle::core::cpu_ref {

@@ -19,7 +19,9 @@
 
 #include "core/base/work_budget.h"
 #include "core/render/curved_ray.h"
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 #include "core/volume/volume.h"
 
 namespace volstyle::core {

@@ -16,7 +16,9 @@
 #include "core/render/light_grid.h"
 #include "core/render/render_stats.h"
 #include "core/shaders/layout.h"
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 
 namespace volstyle::core {
 

@@ -11,7 +11,9 @@
 #include "core/gl/object.h"
 #include "core/gpu/gpu_device.h"
 #include "core/render/gpu_volume.h"
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 #include "core/render/render_stats.h"
 
 namespace volstyle::core {

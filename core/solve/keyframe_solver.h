@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "core/gpu/gpu_device.h"
-#include "core/solve/solve_options.h"
+#include "core/scene/solve_options.h"
 #include "core/volume/volume.h"
 
 namespace volstyle::core {

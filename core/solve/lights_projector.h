@@ -15,7 +15,9 @@
 #include "core/gpu/gpu_device.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/march_setup.h"
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 #include "core/solve/gpu_vector.h"
 
 namespace volstyle::core {

@@ -13,7 +13,7 @@
 #include "core/render/gpu_volume.h"
 #include "core/render/march_setup.h"
 #include "core/solve/gpu_vector.h"
-#include "core/solve/solve_types.h"
+#include "core/scene/solve_types.h"
 #include "core/solve/sparse_rows.h"
 
 namespace volstyle::core {

@@ -14,9 +14,11 @@
 #include <unordered_map>
 #include <vector>
 
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 #include "core/solve/reach.h"
-#include "core/solve/solve_options.h"
+#include "core/scene/solve_options.h"
 #include "core/solve/sparse_rows.h"
 #include "core/volume/volume.h"
 

@@ -21,8 +21,10 @@
 #include <vector>
 
 #include "core/gpu/gpu_device.h"
-#include "core/render/params.h"
-#include "core/solve/solve_options.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
+#include "core/scene/solve_options.h"
 #include "core/volume/volume.h"
 
 namespace volstyle::core {

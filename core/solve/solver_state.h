@@ -14,7 +14,7 @@
 #include "core/solve/gpu_vector.h"
 #include "core/solve/projector.h"
 #include "core/solve/reach.h"
-#include "core/solve/solve_options.h"
+#include "core/scene/solve_options.h"
 #include "core/solve/solver.h"
 
 namespace volstyle::core {

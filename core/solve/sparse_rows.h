@@ -11,9 +11,11 @@
 
 #include "core/gl/object.h"
 #include "core/gpu/gpu_device.h"
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 #include "core/solve/gpu_vector.h"
-#include "core/solve/solve_types.h"
+#include "core/scene/solve_types.h"
 #include "core/volume/volume.h"
 
 namespace volstyle::core {

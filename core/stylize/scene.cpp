@@ -137,6 +137,27 @@ std::vector<FieldProblem> Manipulation::check() const {
     return out;
 }
 
+std::vector<FieldProblem> StylizerLight::check() const {
+    std::vector<FieldProblem> out;
+    const auto finite = [](const Vec3d& v, double bound) { return std::abs(v.x) <= bound && std::abs(v.y) <= bound && std::abs(v.z) <= bound; };
+    if (!finite(direction, 1e9)) out.push_back({"direction", "must be within ±1e9 (only its direction counts)"});
+    else if (!(length(direction) > 0)) out.push_back({"direction", "must not be zero"});
+    if (!finite(position, 1e9)) out.push_back({"position", "must be finite (|x| <= 1e9)"});
+    if (type == StylizerLightType::Spot && !(coneDeg > 0 && coneDeg <= 150)) out.push_back({"cone_deg", "must be in (0, 150]"});
+    // Bounds that keep every product in float range (SPEC §5: nothing may become NaN or Inf).
+    if (!(irradiance.x >= 0 && irradiance.y >= 0 && irradiance.z >= 0 && finite(irradiance, 1e6)))
+        out.push_back({"irradiance", "must be in [0, 1e6]"});
+    if (shadowMapSize < 512 || shadowMapSize > 4096) out.push_back({"shadow_map_size", "must be in [512, 4096]"});
+    return out;
+}
+
+std::vector<FieldProblem> HomogeneousMedium::check() const {
+    std::vector<FieldProblem> out;
+    if (!(extinction >= 0 && extinction <= 1e6)) out.push_back({"extinction", "must be in [0, 1e6]"});
+    if (!(albedo >= 0 && albedo <= 1)) out.push_back({"albedo", "must be in [0, 1]"});
+    return out;
+}
+
 void StylizerScene::validate() const {
     for (const Occluder& o : occluders) {
         try {
@@ -152,23 +173,11 @@ void StylizerScene::validate() const {
         if (const auto problems = o.manipulation.check(); !problems.empty())
             throw InvalidArgument("occluder '" + o.name + "': manipulation " + problems.front().field + " " + problems.front().message);
     }
-    for (int k = 0; k < 3; ++k)
-        if (!(std::abs(light.direction[k]) <= 1e9)) throw InvalidArgument("/light/direction: must be within ±1e9");
-    if (!(length(light.direction) > 0)) throw InvalidArgument("/light/direction: must not be zero");
-    if (light.shadowMapSize < 512 || light.shadowMapSize > 4096)
-        throw InvalidArgument("/light/shadow_map_size: must be in [512, 4096]");
-    if (light.type == StylizerLightType::Spot && !(light.coneDeg > 0 && light.coneDeg <= 150))
-        throw InvalidArgument("/light/cone_deg: must be in (0, 150]");
-    for (int k = 0; k < 3; ++k)
-        if (!(std::abs(light.position[k]) <= 1e9)) throw InvalidArgument("/light/position: must be finite (|x| <= 1e9)");
+    for (const FieldProblem& p : light.check()) throw InvalidArgument("/light/" + p.field + ": " + p.message);
     if (!(std::abs(time) <= 1e9)) throw InvalidArgument("/time: must be finite (|t| <= 1e9)");
-    // Bounds that keep every product in float range (SPEC §5: nothing may become NaN or Inf).
-    if (!(medium.extinction >= 0 && medium.extinction <= 1e6)) throw InvalidArgument("/medium/extinction: must be in [0, 1e6]");
-    for (int c = 0; c < 3; ++c)
-        if (!(light.irradiance[c] >= 0 && light.irradiance[c] <= 1e6)) throw InvalidArgument("/light/irradiance: must be in [0, 1e6]");
+    for (const FieldProblem& p : medium.check()) throw InvalidArgument("/medium/" + p.field + ": " + p.message);
     for (int c = 0; c < 3; ++c)
         if (!(background[c] >= 0 && background[c] <= 1e6)) throw InvalidArgument("/background: must be in [0, 1e6]");
-    if (!(medium.albedo >= 0 && medium.albedo <= 1)) throw InvalidArgument("/medium/albedo: must be in [0, 1]");
     camera.validate();
     if (transferFunction) validateTransferFunction(*transferFunction, "/transfer_function", occluders);
     if (volume) {

@@ -14,7 +14,9 @@
 #include "core/volume/volume.h"
 
 #include "core/math/vec.h"
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 #include "core/stylize/mesh.h"
 #include "core/stylize/tf_layers.h"
 
@@ -73,12 +75,16 @@ struct StylizerLight {
     double coneDeg = 30;             ///< spot: full cone angle
     Vec3d irradiance{3, 2.9, 2.6};   ///< E (directional) or intensity (spot), RGB
     int shadowMapSize = 2048;        ///< 512–4096
+    /// Every value out of its range, with its JSON field ("shadow_map_size", …): the one check
+    /// (the API parser and StylizerScene::validate report it).
+    std::vector<FieldProblem> check() const;
 };
 
 struct HomogeneousMedium {
     double extinction = 0.05;  ///< σt per world unit
     double albedo = 0.9;       ///< ρ
     Phase phase{PhaseType::HenyeyGreenstein, 0.4};
+    std::vector<FieldProblem> check() const;  ///< "extinction" in [0, 1e6], "albedo" in [0, 1]
 };
 
 /// σt of a volume on its voxel grid, for the stylizer's heterogeneous medium (issue #15): the

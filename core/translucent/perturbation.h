@@ -11,7 +11,9 @@
 #include <vector>
 
 #include "core/math/vec.h"
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 #include "core/shaders/layout.h"
 #include "core/volume/volume.h"
 

@@ -11,7 +11,7 @@
 #include "core/base/errors.h"
 #include "core/gl/object.h"
 #include "core/gl/shader_builder.h"
-#include "core/render/environment_lobes.h"
+#include "core/scene/environment_lobes.h"
 #include "core/render/gl_convert.h"
 #include "core/shaders/layout.h"
 #include "core/stylize/light_map.h"

@@ -13,7 +13,9 @@
 #include "core/gpu/gpu_device.h"
 #include "core/image/image.h"
 #include "core/render/gpu_volume.h"
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 #include "core/translucent/translucent_settings.h"
 
 namespace volstyle::core {

@@ -3,7 +3,7 @@
 // environment light's lobes are fitted to, or both.
 #include "core/base/errors.h"
 #include "core/image/image_io.h"
-#include "core/render/environment_lobes.h"
+#include "core/scene/environment_lobes.h"
 #include "server/service/session_service.h"
 
 namespace volstyle::server {

@@ -17,8 +17,10 @@
 
 #include "core/image/image.h"
 #include "core/render/renderer.h"
-#include "core/render/params.h"
-#include "core/solve/solve_options.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
+#include "core/scene/solve_options.h"
 #include "core/volume/volume.h"
 #include "protocol/render_json.h"
 #include "protocol/requests.h"

@@ -12,7 +12,9 @@
 #include <vector>
 
 #include "core/render/gpu_volume.h"
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 #include "core/volume/volume.h"
 #include "protocol/error_code.h"
 #include "server/state/stylizer_state.h"

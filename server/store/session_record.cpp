@@ -4,7 +4,7 @@
 
 #include "core/base/errors.h"
 #include "core/image/image_io.h"
-#include "core/render/environment_lobes.h"
+#include "core/scene/environment_lobes.h"
 #include "core/volume/vdb_io.h"
 #include "protocol/render_json.h"
 

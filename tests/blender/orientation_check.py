@@ -38,7 +38,7 @@ def region_of_colour(rgb):
     return "?" + str(bits)
 
 
-# volstyle's lat-long convention (core/render/params.h): u = 0.5 + atan2(x, -z)/2π, v = acos(y)/π,
+# volstyle's lat-long convention (core/scene/environment_lobes.h): u = 0.5 + atan2(x, -z)/2π, v = acos(y)/π,
 # v = 0 the top row; so a texel (u, v) looks along this direction.
 def lat_long_direction(u, v):
     phi = (u - 0.5) * 2 * math.pi

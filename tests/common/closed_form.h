@@ -5,7 +5,9 @@
 #include <cmath>
 #include <numbers>
 
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 #include "core/volume/builtin_scenes.h"
 #include "core/volume/volume.h"
 

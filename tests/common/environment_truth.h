@@ -6,7 +6,7 @@
 #include <cmath>
 #include <vector>
 
-#include "core/render/environment_lobes.h"
+#include "core/scene/environment_lobes.h"
 
 namespace volstyle::test {
 

@@ -1,7 +1,7 @@
 #pragma once
 // The extinction solve from masks (TVCG Sec. 4.2.4) as the solver and refraction tests set it up:
 // a constant medium radiance L_m emitted everywhere, no lights, extinction solved from zero.
-#include "core/solve/solve_options.h"
+#include "core/scene/solve_options.h"
 #include "core/volume/volume.h"
 
 namespace volstyle::test {

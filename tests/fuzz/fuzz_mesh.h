@@ -1,6 +1,6 @@
 #pragma once
 // libFuzzer harness body for uploaded meshes of one format, as the server's child reader reads
-// them (server/mesh_reader.h): the structure check at the door (protocol/mesh_upload_check.h),
+// them (server/runtime/mesh_reader.h): the structure check at the door (protocol/mesh_upload_check.h),
 // then assimp through core::loadMeshFromMemory (the PLY header check first). Our code must refuse
 // damaged files with a volstyle error; crashes inside assimp are what the child process contains
 // (scripts/fuzz.sh reports them apart).

@@ -1,5 +1,5 @@
 // libFuzzer harness: an uploaded OpenVDB file read as `volstyle read-vdb` reads it (the child
-// process that reads every upload, server/vdb_reader.h): loadVdb under the volume limits. Our code
+// process that reads every upload, server/runtime/vdb_reader.h): loadVdb under the volume limits. Our code
 // must refuse damaged files with a volstyle error; crashes inside OpenVDB itself are what the
 // child process contains (scripts/fuzz.sh reports them apart).
 #include <unistd.h>

@@ -11,7 +11,7 @@
 
 #include "core/cpu_ref/reference_renderer.h"
 #include "core/render/derived_volumes.h"
-#include "core/render/environment_lobes.h"
+#include "core/scene/environment_lobes.h"
 #include "core/volume/builtin_scenes.h"
 #include "gl_test_env.h"
 

@@ -8,7 +8,7 @@ cd "$root"
 status=0
 
 # The GL-free value headers of core (the volstyle_values target) that protocol may include.
-values='core/base/|core/math/|core/image/image\.h|core/render/(params|environment_lobes|curved_ray|curved_paths)\.h|core/solve/solve_options\.h|core/solve/solve_types\.h|core/shaders/layout\.h|core/volume/(volume|glass_sphere|basis)\.h|core/volume/resample\.h|core/stylize/(mesh|scene|tf_layers)\.h|core/translucent/(translucent_settings|perturbation)\.h'
+values='core/base/|core/math/|core/image/image\.h|core/scene/|core/render/(curved_ray|curved_paths)\.h|core/shaders/layout\.h|core/volume/(volume|glass_sphere|basis)\.h|core/volume/resample\.h|core/stylize/(mesh|scene|tf_layers)\.h|core/translucent/(translucent_settings|perturbation)\.h'
 
 # check FILES... -- ALLOWED_REGEX: every project include ("core/…", "protocol/…", "server/…") and
 # every forbidden system header must match the allowed pattern.
@@ -28,10 +28,13 @@ check() {
 
 check "core/base depends on nothing" 'core/base/' core/base/*
 check "core/gl depends only on core/base" 'core/base/|core/gl/' core/gl/*
-check "value types are GL-free" "$values" core/math/* core/image/image.* core/render/params.* core/render/environment_lobes.* core/render/curved_ray.* core/render/curved_paths.* core/solve/solve_options.* \
-  core/solve/solve_types.h core/volume/volume.* core/volume/basis.h core/volume/resample.* core/stylize/mesh.* core/stylize/scene.* core/stylize/tf_layers.* core/translucent/translucent_settings.* core/translucent/perturbation.*
+check "value types are GL-free" "$values" core/math/* core/image/image.* core/scene/* core/render/curved_ray.* core/render/curved_paths.* \
+  core/volume/volume.* core/volume/basis.h core/volume/resample.* core/stylize/mesh.* core/stylize/scene.* core/stylize/tf_layers.* core/translucent/translucent_settings.* core/translucent/perturbation.*
 check "protocol sees only core's value types" "$values|protocol/" protocol/*.h protocol/*.cpp
 check "core never includes protocol, server or the CLI" 'core/' $(find core -name '*.h' -o -name '*.cpp')
+# Scene values (issue #36: camera, lighting, render settings, solve options) sit below every
+# engine folder: they include only base, math, images, the volume's basis and the shared layout.
+check "core/scene holds only values" 'core/base/|core/math/|core/image/image\.h|core/scene/|core/volume/basis\.h|core/shaders/layout\.h' core/scene/*
 # Volumes sit below the engines: nothing in core/volume reaches up into the solver or a renderer
 # (resample.h once included core/solve/solve_types.h for BasisType; issue #36).
 check "core/volume depends only on base, math and the shared layout" 'core/base/|core/math/|core/volume/|core/shaders/layout\.h' core/volume/*
@@ -56,7 +59,7 @@ for f in $(find server cli bench tests/http tests/cli -name '*.h' -o -name '*.cp
     echo "layering: $f includes GL or a kernel's internals; use GpuDevice, GpuVolume, Renderer, Solver"; status=1
   fi
 done
-check "public engine headers are GL-free" 'core/base/|core/math/|core/image/image\.h|core/render/(params|environment_lobes|gpu_volume|render_stats)\.h|core/gl/context\.h|core/gpu/|core/solve/(solve_options|solve_types)\.h|core/shaders/layout\.h|core/volume/volume\.h|core/stylize/(mesh|scene)\.h|core/translucent/(translucent_settings|perturbation)\.h' \
+check "public engine headers are GL-free" 'core/base/|core/math/|core/image/image\.h|core/scene/|core/render/(gpu_volume|render_stats)\.h|core/gl/context\.h|core/gpu/|core/shaders/layout\.h|core/volume/volume\.h|core/stylize/(mesh|scene)\.h|core/translucent/(translucent_settings|perturbation)\.h' \
   core/gpu/gpu_device.h core/gpu/resource_cache.h core/render/gpu_volume.h core/render/renderer.h core/render/render_stats.h core/solve/solver.h core/solve/light_solver.h core/solve/combined_solve.h \
   core/stylize/stylizer.h core/translucent/translucent_renderer.h
 for f in core/gpu/gpu_device.h core/gpu/resource_cache.h core/render/gpu_volume.h core/render/renderer.h core/solve/solver.h core/stylize/stylizer.h core/gl/context.h; do

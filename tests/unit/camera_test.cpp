@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
 #include "core/base/errors.h"
-#include "core/render/params.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
 
 using namespace volstyle;
 using namespace volstyle::core;

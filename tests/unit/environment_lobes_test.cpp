@@ -1,6 +1,6 @@
-// The environment's lobe basis (core/render/environment_lobes.h): cells of equal solid angle,
+// The environment's lobe basis (core/scene/environment_lobes.h): cells of equal solid angle,
 // the projection of a lat-long map onto them, and the map written back from lobe radiances.
-#include "core/render/environment_lobes.h"
+#include "core/scene/environment_lobes.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// The HTTP door (server/guarded_http_server.h, issue #35): a request's head is checked before
+// The HTTP door (server/http/guarded_http_server.h, issue #35): a request's head is checked before
 // cpp-httplib parses it (one answer per malformed request, then the connection closes), the
 // listen backlog holds a burst, and connections over the worker queue are answered 503 at once.
 #include <gtest/gtest.h>

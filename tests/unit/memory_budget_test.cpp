@@ -1,4 +1,4 @@
-// Sessions are charged by what they hold decoded (server/memory_budget.h, issue #35): additions
+// Sessions are charged by what they hold decoded (server/service/memory_budget.h, issue #35): additions
 // over the session's or the server's budget are refused naming it, and deletions release.
 #include <gtest/gtest.h>
 

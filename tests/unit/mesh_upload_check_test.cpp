@@ -1,6 +1,6 @@
 // Uploaded meshes (issue #35): a glTF's structure is checked before any mesh library reads it
 // (protocol/mesh_upload_check.h), PLY headers are held to their bytes whatever the line endings,
-// and the server parses uploads only in its child reader (server/mesh_reader.h).
+// and the server parses uploads only in its child reader (server/runtime/mesh_reader.h).
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 

@@ -1,4 +1,4 @@
-// Uploaded VDBs are read in a child process first (server/vdb_reader.h): a reader that crashes or
+// Uploaded VDBs are read in a child process first (server/runtime/vdb_reader.h): a reader that crashes or
 // hangs is a refused file, not a dead server; the child's refusals keep their kind and message.
 #include <gtest/gtest.h>
 #include <sys/stat.h>

@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "core/base/errors.h"
-#include "core/solve/solve_options.h"
+#include "core/scene/solve_options.h"
 #include "protocol/error_body.h"
 #include "protocol/error_code.h"
 #include "protocol/validation.h"

@@ -2,14 +2,36 @@
 // GET/PUT …/lighting, GET …/lighting/environment.{exr,png}, PUT/DELETE …/environment and
 // GET …/environment.{exr,png} (the uploaded map), POST …/render.
 #include "core/image/image_io.h"
-#include "core/render/environment_lobes.h"
+#include "core/scene/environment_lobes.h"
 #include "protocol/render_json.h"
 #include "server/http/responses.h"
 #include "server/http/routes/route_context.h"
 
 namespace volstyle::server {
 
-void addSessionRoutes(RouteContext& c) {
+namespace {
+
+/// POST …/render: single scattering, or the translucent preview (SPEC §9).
+httplib::Server::Handler renderRoute(RouteContext& c) {
+    return [&c](const httplib::Request& req, httplib::Response& res) {
+        auto s = c.service.find(req.matches[1]);
+        auto request = protocol::RenderRequest::fromJson(c.body(req), c.limits);
+        if (request.mode == protocol::RenderMode::Translucent) {  // SPEC §9
+            core::Image medium;
+            const core::Image beauty = c.service.renderTranslucent(*s, request.camera, request.translucent, &medium);
+            if (request.format != protocol::ImageFormat::Exr) return replyImage(res, beauty, request.format, request.exposure);
+            // As single scattering's: the medium premultiplied, and the picture as a layer.
+            res.set_content(core::encodeExrLayers({{"", &medium}, {"beauty", &beauty}}, request.exrHalf),
+                            protocol::imageMimeType(request.format));
+            return;
+        }
+        replyImage(res, c.service.render(*s, request.camera, request.format == protocol::ImageFormat::Exr), request.format,
+                   request.exposure, request.exrHalf);
+    };
+}
+
+/// Sessions: create, list, get, delete, and a render of one.
+void addSessionItselfRoutes(RouteContext& c) {
     c.http.Post(kApi + "/sessions", [&c](const httplib::Request& req, httplib::Response& res) {
         auto request = protocol::CreateSessionRequest::fromJson(c.body(req), c.limits);
         reply(res, 201, sessionJson(*c.service.create(request)));
@@ -26,6 +48,11 @@ void addSessionRoutes(RouteContext& c) {
         c.service.remove(req.matches[1]);
         res.status = 204;
     });
+    c.http.Post(kSessionPath + "/render", renderRoute(c));
+}
+
+/// The lighting, the environment light's lobes as a map, and the session's environment map.
+void addLightingRoutes(RouteContext& c) {
     c.http.Get(kSessionPath + "/lighting", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);
         reply(res, 200, c.service.lightingJson(*s, c.service.lighting(*s)));
@@ -63,21 +90,13 @@ void addSessionRoutes(RouteContext& c) {
         c.service.removeEnvironmentMap(*c.service.find(req.matches[1]));
         res.status = 204;
     });
-    c.http.Post(kSessionPath + "/render", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
-        auto request = protocol::RenderRequest::fromJson(c.body(req), c.limits);
-        if (request.mode == protocol::RenderMode::Translucent) {  // SPEC §9
-            core::Image medium;
-            const core::Image beauty = c.service.renderTranslucent(*s, request.camera, request.translucent, &medium);
-            if (request.format != protocol::ImageFormat::Exr) return replyImage(res, beauty, request.format, request.exposure);
-            // As single scattering's: the medium premultiplied, and the picture as a layer.
-            res.set_content(core::encodeExrLayers({{"", &medium}, {"beauty", &beauty}}, request.exrHalf),
-                            protocol::imageMimeType(request.format));
-            return;
-        }
-        replyImage(res, c.service.render(*s, request.camera, request.format == protocol::ImageFormat::Exr), request.format,
-                   request.exposure, request.exrHalf);
-    });
+}
+
+}  // namespace
+
+void addSessionRoutes(RouteContext& c) {
+    addSessionItselfRoutes(c);
+    addLightingRoutes(c);
 }
 
 }  // namespace volstyle::server

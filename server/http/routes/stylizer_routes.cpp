@@ -96,7 +96,10 @@ void streamLiveFrames(RouteContext& c, httplib::Response& res, std::shared_ptr<S
 
 }  // namespace
 
-void addStylizerRoutes(RouteContext& c) {
+namespace {
+
+/// The scene: GET/PUT, undo and redo, picks and clicked constraints, sequences.
+void addStylizerSceneRoutes(RouteContext& c) {
     c.http.Get(kStylizerPath, [&c](const httplib::Request& req, httplib::Response& res) {
         replyScene(res, c.service.stylizer(*c.service.find(req.matches[1])));
     });
@@ -128,6 +131,10 @@ void addStylizerRoutes(RouteContext& c) {
         auto s = c.service.find(req.matches[1]);
         reply(res, 202, {{"job", c.service.startSequence(s, protocol::StylizerSequenceRequest::fromJson(c.body(req)))->id}});
     });
+}
+
+/// The uploads: occluder meshes and the transfer-function image.
+void addStylizerUploadRoutes(RouteContext& c) {
     c.http.Get(kStylizerPath + "/occluders", [&c](const httplib::Request& req, httplib::Response& res) {
         nlohmann::json list = nlohmann::json::array();
         for (const auto& m : c.service.occluderMeshes(*c.service.find(req.matches[1]))) list.push_back(meshJson(m));
@@ -160,6 +167,10 @@ void addStylizerRoutes(RouteContext& c) {
         c.service.removeTransferImage(*c.service.find(req.matches[1]));
         res.status = 204;
     });
+}
+
+/// Frames: one on request, and the live stream's.
+void addStylizerFrameRoutes(RouteContext& c) {
     c.http.Post(kStylizerPath + "/frame", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.service.find(req.matches[1]);
         const auto request = protocol::StylizerFrameRequest::fromJson(c.body(req), c.limits);
@@ -182,6 +193,14 @@ void addStylizerRoutes(RouteContext& c) {
         res.set_header("Cache-Control", "private, max-age=3600");  // a revision's frame never changes
         res.set_content(f->bytes, "image/jpeg");
     });
+}
+
+}  // namespace
+
+void addStylizerRoutes(RouteContext& c) {
+    addStylizerSceneRoutes(c);
+    addStylizerUploadRoutes(c);
+    addStylizerFrameRoutes(c);
 }
 
 }  // namespace volstyle::server

@@ -11,8 +11,10 @@
 #include "core/base/name_table.h"
 #include "core/image/image.h"
 #include "core/math/vec.h"
-#include "core/render/params.h"
-#include "core/solve/solve_types.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
+#include "core/scene/solve_types.h"
 
 namespace volstyle::core {
 

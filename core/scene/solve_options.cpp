@@ -1,4 +1,4 @@
-#include "core/solve/solve_options.h"
+#include "core/scene/solve_options.h"
 
 #include <algorithm>
 #include <cmath>

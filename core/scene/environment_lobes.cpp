@@ -1,4 +1,4 @@
-#include "core/render/environment_lobes.h"
+#include "core/scene/environment_lobes.h"
 
 #include <algorithm>
 #include <cmath>

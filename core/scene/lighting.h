@@ -1,60 +1,18 @@
 #pragma once
-/// \file params.h
-/// GL-free value types that describe a rendering (SPEC §1): camera, lighting and settings.
-/// protocol/ may include this header; it never touches GL.
+/// \file lighting.h
+/// The lighting of a scene (SPEC §1, §8): directional lights, the background, the environment's
+/// lobes and the phase function. GL-free.
 
 #include <memory>
-#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/image/image.h"
 #include "core/math/vec.h"
-#include "core/render/environment_lobes.h"
+#include "core/scene/environment_lobes.h"
+#include "core/scene/field_problem.h"
 
 namespace volstyle::core {
-
-/// A field of a parameter struct and what is wrong with it (protocol/ maps it to a JSON Pointer).
-struct FieldProblem {
-    std::string field;    ///< e.g. "fov_y_deg", "lights/0/irradiance"
-    std::string message;
-};
-
-/// Pinhole camera (SPEC §1). Pixel (0,0) is the top-left pixel; rays pass through pixel centres.
-struct Camera {
-    Vec3d eye{0, 0, 3};
-    Vec3d target{0, 0, 0};
-    Vec3d up{0, 1, 0};
-    double fovYDeg = 40;
-    int width = 480;
-    int height = 480;
-    double nearDist = 0;                  ///< rays start this far from the eye (world units)
-    double farDist = 1e30;                ///< and end here (the "surface depth" when no mesh)
-
-    /// Every problem as (field, message), fields named as in the JSON API (`fov_y_deg`): eye =
-    /// target, up parallel to the view direction, fov outside (0,180), sizes outside [1, 8192],
-    /// near/far not 0 <= near < far, non-finite values.
-    std::vector<FieldProblem> check() const;
-    /// Throws InvalidArgument listing check()'s problems.
-    void validate() const;
-
-    /// Orthonormal camera frame: forward (eye->target), right, and true up.
-    struct Frame {
-        Vec3d forward, right, up;
-    };
-    Frame frame() const;
-
-    /// World-space direction (unit length) of the ray through the centre of pixel (px, py).
-    Vec3d rayDirection(double px, double py) const;
-    /// tan(fov_y / 2): the image plane's half-height at distance 1.
-    double tanHalfFov() const;
-    /// The pixel a world point projects into (the inverse of rayDirection), or nothing when the
-    /// point is behind the camera or outside the image.
-    struct Pixel {
-        int x, y;
-    };
-    std::optional<Pixel> project(const Vec3d& world) const;
-};
 
 /// A directional light (the sun): `direction` points from the scene toward the light.
 struct DirectionalLight {
@@ -131,41 +89,9 @@ struct Lighting {
     void validate() const;  ///< throws InvalidArgument listing check()'s problems
 };
 
-/// Quality/speed knobs of the ray marcher.
 /// The default outdoor look (docs/examples/lighting.json): a warm sun from the upper left front,
 /// a blue sky light from above, a faint ground bounce from below, a sky-blue background and mildly
 /// forward Henyey–Greenstein scattering. Tuned so a white cloud's lit side is about 0.9.
 Lighting defaultLighting();
-
-/// The default view: 480×480 from +z, slightly above the horizon, framing [-1, 1]³.
-Camera defaultCamera();
-/// The default camera's view (from the front, slightly above) moved so that the box's bounding
-/// sphere fills the frame: any volume is in view, whatever its size and place.
-Camera framingCamera(const std::pair<Vec3d, Vec3d>& worldBounds);
-
-/// The march step's range, in voxels, for every march (renders, solves, previews): the one
-/// place it is stated (stepProblem; the schema's solve_options.step says the same, checked by
-/// tests/unit/schema_limits_test.cpp). Finer than 0.05 multiplies a solve's rows past any use.
-inline constexpr double kMinStepVoxels = 0.05, kMaxStepVoxels = 8;
-/// The problem with a march step (field "step"), if any.
-std::optional<FieldProblem> stepProblem(double stepVoxels);
-
-struct RenderSettings {
-    double stepVoxels = 0.5;        ///< march step, in voxels of the extinction grid
-    bool skipEmptySpace = true;     ///< jump over occupancy bricks with zero extinction
-    /// Early ray termination budget ε. A ray stops once its transmittance T is below ε and the
-    /// most it could still gather, T·L_max (L_max bounds emission + in-scattering + background),
-    /// is below ε of what it has gathered — or once T < 1e-3·ε. So the radiance lost is below ε
-    /// relative (alpha below ε absolute). 0 marches every ray to its end.
-    double terminationThreshold = 1e-5;
-    bool hardwareFilter = false;    ///< sample with the texture unit (fast, 8-bit weights on GPUs)
-    /// One segment per voxel cell crossed (Amanatides–Woo) instead of equal steps of stepVoxels.
-    bool exactTraversal = false;
-    /// Follow the volume's refractive_index grid (issue #16). Off, or with no grid or a constant
-    /// one, rays are straight and the straight-ray kernels run unchanged.
-    bool refraction = true;
-
-    void validate() const;
-};
 
 }  // namespace volstyle::core
