@@ -11,7 +11,7 @@
 #include "protocol/error_body.h"
 #include "protocol/validation.h"
 #include "server/http/routes/route_context.h"
-#include "server/service/session_service.h"
+#include "server/service/services.h"
 
 namespace volstyle::server {
 namespace {
@@ -64,7 +64,7 @@ protocol::RequestLimits requestLimits(const ServerOptions& o) {
 struct HttpServer::Impl {
     ServerOptions opt;
     GuardedHttpServer http;
-    SessionService service;
+    Services services;
     StreamLimiter streams;
     RouteContext routes;
     std::atomic<uint64_t> requestCounter{0};
@@ -72,9 +72,9 @@ struct HttpServer::Impl {
     explicit Impl(ServerOptions o)
         : opt(std::move(o)),
           http(opt.connections),
-          service(serviceLimits(opt), opt.dataDir),
+          services(serviceLimits(opt), opt.dataDir),
           streams(opt.maxEventStreams, opt.maxEventStreamsPerClient),
-          routes{http, service, requestLimits(opt), opt.maxJsonBytes, streams} {}
+          routes{http, services, requestLimits(opt), opt.maxJsonBytes, streams} {}
 
     void addMiddleware();
     /// A fresh request id for this thread's request, also sent as X-Request-Id.

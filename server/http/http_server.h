@@ -2,7 +2,7 @@
 /// \file http_server.h
 /// `volstyle serve`: the HTTP/JSON API of SPEC §3 over cpp-httplib. This file is the shell —
 /// options, request ids, the bearer token, the error body for every failure, static files — and
-/// the routes live by resource under server/routes/, calling the SessionService.
+/// the routes live by resource under server/http/routes/, calling the session services (server/service/services.h).
 
 #include <memory>
 #include <string>

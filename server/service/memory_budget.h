@@ -9,7 +9,7 @@
 /// (the client must delete something), 503 overloaded with Retry-After past the server's (other
 /// sessions may free memory); what is refused or
 /// deleted is released. The charge is recounted from the session itself after every change
-/// (SessionService::saved), so it cannot drift from what is held.
+/// (ServiceContext::saved), so it cannot drift from what is held.
 
 #include <cstddef>
 #include <mutex>

@@ -12,7 +12,7 @@
 #include "core/stylize/keyframes.h"
 #include "core/stylize/stylizer.h"
 #include "core/stylize/stylizer_files.h"
-#include "server/service/session_service.h"
+#include "server/service/services.h"
 #include "server/runtime/video_encoder.h"
 
 namespace volstyle::server {
@@ -30,7 +30,7 @@ constexpr double kMaxSequencePixels = 2.0e9;
 
 }  // namespace
 
-std::shared_ptr<Job> SessionService::startSequence(const std::shared_ptr<Session>& session, const protocol::StylizerSequenceRequest& q) {
+std::shared_ptr<Job> StylizerService::startSequence(const std::shared_ptr<Session>& session, const protocol::StylizerSequenceRequest& q) {
     const core::StylizerScene scene = stylizer(*session).scene;
     const auto [first, last] = core::pathSpan(scene.keyframes);
     if (scene.keyframes.empty() && !q.end)
@@ -57,21 +57,21 @@ std::shared_ptr<Job> SessionService::startSequence(const std::shared_ptr<Session
                        {{"/video", "no ffmpeg on the server"}});
     // Each frame holds the GL thread like a POST …/frame: the same budget, checked per frame now.
     const double seconds = stylizerSeconds(core::sceneAtTime(scene, times.front()), q.settings);
-    if (m_limits.renderBudgetSeconds > 0 && seconds > m_limits.renderBudgetSeconds)
+    if (m_ctx.limits.renderBudgetSeconds > 0 && seconds > m_ctx.limits.renderBudgetSeconds)
         throw ApiError(ErrorCode::OverBudget, fmt::format("each frame would take about {:.0f} s, over the render budget of {:g} s; use fewer "
                                                           "pixels or a smaller shadow map",
-                                                          seconds, m_limits.renderBudgetSeconds));
-    auto job = queueJob(*session);
-    m_gl->submit([this, job, scene, times, q](core::GpuDevice& device) {
-        runJob(*job, [&] { runSequence(*job, scene, times, q, device); });
-        finishJob(*job);
+                                                          seconds, m_ctx.limits.renderBudgetSeconds));
+    auto job = m_ctx.queueJob(*session);
+    m_ctx.gl->submit([this, job, scene, times, q](core::GpuDevice& device) {
+        m_ctx.runJob(*job, [&] { runSequence(*job, scene, times, q, device); });
+        m_ctx.finishJob(*job);
     });
     return job;
 }
 
-void SessionService::runSequence(Job& job, const core::StylizerScene& scene, const std::vector<double>& times,
+void StylizerService::runSequence(Job& job, const core::StylizerScene& scene, const std::vector<double>& times,
                                  const protocol::StylizerSequenceRequest& q, core::GpuDevice& device) {
-    const std::filesystem::path dir = jobFilesDir(job.id);
+    const std::filesystem::path dir = m_ctx.jobFilesDir(job.id);
     std::filesystem::create_directories(dir);
     const core::SaveOptions save = core::stylizerSaveOptions(q.output, q.exposure);
     core::StylizeSettings settings = q.settings;
@@ -80,7 +80,7 @@ void SessionService::runSequence(Job& job, const core::StylizerScene& scene, con
     double totalMs = 0;
     for (size_t i = 0; i < times.size(); ++i) {
         if (job.cancel) throw ApiError(ErrorCode::Cancelled, fmt::format("cancelled after {} of {} frames", i, times.size()));
-        const core::StylizedFrame f = stylizerEngine(device).render(core::sceneAtTime(scene, times[i]), settings);
+        const core::StylizedFrame f = m_ctx.stylizerEngine(device).render(core::sceneAtTime(scene, times[i]), settings);
         const std::string name = sequenceFrameName(i);
         core::saveImage((dir / name).string(), f.output(q.output), save);
         totalMs += f.totalMs;
@@ -92,7 +92,7 @@ void SessionService::runSequence(Job& job, const core::StylizerScene& scene, con
             job.progress = progress;
         }
         job.emit(JobEvent::Progress, progress);
-        m_gl->runShortTasks(device);  // frames and renders other clients wait for
+        m_ctx.gl->runShortTasks(device);  // frames and renders other clients wait for
     }
     nlohmann::json result = {{"frames", times.size()}, {"fps", q.fps}, {"start", times.front()}, {"end", times.back()},
                              {"frame_urls", urls}, {"render_ms", totalMs}};

@@ -23,7 +23,7 @@ struct Job {
     std::string id, session;
     uint64_t sequence = 0;  ///< creation order (restored jobs: the order of their files' times)
     std::atomic<bool> cancel{false};
-    /// Pruned from the store: its record must not be written again (SessionService::saved).
+    /// Pruned from the store: its record must not be written again (ServiceContext::saved).
     bool forgotten = false;
 
     mutable std::mutex mutex;

@@ -77,4 +77,19 @@ size_t SessionStore::size() const {
     return m_sessions.size();
 }
 
+SessionView& findView(Session& s, const std::string& id) {
+    for (auto& v : s.views)
+        if (v.id == id) return v;
+    throw protocol::ApiError(protocol::ErrorCode::NotFound, "no view '" + id + "' in session '" + s.id + "'");
+}
+
+void attachVolumeDensity(Session& s, core::StylizerScene& scene) {
+    if (!scene.volume) return;
+    if (!s.stylizer.density || s.stylizer.densityVersion != s.version) {
+        s.stylizer.density = core::densityGridOf(s.volume);
+        s.stylizer.densityVersion = s.version;
+    }
+    scene.volume->grid = s.stylizer.density;
+}
+
 }  // namespace volstyle::server

@@ -1,4 +1,4 @@
-// The session service without GL (issue #36): a FakeGlExecutor stands in for the GL thread, so
+// The session services without GL (issue #36): a FakeGlExecutor stands in for the GL thread, so
 // creation, views, versions, the stylizer's scene and undo, jobs, persistence and recovery are
 // tested without a GL context, and every test asserts that it needed none.
 
@@ -13,7 +13,7 @@
 #include "core/image/image_io.h"
 #include "core/translucent/perturbation.h"
 #include "protocol/stylize_json.h"
-#include "server/service/session_service.h"
+#include "server/service/services.h"
 #include "tests/service/fake_gl_executor.h"
 
 namespace volstyle {
@@ -23,7 +23,7 @@ namespace fs = std::filesystem;
 using protocol::ApiError;
 using protocol::ErrorCode;
 using server::Session;
-using server::SessionService;
+using server::Services;
 
 /// A data folder of its own, removed afterwards.
 struct TempDir {
@@ -40,10 +40,10 @@ struct TempDir {
 
 class ServiceTest : public ::testing::Test {
 protected:
-    std::unique_ptr<SessionService> makeService(const std::string& dataDir = "") {
+    std::unique_ptr<Services> makeService(const std::string& dataDir = "") {
         server::ServiceLimits limits;
         limits.maxQueuedJobs = 2;
-        return std::make_unique<SessionService>(limits, dataDir, std::make_unique<test::FakeGlExecutor>(counts));
+        return std::make_unique<Services>(limits, dataDir, std::make_unique<test::FakeGlExecutor>(counts));
     }
     static protocol::CreateSessionRequest smallCloud() {
         protocol::CreateSessionRequest r;
@@ -87,13 +87,13 @@ core::Perturbation someNoise(uint32_t seed) {
 
 TEST_F(ServiceTest, CreatesFindsAndRemovesSessions) {
     auto service = makeService();
-    auto s = service->create(smallCloud());
-    EXPECT_EQ(service->find(s->id), s);
+    auto s = service->sessions.create(smallCloud());
+    EXPECT_EQ(service->sessions.find(s->id), s);
     EXPECT_EQ(versionOf(*s), 1);
     EXPECT_EQ(volumeOf(*s).dims(), (Int3{16, 16, 16}));
-    service->remove(s->id);
+    service->sessions.remove(s->id);
     try {
-        service->find(s->id);
+        service->sessions.find(s->id);
         FAIL() << "a removed session was found";
     } catch (const ApiError& e) {
         EXPECT_EQ(e.code(), ErrorCode::NotFound);
@@ -102,32 +102,32 @@ TEST_F(ServiceTest, CreatesFindsAndRemovesSessions) {
 
 TEST_F(ServiceTest, ViewsHoldTheirTargetsUntilRemoved) {
     auto service = makeService();
-    auto s = service->create(smallCloud());
-    const server::SessionView v = service->addView(*s, smallCamera());
+    auto s = service->sessions.create(smallCloud());
+    const server::SessionView v = service->sessions.addView(*s, smallCamera());
     EXPECT_EQ(v.id, "v1");
     EXPECT_FALSE(v.target.has_value());
-    const server::SessionView withTarget = service->setViewImage(*s, v.id, server::ViewImage::Target, targetPng(0.5f));
+    const server::SessionView withTarget = service->sessions.setViewImage(*s, v.id, server::ViewImage::Target, targetPng(0.5f));
     ASSERT_TRUE(withTarget.target.has_value());
     EXPECT_EQ(withTarget.target->width, 8);
-    EXPECT_FALSE(service->removeViewImage(*s, v.id, server::ViewImage::Target).target.has_value());
-    service->removeView(*s, v.id);
-    EXPECT_THROW(service->view(*s, v.id), ApiError);
-    EXPECT_EQ(service->addView(*s, smallCamera()).id, "v2");  // ids are never reused
+    EXPECT_FALSE(service->sessions.removeViewImage(*s, v.id, server::ViewImage::Target).target.has_value());
+    service->sessions.removeView(*s, v.id);
+    EXPECT_THROW(service->sessions.view(*s, v.id), ApiError);
+    EXPECT_EQ(service->sessions.addView(*s, smallCamera()).id, "v2");  // ids are never reused
 }
 
 TEST_F(ServiceTest, EditsAreVersionsAndRevertIsANewVersion) {
     auto service = makeService();
-    auto s = service->create(smallCloud());
+    auto s = service->sessions.create(smallCloud());
     const std::vector<float> first = volumeOf(*s).extinction();
-    EXPECT_EQ(service->perturb(*s, someNoise(3)), 2);
+    EXPECT_EQ(service->volumes.perturb(*s, someNoise(3)), 2);
     const std::vector<float> edited = volumeOf(*s).extinction();
     EXPECT_NE(edited, first);
-    EXPECT_EQ(service->revert(*s, 1), 3);  // nothing is lost: the edit stays version 2
+    EXPECT_EQ(service->volumes.revert(*s, 1), 3);  // nothing is lost: the edit stays version 2
     EXPECT_EQ(volumeOf(*s).extinction(), first);
-    EXPECT_EQ(service->revert(*s, 2), 4);
+    EXPECT_EQ(service->volumes.revert(*s, 2), 4);
     EXPECT_EQ(volumeOf(*s).extinction(), edited);
     try {
-        service->revert(*s, 9);
+        service->volumes.revert(*s, 9);
         FAIL() << "a version that does not exist was reverted to";
     } catch (const ApiError& e) {
         EXPECT_EQ(e.code(), ErrorCode::NotFound);
@@ -138,24 +138,24 @@ TEST_F(ServiceTest, EditsAreVersionsAndRevertIsANewVersion) {
 // committed in between must not be silently overwritten by the stale copy.
 TEST_F(ServiceTest, AnEditRacedByAnotherChangeIsRefusedNotLost) {
     auto service = makeService();
-    auto s = service->create(smallCloud());
-    ASSERT_EQ(service->perturb(*s, someNoise(1)), 2);
+    auto s = service->sessions.create(smallCloud());
+    ASSERT_EQ(service->volumes.perturb(*s, someNoise(1)), 2);
     const std::vector<float> original = [&] {
-        service->revert(*s, 1);  // version 3: the original content
+        service->volumes.revert(*s, 1);  // version 3: the original content
         return volumeOf(*s).extinction();
     }();
     // While edit A (noise 5) works on its copy of version 3, edit B (revert to version 2) commits.
     std::vector<float> committedByB;
     bool raced = false;
-    service->setVolumeEditHook([&] {
+    service->volumes.setVolumeEditHook([&] {
         if (raced) return;
         raced = true;
-        std::thread other([&] { EXPECT_EQ(service->revert(*s, 2), 4); });  // another request's thread
+        std::thread other([&] { EXPECT_EQ(service->volumes.revert(*s, 2), 4); });  // another request's thread
         other.join();
         committedByB = volumeOf(*s).extinction();
     });
     try {
-        service->perturb(*s, someNoise(5));
+        service->volumes.perturb(*s, someNoise(5));
         FAIL() << "the stale edit was committed over version 4";
     } catch (const ApiError& e) {
         EXPECT_EQ(e.code(), ErrorCode::Busy);  // 409
@@ -165,8 +165,8 @@ TEST_F(ServiceTest, AnEditRacedByAnotherChangeIsRefusedNotLost) {
     EXPECT_EQ(volumeOf(*s).extinction(), committedByB);  // B's change stands
     EXPECT_NE(committedByB, original);
     // Sent again, the edit applies to version 4.
-    service->setVolumeEditHook({});
-    EXPECT_EQ(service->perturb(*s, someNoise(5)), 5);
+    service->volumes.setVolumeEditHook({});
+    EXPECT_EQ(service->volumes.perturb(*s, someNoise(5)), 5);
 }
 
 // Two edits racing for real, many times. Each edit scales the extinction by its own noise
@@ -174,14 +174,14 @@ TEST_F(ServiceTest, AnEditRacedByAnotherChangeIsRefusedNotLost) {
 // first one times the factor of every edit that was acknowledged. A lost update drops a factor.
 TEST_F(ServiceTest, ConcurrentEditsNeverLoseAnAcknowledgedOne) {
     auto service = makeService();
-    auto s = service->create(smallCloud());
+    auto s = service->sessions.create(smallCloud());
     const core::Volume first = volumeOf(*s);
     std::mutex mutex;
     std::vector<uint32_t> acknowledged;
     std::atomic<int> refused{0};
     auto editor = [&](uint32_t seedBase) {
         for (uint32_t i = 0; i < 8; ++i) try {
-                service->perturb(*s, someNoise(seedBase + i));
+                service->volumes.perturb(*s, someNoise(seedBase + i));
                 std::lock_guard lock(mutex);
                 acknowledged.push_back(seedBase + i);
             } catch (const ApiError& e) {
@@ -205,19 +205,19 @@ TEST_F(ServiceTest, ConcurrentEditsNeverLoseAnAcknowledgedOne) {
 
 TEST_F(ServiceTest, StylizerScenesUndoAndRedo) {
     auto service = makeService();
-    auto s = service->create(smallCloud());
-    const server::StylizerSnapshot first = service->stylizer(*s);
+    auto s = service->sessions.create(smallCloud());
+    const server::StylizerSnapshot first = service->stylizer.stylizer(*s);
     nlohmann::json j = protocol::stylizerSceneToJson(first.scene, first.meshRefs);
     j["occluders"][1]["manipulation"] = {{"closing", {{"radius_px", 3}, {"shape", "box"}}}};
-    const server::StylizerSnapshot changed = service->setStylizerScene(*s, protocol::stylizerSceneFromJson(j, "", protocol::SceneSource::Api));
+    const server::StylizerSnapshot changed = service->stylizer.setStylizerScene(*s, protocol::stylizerSceneFromJson(j, "", protocol::SceneSource::Api));
     EXPECT_GT(changed.revision, first.revision);
     EXPECT_EQ(changed.scene.occluders[1].manipulation.closingRadius, 3);
-    const server::StylizerSnapshot undone = service->undoStylizer(*s, false);
+    const server::StylizerSnapshot undone = service->stylizer.undoStylizer(*s, false);
     EXPECT_EQ(undone.scene.occluders[1].manipulation.closingRadius, first.scene.occluders[1].manipulation.closingRadius);
-    const server::StylizerSnapshot redone = service->undoStylizer(*s, true);
+    const server::StylizerSnapshot redone = service->stylizer.undoStylizer(*s, true);
     EXPECT_EQ(redone.scene.occluders[1].manipulation.closingRadius, 3);
     try {
-        service->undoStylizer(*s, true);
+        service->stylizer.undoStylizer(*s, true);
         FAIL() << "a redo with nothing to redo";
     } catch (const ApiError& e) {
         EXPECT_EQ(e.code(), ErrorCode::Busy);
@@ -226,22 +226,22 @@ TEST_F(ServiceTest, StylizerScenesUndoAndRedo) {
 
 TEST_F(ServiceTest, SolvesQueueUpToTheLimitWithoutTouchingGl) {
     auto service = makeService();
-    auto s = service->create(smallCloud());
+    auto s = service->sessions.create(smallCloud());
     core::SolveOptions options;
     try {
-        service->startSolve(s, options);
+        service->jobs.startSolve(s, options);
         FAIL() << "a solve without targets was queued";
     } catch (const ApiError& e) {
         EXPECT_EQ(e.code(), ErrorCode::InvalidArgument);
     }
-    const auto v = service->addView(*s, smallCamera());
-    service->setViewImage(*s, v.id, server::ViewImage::Target, targetPng(0.25f));
-    auto job = service->startSolve(s, options);
+    const auto v = service->sessions.addView(*s, smallCamera());
+    service->sessions.setViewImage(*s, v.id, server::ViewImage::Target, targetPng(0.25f));
+    auto job = service->jobs.startSolve(s, options);
     EXPECT_EQ(job->state, protocol::JobState::Queued);
-    EXPECT_EQ(service->job(job->id), job);
-    service->startSolve(s, options);
+    EXPECT_EQ(service->jobs.job(job->id), job);
+    service->jobs.startSolve(s, options);
     try {
-        service->startSolve(s, options);
+        service->jobs.startSolve(s, options);
         FAIL() << "a third job was queued over the limit of 2";
     } catch (const ApiError& e) {
         EXPECT_EQ(e.code(), ErrorCode::TooManyJobs);
@@ -260,31 +260,31 @@ TEST_F(ServiceTest, ARestartRestoresEveryRecord) {
     uint64_t revision = 0;
     {
         auto service = makeService(dir.path.string());
-        auto s = service->create(smallCloud());
+        auto s = service->sessions.create(smallCloud());
         id = s->id;
-        const auto v = service->addView(*s, smallCamera());
-        service->setViewImage(*s, v.id, server::ViewImage::Target, targetPng(0.75f));
-        service->perturb(*s, someNoise(7));
+        const auto v = service->sessions.addView(*s, smallCamera());
+        service->sessions.setViewImage(*s, v.id, server::ViewImage::Target, targetPng(0.75f));
+        service->volumes.perturb(*s, someNoise(7));
         current = volumeOf(*s).extinction();
-        const server::StylizerSnapshot first = service->stylizer(*s);
+        const server::StylizerSnapshot first = service->stylizer.stylizer(*s);
         nlohmann::json j = protocol::stylizerSceneToJson(first.scene, first.meshRefs);
         j["occluders"][0]["manipulation"] = {{"closing", {{"radius_px", 2}}}};
-        const auto changed = service->setStylizerScene(*s, protocol::stylizerSceneFromJson(j, "", protocol::SceneSource::Api));
+        const auto changed = service->stylizer.setStylizerScene(*s, protocol::stylizerSceneFromJson(j, "", protocol::SceneSource::Api));
         sceneJson = protocol::stylizerSceneToJson(changed.scene, changed.meshRefs);
         revision = changed.revision;
     }
     auto service = makeService(dir.path.string());
-    auto s = service->find(id);
+    auto s = service->sessions.find(id);
     EXPECT_EQ(versionOf(*s), 2);
     EXPECT_EQ(volumeOf(*s).extinction(), current);  // bit for bit
-    const server::SessionView v = service->view(*s, "v1");
+    const server::SessionView v = service->sessions.view(*s, "v1");
     ASSERT_TRUE(v.target.has_value());
     EXPECT_EQ(v.target->pixel(3, 3)[3], 0.75f);  // float EXR: exact
-    const server::StylizerSnapshot restored = service->stylizer(*s);
+    const server::StylizerSnapshot restored = service->stylizer.stylizer(*s);
     EXPECT_EQ(restored.revision, revision);
     EXPECT_EQ(protocol::stylizerSceneToJson(restored.scene, restored.meshRefs), sceneJson);
-    EXPECT_EQ(service->undoStylizer(*s, false).scene.occluders[0].manipulation.closingRadius, 0);  // the undo history too
-    EXPECT_EQ(service->revert(*s, 1), 3);  // version 1 is read back from its file
+    EXPECT_EQ(service->stylizer.undoStylizer(*s, false).scene.occluders[0].manipulation.closingRadius, 0);  // the undo history too
+    EXPECT_EQ(service->volumes.revert(*s, 1), 3);  // version 1 is read back from its file
 }
 
 // The job record: a job queued when the server stopped reads failed/interrupted after a restart.
@@ -293,19 +293,19 @@ TEST_F(ServiceTest, AJobQueuedAtAStopIsInterruptedAfterTheRestart) {
     std::string jobId;
     {
         auto service = makeService(dir.path.string());
-        auto s = service->create(smallCloud());
-        const auto v = service->addView(*s, smallCamera());
-        service->setViewImage(*s, v.id, server::ViewImage::Target, targetPng(0.25f));
-        jobId = service->startSolve(s, core::SolveOptions{})->id;
+        auto s = service->sessions.create(smallCloud());
+        const auto v = service->sessions.addView(*s, smallCamera());
+        service->sessions.setViewImage(*s, v.id, server::ViewImage::Target, targetPng(0.25f));
+        jobId = service->jobs.startSolve(s, core::SolveOptions{})->id;
     }
     allowedShortTasks = 1;  // the first service's shutdown
     auto service = makeService(dir.path.string());
-    auto job = service->job(jobId);
+    auto job = service->jobs.job(jobId);
     EXPECT_EQ(job->state, protocol::JobState::Failed);
     EXPECT_EQ(job->error.at("code"), "interrupted");
     // Written back: a third start reads the same.
     auto again = makeService(dir.path.string());
-    EXPECT_EQ(again->job(jobId)->state, protocol::JobState::Failed);
+    EXPECT_EQ(again->jobs.job(jobId)->state, protocol::JobState::Failed);
 }
 
 // Damage: a view's image that does not read is quarantined and the view stays without it; a
@@ -315,11 +315,11 @@ TEST_F(ServiceTest, DamagedFilesGoToTheQuarantineAndOnlyWhatTheyHeldIsLost) {
     std::string damagedView, newerFormat;
     {
         auto service = makeService(dir.path.string());
-        auto a = service->create(smallCloud());
-        const auto v = service->addView(*a, smallCamera());
-        service->setViewImage(*a, v.id, server::ViewImage::Target, targetPng(0.5f));
+        auto a = service->sessions.create(smallCloud());
+        const auto v = service->sessions.addView(*a, smallCamera());
+        service->sessions.setViewImage(*a, v.id, server::ViewImage::Target, targetPng(0.5f));
         damagedView = a->id;
-        newerFormat = service->create(smallCloud())->id;
+        newerFormat = service->sessions.create(smallCloud())->id;
     }
     const fs::path sessions = dir.path / "sessions";
     {
@@ -333,10 +333,10 @@ TEST_F(ServiceTest, DamagedFilesGoToTheQuarantineAndOnlyWhatTheyHeldIsLost) {
         std::ofstream(sessions / newerFormat / "session.json", std::ios::trunc) << record.dump();
     }
     auto service = makeService(dir.path.string());
-    auto s = service->find(damagedView);
-    EXPECT_EQ(service->view(*s, "v1").target, std::nullopt);
-    EXPECT_THROW(service->find(newerFormat), ApiError);
-    const auto quarantine = service->quarantine();
+    auto s = service->sessions.find(damagedView);
+    EXPECT_EQ(service->sessions.view(*s, "v1").target, std::nullopt);
+    EXPECT_THROW(service->sessions.find(newerFormat), ApiError);
+    const auto quarantine = service->sessions.quarantine();
     ASSERT_EQ(quarantine.size(), 2u);
     bool sawImage = false, sawSession = false;
     for (const auto& q : quarantine) {
@@ -351,23 +351,23 @@ TEST_F(ServiceTest, DamagedFilesGoToTheQuarantineAndOnlyWhatTheyHeldIsLost) {
 // resolves: the undo to it answers 409 and drops it, and the one before it is next.
 TEST_F(ServiceTest, AnUndoToASceneWhoseMeshWasDeletedIsDropped) {
     auto service = makeService();
-    auto s = service->create(smallCloud());
-    service->putOccluderMesh(*s, "tri", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-    const server::StylizerSnapshot forest = service->stylizer(*s);
+    auto s = service->sessions.create(smallCloud());
+    service->stylizer.putOccluderMesh(*s, "tri", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const server::StylizerSnapshot forest = service->stylizer.stylizer(*s);
     nlohmann::json j = protocol::stylizerSceneToJson(forest.scene, forest.meshRefs);
     j["occluders"][0]["mesh"] = "tri";
-    service->setStylizerScene(*s, protocol::stylizerSceneFromJson(j, "", protocol::SceneSource::Api));
-    service->setStylizerScene(*s, protocol::stylizerSceneFromJson(protocol::stylizerSceneToJson(forest.scene, forest.meshRefs), "",
+    service->stylizer.setStylizerScene(*s, protocol::stylizerSceneFromJson(j, "", protocol::SceneSource::Api));
+    service->stylizer.setStylizerScene(*s, protocol::stylizerSceneFromJson(protocol::stylizerSceneToJson(forest.scene, forest.meshRefs), "",
                                                                   protocol::SceneSource::Api));
-    service->removeOccluderMesh(*s, "tri");  // the current scene no longer uses it
+    service->stylizer.removeOccluderMesh(*s, "tri");  // the current scene no longer uses it
     try {
-        service->undoStylizer(*s, false);
+        service->stylizer.undoStylizer(*s, false);
         FAIL() << "undid to a scene whose mesh is gone";
     } catch (const ApiError& e) {
         EXPECT_EQ(e.code(), ErrorCode::Busy);
         EXPECT_NE(std::string(e.what()).find("'tri' was deleted"), std::string::npos) << e.what();
     }
-    const server::StylizerSnapshot first = service->undoStylizer(*s, false);  // the forest as it was first
+    const server::StylizerSnapshot first = service->stylizer.undoStylizer(*s, false);  // the forest as it was first
     EXPECT_EQ(first.meshRefs, forest.meshRefs);
     EXPECT_EQ(first.scene.occluders[0].mesh, forest.scene.occluders[0].mesh);  // the built-in mesh, shared
 }

@@ -25,35 +25,35 @@ nlohmann::json framesJson(Session& s) {
 
 void addFrameRoutes(RouteContext& c) {
     putUpload(c, kFramePath, [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
-        auto s = c.service.find(req.matches[1]);
-        c.service.uploadFrame(*s, std::stoi(req.matches[2]), bytes);
+        auto s = c.services.sessions.find(req.matches[1]);
+        c.services.volumes.uploadFrame(*s, std::stoi(req.matches[2]), bytes);
         reply(res, 200, framesJson(*s));
     });
     // One VDB holding the whole animation (grids stamped with their frames): every frame at once.
     putUpload(c, kSessionPath + "/frames", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
-        auto s = c.service.find(req.matches[1]);
-        c.service.uploadFrames(*s, bytes);
+        auto s = c.services.sessions.find(req.matches[1]);
+        c.services.volumes.uploadFrames(*s, bytes);
         reply(res, 200, framesJson(*s));
     });
     c.http.Get(kSessionPath + "/frames", [&c](const httplib::Request& req, httplib::Response& res) {
-        reply(res, 200, framesJson(*c.service.find(req.matches[1])));
+        reply(res, 200, framesJson(*c.services.sessions.find(req.matches[1])));
     });
     c.http.Get(kFramePath + R"(\.vdb)", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
-        res.set_content(c.service.downloadFrame(*s, std::stoi(req.matches[2])), "application/octet-stream");
+        auto s = c.services.sessions.find(req.matches[1]);
+        res.set_content(c.services.volumes.downloadFrame(*s, std::stoi(req.matches[2])), "application/octet-stream");
     });
     c.http.Delete(kFramePath, [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
-        c.service.removeFrame(*s, std::stoi(req.matches[2]));
+        auto s = c.services.sessions.find(req.matches[1]);
+        c.services.volumes.removeFrame(*s, std::stoi(req.matches[2]));
         reply(res, 200, framesJson(*s));
     });
     c.http.Post(kSessionPath + "/animate", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
-        reply(res, 202, {{"job", c.service.startAnimate(s, protocol::AnimateRequest::fromJson(c.body(req)))->id}});
+        auto s = c.services.sessions.find(req.matches[1]);
+        reply(res, 202, {{"job", c.services.volumes.startAnimate(s, protocol::AnimateRequest::fromJson(c.body(req)))->id}});
     });
     c.http.Post(kSessionPath + "/frames/render", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
-        reply(res, 202, {{"job", c.service.startFramesRender(s, protocol::FramesRenderRequest::fromJson(c.body(req), c.limits))->id}});
+        auto s = c.services.sessions.find(req.matches[1]);
+        reply(res, 202, {{"job", c.services.volumes.startFramesRender(s, protocol::FramesRenderRequest::fromJson(c.body(req), c.limits))->id}});
     });
 }
 

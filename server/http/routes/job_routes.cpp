@@ -67,31 +67,31 @@ void replyFile(httplib::Response& res, const std::filesystem::path& path, const 
 
 void addJobRoutes(RouteContext& c) {
     c.http.Post(kSessionPath + "/solve", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
-        const Vec3d background = c.service.lighting(*s).background.color;  // offered when L_m is left out
+        auto s = c.services.sessions.find(req.matches[1]);
+        const Vec3d background = c.services.sessions.lighting(*s).background.color;  // offered when L_m is left out
         const protocol::SolveRequest request = protocol::SolveRequest::fromJson(c.body(req), c.limits, &background);
-        reply(res, 202, {{"job", c.service.startSolve(s, request.options)->id}});
+        reply(res, 202, {{"job", c.services.jobs.startSolve(s, request.options)->id}});
     });
     c.http.Get(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {
-        reply(res, 200, c.service.job(req.matches[1])->toJson());
+        reply(res, 200, c.services.jobs.job(req.matches[1])->toJson());
     });
     c.http.Delete(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {
-        auto job = c.service.job(req.matches[1]);
-        c.service.cancel(*job);
+        auto job = c.services.jobs.job(req.matches[1]);
+        c.services.jobs.cancel(*job);
         reply(res, 202, job->toJson());
     });
     c.http.Get(kJobPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
-        streamEvents(res, c.service.job(req.matches[1]), c.streams, req.remote_addr);
+        streamEvents(res, c.services.jobs.job(req.matches[1]), c.streams, req.remote_addr);
     });
     // A sequence job's files (issue #15): its frames and its video.
     c.http.Get(kJobPath + R"(/frames/([0-9]{1,6})\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
-        replyFile(res, c.service.jobFile(req.matches[1], sequenceFrameName(std::stoul(req.matches[2]))), "image/png");
+        replyFile(res, c.services.jobs.jobFile(req.matches[1], sequenceFrameName(std::stoul(req.matches[2]))), "image/png");
     });
     c.http.Get(kJobPath + R"(/video\.mp4)", [&c](const httplib::Request& req, httplib::Response& res) {
-        replyFile(res, c.service.jobFile(req.matches[1], "video.mp4"), "video/mp4");
+        replyFile(res, c.services.jobs.jobFile(req.matches[1], "video.mp4"), "video/mp4");
     });
     c.http.Get(kJobPath + R"(/preview/(v[0-9]+)\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
-        replyImage(res, c.service.renderPreview(req.matches[1], req.matches[2]), protocol::ImageFormat::Png);
+        replyImage(res, c.services.volumes.renderPreview(req.matches[1], req.matches[2]), protocol::ImageFormat::Png);
     });
 }
 

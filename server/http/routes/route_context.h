@@ -1,6 +1,6 @@
 #pragma once
 /// \file route_context.h
-/// What every route file shares: the httplib server to register on, the session service to
+/// What every route file shares: the httplib server to register on, the session services to
 /// call, the request limits, and the helpers that read a body and write an answer. Handlers are
 /// about twenty lines: parse a protocol request, call the service, reply.
 
@@ -15,7 +15,7 @@
 #include "core/image/image.h"
 #include "core/render/renderer.h"
 #include "protocol/requests.h"
-#include "server/service/session_service.h"
+#include "server/service/services.h"
 
 namespace volstyle::server {
 
@@ -37,7 +37,7 @@ private:
 
 struct RouteContext {
     httplib::Server& http;
-    SessionService& service;
+    Services& services;
     protocol::RequestLimits limits;
     size_t maxJsonBytes = 1 << 20;
     StreamLimiter& streams;

@@ -11,21 +11,26 @@ namespace volstyle::server {
 
 namespace {
 
+/// The lighting as JSON, naming the session's environment map "session".
+nlohmann::json lightingResponse(RouteContext& c, Session& s, const core::Lighting& lighting) {
+    return protocol::lightingToJson(lighting, c.services.sessions.environmentMapIfAny(s).get());
+}
+
 /// POST …/render: single scattering, or the translucent preview (SPEC §9).
 httplib::Server::Handler renderRoute(RouteContext& c) {
     return [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
+        auto s = c.services.sessions.find(req.matches[1]);
         auto request = protocol::RenderRequest::fromJson(c.body(req), c.limits);
         if (request.mode == protocol::RenderMode::Translucent) {  // SPEC §9
             core::Image medium;
-            const core::Image beauty = c.service.renderTranslucent(*s, request.camera, request.translucent, &medium);
+            const core::Image beauty = c.services.volumes.renderTranslucent(*s, request.camera, request.translucent, &medium);
             if (request.format != protocol::ImageFormat::Exr) return replyImage(res, beauty, request.format, request.exposure);
             // As single scattering's: the medium premultiplied, and the picture as a layer.
             res.set_content(core::encodeExrLayers({{"", &medium}, {"beauty", &beauty}}, request.exrHalf),
                             protocol::imageMimeType(request.format));
             return;
         }
-        replyImage(res, c.service.render(*s, request.camera, request.format == protocol::ImageFormat::Exr), request.format,
+        replyImage(res, c.services.volumes.render(*s, request.camera, request.format == protocol::ImageFormat::Exr), request.format,
                    request.exposure, request.exrHalf);
     };
 }
@@ -34,18 +39,18 @@ httplib::Server::Handler renderRoute(RouteContext& c) {
 void addSessionItselfRoutes(RouteContext& c) {
     c.http.Post(kApi + "/sessions", [&c](const httplib::Request& req, httplib::Response& res) {
         auto request = protocol::CreateSessionRequest::fromJson(c.body(req), c.limits);
-        reply(res, 201, sessionJson(*c.service.create(request)));
+        reply(res, 201, sessionJson(*c.services.sessions.create(request)));
     });
     c.http.Get(kApi + "/sessions", [&c](const httplib::Request&, httplib::Response& res) {
         nlohmann::json list = nlohmann::json::array();
-        for (auto& s : c.service.all()) list.push_back(sessionJson(*s));
+        for (auto& s : c.services.sessions.all()) list.push_back(sessionJson(*s));
         reply(res, 200, list);
     });
     c.http.Get(kSessionPath, [&c](const httplib::Request& req, httplib::Response& res) {
-        reply(res, 200, sessionJson(*c.service.find(req.matches[1])));
+        reply(res, 200, sessionJson(*c.services.sessions.find(req.matches[1])));
     });
     c.http.Delete(kSessionPath, [&c](const httplib::Request& req, httplib::Response& res) {
-        c.service.remove(req.matches[1]);
+        c.services.sessions.remove(req.matches[1]);
         res.status = 204;
     });
     c.http.Post(kSessionPath + "/render", renderRoute(c));
@@ -54,13 +59,13 @@ void addSessionItselfRoutes(RouteContext& c) {
 /// The lighting, the environment light's lobes as a map, and the session's environment map.
 void addLightingRoutes(RouteContext& c) {
     c.http.Get(kSessionPath + "/lighting", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
-        reply(res, 200, c.service.lightingJson(*s, c.service.lighting(*s)));
+        auto s = c.services.sessions.find(req.matches[1]);
+        reply(res, 200, lightingResponse(c, *s, c.services.sessions.lighting(*s)));
     });
     // The environment light's lobes as a lat-long map (docs/LIGHTING.md): EXR (linear) for
     // `background: {"environment": …}` and Blender, PNG (sRGB) for the page's thumbnail.
     c.http.Get(kSessionPath + R"(/lighting/environment\.(exr|png))", [&c](const httplib::Request& req, httplib::Response& res) {
-        const core::Lighting l = c.service.lighting(*c.service.find(req.matches[1]));
+        const core::Lighting l = c.services.sessions.lighting(*c.services.sessions.find(req.matches[1]));
         if (!l.environment.active())
             throw protocol::ApiError(protocol::ErrorCode::NotFound, "the lighting has no environment light (environment.lobes is 0)");
         const bool exr = req.matches[2] == "exr";
@@ -69,25 +74,25 @@ void addLightingRoutes(RouteContext& c) {
                    exr ? protocol::ImageFormat::Exr : protocol::ImageFormat::Png);
     });
     c.http.Put(kSessionPath + "/lighting", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
+        auto s = c.services.sessions.find(req.matches[1]);
         // An empty body is a client mistake, not "no lights" (send {} for that).
         if (req.body.find_first_not_of(" \t\r\n") == std::string::npos)
             throw protocol::ApiError(protocol::ErrorCode::InvalidArgument, "the body is empty; send the lighting object ({} means no light)");
         auto request = protocol::SetLightingRequest::fromJson(c.body(req));
-        reply(res, 200, c.service.lightingJson(*s, c.service.setLighting(*s, request.lighting)));
+        reply(res, 200, lightingResponse(c, *s, c.services.sessions.setLighting(*s, request.lighting)));
     });
     // The session's environment map: a lat-long EXR/HDR (or PNG/JPEG, linearised) that the
     // lighting names "session" (docs/LIGHTING.md).
     putUpload(c, kSessionPath + "/environment", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
-        const EnvironmentMapInfo info = c.service.setEnvironmentMap(*c.service.find(req.matches[1]), bytes);
+        const EnvironmentMapInfo info = c.services.sessions.setEnvironmentMap(*c.services.sessions.find(req.matches[1]), bytes);
         reply(res, 200, {{"width", info.width}, {"height", info.height}, {"used", info.used}});
     });
     c.http.Get(kSessionPath + R"(/environment\.(exr|png))", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto map = c.service.environmentMap(*c.service.find(req.matches[1]));
+        auto map = c.services.sessions.environmentMap(*c.services.sessions.find(req.matches[1]));
         replyImage(res, *map, req.matches[2] == "exr" ? protocol::ImageFormat::Exr : protocol::ImageFormat::Png);
     });
     c.http.Delete(kSessionPath + "/environment", [&c](const httplib::Request& req, httplib::Response& res) {
-        c.service.removeEnvironmentMap(*c.service.find(req.matches[1]));
+        c.services.sessions.removeEnvironmentMap(*c.services.sessions.find(req.matches[1]));
         res.status = 204;
     });
 }

@@ -69,7 +69,7 @@ void streamLiveFrames(RouteContext& c, httplib::Response& res, std::shared_ptr<S
         [&c, s, sent = uint64_t(0), idle = 0](size_t, httplib::DataSink& sink) mutable {
             std::string message;
             try {
-                if (auto f = c.service.nextLiveFrame(*s, sent, kLivePoll)) {
+                if (auto f = c.services.stylizer.nextLiveFrame(*s, sent, kLivePoll)) {
                     sent = f->revision;
                     idle = 0;
                     message = sseEvent("frame", {{"revision", f->revision}, {"url", frameUrl(s->id, f->revision)},
@@ -85,7 +85,7 @@ void streamLiveFrames(RouteContext& c, httplib::Response& res, std::shared_ptr<S
                     sink.done();
                     return true;
                 }
-                sent = c.service.stylizer(*s).revision;  // wait for the next change
+                sent = c.services.stylizer.stylizer(*s).revision;  // wait for the next change
                 message = sseEvent("failed", {{"revision", sent}, {"error", protocol::errorBody(e.code, e.message, e.details, "")["error"]}});
             }
             if (!message.empty() && !sink.write(message.data(), message.size())) return false;  // the client left
@@ -101,26 +101,26 @@ namespace {
 /// The scene: GET/PUT, undo and redo, picks and clicked constraints, sequences.
 void addStylizerSceneRoutes(RouteContext& c) {
     c.http.Get(kStylizerPath, [&c](const httplib::Request& req, httplib::Response& res) {
-        replyScene(res, c.service.stylizer(*c.service.find(req.matches[1])));
+        replyScene(res, c.services.stylizer.stylizer(*c.services.sessions.find(req.matches[1])));
     });
     c.http.Put(kStylizerPath, [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
+        auto s = c.services.sessions.find(req.matches[1]);
         if (req.body.find_first_not_of(" \t\r\n") == std::string::npos)  // a mistake, not "the defaults"
             throw ApiError(ErrorCode::InvalidArgument, "the body is empty; send the scene (GET …/stylizer gives the current one)");
         auto request = protocol::stylizerSceneFromJson(c.body(req), "", protocol::SceneSource::Api);
-        replyScene(res, c.service.setStylizerScene(*s, request));
+        replyScene(res, c.services.stylizer.setStylizerScene(*s, request));
     });
     for (auto [route, redo] : {std::pair{"/undo", false}, std::pair{"/redo", true}})
         c.http.Post(kStylizerPath + route, [&c, redo](const httplib::Request& req, httplib::Response& res) {
-            replyScene(res, c.service.undoStylizer(*c.service.find(req.matches[1]), redo));
+            replyScene(res, c.services.stylizer.undoStylizer(*c.services.sessions.find(req.matches[1]), redo));
         });
     c.http.Post(kStylizerPath + "/pick", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
-        reply(res, 200, pickJson(c.service.pickStylizer(*s, protocol::StylizerPickRequest::fromJson(c.body(req), c.limits, false))));
+        auto s = c.services.sessions.find(req.matches[1]);
+        reply(res, 200, pickJson(c.services.stylizer.pickStylizer(*s, protocol::StylizerPickRequest::fromJson(c.body(req), c.limits, false))));
     });
     c.http.Post(kStylizerPath + "/constraints", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
-        const AddedTfConstraint a = c.service.addTfConstraint(*s, protocol::StylizerPickRequest::fromJson(c.body(req), c.limits, true));
+        auto s = c.services.sessions.find(req.matches[1]);
+        const AddedTfConstraint a = c.services.stylizer.addTfConstraint(*s, protocol::StylizerPickRequest::fromJson(c.body(req), c.limits, true));
         res.set_header("ETag", fmt::format("\"r{}\"", a.revision));
         nlohmann::json body = {{"revision", a.revision}, {"layer", a.layer}, {"index", a.index},
                                {"constraint", protocol::tfConstraintToJson(a.constraint)}, {"pick", pickJson(a.pick)}};
@@ -128,8 +128,8 @@ void addStylizerSceneRoutes(RouteContext& c) {
         reply(res, 200, body);
     });
     c.http.Post(kStylizerPath + "/sequence", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
-        reply(res, 202, {{"job", c.service.startSequence(s, protocol::StylizerSequenceRequest::fromJson(c.body(req)))->id}});
+        auto s = c.services.sessions.find(req.matches[1]);
+        reply(res, 202, {{"job", c.services.stylizer.startSequence(s, protocol::StylizerSequenceRequest::fromJson(c.body(req)))->id}});
     });
 }
 
@@ -137,34 +137,34 @@ void addStylizerSceneRoutes(RouteContext& c) {
 void addStylizerUploadRoutes(RouteContext& c) {
     c.http.Get(kStylizerPath + "/occluders", [&c](const httplib::Request& req, httplib::Response& res) {
         nlohmann::json list = nlohmann::json::array();
-        for (const auto& m : c.service.occluderMeshes(*c.service.find(req.matches[1]))) list.push_back(meshJson(m));
+        for (const auto& m : c.services.stylizer.occluderMeshes(*c.services.sessions.find(req.matches[1]))) list.push_back(meshJson(m));
         reply(res, 200, list);
     });
     putUpload(c, kStylizerPath + "/occluders/([^/]+)", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
-        auto s = c.service.find(req.matches[1]);
-        reply(res, 200, meshJson(c.service.putOccluderMesh(*s, req.matches[2], bytes)));
+        auto s = c.services.sessions.find(req.matches[1]);
+        reply(res, 200, meshJson(c.services.stylizer.putOccluderMesh(*s, req.matches[2], bytes)));
     });
     c.http.Delete(kStylizerPath + "/occluders/([^/]+)", [&c](const httplib::Request& req, httplib::Response& res) {
-        c.service.removeOccluderMesh(*c.service.find(req.matches[1]), req.matches[2]);
+        c.services.stylizer.removeOccluderMesh(*c.services.sessions.find(req.matches[1]), req.matches[2]);
         res.status = 204;
     });
     putUpload(c, kStylizerPath + "/tf", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
-        const TransferImageInfo t = c.service.setTransferImage(*c.service.find(req.matches[1]), bytes);
+        const TransferImageInfo t = c.services.stylizer.setTransferImage(*c.services.sessions.find(req.matches[1]), bytes);
         reply(res, 200, {{"width", t.width}, {"height", t.height}, {"channels", t.channels}, {"used", t.used}});
     });
     c.http.Get(kStylizerPath + R"(/tf\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
         core::SaveOptions save;
         save.writeAlpha = true;
-        res.set_content(core::encodeImage(c.service.transferImage(*c.service.find(req.matches[1])), "png", save), "image/png");
+        res.set_content(core::encodeImage(c.services.stylizer.transferImage(*c.services.sessions.find(req.matches[1])), "png", save), "image/png");
     });
     c.http.Get(kStylizerPath + R"(/transfer_function\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
         core::SaveOptions save;
         save.writeAlpha = true;
         save.data = true;  // the TF's values as they are (it multiplies linear radiance)
-        res.set_content(core::encodeImage(c.service.compiledTransferFunction(*c.service.find(req.matches[1])), "png", save), "image/png");
+        res.set_content(core::encodeImage(c.services.stylizer.compiledTransferFunction(*c.services.sessions.find(req.matches[1])), "png", save), "image/png");
     });
     c.http.Delete(kStylizerPath + "/tf", [&c](const httplib::Request& req, httplib::Response& res) {
-        c.service.removeTransferImage(*c.service.find(req.matches[1]));
+        c.services.stylizer.removeTransferImage(*c.services.sessions.find(req.matches[1]));
         res.status = 204;
     });
 }
@@ -172,9 +172,9 @@ void addStylizerUploadRoutes(RouteContext& c) {
 /// Frames: one on request, and the live stream's.
 void addStylizerFrameRoutes(RouteContext& c) {
     c.http.Post(kStylizerPath + "/frame", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
+        auto s = c.services.sessions.find(req.matches[1]);
         const auto request = protocol::StylizerFrameRequest::fromJson(c.body(req), c.limits);
-        const core::StylizedFrame f = c.service.stylize(*s, request);
+        const core::StylizedFrame f = c.services.stylizer.stylize(*s, request);
         res.set_header("X-Render-Ms", fmt::format("{:.1f}", f.totalMs));
         const core::SaveOptions save =
             core::stylizerSaveOptions(request.output, request.format == protocol::ImageFormat::Exr ? 0 : request.exposure);
@@ -182,12 +182,12 @@ void addStylizerFrameRoutes(RouteContext& c) {
                         protocol::imageMimeType(request.format));
     });
     c.http.Get(kStylizerPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
-        streamLiveFrames(c, res, c.service.find(req.matches[1]), req.remote_addr);
+        streamLiveFrames(c, res, c.services.sessions.find(req.matches[1]), req.remote_addr);
     });
     c.http.Get(kStylizerPath + R"(/frames/([0-9]+)\.jpeg)", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
+        auto s = c.services.sessions.find(req.matches[1]);
         const uint64_t revision = std::stoull(req.matches[2].str().substr(0, 19));
-        auto f = c.service.liveFrame(*s, revision);
+        auto f = c.services.stylizer.liveFrame(*s, revision);
         if (!f) throw ApiError(ErrorCode::NotFound, "the live stream holds no frame of revision " + std::to_string(revision) +
                                                         " (a newer one replaced it; follow …/stylizer/events)");
         res.set_header("Cache-Control", "private, max-age=3600");  // a revision's frame never changes

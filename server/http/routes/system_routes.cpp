@@ -8,7 +8,7 @@ namespace volstyle::server {
 
 void addSystemRoutes(RouteContext& c) {
     c.http.Get(kApi + "/health", [&c](const httplib::Request&, httplib::Response& res) {
-        const auto& caps = c.service.capabilities();
+        const auto& caps = c.services.sessions.capabilities();
         reply(res, 200, {{"status", "ok"}, {"version", protocol::versionString()}, {"api", protocol::kApiVersion},
                          {"gl_renderer", caps.renderer}, {"gl_version", caps.version}});
     });
@@ -23,7 +23,7 @@ void addSystemRoutes(RouteContext& c) {
     // Files (or whole sessions) found damaged in the data directory and moved aside, with why.
     c.http.Get(kApi + "/quarantine", [&c](const httplib::Request&, httplib::Response& res) {
         nlohmann::json list = nlohmann::json::array();
-        for (const auto& q : c.service.quarantine())
+        for (const auto& q : c.services.sessions.quarantine())
             list.push_back({{"session", q.session}, {"file", q.file}, {"reason", q.reason}, {"time", q.time}});
         reply(res, 200, list);
     });

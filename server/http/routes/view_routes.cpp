@@ -8,51 +8,51 @@ namespace volstyle::server {
 
 void addViewRoutes(RouteContext& c) {
     c.http.Post(kSessionPath + "/views", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
+        auto s = c.services.sessions.find(req.matches[1]);
         auto request = protocol::AddViewRequest::fromJson(c.body(req), c.limits);
-        reply(res, 201, viewJson(c.service.addView(*s, request.camera, request.frame)));
+        reply(res, 201, viewJson(c.services.sessions.addView(*s, request.camera, request.frame)));
     });
     c.http.Get(kSessionPath + "/views", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
+        auto s = c.services.sessions.find(req.matches[1]);
         std::lock_guard lock(s->mutex);
         reply(res, 200, viewsJson(*s));
     });
     c.http.Get(kViewPath, [&c](const httplib::Request& req, httplib::Response& res) {
-        reply(res, 200, viewJson(c.service.view(*c.service.find(req.matches[1]), req.matches[2])));
+        reply(res, 200, viewJson(c.services.sessions.view(*c.services.sessions.find(req.matches[1]), req.matches[2])));
     });
     c.http.Delete(kViewPath, [&c](const httplib::Request& req, httplib::Response& res) {
-        c.service.removeView(*c.service.find(req.matches[1]), req.matches[2]);
+        c.services.sessions.removeView(*c.services.sessions.find(req.matches[1]), req.matches[2]);
         res.status = 204;
     });
     for (ViewImage kind : {ViewImage::Target, ViewImage::Weights, ViewImage::Background}) {
         const std::string part = std::string("/") + viewImageName(kind);
         putUpload(c, kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
-            auto s = c.service.find(req.matches[1]);
-            reply(res, 200, viewJson(c.service.setViewImage(*s, req.matches[2], kind, bytes)));
+            auto s = c.services.sessions.find(req.matches[1]);
+            reply(res, 200, viewJson(c.services.sessions.setViewImage(*s, req.matches[2], kind, bytes)));
         });
         c.http.Delete(kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res) {
-            auto s = c.service.find(req.matches[1]);
-            reply(res, 200, viewJson(c.service.removeViewImage(*s, req.matches[2], kind)));
+            auto s = c.services.sessions.find(req.matches[1]);
+            reply(res, 200, viewJson(c.services.sessions.removeViewImage(*s, req.matches[2], kind)));
         });
     }
     // The plate as stored (linear): EXR exactly, PNG sRGB-encoded for the page.
     c.http.Get(kViewPath + R"(/background\.(png|exr))", [&c](const httplib::Request& req, httplib::Response& res) {
-        SessionView v = c.service.view(*c.service.find(req.matches[1]), req.matches[2]);
+        SessionView v = c.services.sessions.view(*c.services.sessions.find(req.matches[1]), req.matches[2]);
         if (!v.background) throw protocol::ApiError(protocol::ErrorCode::NotFound, "view " + v.id + " has no background plate");
         replyImage(res, *v.background, req.matches[3] == "exr" ? protocol::ImageFormat::Exr : protocol::ImageFormat::Png);
     });
     c.http.Get(kViewPath + "/target.png", [&c](const httplib::Request& req, httplib::Response& res) {
-        SessionView v = c.service.view(*c.service.find(req.matches[1]), req.matches[2]);
+        SessionView v = c.services.sessions.view(*c.services.sessions.find(req.matches[1]), req.matches[2]);
         if (!v.target) throw protocol::ApiError(protocol::ErrorCode::NotFound, "view " + v.id + " has no target yet");
         core::SaveOptions save;
         save.writeAlpha = true;  // alpha is the painted weight
         res.set_content(core::encodeImage(*v.target, "png", save), "image/png");
     });
     c.http.Get(kViewPath + R"(/render\.(png|exr))", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
+        auto s = c.services.sessions.find(req.matches[1]);
         auto query = protocol::ViewRenderQuery::fromQuery(req.params);
         const auto format = req.matches[3] == "png" ? protocol::ImageFormat::Png : protocol::ImageFormat::Exr;
-        replyImage(res, c.service.renderView(*s, req.matches[2], format == protocol::ImageFormat::Exr), format, query.exposure,
+        replyImage(res, c.services.volumes.renderView(*s, req.matches[2], format == protocol::ImageFormat::Exr), format, query.exposure,
                    query.exrHalf);
     });
 }

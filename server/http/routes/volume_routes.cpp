@@ -8,37 +8,37 @@ namespace volstyle::server {
 
 void addVolumeRoutes(RouteContext& c) {
     putUpload(c, kSessionPath + "/volume", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
-        auto s = c.service.find(req.matches[1]);
-        c.service.uploadVdb(*s, bytes);
+        auto s = c.services.sessions.find(req.matches[1]);
+        c.services.volumes.uploadVdb(*s, bytes);
         reply(res, 200, sessionJson(*s));
     });
     c.http.Get(kSessionPath + R"(/volume\.vdb)", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
+        auto s = c.services.sessions.find(req.matches[1]);
         auto query = protocol::VolumeQuery::fromQuery(req.params);
-        res.set_content(c.service.downloadVdb(*s, query.version), "application/octet-stream");
+        res.set_content(c.services.volumes.downloadVdb(*s, query.version), "application/octet-stream");
     });
     // Volume perturbation baked into a new version (SPEC §9; docs/TRANSLUCENT.md).
     c.http.Post(kSessionPath + "/perturb", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
+        auto s = c.services.sessions.find(req.matches[1]);
         const core::Perturbation p = protocol::perturbationFromJson(c.body(req));
-        c.service.perturb(*s, p);
+        c.services.volumes.perturb(*s, p);
         reply(res, 200, sessionJson(*s));
     });
     // A generated refractive index (a glass sphere with noise, issue #16), or none: a new version.
     c.http.Post(kSessionPath + "/refraction", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
-        c.service.setRefraction(*s, protocol::glassSphereFromJson(c.body(req)));
+        auto s = c.services.sessions.find(req.matches[1]);
+        c.services.volumes.setRefraction(*s, protocol::glassSphereFromJson(c.body(req)));
         reply(res, 200, sessionJson(*s));
     });
     c.http.Delete(kSessionPath + "/refraction", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
-        c.service.setRefraction(*s, std::nullopt);
+        auto s = c.services.sessions.find(req.matches[1]);
+        c.services.volumes.setRefraction(*s, std::nullopt);
         reply(res, 200, sessionJson(*s));
     });
     c.http.Post(kSessionPath + "/revert", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.service.find(req.matches[1]);
+        auto s = c.services.sessions.find(req.matches[1]);
         auto request = protocol::RevertRequest::fromJson(c.body(req));
-        c.service.revert(*s, request.version);
+        c.services.volumes.revert(*s, request.version);
         reply(res, 200, sessionJson(*s));
     });
 }

@@ -4,7 +4,7 @@
 #include "core/base/errors.h"
 #include "core/image/image_io.h"
 #include "core/scene/environment_lobes.h"
-#include "server/service/session_service.h"
+#include "server/service/services.h"
 
 namespace volstyle::server {
 namespace {
@@ -25,18 +25,18 @@ std::optional<EnvironmentMapInfo> environmentMapInfo(const Session& s) {
     return EnvironmentMapInfo{s.environmentMap->width, s.environmentMap->height, namesMap(s.lighting, s.environmentMap.get())};
 }
 
-EnvironmentMapInfo SessionService::setEnvironmentMap(Session& s, const std::string& bytes) {
-    checkUploadSize(bytes, "the environment map");
-    std::optional<DecodeSlot> slot;
+EnvironmentMapInfo SessionsService::setEnvironmentMap(Session& s, const std::string& bytes) {
+    m_ctx.checkUploadSize(bytes, "the environment map");
+    std::optional<ServiceContext::DecodeSlot> slot;
     core::Image image;
     try {
-        image = core::loadImageFromMemory(bytes.data(), bytes.size(), "the environment map", m_limits.maxImageSide,
+        image = core::loadImageFromMemory(bytes.data(), bytes.size(), "the environment map", m_ctx.limits.maxImageSide,
                                           [&](int width, int height) {
                                               if (std::abs(width - 2 * height) > 1)  // before decoding the pixels
                                                   throw ApiError(ErrorCode::InvalidArgument,
                                                                  "a latitude-longitude map is twice as wide as high; this one is " +
                                                                      std::to_string(width) + "x" + std::to_string(height));
-                                              slot.emplace(m_decodeSlots);
+                                              slot.emplace(m_ctx.decodeSlots);
                                           }).image;
     } catch (const Error& e) {
         throw ApiError(ErrorCode::UnsupportedMedia, e.what());  // undecodable, or over the side limit
@@ -47,31 +47,31 @@ EnvironmentMapInfo SessionService::setEnvironmentMap(Session& s, const std::stri
     slot.reset();
     std::lock_guard lock(s.mutex);
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
-    m_memory.check(s, map->rgba.size() * sizeof(float), s.environmentMap ? s.environmentMap->rgba.size() * sizeof(float) : 0, "the environment map");
-    if (m_persist) m_persist->saveSessionFile(s.id, kEnvironmentFile, bytes);
+    m_ctx.memory.check(s, map->rgba.size() * sizeof(float), s.environmentMap ? s.environmentMap->rgba.size() * sizeof(float) : 0, "the environment map");
+    if (m_ctx.persist) m_ctx.persist->saveSessionFile(s.id, kEnvironmentFile, bytes);
     // The lighting that names the old map names the new one.
     core::Lighting& l = s.lighting;
     if (s.environmentMap && l.background.environment == s.environmentMap) l.background.environment = map;
     if (s.environmentMap && l.environment.map == s.environmentMap) l.environment.map = map;
     s.environmentMap = map;
-    saved(s);
+    m_ctx.saved(s);
     return *environmentMapInfo(s);
 }
 
-std::shared_ptr<const core::Image> SessionService::environmentMap(Session& s) const {
+std::shared_ptr<const core::Image> SessionsService::environmentMap(Session& s) const {
     std::lock_guard lock(s.mutex);
     if (!s.environmentMap) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no environment map uploaded");
     return s.environmentMap;
 }
 
-void SessionService::removeEnvironmentMap(Session& s) {
+void SessionsService::removeEnvironmentMap(Session& s) {
     std::lock_guard lock(s.mutex);
     if (!s.environmentMap) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no environment map uploaded");
     if (namesMap(s.lighting, s.environmentMap.get()))
         throw ApiError(ErrorCode::Busy, "the lighting names the environment map (\"session\"); PUT a lighting without it first");
-    if (m_persist) m_persist->removeSessionFile(s.id, kEnvironmentFile);
+    if (m_ctx.persist) m_ctx.persist->removeSessionFile(s.id, kEnvironmentFile);
     s.environmentMap.reset();
-    saved(s);
+    m_ctx.saved(s);
 }
 
 }  // namespace volstyle::server

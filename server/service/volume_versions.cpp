@@ -13,7 +13,7 @@
 #include "core/volume/builtin_scenes.h"
 #include "core/volume/vdb_io.h"
 #include "server/store/persistence.h"
-#include "server/service/session_service.h"
+#include "server/service/services.h"
 #include "server/runtime/vdb_reader.h"
 
 namespace volstyle::server {
@@ -34,35 +34,24 @@ struct TempVdb {
 
 }  // namespace
 
-std::shared_ptr<core::GpuVolume> SessionService::commitVersion(Session& s, core::Volume volume) {
-    const int n = s.versions.newest() + 1;  // after damaged ones too: numbers are never reused
-    s.versions.retire(s.version, std::move(s.volume));
-    s.volume = std::move(volume);
-    s.version = n;
-    s.versions.add(n);
-    saved(s);
-    if (s.stylizer.scene.volume) stylizerChanged(s);  // its medium is the session's volume: live frames follow
-    return std::move(s.gpu);
-}
-
-void SessionService::checkVersion(const Session& s, int n) const {
+void VolumeService::checkVersion(const Session& s, int n) const {
     if (!s.versions.has(n)) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no version " + std::to_string(n));
     if (auto reason = s.versions.damage(n))
         throw ApiError(ErrorCode::IoError, "version " + std::to_string(n) + " of session '" + s.id +
                                                "' is damaged and was quarantined (" + *reason + "); choose another version");
 }
 
-void SessionService::recordDamage(Session& s, int n, const std::string& reason) {
+void VolumeService::recordDamage(Session& s, int n, const std::string& reason) {
     std::lock_guard lock(s.mutex);
     if (s.removed || s.versions.damage(n)) return;
     const std::string file = Persistence::versionFile(n);
-    m_persist->quarantineFile(s.id, file, reason);
+    m_ctx.persist->quarantineFile(s.id, file, reason);
     s.versions.markDamaged(n, reason);
     s.damaged.push_back({file, reason});
-    saved(s);
+    m_ctx.saved(s);
 }
 
-core::Volume SessionService::olderVersion(Session& s, int n) {
+core::Volume VolumeService::olderVersion(Session& s, int n) {
     std::uintmax_t bytes = 0;
     {
         std::lock_guard lock(s.mutex);
@@ -74,7 +63,7 @@ core::Volume SessionService::olderVersion(Session& s, int n) {
     // Read from disk without the lock (a 256³ version takes a second).
     core::Volume v;
     try {
-        v = m_persist->loadVersion(s.id, n, bytes);
+        v = m_ctx.persist->loadVersion(s.id, n, bytes);
     } catch (const Error& e) {
         recordDamage(s, n, e.what());
         checkVersion(s, n);  // io_error, or not_found if the session went meanwhile
@@ -85,29 +74,21 @@ core::Volume SessionService::olderVersion(Session& s, int n) {
     return v;
 }
 
-std::vector<QuarantineEntry> SessionService::quarantine() const {
-    return m_persist ? m_persist->quarantine() : std::vector<QuarantineEntry>{};
-}
-
-void SessionService::release(std::shared_ptr<core::GpuVolume> gpu) {
-    if (gpu) m_gl->run([gpu = std::move(gpu)](core::GpuDevice&) mutable { gpu.reset(); });
-}
-
-int SessionService::revert(Session& s, int version) {
+int VolumeService::revert(Session& s, int version) {
     core::Volume old = olderVersion(s, version);
     std::shared_ptr<core::GpuVolume> stale;
     int now = 0;
     {
         std::lock_guard lock(s.mutex);
-        m_memory.check(s, old.memoryBytes(), 0, "reverting to version " + std::to_string(version));
-        stale = commitVersion(s, std::move(old));  // undo is a new version with the old content: nothing is lost
+        m_ctx.memory.check(s, old.memoryBytes(), 0, "reverting to version " + std::to_string(version));
+        stale = m_ctx.commitVersion(s, std::move(old));  // undo is a new version with the old content: nothing is lost
         now = s.version;
     }
-    release(std::move(stale));
+    m_ctx.release(std::move(stale));
     return now;
 }
 
-int SessionService::editVolume(Session& s, const std::function<void(core::Volume&)>& edit) {
+int VolumeService::editVolume(Session& s, const std::function<void(core::Volume&)>& edit) {
     core::Volume volume;
     int base = 0;
     {
@@ -126,19 +107,19 @@ int SessionService::editVolume(Session& s, const std::function<void(core::Volume
         if (s.version != base)
             throw ApiError(ErrorCode::Busy, "the volume changed (version " + std::to_string(base) + " → " + std::to_string(s.version) +
                                                 ") while this edit ran; send it again to apply it to version " + std::to_string(s.version));
-        m_memory.check(s, volume.memoryBytes(), 0, "the edited volume");
-        stale = commitVersion(s, std::move(volume));
+        m_ctx.memory.check(s, volume.memoryBytes(), 0, "the edited volume");
+        stale = m_ctx.commitVersion(s, std::move(volume));
         now = s.version;
     }
-    release(std::move(stale));
+    m_ctx.release(std::move(stale));
     return now;
 }
 
-int SessionService::perturb(Session& s, const core::Perturbation& perturbation) {
+int VolumeService::perturb(Session& s, const core::Perturbation& perturbation) {
     return editVolume(s, [&](core::Volume& v) { v = core::perturbVolume(v, perturbation); });
 }
 
-int SessionService::setRefraction(Session& s, const std::optional<core::GlassSphere>& glass) {
+int VolumeService::setRefraction(Session& s, const std::optional<core::GlassSphere>& glass) {
     return editVolume(s, [&](core::Volume& v) {
         if (glass) {
             core::addGlassSphere(v, *glass);
@@ -149,30 +130,30 @@ int SessionService::setRefraction(Session& s, const std::optional<core::GlassSph
     });
 }
 
-void SessionService::uploadVdb(Session& s, const std::string& bytes) {
+void VolumeService::uploadVdb(Session& s, const std::string& bytes) {
     core::Volume v = readUploadedVdb(bytes);
     std::shared_ptr<core::GpuVolume> stale;
     {
         std::lock_guard lock(s.mutex);
-        m_memory.check(s, v.memoryBytes(), 0, "the uploaded volume");
+        m_ctx.memory.check(s, v.memoryBytes(), 0, "the uploaded volume");
         s.scene = "upload";  // the session no longer shows its first scene (saved with the version)
-        stale = commitVersion(s, std::move(v));
+        stale = m_ctx.commitVersion(s, std::move(v));
     }
-    release(std::move(stale));
+    m_ctx.release(std::move(stale));
 }
 
-core::Volume SessionService::readUploadedVdb(const std::string& bytes) const {
-    return readUpload<core::Volume>(bytes, [this](const std::string& path) { return loadUntrustedVdb(path, m_limits.volumeLimits, m_limits.vdbReader); });
+core::Volume VolumeService::readUploadedVdb(const std::string& bytes) const {
+    return readUpload<core::Volume>(bytes, [this](const std::string& path) { return loadUntrustedVdb(path, m_ctx.limits.volumeLimits, m_ctx.limits.vdbReader); });
 }
 
-std::map<int, core::Volume> SessionService::readUploadedVdbFrames(const std::string& bytes) const {
+std::map<int, core::Volume> VolumeService::readUploadedVdbFrames(const std::string& bytes) const {
     return readUpload<std::map<int, core::Volume>>(
-        bytes, [this](const std::string& path) { return loadUntrustedVdbFrames(path, m_limits.volumeLimits, m_limits.vdbReader); });
+        bytes, [this](const std::string& path) { return loadUntrustedVdbFrames(path, m_ctx.limits.volumeLimits, m_ctx.limits.vdbReader); });
 }
 
 template <typename T>
-T SessionService::readUpload(const std::string& bytes, const std::function<T(const std::string&)>& read) const {
-    checkUploadSize(bytes, "the VDB");
+T VolumeService::readUpload(const std::string& bytes, const std::function<T(const std::string&)>& read) const {
+    m_ctx.checkUploadSize(bytes, "the VDB");
     TempVdb tmp;
     std::ofstream(tmp.path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
     T v;
@@ -187,18 +168,18 @@ T SessionService::readUpload(const std::string& bytes, const std::function<T(con
     return v;
 }
 
-std::string SessionService::downloadVdb(Session& s, std::optional<int> version) {
+std::string VolumeService::downloadVdb(Session& s, std::optional<int> version) {
     int n = 0;
     std::optional<std::uintmax_t> stored;
     {
         std::lock_guard lock(s.mutex);
         n = version.value_or(s.version);
         checkVersion(s, n);
-        if (m_persist) stored = s.versions.storedBytes(n);
+        if (m_ctx.persist) stored = s.versions.storedBytes(n);
     }
     if (stored) {  // the file as written: no decode, no encode
         try {
-            return m_persist->readVersionFile(s.id, n, *stored);
+            return m_ctx.persist->readVersionFile(s.id, n, *stored);
         } catch (const Error& e) {
             recordDamage(s, n, e.what());
             checkVersion(s, n);
@@ -208,7 +189,7 @@ std::string SessionService::downloadVdb(Session& s, std::optional<int> version) 
     return vdbBytes(olderVersion(s, n));
 }
 
-std::string SessionService::vdbBytes(const core::Volume& v) {
+std::string VolumeService::vdbBytes(const core::Volume& v) {
     TempVdb tmp;
     core::saveVdb(tmp.path.string(), v);
     std::ifstream f(tmp.path, std::ios::binary);

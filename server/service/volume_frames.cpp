@@ -15,7 +15,7 @@
 #include "core/solve/keyframe_solver.h"
 #include "core/volume/vdb_io.h"
 #include "server/store/persistence.h"
-#include "server/service/session_service.h"
+#include "server/service/services.h"
 #include "server/runtime/video_encoder.h"
 
 namespace volstyle::server {
@@ -37,17 +37,17 @@ SessionFrame& frameOf(Session& s, int n) {
 
 }  // namespace
 
-void SessionService::uploadFrame(Session& s, int n, const std::string& bytes) {
+void VolumeService::uploadFrame(Session& s, int n, const std::string& bytes) {
     if (n < 0 || n > protocol::kMaxFrameNumber)
         throw ApiError(ErrorCode::InvalidArgument, "frame numbers are in [0, " + std::to_string(protocol::kMaxFrameNumber) + "]");
     core::Volume v = readUploadedVdb(bytes);
     core::velocityOf(v);  // a velocity grid that cannot be read is refused now, not in the solve
     std::lock_guard lock(s.mutex);
     storeFrame(s, n, std::move(v));
-    saved(s);
+    m_ctx.saved(s);
 }
 
-std::vector<int> SessionService::uploadFrames(Session& s, const std::string& bytes) {
+std::vector<int> VolumeService::uploadFrames(Session& s, const std::string& bytes) {
     std::map<int, core::Volume> frames = readUploadedVdbFrames(bytes);
     for (auto& [n, v] : frames) {
         if (n < 0 || n > protocol::kMaxFrameNumber)
@@ -74,24 +74,24 @@ std::vector<int> SessionService::uploadFrames(Session& s, const std::string& byt
         adding += v.memoryBytes();
         if (s.frames.count(n)) freeing += s.frames.at(n).volume.memoryBytes();
     }
-    m_memory.check(s, adding, freeing, fmt::format("the file's {} frames", frames.size()));
+    m_ctx.memory.check(s, adding, freeing, fmt::format("the file's {} frames", frames.size()));
     for (auto& [n, v] : frames) {
         numbers.push_back(n);
         storeFrame(s, n, std::move(v));
     }
-    saved(s);
+    m_ctx.saved(s);
     return numbers;
 }
 
-void SessionService::storeFrame(Session& s, int n, core::Volume v) {
+void VolumeService::storeFrame(Session& s, int n, core::Volume v) {
     storeFrameChecks(s, n, v);
-    m_memory.check(s, v.memoryBytes(), s.frames.count(n) ? s.frames.at(n).volume.memoryBytes() : 0, "frame " + std::to_string(n));
+    m_ctx.memory.check(s, v.memoryBytes(), s.frames.count(n) ? s.frames.at(n).volume.memoryBytes() : 0, "frame " + std::to_string(n));
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
-    if (m_persist) m_persist->saveFrame(s.id, n, v);
+    if (m_ctx.persist) m_ctx.persist->saveFrame(s.id, n, v);
     s.frames[n] = {std::move(v), false};
 }
 
-void SessionService::storeFrameChecks(const Session& s, int n, const core::Volume& v) {
+void VolumeService::storeFrameChecks(const Session& s, int n, const core::Volume& v) {
     if (!s.frames.count(n) && s.frames.size() >= kMaxFrames)
         throw ApiError(ErrorCode::TooLarge, "the session holds " + std::to_string(kMaxFrames) + " frames already");
     for (const auto& [m, f] : s.frames)
@@ -102,15 +102,15 @@ void SessionService::storeFrameChecks(const Session& s, int n, const core::Volum
                                        n, v.dims().x, v.dims().y, v.dims().z, m, f.volume.dims().x, f.volume.dims().y, f.volume.dims().z));
 }
 
-void SessionService::removeFrame(Session& s, int n) {
+void VolumeService::removeFrame(Session& s, int n) {
     std::lock_guard lock(s.mutex);
     frameOf(s, n);
     s.frames.erase(n);
-    if (m_persist) m_persist->removeFrame(s.id, n);
-    saved(s);
+    if (m_ctx.persist) m_ctx.persist->removeFrame(s.id, n);
+    m_ctx.saved(s);
 }
 
-std::string SessionService::downloadFrame(Session& s, int n) {
+std::string VolumeService::downloadFrame(Session& s, int n) {
     core::Volume v;
     {
         std::lock_guard lock(s.mutex);
@@ -119,7 +119,7 @@ std::string SessionService::downloadFrame(Session& s, int n) {
     return vdbBytes(v);
 }
 
-std::shared_ptr<Job> SessionService::startAnimate(const std::shared_ptr<Session>& session, const protocol::AnimateRequest& q) {
+std::shared_ptr<Job> VolumeService::startAnimate(const std::shared_ptr<Session>& session, const protocol::AnimateRequest& q) {
     {
         std::lock_guard lock(session->mutex);
         if (session->frames.empty()) throw ApiError(ErrorCode::InvalidArgument, "the session has no frames: PUT …/frames/{n} first");
@@ -132,15 +132,15 @@ std::shared_ptr<Job> SessionService::startAnimate(const std::shared_ptr<Session>
             }
         if (!anyKey) throw ApiError(ErrorCode::InvalidArgument, "no view of a frame has a target: add views with \"frame\" and paint them");
     }
-    auto job = queueJob(*session);
-    m_gl->submit([this, job, session, q](core::GpuDevice& device) {
-        runJob(*job, [&] { runAnimate(*job, *session, q, device); });
-        finishJob(*job);
+    auto job = m_ctx.queueJob(*session);
+    m_ctx.gl->submit([this, job, session, q](core::GpuDevice& device) {
+        m_ctx.runJob(*job, [&] { runAnimate(*job, *session, q, device); });
+        m_ctx.finishJob(*job);
     });
     return job;
 }
 
-void SessionService::runAnimate(Job& job, Session& s, const protocol::AnimateRequest& q, core::GpuDevice& device) {
+void VolumeService::runAnimate(Job& job, Session& s, const protocol::AnimateRequest& q, core::GpuDevice& device) {
     // The key frames: the frames with painted views (copied under the lock; solved off it).
     std::vector<core::KeyFrame> keys;
     std::map<int, core::Volume> frames;
@@ -176,7 +176,7 @@ void SessionService::runAnimate(Job& job, Session& s, const protocol::AnimateReq
             job.progress = progress;
         }
         job.emit(JobEvent::Progress, progress);
-        m_gl->runShortTasks(device);
+        m_ctx.gl->runShortTasks(device);
     });
     // Every frame from the key frames, stored (and written) as solved.
     for (auto& [n, v] : frames)
@@ -187,11 +187,11 @@ void SessionService::runAnimate(Job& job, Session& s, const protocol::AnimateReq
         std::lock_guard lock(s.mutex);
         for (auto& [n, v] : frames) {
             if (!s.frames.count(n)) continue;  // removed while the job ran
-            if (m_persist && !s.removed) m_persist->saveFrame(s.id, n, v);
+            if (m_ctx.persist && !s.removed) m_ctx.persist->saveFrame(s.id, n, v);
             s.frames[n] = {std::move(v), true};
             frameNumbers.push_back(n);
         }
-        if (!s.removed) saved(s);
+        if (!s.removed) m_ctx.saved(s);
     }
     spdlog::info("job {}: {} key frames solved, {} frames stored", job.id, keys.size(), frameNumbers.size());
     std::lock_guard lock(job.mutex);
@@ -199,14 +199,14 @@ void SessionService::runAnimate(Job& job, Session& s, const protocol::AnimateReq
     job.result = {{"key_frames", keyNumbers}, {"frames", frameNumbers}, {"change_per_sweep", report.change}};
 }
 
-std::shared_ptr<Job> SessionService::startFramesRender(const std::shared_ptr<Session>& session, const protocol::FramesRenderRequest& q) {
+std::shared_ptr<Job> VolumeService::startFramesRender(const std::shared_ptr<Session>& session, const protocol::FramesRenderRequest& q) {
     {
         std::lock_guard lock(session->mutex);
         if (session->frames.empty()) throw ApiError(ErrorCode::InvalidArgument, "the session has no frames: PUT …/frames/{n} first");
     }
-    auto job = queueJob(*session);
-    m_gl->submit([this, job, session, q](core::GpuDevice& device) {
-        runJob(*job, [&] {
+    auto job = m_ctx.queueJob(*session);
+    m_ctx.gl->submit([this, job, session, q](core::GpuDevice& device) {
+        m_ctx.runJob(*job, [&] {
             std::map<int, core::Volume> frames;
             core::Lighting lighting;
             {
@@ -214,7 +214,7 @@ std::shared_ptr<Job> SessionService::startFramesRender(const std::shared_ptr<Ses
                 for (const auto& [n, f] : session->frames) frames[n] = f.volume;
                 lighting = session->lighting;
             }
-            const std::filesystem::path dir = jobFilesDir(job->id);
+            const std::filesystem::path dir = m_ctx.jobFilesDir(job->id);
             std::filesystem::create_directories(dir);
             core::Renderer renderer(device);
             core::SaveOptions save;
@@ -226,7 +226,7 @@ std::shared_ptr<Job> SessionService::startFramesRender(const std::shared_ptr<Ses
                 core::GpuVolume gpu(v);
                 // Each frame under the render budget, and a cancel stops it within a chunk of its
                 // march (three 4096² frames once ran 360 s, deaf to a cancel at 300 s).
-                const WorkBudget budget(m_limits.renderBudgetSeconds, &job->cancel);
+                const WorkBudget budget(m_ctx.limits.renderBudgetSeconds, &job->cancel);
                 core::Image picture;
                 try {
                     picture = renderer.render(gpu, q.camera, lighting, {}, nullptr, budget);
@@ -244,14 +244,14 @@ std::shared_ptr<Job> SessionService::startFramesRender(const std::shared_ptr<Ses
                     job->progress = progress;
                 }
                 job->emit(JobEvent::Progress, progress);
-                m_gl->runShortTasks(device);
+                m_ctx.gl->runShortTasks(device);
                 ++i;
             }
             std::lock_guard lock(job->mutex);
             job->state = JobState::Done;
             job->result = {{"frames", numbers}, {"frame_urls", urls}};
         });
-        finishJob(*job);
+        m_ctx.finishJob(*job);
     });
     return job;
 }

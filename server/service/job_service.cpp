@@ -1,5 +1,5 @@
 // A solve job on the GL thread: snapshot the session, solve with progress and previews, commit
-// the result as a new version, record the final state (SessionService, SPEC §3 jobs).
+// the result as a new version, record the final state (JobService, SPEC §3 jobs).
 #include <spdlog/spdlog.h>
 
 #include "core/base/errors.h"
@@ -11,11 +11,13 @@
 #include "protocol/error_body.h"
 #include "protocol/render_json.h"
 #include "protocol/solve_json.h"
-#include "server/service/session_service.h"
+#include "server/service/services.h"
 
 namespace volstyle::server {
 namespace {
 
+using protocol::ApiError;
+using protocol::ErrorCode;
 using protocol::JobEvent;
 using protocol::JobState;
 
@@ -43,28 +45,28 @@ SolveInputs snapshot(Session& s) {
 
 }  // namespace
 
-void SessionService::runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr<Session>& s,
+void JobService::runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr<Session>& s,
                               const core::SolveOptions& options, core::GpuDevice& device) {
     {
         std::lock_guard lock(s->mutex);
-        dropPreviews(*s);  // earlier jobs' last iterates: this job's previews replace them
+        m_ctx.dropPreviews(*s);  // earlier jobs' last iterates: this job's previews replace them
     }
-    runJob(*job, [&] { solveAndCommit(*job, s, options, device); });
+    m_ctx.runJob(*job, [&] { solveAndCommit(*job, s, options, device); });
     std::shared_ptr<core::GpuVolume> preview;  // freed here, on the GL thread, when the job is done
     {
         std::lock_guard lock(job->mutex);
         if (job->state == JobState::Done) preview = std::move(job->preview);
     }
-    finishJob(*job);
+    m_ctx.finishJob(*job);
 }
 
-void SessionService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,
+void JobService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,
                                     core::GpuDevice& device) {
     if (options.lights.solve) return solveLightsAndCommit(job, s, options, device);
     SolveInputs in = snapshot(*s);
     // Every view a stroke left alone keeps its rows of W and renders from the last solve.
-    if (!m_solveCache && m_limits.solveCacheBytes > 0) m_solveCache = std::make_unique<core::SolveCache>(m_limits.solveCacheBytes);
-    core::Solver solver(device, in.volume, in.lighting, std::move(in.views), options, m_solveCache.get());
+    if (!m_ctx.solveCache && m_ctx.limits.solveCacheBytes > 0) m_ctx.solveCache = std::make_unique<core::SolveCache>(m_ctx.limits.solveCacheBytes);
+    core::Solver solver(device, in.volume, in.lighting, std::move(in.views), options, m_ctx.solveCache.get());
     auto lastPreview = Clock::now() - std::chrono::hours(1);
     core::SolveResult result = solver.run(
         [&](const core::SolveProgress& p) {
@@ -93,14 +95,14 @@ void SessionService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s,
                 }
                 job.emit(JobEvent::Preview, {{"iteration", p.iteration}, {"urls", urls}});
             }
-            m_gl->runShortTasks(device);  // renders waiting for the GL thread run between iterations
+            m_ctx.gl->runShortTasks(device);  // renders waiting for the GL thread run between iterations
         },
         &job.cancel);
     int version = 0;
     std::shared_ptr<core::GpuVolume> stale;  // freed here, on the GL thread
     {
         std::lock_guard lock(s->mutex);
-        stale = commitVersion(*s, std::move(result.volume));  // on disk before the job reads done;
+        stale = m_ctx.commitVersion(*s, std::move(result.volume));  // on disk before the job reads done;
         version = s->version;                                 // not_found if the session was deleted
     }
     std::lock_guard lock(job.mutex);
@@ -108,7 +110,7 @@ void SessionService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s,
     job.result = {{"version", version}, {"report", protocol::solveReportToJson(result.report)}};
 }
 
-void SessionService::solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,
+void JobService::solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,
                                           core::GpuDevice& device) {
     SolveInputs in = snapshot(*s);
     core::Lighting lighting = core::lightingForLightSolve(in.lighting, options.lights);
@@ -121,7 +123,7 @@ void SessionService::solveLightsAndCommit(Job& job, const std::shared_ptr<Sessio
             job.progress = progress;
         }
         job.emit(JobEvent::Progress, progress);
-        m_gl->runShortTasks(device);  // renders waiting for the GL thread run between iterations
+        m_ctx.gl->runShortTasks(device);  // renders waiting for the GL thread run between iterations
     };
     nlohmann::json result;
     std::optional<core::Volume> volume;
@@ -150,46 +152,51 @@ void SessionService::solveLightsAndCommit(Job& job, const std::shared_ptr<Sessio
         if (lighting.background.fromLobes)  // "lights": {"background": true}: the sky behind is solved too
             s->lighting.background.fromLobes = true, s->lighting.background.environment = nullptr;
         lighting = s->lighting;
-        if (volume) stale = commitVersion(*s, std::move(*volume));  // saves the session, lighting included
-        else saved(*s);
+        if (volume) stale = m_ctx.commitVersion(*s, std::move(*volume));  // saves the session, lighting included
+        else m_ctx.saved(*s);
         result["version"] = s->version;
+        result["lighting"] = protocol::lightingToJson(lighting, s->environmentMap.get());  // naming the session's map "session"
     }
-    result["lighting"] = lightingJson(*s, lighting);
     result["environment_url"] = "/api/v1/sessions/" + s->id + "/lighting/environment.exr";
     std::lock_guard lock(job.mutex);
     job.state = JobState::Done;
     job.result = std::move(result);
 }
 
-void SessionService::runJob(Job& job, const std::function<void()>& work) {
-    if (job.cancel) {
-        job.fail(JobState::Cancelled, protocol::ErrorCode::Cancelled, "cancelled before it started");
-        return;
-    }
-    job.setState(JobState::Running);
-    saved(job);
-    spdlog::info("job {} running", job.id);
-    try {
-        work();
-    } catch (...) {
-        const protocol::ErrorReport e = protocol::describeException(std::current_exception());
-        job.fail(e.code == protocol::ErrorCode::Cancelled ? JobState::Cancelled : JobState::Failed, e.code, e.message, e.details);
-    }
+std::filesystem::path JobService::jobFile(const std::string& jobId, const std::string& name) const {
+    m_ctx.job(jobId);  // not_found for no such job
+    const std::filesystem::path path = m_ctx.jobFilesDir(jobId) / name;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec))
+        throw ApiError(ErrorCode::NotFound, "job '" + jobId + "' has no file '" + name + "' (yet)");
+    return path;
 }
 
-void SessionService::finishJob(Job& job) {
-    JobState state;
+std::shared_ptr<Job> JobService::startSolve(const std::shared_ptr<Session>& session, const core::SolveOptions& options) {
+    Session& s = *session;
+    m_ctx.checkJobQueue(s);
     {
-        std::lock_guard lock(job.mutex);
-        state = job.state;
+        std::lock_guard lock(s.mutex);
+        bool anyTarget = false;
+        for (const auto& v : s.views) anyTarget |= v.target.has_value() && !v.frame;
+        if (!anyTarget)
+            throw ApiError(ErrorCode::InvalidArgument, "no view of the volume has a target (views of an animation's frames are solved by "
+                                                       "POST …/animate); PUT …/views/{vid}/target first");
+        // "views" names views of this session that have targets: check now, not when the job runs.
+        std::vector<protocol::FieldError> problems;
+        for (size_t i = 0; i < options.views.size(); ++i) {
+            auto it = std::find_if(s.views.begin(), s.views.end(), [&](const SessionView& v) { return v.id == options.views[i]; });
+            if (it == s.views.end()) problems.push_back({"/views/" + std::to_string(i), "no view '" + options.views[i] + "' in this session"});
+            else if (!it->target) problems.push_back({"/views/" + std::to_string(i), "view '" + options.views[i] + "' has no target yet"});
+            else if (it->frame)
+                problems.push_back({"/views/" + std::to_string(i), "view '" + options.views[i] + "' shows frame " + std::to_string(*it->frame) +
+                                                                       " of the animation: POST …/animate solves it"});
+        }
+        if (!problems.empty()) throw protocol::ValidationError(problems);
     }
-    spdlog::info("job {} {}", job.id, protocol::jobStateName(state));
-    try {
-        saved(job);
-    } catch (const std::exception& e) {
-        spdlog::error("job {}: cannot record its end: {}", job.id, e.what());
-    }
-    job.emit(protocol::finalEvent(state), job.toJson());
+    auto job = m_ctx.queueJob(s);
+    m_ctx.gl->submit([this, job, session, options](core::GpuDevice& device) { runSolve(job, session, options, device); });
+    return job;
 }
 
 }  // namespace volstyle::server

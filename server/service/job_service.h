@@ -1,0 +1,32 @@
+#pragma once
+/// \file job_service.h
+/// Solve jobs (SPEC §2–3) and every job's lookup, files and cancel: a solve is checked when it
+/// is asked for, recorded, and run on the GL thread, which commits its result as a new version.
+
+#include "server/service/service_context.h"
+
+namespace volstyle::server {
+
+class JobService {
+public:
+    explicit JobService(ServiceContext& ctx) : m_ctx(ctx) {}
+
+    std::shared_ptr<Job> startSolve(const std::shared_ptr<Session>& s, const core::SolveOptions& options);
+    std::shared_ptr<Job> job(const std::string& id) const { return m_ctx.job(id); }  ///< ApiError not_found
+    /// The path of a file job `jobId` wrote (frame_00000.png, video.mp4); not_found without it.
+    std::filesystem::path jobFile(const std::string& jobId, const std::string& name) const;
+    void cancel(Job& job) { job.cancel = true; }
+
+private:
+    // The solve job on the GL thread (solve_job.cpp).
+    void runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,
+                  core::GpuDevice& device);
+    void solveAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options, core::GpuDevice& device);
+    /// "unknowns": ["lights", …]: the environment lobes (and the volume's unknowns in turn); the
+    /// session's lighting gets the solved radiances (and the volume a new version).
+    void solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options, core::GpuDevice& device);
+
+    ServiceContext& m_ctx;
+};
+
+}  // namespace volstyle::server

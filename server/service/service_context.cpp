@@ -1,0 +1,253 @@
+#include "server/service/service_context.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <filesystem>
+
+#include "core/base/errors.h"
+#include "core/render/gpu_volume.h"
+#include "core/render/renderer.h"
+#include "core/solve/solve_cache.h"
+#include "core/stylize/stylizer.h"
+#include "core/translucent/translucent_renderer.h"
+#include "protocol/error_body.h"
+#include "protocol/stylize_json.h"
+#include "server/runtime/gl_worker.h"
+#include "server/runtime/mesh_reader.h"
+
+namespace volstyle::server {
+namespace {
+
+using protocol::ApiError;
+using protocol::ErrorCode;
+using protocol::JobState;
+
+}  // namespace
+
+ServiceContext::ServiceContext(ServiceLimits serviceLimits, const std::string& dataDir, std::unique_ptr<GlExecutor> executor)
+    : limits(std::move(serviceLimits)), sessions(limits.maxSessions), gl(executor ? std::move(executor) : std::make_unique<GlWorker>()) {
+    if (!dataDir.empty()) {
+        persist = std::make_unique<Persistence>(dataDir, [this](const std::string& bytes, const std::string& format) {
+            core::MeshLimits meshLimits = limits.meshLimits;
+            meshLimits.maxFileBytes = std::max(meshLimits.maxFileBytes, bytes.size());  // accepted once: the file limit may have changed since
+            return loadUntrustedMesh(bytes, format, meshLimits, limits.vdbReader);
+        });
+        for (auto& s : persist->loadSessions()) {
+            memory.recount(*s);
+            sessions.restore(s);
+        }
+        for (auto& j : persist->loadJobs()) jobs.restore(j);
+        pruneJobs();
+        spdlog::info("restored {} session(s) from '{}'", sessions.size(), dataDir);
+    } else {
+        scratch = std::filesystem::temp_directory_path() / ("volstyle-jobs-" + SessionStore::newId());
+    }
+}
+
+ServiceContext::~ServiceContext() {
+    // Stop the solves (a running one ends at its next iteration, queued ones before they start),
+    // then free every GPU object on the GL thread while the context lives: the last short task
+    // runs before the worker drains the cancelled solves, which create nothing on the way out.
+    for (auto& j : jobs.all()) j->cancel = true;
+    try {
+        if (gl->used()) freeGpuObjects();  // nothing to free when nothing ever ran on GL
+    } catch (const std::exception& e) {
+        spdlog::debug("shutting down: the GPU objects were not freed on the GL thread: {}", e.what());
+    }
+    std::error_code ec;
+    if (!scratch.empty()) std::filesystem::remove_all(scratch, ec);
+}
+
+void ServiceContext::freeGpuObjects() {
+    gl->run([this](core::GpuDevice&) {
+        for (auto& s : sessions.all()) {
+            std::lock_guard lock(s->mutex);
+            s->gpu.reset();
+        }
+        for (auto& j : jobs.all()) {
+            std::lock_guard lock(j->mutex);
+            j->preview.reset();
+        }
+        rendererEngine.reset();
+        stylizer.reset();
+        translucent.reset();
+        solveCache.reset();
+    });
+}
+
+void ServiceContext::saved(Session& s) {
+    if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+    if (persist) persist->saveSession(s);
+    memory.recount(s);  // what it holds now, whatever changed
+}
+
+void ServiceContext::saved(const Job& j) {
+    std::lock_guard lock(jobRecords);
+    if (persist && !j.forgotten) persist->saveJob(j);
+}
+
+void ServiceContext::pruneJobs() {
+    std::error_code ec;
+    for (const auto& j : jobs.prune(limits.finishedJobsKept)) {
+        {
+            std::lock_guard lock(jobRecords);
+            j->forgotten = true;
+            if (persist) persist->removeJob(j->id);
+            else std::filesystem::remove_all(jobFilesDir(j->id), ec);
+        }
+        if (auto s = sessions.find(j->session)) {
+            std::lock_guard lock(s->mutex);
+            std::erase(s->jobs, j->id);
+        }
+        std::shared_ptr<core::GpuVolume> preview;
+        {
+            std::lock_guard lock(j->mutex);
+            preview = std::move(j->preview);
+        }
+        release(std::move(preview));
+    }
+}
+
+std::shared_ptr<Session> ServiceContext::find(const std::string& id) const {
+    auto s = sessions.find(id);
+    if (!s) throw ApiError(ErrorCode::NotFound, "no session '" + id + "'");
+    return s;
+}
+
+core::Lighting ServiceContext::lighting(Session& s) const {
+    std::lock_guard lock(s.mutex);
+    return s.lighting;
+}
+
+SessionView ServiceContext::view(Session& s, const std::string& viewId) const {
+    std::lock_guard lock(s.mutex);
+    return findView(s, viewId);
+}
+
+void ServiceContext::checkUploadSize(const std::string& bytes, const std::string& what) const {
+    if (bytes.size() > limits.maxUploadBytes)
+        throw ApiError(ErrorCode::TooLarge, what + " is " + std::to_string(bytes.size()) + " bytes; the upload limit is " +
+                                                std::to_string(limits.maxUploadBytes) + " bytes");
+}
+
+void ServiceContext::dropPreviews(const Session& s) {
+    for (const auto& jid : s.jobs) {
+        auto j = jobs.find(jid);
+        if (!j) continue;
+        std::lock_guard lock(j->mutex);
+        if (j->isFinished()) j->preview.reset();
+    }
+}
+
+std::shared_ptr<Job> ServiceContext::job(const std::string& id) const {
+    auto j = jobs.find(id);
+    if (!j) throw ApiError(ErrorCode::NotFound, "no job '" + id + "'");
+    return j;
+}
+
+std::shared_ptr<Job> ServiceContext::queueJob(Session& s) {
+    checkJobQueue(s);
+    pruneJobs();
+    auto job = jobs.add(s.id);
+    saved(*job);
+    {
+        std::lock_guard lock(s.mutex);
+        s.jobs.push_back(job->id);
+        saved(s);
+    }
+    spdlog::info("job {} queued (session {})", job->id, s.id);
+    return job;
+}
+
+void ServiceContext::checkJobQueue(const Session& s) const {
+    if (jobs.pending(s.id) >= limits.maxQueuedJobs)
+        throw ApiError(ErrorCode::TooManyJobs, "session '" + s.id + "' already has " + std::to_string(limits.maxQueuedJobs) +
+                                                   " queued jobs (the limit); wait or cancel one");
+}
+
+std::filesystem::path ServiceContext::jobFilesDir(const std::string& jobId) const {
+    return persist ? persist->jobFilesDir(jobId) : scratch / jobId;
+}
+
+std::shared_ptr<core::GpuVolume> ServiceContext::commitVersion(Session& s, core::Volume volume) {
+    const int n = s.versions.newest() + 1;  // after damaged ones too: numbers are never reused
+    s.versions.retire(s.version, std::move(s.volume));
+    s.volume = std::move(volume);
+    s.version = n;
+    s.versions.add(n);
+    saved(s);
+    if (s.stylizer.scene.volume) stylizerChanged(s);  // its medium is the session's volume: live frames follow
+    return std::move(s.gpu);
+}
+
+void ServiceContext::release(std::shared_ptr<core::GpuVolume> gpu) {
+    if (gpu) gl->run([gpu = std::move(gpu)](core::GpuDevice&) mutable { gpu.reset(); });
+}
+
+core::Renderer& ServiceContext::renderer(core::GpuDevice& device) {
+    if (!rendererEngine) rendererEngine = std::make_unique<core::Renderer>(device);
+    return *rendererEngine;
+}
+
+std::shared_ptr<core::GpuVolume> ServiceContext::sessionGpu(Session& s) {
+    if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+    if (!s.gpu) s.gpu = std::make_shared<core::GpuVolume>(s.volume);
+    return s.gpu;
+}
+
+std::shared_ptr<core::GpuVolume> ServiceContext::lockedSessionGpu(Session& s) {
+    // The lock covers only finding (or uploading) the GPU copy, not the render: reads of the
+    // session (a VDB download, its JSON) never wait for GL work. Locking on the GL thread is safe
+    // even between a solve's iterations: the solve holds no session lock then.
+    std::lock_guard lock(s.mutex);
+    return sessionGpu(s);
+}
+
+void ServiceContext::stylizerChanged(Session& s, bool history) {
+    if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+    if (persist) {
+        if (history) persist->saveStylizerHistory(s.id, s.stylizer.undo, s.stylizer.redo);
+        persist->saveStylizerScene(s.id, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), s.stylizer.revision + 1);
+    }
+    ++s.stylizer.revision;
+    s.stylizerChanged.notify_all();
+}
+
+core::Stylizer& ServiceContext::stylizerEngine(core::GpuDevice& device) {
+    if (!stylizer) stylizer = std::make_unique<core::Stylizer>(device);
+    return *stylizer;
+}
+
+void ServiceContext::runJob(Job& job, const std::function<void()>& work) {
+    if (job.cancel) {
+        job.fail(JobState::Cancelled, protocol::ErrorCode::Cancelled, "cancelled before it started");
+        return;
+    }
+    job.setState(JobState::Running);
+    saved(job);
+    spdlog::info("job {} running", job.id);
+    try {
+        work();
+    } catch (...) {
+        const protocol::ErrorReport e = protocol::describeException(std::current_exception());
+        job.fail(e.code == protocol::ErrorCode::Cancelled ? JobState::Cancelled : JobState::Failed, e.code, e.message, e.details);
+    }
+}
+
+void ServiceContext::finishJob(Job& job) {
+    JobState state;
+    {
+        std::lock_guard lock(job.mutex);
+        state = job.state;
+    }
+    spdlog::info("job {} {}", job.id, protocol::jobStateName(state));
+    try {
+        saved(job);
+    } catch (const std::exception& e) {
+        spdlog::error("job {}: cannot record its end: {}", job.id, e.what());
+    }
+    job.emit(protocol::finalEvent(state), job.toJson());
+}
+
+}  // namespace volstyle::server

@@ -1,0 +1,96 @@
+#pragma once
+/// \file service_context.h
+/// What the session services share (issue #36): the limits, the memory budget, the session and
+/// job tables, the store, the GL executor and the engines that live on its thread, and the steps
+/// every service takes — write a change before answering (`saved`), make a volume the newest
+/// version, queue and run a job, find a session's GPU copy. Each service (sessions, volumes and
+/// frames, stylizer, jobs) is a small class on one context.
+///
+/// Rules: every change is on disk (the store) before a method returns; GL work runs on the
+/// GlExecutor; a session's lock is never held while waiting for the GL thread (a finishing solve
+/// needs it).
+
+#include "server/service/service_types.h"
+
+namespace volstyle::server {
+
+struct ServiceContext {
+    /// Restores sessions and jobs from `dataDir` (empty: in memory only). GL work goes to `gl`;
+    /// none given: its own GL thread (GlWorker).
+    ServiceContext(ServiceLimits limits, const std::string& dataDir, std::unique_ptr<GlExecutor> gl);
+    ~ServiceContext();  ///< cancels the jobs and frees GPU objects on the GL thread
+    ServiceContext(const ServiceContext&) = delete;
+    ServiceContext& operator=(const ServiceContext&) = delete;
+
+    // Lookups.
+    std::shared_ptr<Session> find(const std::string& id) const;  ///< ApiError not_found
+    std::shared_ptr<Job> job(const std::string& id) const;       ///< ApiError not_found
+    SessionView view(Session& s, const std::string& viewId) const;  ///< a copy; ApiError not_found
+    core::Lighting lighting(Session& s) const;
+
+    // Writing what changed.
+    /// Throws not_found if `s` was deleted; else writes it and recounts its memory (its lock held).
+    void saved(Session& s);
+    void saved(const Job& j);
+    /// Forgets the oldest finished jobs beyond ServiceLimits::finishedJobsKept: memory, record
+    /// on disk, the id in its session's list, and its preview copy (freed on the GL thread).
+    void pruneJobs();
+    void checkUploadSize(const std::string& bytes, const std::string& what) const;
+
+    // Volume versions.
+    /// Makes `volume` the newest version, on disk before it returns. Call with the session's
+    /// lock held; returns the stale GPU copy (release() it after unlocking).
+    std::shared_ptr<core::GpuVolume> commitVersion(Session& s, core::Volume volume);
+    void release(std::shared_ptr<core::GpuVolume> gpu);
+    /// Writes the stylizer's scene, moves its revision and wakes its streams (the lock held).
+    /// `history`: the undo/redo stacks changed too (written apart from the scene).
+    void stylizerChanged(Session& s, bool history = false);
+
+    // Jobs.
+    /// A new job of session `s` (too_many_jobs at its queue limit), recorded and listed.
+    std::shared_ptr<Job> queueJob(Session& s);
+    void checkJobQueue(const Session& s) const;  ///< too_many_jobs at the session's queue limit
+    /// Runs `work` as the job's body: cancelled before it starts, or running (recorded) until it
+    /// returns (it sets the result and done) or throws (failed or cancelled, with the error).
+    void runJob(Job& job, const std::function<void()>& work);
+    void finishJob(Job& job);
+    /// Where a job's files go: its folder in the data directory, or in `scratch`.
+    std::filesystem::path jobFilesDir(const std::string& jobId) const;
+    /// On the GL thread: frees the preview copies of the session's finished jobs.
+    void dropPreviews(const Session& s);
+
+    // The GL thread's engines (created on first use, GL thread only).
+    core::Renderer& renderer(core::GpuDevice& device);
+    core::Stylizer& stylizerEngine(core::GpuDevice& device);
+    /// On the GL thread, with the session's lock held: the session's GPU copy, uploaded if there
+    /// is none (not_found once removed). Shared, so a render can drop the lock and keep it alive.
+    std::shared_ptr<core::GpuVolume> sessionGpu(Session& s);
+    /// On the GL thread: sessionGpu() under the session's lock, released before any GL work.
+    std::shared_ptr<core::GpuVolume> lockedSessionGpu(Session& s);
+    /// On the GL thread: frees every session's GPU copy, every job's preview and the engines.
+    void freeGpuObjects();
+
+    /// A slot of decodeSlots, held while an upload's pixels are decoded.
+    struct DecodeSlot {
+        explicit DecodeSlot(std::counting_semaphore<>& s) : slots(s) { slots.acquire(); }
+        ~DecodeSlot() { slots.release(); }
+        std::counting_semaphore<>& slots;
+    };
+    static constexpr int kConcurrentDecodes = 2;
+
+    ServiceLimits limits;
+    MemoryBudget memory{limits.memory};
+    SessionStore sessions;
+    JobStore jobs;
+    std::mutex jobRecords;  ///< orders writing a job's record against forgetting it
+    std::unique_ptr<Persistence> persist;  ///< null: in memory only
+    std::filesystem::path scratch;          ///< job files without a data directory (removed at exit)
+    std::counting_semaphore<> decodeSlots{kConcurrentDecodes};
+    std::unique_ptr<core::Renderer> rendererEngine;             ///< GL thread only
+    std::unique_ptr<core::Stylizer> stylizer;                   ///< GL thread only
+    std::unique_ptr<core::TranslucentRenderer> translucent;     ///< GL thread only; created on first use
+    std::unique_ptr<core::SolveCache> solveCache;               ///< GL thread only; created by the first solve
+    std::unique_ptr<GlExecutor> gl;  ///< last: destroyed first, so its thread stops before the engines go
+};
+
+}  // namespace volstyle::server

@@ -1,0 +1,112 @@
+#pragma once
+/// \file service_types.h
+/// The values the session services take and return (issue #36: core and protocol values, no
+/// JSON): their limits, and what stylizer calls answer.
+
+#include <chrono>
+#include <mutex>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <semaphore>
+#include <string>
+#include <vector>
+
+#include "core/image/image.h"
+#include "core/render/renderer.h"
+#include "core/scene/camera.h"
+#include "core/scene/lighting.h"
+#include "core/scene/render_settings.h"
+#include "core/scene/solve_options.h"
+#include "core/volume/volume.h"
+#include "protocol/render_json.h"
+#include "protocol/requests.h"
+#include "server/runtime/gl_executor.h"
+#include "server/state/job_store.h"
+#include "server/service/memory_budget.h"
+#include "server/store/persistence.h"
+#include "server/state/session_store.h"
+#include "server/runtime/vdb_reader.h"
+#include "server/state/stylizer_state.h"
+
+namespace volstyle::core {
+class Stylizer;
+class SolveCache;
+class TranslucentRenderer;
+struct TranslucentSettings;
+struct StylizedFrame;
+}  // namespace volstyle::core
+
+namespace volstyle::server {
+
+struct ServiceLimits {
+    size_t maxSessions = 64;
+    size_t maxQueuedJobs = 4;  ///< per session
+    size_t maxUploadBytes = size_t(512) << 20;
+    int maxImageSide = 4096;
+    core::VolumeLimits volumeLimits;
+    /// Occluder meshes: each file (also within maxUploadBytes) and its vertices and triangles;
+    /// maxVertices also bounds the vertices of all a session's uploads together.
+    core::MeshLimits meshLimits;
+    size_t maxMeshesPerSession = 16;
+    /// Seconds a render or preview may hold the GL thread (over: 422 over_budget); <= 0: unbounded.
+    double renderBudgetSeconds = 60;
+    VdbReaderOptions vdbReader;  ///< uploads are read in a child process first (vdb_reader.h)
+    /// Finished jobs kept (memory and disk; GET /jobs/{id} of an older one: 404). Unfinished
+    /// jobs are always kept.
+    size_t finishedJobsKept = 256;
+    /// GPU memory for the parts one solve leaves for the next (core/solve/solve_cache.h), shared by
+    /// every session: the keys name content, not sessions. 0: every solve starts cold.
+    size_t solveCacheBytes = size_t(1) << 30;
+    /// Decoded bytes a session, and all sessions, may hold (memory_budget.h; over: 507).
+    MemoryLimits memory;
+};
+
+enum class ViewImage { Target, Weights, Background };
+/// "target", "weights", "background": its name in routes, files and "has_…" fields.
+const char* viewImageName(ViewImage kind);
+
+/// What a session's stylizer renders (a copy: the meshes are shared, not copied).
+struct StylizerSnapshot {
+    core::StylizerScene scene;
+    std::vector<std::string> meshRefs;
+    uint64_t revision = 0;
+};
+
+/// What a click at a pixel of the stylizer's frame finds (POST …/stylizer/pick): the pixel's TF
+/// position (V̄ and linear depth d), its distance, the occluder seen there and the point.
+struct StylizerPick {
+    int x = 0, y = 0;
+    double vBar = 0, depth = 0, distance = 0;
+    int occluder = -1;         ///< index in the scene; −1: the sky (no surface)
+    std::string occluderName;  ///< empty for the sky
+    Vec3d position;            ///< the world point at `distance` along the pixel's ray
+    core::TfAnchor anchor;     ///< what the request's `anchor` asked for (position empty for "none")
+    /// The TF a constraint there goes into: on a path whose keys carry TFs, the key nearest the
+    /// time (its depth range gives `depth`); −1: the scene's own.
+    int key = -1;
+};
+
+/// A constraint clicked into the scene (POST …/stylizer/constraints).
+struct AddedTfConstraint {
+    StylizerPick pick;
+    int layer = 0, index = 0;  ///< where it went: transfer_function/layers/{layer}/constraints/{index}
+    int key = -1;              ///< … of key frame `key` (on a path whose keys carry TFs); −1: the scene's TF
+    core::TfConstraint constraint;
+    uint64_t revision = 0;
+};
+
+struct OccluderMeshInfo {
+    std::string name, format;
+    size_t vertices = 0, triangles = 0, fileBytes = 0;
+    Vec3 boundsLo, boundsHi;  ///< in the mesh's own space
+    bool used = false;              ///< the scene's occluders use it
+};
+
+struct TransferImageInfo {
+    int width = 0, height = 0, channels = 0;
+    bool used = false;  ///< the scene has a transfer_function
+};
+
+}  // namespace volstyle::server

@@ -1,0 +1,30 @@
+#pragma once
+/// \file services.h
+/// The session services on one shared context (issue #36): what the HTTP routes call. Each is a
+/// small class taking and returning core and protocol values (no JSON); the context holds what
+/// they share (service_context.h).
+
+#include <memory>
+#include <string>
+
+#include "server/service/job_service.h"
+#include "server/service/sessions_service.h"
+#include "server/service/stylizer_service.h"
+#include "server/service/volume_service.h"
+
+namespace volstyle::server {
+
+struct Services {
+    /// Restores sessions and jobs from `dataDir` (empty: in memory only); GL work goes to `gl`
+    /// (none: its own GL thread).
+    Services(ServiceLimits limits, const std::string& dataDir, std::unique_ptr<GlExecutor> gl = nullptr)
+        : context(std::move(limits), dataDir, std::move(gl)) {}
+
+    ServiceContext context;
+    SessionsService sessions{context};
+    VolumeService volumes{context};
+    StylizerService stylizer{context};
+    JobService jobs{context};
+};
+
+}  // namespace volstyle::server

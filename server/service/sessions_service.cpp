@@ -1,0 +1,179 @@
+#include "server/service/services.h"
+
+#include "core/solve/solve_cache.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <ctime>
+#include <filesystem>
+
+#include "core/base/errors.h"
+#include "core/image/image_io.h"
+#include "core/render/gpu_volume.h"
+#include "core/render/renderer.h"
+#include "core/translucent/translucent_renderer.h"
+#include "core/stylize/stylizer.h"
+#include "core/volume/builtin_scenes.h"
+#include "server/runtime/gl_worker.h"
+#include "server/runtime/mesh_reader.h"
+
+namespace volstyle::server {
+namespace {
+
+using protocol::ApiError;
+using protocol::ErrorCode;
+
+}  // namespace
+
+std::shared_ptr<Session> SessionsService::create(const protocol::CreateSessionRequest& request) {
+    // Refuse before building the scene (a 256³ one takes seconds); add() re-checks under its lock.
+    if (m_ctx.sessions.size() >= m_ctx.limits.maxSessions) throw tooManySessions(m_ctx.limits.maxSessions);
+    auto s = std::make_shared<Session>();
+    s->created = isoNow();
+    s->scene = request.scene;
+    m_ctx.memory.checkNew(size_t(request.resolution) * request.resolution * request.resolution * 9 * sizeof(float), "a new session");
+    s->volume = core::makeBuiltinScene(request.builtinName(), request.resolution);  // InvalidArgument lists the scenes
+    s->lighting = core::defaultLighting();
+    s->versions.add(1);
+    m_ctx.sessions.add(s);
+    std::lock_guard lock(s->mutex);
+    m_ctx.saved(*s);
+    return s;
+}
+
+void SessionsService::remove(const std::string& id) {
+    auto s = m_ctx.sessions.remove(id);
+    if (!s) throw ApiError(ErrorCode::NotFound, "no session '" + id + "'");
+    std::vector<std::string> jobs;
+    {
+        std::lock_guard lock(s->mutex);
+        s->removed = true;  // from now on nothing writes it back or caches a GPU copy
+        m_ctx.memory.forget(*s);
+        jobs = s->jobs;
+        if (m_ctx.persist) m_ctx.persist->removeSession(s->id);
+    }
+    s->stylizerChanged.notify_all();  // its live streams end
+    bool holdsGpu = false;
+    {
+        std::lock_guard lock(s->mutex);
+        holdsGpu = s->gpu != nullptr;
+    }
+    for (const auto& jid : jobs)
+        if (auto j = m_ctx.jobs.find(jid)) {
+            j->cancel = true;
+            std::lock_guard lock(j->mutex);
+            holdsGpu |= j->preview != nullptr;
+        }
+    if (!holdsGpu) return;  // nothing for the GL thread to free
+    m_ctx.gl->run([this, s](core::GpuDevice&) {
+        std::lock_guard lock(s->mutex);
+        s->gpu.reset();
+        m_ctx.dropPreviews(*s);
+    });
+}
+
+core::Lighting SessionsService::setLighting(Session& s, const protocol::LightingRequest& request) {
+    std::lock_guard lock(s.mutex);
+    s.lighting = request.resolve(s.environmentMap);
+    m_ctx.saved(s);
+    return s.lighting;
+}
+
+std::shared_ptr<const core::Image> SessionsService::environmentMapIfAny(Session& s) const {
+    std::lock_guard lock(s.mutex);
+    return s.environmentMap;
+}
+
+SessionView SessionsService::addView(Session& s, const core::Camera& camera, std::optional<int> frame) {
+    std::lock_guard lock(s.mutex);
+    s.views.push_back({"v" + std::to_string(s.nextView++), camera, std::nullopt, std::nullopt, nullptr, frame});
+    m_ctx.saved(s);
+    return s.views.back();
+}
+
+void SessionsService::removeView(Session& s, const std::string& viewId) {
+    std::lock_guard lock(s.mutex);
+    findView(s, viewId);  // 404 if absent
+    std::erase_if(s.views, [&](const SessionView& v) { return v.id == viewId; });
+    if (m_ctx.persist) m_ctx.persist->removeView(s.id, viewId);
+    m_ctx.saved(s);
+}
+
+const char* viewImageName(ViewImage kind) {
+    switch (kind) {
+        case ViewImage::Target: return "target";
+        case ViewImage::Weights: return "weights";
+        default: return "background";
+    }
+}
+
+SessionView SessionsService::setViewImage(Session& s, const std::string& viewId, ViewImage kind, const std::string& bytes) {
+    const bool isTarget = kind == ViewImage::Target;
+    const std::string what = isTarget ? "the target" : kind == ViewImage::Weights ? "the weight image" : "the background plate";
+    m_ctx.checkUploadSize(bytes, what);
+    const core::Camera camera = m_ctx.view(s, viewId).camera;  // 404 before any decode
+    // The size is checked from the header, before any pixel is decoded, and at most
+    // kConcurrentDecodes uploads decode at once: six parallel 4096² PNGs to a 64² view once took
+    // 5.8 GiB to refuse.
+    std::optional<ServiceContext::DecodeSlot> slot;
+    const auto checkHeader = [&](int width, int height) {
+        if (width != camera.width || height != camera.height)
+            throw ApiError(ErrorCode::InvalidArgument, "the image is " + std::to_string(width) + "x" + std::to_string(height) +
+                                                           " but view " + viewId + " renders " + std::to_string(camera.width) +
+                                                           "x" + std::to_string(camera.height));
+        slot.emplace(m_ctx.decodeSlots);
+    };
+    core::Image image;
+    try {
+        const core::LoadedImage loaded = core::loadImageFromMemory(bytes.data(), bytes.size(), what, m_ctx.limits.maxImageSide, checkHeader);
+        image = isTarget ? core::pictureOf(loaded) : loaded.image;  // a render EXR as a target: the picture it shows
+    } catch (const Error& e) {
+        throw ApiError(ErrorCode::UnsupportedMedia, e.what());  // undecodable, or over the side limit
+    }
+    // Weights are the target's alpha (or the weight image's first channel), a plate is radiance:
+    // negative values would be solved on silently; refuse them here, where the client can fix the
+    // file. (The decoder already refuses NaN and Inf.)
+    const int channels = isTarget ? 4 : kind == ViewImage::Weights ? 1 : 3;
+    size_t negative = 0;
+    for (size_t i = 0; i < image.pixelCount(); ++i)
+        for (int c = 0; c < channels; ++c) negative += image.rgba[4 * i + size_t(c)] < 0 ? 1 : 0;
+    if (negative)
+        throw ApiError(ErrorCode::InvalidArgument, what + " has " + std::to_string(negative) +
+                                                       " negative values; colours and weights must be >= 0");
+    if (kind == ViewImage::Background)  // a plate is opaque: its alpha means nothing
+        for (size_t i = 0; i < image.pixelCount(); ++i) image.rgba[4 * i + 3] = 1;
+    slot.reset();
+    std::lock_guard lock(s.mutex);
+    SessionView& v = findView(s, viewId);  // views keep their camera: the header check still holds
+    const std::optional<core::Image>& held = kind == ViewImage::Target ? v.target : v.weights;
+    const size_t replaced = kind == ViewImage::Background ? (v.background ? v.background->rgba.size() : 0) : (held ? held->rgba.size() : 0);
+    m_ctx.memory.check(s, image.rgba.size() * sizeof(float), replaced * sizeof(float), "the " + std::string(viewImageName(kind)) + " of " + v.id);
+    if (m_ctx.persist) m_ctx.persist->saveViewImage(s.id, v.id, viewImageName(kind), image);
+    switch (kind) {
+        case ViewImage::Target: v.target = std::move(image); break;
+        case ViewImage::Weights: v.weights = std::move(image); break;
+        case ViewImage::Background: v.background = std::make_shared<const core::Image>(std::move(image)); break;
+    }
+    m_ctx.saved(s);
+    return v;
+}
+
+SessionView SessionsService::removeViewImage(Session& s, const std::string& viewId, ViewImage kind) {
+    std::lock_guard lock(s.mutex);
+    SessionView& v = findView(s, viewId);
+    const bool had = kind == ViewImage::Target ? v.target.has_value() : kind == ViewImage::Weights ? v.weights.has_value() : bool(v.background);
+    if (!had) throw ApiError(ErrorCode::NotFound, "view " + v.id + " has no " + viewImageName(kind));
+    if (m_ctx.persist) m_ctx.persist->removeViewImage(s.id, v.id, viewImageName(kind));
+    if (kind == ViewImage::Target) v.target.reset();
+    else if (kind == ViewImage::Weights) v.weights.reset();
+    else v.background.reset();
+    m_ctx.saved(s);
+    return v;
+}
+
+std::vector<QuarantineEntry> SessionsService::quarantine() const {
+    return m_ctx.persist ? m_ctx.persist->quarantine() : std::vector<QuarantineEntry>{};
+}
+
+}  // namespace volstyle::server
