@@ -16,11 +16,6 @@
 namespace volstyle::server {
 namespace {
 
-using protocol::ApiError;
-using protocol::ErrorCode;
-using protocol::JobEvent;
-using protocol::JobState;
-
 /// Previews are announced at most this often: each costs a download and an upload of the iterate.
 constexpr auto kPreviewInterval = std::chrono::seconds(1);
 

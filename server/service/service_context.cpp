@@ -17,14 +17,6 @@
 #include "server/runtime/mesh_reader.h"
 
 namespace volstyle::server {
-namespace {
-
-using protocol::ApiError;
-using protocol::ErrorCode;
-using protocol::JobState;
-
-}  // namespace
-
 ServiceContext::ServiceContext(ServiceLimits serviceLimits, const std::string& dataDir, std::unique_ptr<GlExecutor> executor)
     : limits(std::move(serviceLimits)), sessions(limits.maxSessions), gl(executor ? std::move(executor) : std::make_unique<GlWorker>()) {
     if (!dataDir.empty()) {

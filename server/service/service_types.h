@@ -40,6 +40,12 @@ struct StylizedFrame;
 
 namespace volstyle::server {
 
+// The API's error and job vocabulary, as every service names it.
+using protocol::ApiError;
+using protocol::ErrorCode;
+using protocol::JobEvent;
+using protocol::JobState;
+
 struct ServiceLimits {
     size_t maxSessions = 64;
     size_t maxQueuedJobs = 4;  ///< per session

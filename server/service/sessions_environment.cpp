@@ -9,9 +9,6 @@
 namespace volstyle::server {
 namespace {
 
-using protocol::ApiError;
-using protocol::ErrorCode;
-
 const std::string kEnvironmentFile = "environment.image";
 
 bool namesMap(const core::Lighting& l, const core::Image* map) {

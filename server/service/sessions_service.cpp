@@ -19,13 +19,6 @@
 #include "server/runtime/mesh_reader.h"
 
 namespace volstyle::server {
-namespace {
-
-using protocol::ApiError;
-using protocol::ErrorCode;
-
-}  // namespace
-
 std::shared_ptr<Session> SessionsService::create(const protocol::CreateSessionRequest& request) {
     // Refuse before building the scene (a 256³ one takes seconds); add() re-checks under its lock.
     if (m_ctx.sessions.size() >= m_ctx.limits.maxSessions) throw tooManySessions(m_ctx.limits.maxSessions);

@@ -18,11 +18,6 @@
 namespace volstyle::server {
 namespace {
 
-using protocol::ApiError;
-using protocol::ErrorCode;
-using protocol::JobEvent;
-using protocol::JobState;
-
 /// A sequence's frames at most: 10 minutes at 24 fps; and its pixels, all frames together (about
 /// 1,000 frames of 1920×1080, a few GB of PNG on disk).
 constexpr size_t kMaxSequenceFrames = 14400;

@@ -17,9 +17,6 @@
 namespace volstyle::server {
 namespace {
 
-using protocol::ApiError;
-using protocol::ErrorCode;
-
 using Clock = std::chrono::steady_clock;
 
 

@@ -17,9 +17,6 @@
 namespace volstyle::server {
 namespace {
 
-using protocol::ApiError;
-using protocol::ErrorCode;
-
 std::string meshFile(const std::string& name, const std::string& format) { return "stylizer/occluders/" + name + "." + format; }
 const std::string kTransferFile = "stylizer/tf.image";
 

@@ -21,11 +21,6 @@
 namespace volstyle::server {
 namespace {
 
-using protocol::ApiError;
-using protocol::ErrorCode;
-using protocol::JobEvent;
-using protocol::JobState;
-
 /// An animation's frames at most (each a volume in memory).
 constexpr size_t kMaxFrames = 1000;
 

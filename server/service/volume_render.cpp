@@ -14,8 +14,6 @@ namespace volstyle::server {
 /// 8e7/s, halved for a slower machine of the kind).
 constexpr double kTranslucentTexelsPerSecond = 4e7;
 
-using protocol::ApiError;
-using protocol::ErrorCode;
 
 core::Lighting VolumeService::viewLighting(Session& s, const SessionView& v) {
     core::Lighting l = m_ctx.lighting(s);

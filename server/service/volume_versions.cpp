@@ -19,9 +19,6 @@
 namespace volstyle::server {
 namespace {
 
-using protocol::ApiError;
-using protocol::ErrorCode;
-
 /// A private temporary file, removed when this goes out of scope (OpenVDB reads and writes files).
 struct TempVdb {
     std::filesystem::path path =
