@@ -1,6 +1,7 @@
 #include "core/stylize/tf_layers.h"
 
 #include <algorithm>
+#include <functional>
 #include <memory>
 #include <cmath>
 #include <string>
@@ -141,6 +142,53 @@ std::array<double, 4> sampleTransferFunction(const Image& tf, double vBar, doubl
     return out;
 }
 
+namespace {
+
+/// Preconditioned conjugate gradients on A x = b (A symmetric positive definite, given by
+/// `apply`), from the start in `x`, to `tolerance` relative residual or `maxIterations`; the
+/// iterations taken, and the relative residual reached in `relative`.
+int preconditionedCg(const std::function<void(const std::vector<double>&, std::vector<double>&)>& apply,
+                     const std::function<void(const std::vector<double>&, std::vector<double>&)>& precondition, const std::vector<double>& b,
+                     std::vector<double>& x, double tolerance, int maxIterations, double& relative) {
+    const size_t m = x.size();
+    std::vector<double> r(m), z(m), p(m), q(m);
+    apply(x, q);
+    double bNorm = 0, rz = 0;
+    for (size_t i = 0; i < m; ++i) r[i] = b[i] - q[i], bNorm += b[i] * b[i];
+    precondition(r, z);
+    for (size_t i = 0; i < m; ++i) p[i] = z[i], rz += r[i] * z[i];
+    bNorm = std::max(std::sqrt(bNorm), 1e-300);
+    double rNorm = 0;
+    for (double v : r) rNorm += v * v;
+    rNorm = std::sqrt(rNorm);
+    int it = 0;
+    while (rNorm > tolerance * bNorm && it < maxIterations) {
+        apply(p, q);
+        double pq = 0;
+        for (size_t i = 0; i < m; ++i) pq += p[i] * q[i];
+        if (pq <= 0) break;
+        const double a = rz / pq;
+        double rzNew = 0;
+        rNorm = 0;
+        for (size_t i = 0; i < m; ++i) {
+            x[i] += a * p[i];
+            r[i] -= a * q[i];
+            rNorm += r[i] * r[i];
+        }
+        precondition(r, z);
+        for (size_t i = 0; i < m; ++i) rzNew += r[i] * z[i];
+        rNorm = std::sqrt(rNorm);
+        const double beta = rzNew / rz;
+        rz = rzNew;
+        for (size_t i = 0; i < m; ++i) p[i] = z[i] + beta * p[i];
+        ++it;
+    }
+    relative = rNorm / bNorm;
+    return it;
+}
+
+}  // namespace
+
 std::vector<Vec3d> diffuseConstraints(const std::vector<TfConstraint>& constraints, int w, int h, std::vector<double>& alpha,
                                       int* iterations, double* residual, double tolerance) {
     const size_t n = size_t(w) * h;
@@ -210,7 +258,7 @@ std::vector<Vec3d> diffuseConstraints(const std::vector<TfConstraint>& constrain
     };
     std::vector<double> result[4];
     for (int ch = 0; ch < 4; ++ch) {
-        std::vector<double> b(m, 0.0), x(m), r(m), z(m), p(m), q(m);
+        std::vector<double> b(m, 0.0), x(m);
         double mean = 0;
         for (const TfConstraint& c : constraints) mean += (ch == 0 ? c.colour.x : ch == 1 ? c.colour.y : ch == 2 ? c.colour.z : c.alpha);
         mean /= double(constraints.size());
@@ -220,40 +268,11 @@ std::vector<Vec3d> diffuseConstraints(const std::vector<TfConstraint>& constrain
             });
             x[i] = mean;  // one constraint: already the answer
         }
-        apply(x, q);
-        double bNorm = 0, rz = 0;
-        for (size_t i = 0; i < m; ++i) r[i] = b[i] - q[i], bNorm += b[i] * b[i];
-        precondition(r, z);
-        for (size_t i = 0; i < m; ++i) p[i] = z[i], rz += r[i] * z[i];
-        bNorm = std::max(std::sqrt(bNorm), 1e-300);
-        double rNorm = 0;
-        for (double v : r) rNorm += v * v;
-        rNorm = std::sqrt(rNorm);
         const int maxIterations = int(std::min<size_t>(20 * (size_t(w) + size_t(h)) + 100, 4 * m + 10));
-        int it = 0;
-        while (rNorm > tolerance * bNorm && it < maxIterations) {
-            apply(p, q);
-            double pq = 0;
-            for (size_t i = 0; i < m; ++i) pq += p[i] * q[i];
-            if (pq <= 0) break;
-            const double a = rz / pq;
-            double rzNew = 0;
-            rNorm = 0;
-            for (size_t i = 0; i < m; ++i) {
-                x[i] += a * p[i];
-                r[i] -= a * q[i];
-                rNorm += r[i] * r[i];
-            }
-            precondition(r, z);
-            for (size_t i = 0; i < m; ++i) rzNew += r[i] * z[i];
-            rNorm = std::sqrt(rNorm);
-            const double beta = rzNew / rz;
-            rz = rzNew;
-            for (size_t i = 0; i < m; ++i) p[i] = z[i] + beta * p[i];
-            ++it;
-        }
+        double relative = 0;
+        const int it = preconditionedCg(apply, precondition, b, x, tolerance, maxIterations, relative);
         if (iterations) *iterations += it;
-        if (residual) *residual = std::max(*residual, rNorm / bNorm);
+        if (residual) *residual = std::max(*residual, relative);
         result[ch].assign(n, 0.0);
         for (size_t t = 0; t < n; ++t) result[ch][t] = freeIndex[t] >= 0 ? x[size_t(freeIndex[t])] : pinned[ch][t];
     }

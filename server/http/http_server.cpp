@@ -77,6 +77,8 @@ struct HttpServer::Impl {
           routes{http, services, requestLimits(opt), opt.maxJsonBytes, streams} {}
 
     void addMiddleware();
+    /// The SPEC error body for every exception a route throws and every error the library raises itself.
+    void addErrorHandlers();
     /// A fresh request id for this thread's request, also sent as X-Request-Id.
     void beginRequest(httplib::Response& res) {
         t_requestStart = Clock::now();
@@ -136,6 +138,7 @@ void HttpServer::Impl::addMiddleware() {
         return protocol::toText(protocol::errorBody(code, message, {}, id));
     };
     http.setWorkerThreads(size_t(std::max(opt.httpThreads, opt.maxEventStreams + 4)));
+    addErrorHandlers();
 
     // Request ids, timing, and the bearer token on /api when one is set.
     http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
@@ -150,6 +153,9 @@ void HttpServer::Impl::addMiddleware() {
     http.set_logger([](const httplib::Request& req, const httplib::Response& res) {
         spdlog::info("{} {} {} {:.1f} ms id={}", req.method, req.path, res.status, msSince(t_requestStart), t_requestId);
     });
+}
+
+void HttpServer::Impl::addErrorHandlers() {
     // One exception handler for every route (cpp-httplib's advice): the SPEC's error body.
     http.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
         const protocol::ErrorReport e = protocol::describeException(ep);

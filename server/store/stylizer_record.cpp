@@ -38,12 +38,16 @@ StylizerSceneEntry entryOf(const StylizerState& state, const json& scene) {
 
 }  // namespace
 
-void restoreStylizerRecord(DataDir& data, Session& s, const fs::path& dir, const MeshReader& readMesh,
-                           const std::function<void(const json& scene, uint64_t revision)>& saveScene) {
-    const auto damage = [&](const std::string& file, const std::string& reason) {
-        data.quarantineFile(s.id, file, reason);
-        s.damaged.push_back({file, reason});
-    };
+namespace {
+
+/// A file found damaged: quarantined, and listed in the session's damage.
+void damage(DataDir& data, Session& s, const std::string& file, const std::string& reason) {
+    data.quarantineFile(s.id, file, reason);
+    s.damaged.push_back({file, reason});
+}
+
+/// The uploads: occluder meshes (each read again as untrusted) and the TF image.
+void restoreUploads(DataDir& data, Session& s, const fs::path& dir, const MeshReader& readMesh) {
     std::error_code ec;
     for (const auto& entry : fs::directory_iterator(dir / "stylizer" / "occluders", ec)) {
         const std::string file = "stylizer/occluders/" + entry.path().filename().string();
@@ -54,45 +58,40 @@ void restoreStylizerRecord(DataDir& data, Session& s, const fs::path& dir, const
             auto mesh = std::make_shared<const core::Mesh>(readMesh ? readMesh(bytes, format) : core::loadMeshFromMemory(bytes, format));
             s.stylizer.meshes[entry.path().stem().string()] = {format, std::move(mesh), bytes.size()};
         } catch (const std::exception& e) {
-            damage(file, e.what());
+            damage(data, s, file, e.what());
         }
     }
-    if (fs::exists(dir / "stylizer" / "tf.image")) {
-        try {
-            const std::string bytes = readFile(dir / "stylizer" / "tf.image");
-            s.stylizer.transferImage =
-                std::make_shared<const core::Image>(core::loadImageFromMemory(bytes.data(), bytes.size(), "the transfer function", 4096).image);
-        } catch (const std::exception& e) {
-            damage("stylizer/tf.image", e.what());
-        }
-    }
-    if (fs::exists(dir / "stylizer" / "history.json")) {  // a convenience: an unreadable one is dropped, not the scene
-        try {
-            const json h = json::parse(readFile(dir / "stylizer" / "history.json"));
-            for (auto [stack, name] : {std::pair{&s.stylizer.undo, "undo"}, std::pair{&s.stylizer.redo, "redo"}})
-                for (const json& scene : h.at(name)) try {
-                        stack->push_back(entryOf(s.stylizer, scene));
-                    } catch (const std::exception& e) {  // a deleted mesh's: an undo to it would drop it too
-                        spdlog::info("session {}: a stylizer {} step no longer resolves and was dropped: {}", s.id, name, e.what());
-                    }
-        } catch (const std::exception& e) {
-            s.stylizer.undo.clear(), s.stylizer.redo.clear();
-            spdlog::warn("session {}: the stylizer's undo history is unreadable and was dropped: {}", s.id, e.what());
-        }
-    }
-    if (!fs::exists(dir / "stylizer" / "scene.json")) return;  // never edited: builtin:forest
-    protocol::StylizerSceneRequest request;
+    if (!fs::exists(dir / "stylizer" / "tf.image")) return;
     try {
-        const json j = json::parse(readFile(dir / "stylizer" / "scene.json"));
-        if (j.value("format", 1) > 1) throw IoError("its format " + j.at("format").dump() + " is newer than this server's (1)");
-        request = protocol::stylizerSceneFromJson(j.at("scene"), "", protocol::SceneSource::Api);
-        s.stylizer.revision = j.at("revision").get<uint64_t>();
-
+        const std::string bytes = readFile(dir / "stylizer" / "tf.image");
+        s.stylizer.transferImage =
+            std::make_shared<const core::Image>(core::loadImageFromMemory(bytes.data(), bytes.size(), "the transfer function", 4096).image);
     } catch (const std::exception& e) {
-        damage("stylizer/scene.json", std::string("the stylizer's scene is unreadable (it is builtin:forest again): ") + e.what());
-        return;
+        damage(data, s, "stylizer/tf.image", e.what());
     }
-    // What a damaged upload held is lost, and only that: its occluders, or the TF.
+}
+
+/// The undo and redo stacks: a convenience, so an unreadable file is dropped, not the scene, and
+/// a step that no longer resolves (its mesh deleted) is dropped as an undo to it would drop it.
+void restoreHistory(Session& s, const fs::path& dir) {
+    if (!fs::exists(dir / "stylizer" / "history.json")) return;
+    try {
+        const json h = json::parse(readFile(dir / "stylizer" / "history.json"));
+        for (auto [stack, name] : {std::pair{&s.stylizer.undo, "undo"}, std::pair{&s.stylizer.redo, "redo"}})
+            for (const json& scene : h.at(name)) try {
+                    stack->push_back(entryOf(s.stylizer, scene));
+                } catch (const std::exception& e) {
+                    spdlog::info("session {}: a stylizer {} step no longer resolves and was dropped: {}", s.id, name, e.what());
+                }
+    } catch (const std::exception& e) {
+        s.stylizer.undo.clear(), s.stylizer.redo.clear();
+        spdlog::warn("session {}: the stylizer's undo history is unreadable and was dropped: {}", s.id, e.what());
+    }
+}
+
+/// Drops from `request` what damaged uploads held — occluders whose mesh is gone, the TFs that
+/// showed a lost TF image — and says what went.
+std::vector<std::string> dropLostUploads(const Session& s, protocol::StylizerSceneRequest& request) {
     std::vector<std::string> lost;
     for (size_t i = request.meshRefs.size(); i-- > 0;)
         if (!protocol::builtinMesh(request.meshRefs[i]) && !s.stylizer.meshes.contains(request.meshRefs[i])) {
@@ -100,7 +99,7 @@ void restoreStylizerRecord(DataDir& data, Session& s, const fs::path& dir, const
             request.meshRefs.erase(request.meshRefs.begin() + std::ptrdiff_t(i));
             request.scene.occluders.erase(request.scene.occluders.begin() + std::ptrdiff_t(i));
         }
-    if (!request.tfImages.empty() && !s.stylizer.transferImage) {  // the TFs that showed the image go
+    if (!request.tfImages.empty() && !s.stylizer.transferImage) {
         bool scene = false, keys = false;
         for (const auto& ref : request.tfImages) (ref.key < 0 ? scene : keys) = true;
         if (scene) lost.push_back("the transfer function"), request.scene.transferFunction.reset();
@@ -110,20 +109,40 @@ void restoreStylizerRecord(DataDir& data, Session& s, const fs::path& dir, const
         }
         request.tfImages.clear();
     }
+    return lost;
+}
+
+}  // namespace
+
+void restoreStylizerRecord(DataDir& data, Session& s, const fs::path& dir, const MeshReader& readMesh,
+                           const std::function<void(const json& scene, uint64_t revision)>& saveScene) {
+    restoreUploads(data, s, dir, readMesh);
+    restoreHistory(s, dir);
+    if (!fs::exists(dir / "stylizer" / "scene.json")) return;  // never edited: builtin:forest
+    protocol::StylizerSceneRequest request;
+    try {
+        const json j = json::parse(readFile(dir / "stylizer" / "scene.json"));
+        if (j.value("format", 1) > 1) throw IoError("its format " + j.at("format").dump() + " is newer than this server's (1)");
+        request = protocol::stylizerSceneFromJson(j.at("scene"), "", protocol::SceneSource::Api);
+        s.stylizer.revision = j.at("revision").get<uint64_t>();
+    } catch (const std::exception& e) {
+        damage(data, s, "stylizer/scene.json", std::string("the stylizer's scene is unreadable (it is builtin:forest again): ") + e.what());
+        return;
+    }
+    const std::vector<std::string> lost = dropLostUploads(s, request);  // what a damaged upload held, and only that
     try {
         s.stylizer.scene = resolveStylizerScene(s.stylizer, request);
         s.stylizer.meshRefs = request.meshRefs;
     } catch (const std::exception& e) {
-        damage("stylizer/scene.json", std::string("the stylizer's scene no longer loads (it is builtin:forest again): ") + e.what());
+        damage(data, s, "stylizer/scene.json", std::string("the stylizer's scene no longer loads (it is builtin:forest again): ") + e.what());
         return;
     }
-    if (!lost.empty()) {
-        std::string what;
-        for (const auto& l : lost) what += (what.empty() ? "" : ", ") + l;
-        s.damaged.push_back({"stylizer/scene.json", "its uploads were damaged; the scene lost " + what});
-        spdlog::error("session {}'s stylizer scene lost {}", s.id, what);
-        saveScene(protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), ++s.stylizer.revision);
-    }
+    if (lost.empty()) return;
+    std::string what;
+    for (const auto& l : lost) what += (what.empty() ? "" : ", ") + l;
+    s.damaged.push_back({"stylizer/scene.json", "its uploads were damaged; the scene lost " + what});
+    spdlog::error("session {}'s stylizer scene lost {}", s.id, what);
+    saveScene(protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), ++s.stylizer.revision);
 }
 
 }  // namespace volstyle::server::store
