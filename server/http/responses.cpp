@@ -18,7 +18,7 @@ nlohmann::json viewJson(const SessionView& v) {
 
 nlohmann::json viewsJson(const Session& s) {
     nlohmann::json list = nlohmann::json::array();
-    for (const auto& v : s.views) list.push_back(viewJson(v));
+    for (const auto& v : s.views.list) list.push_back(viewJson(v));
     return list;
 }
 
@@ -30,7 +30,7 @@ nlohmann::json damagedJson(const std::vector<DamagedFile>& damaged) {
 
 nlohmann::json sessionJson(Session& s) {
     std::lock_guard lock(s.mutex);
-    const core::Volume& v = s.volume;
+    const core::Volume& v = s.volume.current;
     auto [lo, hi] = v.worldBounds();
     nlohmann::json grids = nlohmann::json::array({"extinction"});
     if (v.hasAlbedo()) grids.push_back("albedo");
@@ -40,11 +40,11 @@ nlohmann::json sessionJson(Session& s) {
             {"created", s.created},
             {"scene", s.scene},
             {"volume", {{"dims", {v.dims().x, v.dims().y, v.dims().z}}, {"bbox", {vec(lo), vec(hi)}},
-                        {"voxel_size", vec(v.voxelSize())}, {"grids", grids}, {"version", s.version}}},
-            {"lighting", protocol::lightingToJson(s.lighting, s.environmentMap.get())},
+                        {"voxel_size", vec(v.voxelSize())}, {"grids", grids}, {"version", s.volume.version}}},
+            {"lighting", protocol::lightingToJson(s.light.lighting, s.light.environmentMap.get())},
             {"views", viewsJson(s)},
             {"jobs", s.jobs},
-            {"versions", s.versions.numbers()},
+            {"versions", s.volume.versions.numbers()},
             {"damaged", damagedJson(s.damaged)}};
     if (auto map = environmentMapInfo(s))
         j["environment_map"] = nlohmann::json{{"width", map->width}, {"height", map->height}, {"used", map->used}};

@@ -29,8 +29,8 @@ struct SolveInputs {
 
 SolveInputs snapshot(Session& s) {
     std::lock_guard lock(s.mutex);
-    SolveInputs in{s.volume, s.lighting, {}, {}};
-    for (const auto& v : s.views) {
+    SolveInputs in{s.volume.current, s.light.lighting, {}, {}};
+    for (const auto& v : s.views.list) {
         if (v.frame) continue;  // a frame of the animation: POST …/animate solves it
         in.viewIds.push_back(v.id);
         in.views.push_back({v.id, v.camera, v.target.value_or(core::Image()), v.weights, v.background});
@@ -98,7 +98,7 @@ void JobService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s, con
     {
         std::lock_guard lock(s->mutex);
         stale = m_ctx.commitVersion(*s, std::move(result.volume));  // on disk before the job reads done;
-        version = s->version;                                 // not_found if the session was deleted
+        version = s->volume.version;                                 // not_found if the session was deleted
     }
     std::lock_guard lock(job.mutex);
     job.state = JobState::Done;
@@ -143,14 +143,14 @@ void JobService::solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& 
         std::lock_guard lock(s->mutex);
         // Only the environment: the sun, lights, background or phase may have been set meanwhile.
         lighting.validate();  // never store what a breakdown left non-finite
-        s->lighting.environment = lighting.environment;
+        s->light.lighting.environment = lighting.environment;
         if (lighting.background.fromLobes)  // "lights": {"background": true}: the sky behind is solved too
-            s->lighting.background.fromLobes = true, s->lighting.background.environment = nullptr;
-        lighting = s->lighting;
+            s->light.lighting.background.fromLobes = true, s->light.lighting.background.environment = nullptr;
+        lighting = s->light.lighting;
         if (volume) stale = m_ctx.commitVersion(*s, std::move(*volume));  // saves the session, lighting included
         else m_ctx.saved(*s);
-        result["version"] = s->version;
-        result["lighting"] = protocol::lightingToJson(lighting, s->environmentMap.get());  // naming the session's map "session"
+        result["version"] = s->volume.version;
+        result["lighting"] = protocol::lightingToJson(lighting, s->light.environmentMap.get());  // naming the session's map "session"
     }
     result["environment_url"] = "/api/v1/sessions/" + s->id + "/lighting/environment.exr";
     std::lock_guard lock(job.mutex);
@@ -173,15 +173,15 @@ std::shared_ptr<Job> JobService::startSolve(const std::shared_ptr<Session>& sess
     {
         std::lock_guard lock(s.mutex);
         bool anyTarget = false;
-        for (const auto& v : s.views) anyTarget |= v.target.has_value() && !v.frame;
+        for (const auto& v : s.views.list) anyTarget |= v.target.has_value() && !v.frame;
         if (!anyTarget)
             throw ApiError(ErrorCode::InvalidArgument, "no view of the volume has a target (views of an animation's frames are solved by "
                                                        "POST …/animate); PUT …/views/{vid}/target first");
         // "views" names views of this session that have targets: check now, not when the job runs.
         std::vector<protocol::FieldError> problems;
         for (size_t i = 0; i < options.views.size(); ++i) {
-            auto it = std::find_if(s.views.begin(), s.views.end(), [&](const SessionView& v) { return v.id == options.views[i]; });
-            if (it == s.views.end()) problems.push_back({"/views/" + std::to_string(i), "no view '" + options.views[i] + "' in this session"});
+            auto it = std::find_if(s.views.list.begin(), s.views.list.end(), [&](const SessionView& v) { return v.id == options.views[i]; });
+            if (it == s.views.list.end()) problems.push_back({"/views/" + std::to_string(i), "no view '" + options.views[i] + "' in this session"});
             else if (!it->target) problems.push_back({"/views/" + std::to_string(i), "view '" + options.views[i] + "' has no target yet"});
             else if (it->frame)
                 problems.push_back({"/views/" + std::to_string(i), "view '" + options.views[i] + "' shows frame " + std::to_string(*it->frame) +

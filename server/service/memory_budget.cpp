@@ -15,14 +15,14 @@ std::string mib(size_t bytes) { return fmt::format("{:.0f} MiB", double(bytes) /
 }  // namespace
 
 size_t decodedBytes(const Session& s) {
-    size_t n = s.volume.memoryBytes() + s.versions.memoryBytes();
+    size_t n = s.volume.current.memoryBytes() + s.volume.versions.memoryBytes();
     for (const auto& [_, f] : s.frames) n += f.volume.memoryBytes();
-    for (const auto& v : s.views) {
+    for (const auto& v : s.views.list) {
         if (v.target) n += imageBytes(*v.target);
         if (v.weights) n += imageBytes(*v.weights);
         if (v.background) n += imageBytes(*v.background);
     }
-    if (s.environmentMap) n += imageBytes(*s.environmentMap);
+    if (s.light.environmentMap) n += imageBytes(*s.light.environmentMap);
     for (const auto& [_, m] : s.stylizer.meshes)
         if (m.mesh) n += (m.mesh->positions.size() + m.mesh->normals.size()) * sizeof(Vec3) + m.mesh->indices.size() * sizeof(uint32_t);
     if (s.stylizer.transferImage) n += imageBytes(*s.stylizer.transferImage);

@@ -55,7 +55,7 @@ void ServiceContext::freeGpuObjects() {
     gl->run([this](core::GpuDevice&) {
         for (auto& s : sessions.all()) {
             std::lock_guard lock(s->mutex);
-            s->gpu.reset();
+            s->volume.gpu.reset();
         }
         for (auto& j : jobs.all()) {
             std::lock_guard lock(j->mutex);
@@ -109,7 +109,7 @@ std::shared_ptr<Session> ServiceContext::find(const std::string& id) const {
 
 core::Lighting ServiceContext::lighting(Session& s) const {
     std::lock_guard lock(s.mutex);
-    return s.lighting;
+    return s.light.lighting;
 }
 
 SessionView ServiceContext::view(Session& s, const std::string& viewId) const {
@@ -163,14 +163,14 @@ std::filesystem::path ServiceContext::jobFilesDir(const std::string& jobId) cons
 }
 
 std::shared_ptr<core::GpuVolume> ServiceContext::commitVersion(Session& s, core::Volume volume) {
-    const int n = s.versions.newest() + 1;  // after damaged ones too: numbers are never reused
-    s.versions.retire(s.version, std::move(s.volume));
-    s.volume = std::move(volume);
-    s.version = n;
-    s.versions.add(n);
+    const int n = s.volume.versions.newest() + 1;  // after damaged ones too: numbers are never reused
+    s.volume.versions.retire(s.volume.version, std::move(s.volume.current));
+    s.volume.current = std::move(volume);
+    s.volume.version = n;
+    s.volume.versions.add(n);
     saved(s);
     if (s.stylizer.scene.volume) stylizerChanged(s);  // its medium is the session's volume: live frames follow
-    return std::move(s.gpu);
+    return std::move(s.volume.gpu);
 }
 
 void ServiceContext::release(std::shared_ptr<core::GpuVolume> gpu) {
@@ -184,8 +184,8 @@ core::Renderer& ServiceContext::renderer(core::GpuDevice& device) {
 
 std::shared_ptr<core::GpuVolume> ServiceContext::sessionGpu(Session& s) {
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
-    if (!s.gpu) s.gpu = std::make_shared<core::GpuVolume>(s.volume);
-    return s.gpu;
+    if (!s.volume.gpu) s.volume.gpu = std::make_shared<core::GpuVolume>(s.volume.current);
+    return s.volume.gpu;
 }
 
 std::shared_ptr<core::GpuVolume> ServiceContext::lockedSessionGpu(Session& s) {

@@ -18,8 +18,8 @@ bool namesMap(const core::Lighting& l, const core::Image* map) {
 }  // namespace
 
 std::optional<EnvironmentMapInfo> environmentMapInfo(const Session& s) {
-    if (!s.environmentMap) return std::nullopt;
-    return EnvironmentMapInfo{s.environmentMap->width, s.environmentMap->height, namesMap(s.lighting, s.environmentMap.get())};
+    if (!s.light.environmentMap) return std::nullopt;
+    return EnvironmentMapInfo{s.light.environmentMap->width, s.light.environmentMap->height, namesMap(s.light.lighting, s.light.environmentMap.get())};
 }
 
 EnvironmentMapInfo SessionsService::setEnvironmentMap(Session& s, const std::string& bytes) {
@@ -44,30 +44,30 @@ EnvironmentMapInfo SessionsService::setEnvironmentMap(Session& s, const std::str
     slot.reset();
     std::lock_guard lock(s.mutex);
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
-    m_ctx.memory.check(s, map->rgba.size() * sizeof(float), s.environmentMap ? s.environmentMap->rgba.size() * sizeof(float) : 0, "the environment map");
+    m_ctx.memory.check(s, map->rgba.size() * sizeof(float), s.light.environmentMap ? s.light.environmentMap->rgba.size() * sizeof(float) : 0, "the environment map");
     if (m_ctx.persist) m_ctx.persist->saveSessionFile(s.id, kEnvironmentFile, bytes);
     // The lighting that names the old map names the new one.
-    core::Lighting& l = s.lighting;
-    if (s.environmentMap && l.background.environment == s.environmentMap) l.background.environment = map;
-    if (s.environmentMap && l.environment.map == s.environmentMap) l.environment.map = map;
-    s.environmentMap = map;
+    core::Lighting& l = s.light.lighting;
+    if (s.light.environmentMap && l.background.environment == s.light.environmentMap) l.background.environment = map;
+    if (s.light.environmentMap && l.environment.map == s.light.environmentMap) l.environment.map = map;
+    s.light.environmentMap = map;
     m_ctx.saved(s);
     return *environmentMapInfo(s);
 }
 
 std::shared_ptr<const core::Image> SessionsService::environmentMap(Session& s) const {
     std::lock_guard lock(s.mutex);
-    if (!s.environmentMap) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no environment map uploaded");
-    return s.environmentMap;
+    if (!s.light.environmentMap) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no environment map uploaded");
+    return s.light.environmentMap;
 }
 
 void SessionsService::removeEnvironmentMap(Session& s) {
     std::lock_guard lock(s.mutex);
-    if (!s.environmentMap) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no environment map uploaded");
-    if (namesMap(s.lighting, s.environmentMap.get()))
+    if (!s.light.environmentMap) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no environment map uploaded");
+    if (namesMap(s.light.lighting, s.light.environmentMap.get()))
         throw ApiError(ErrorCode::Busy, "the lighting names the environment map (\"session\"); PUT a lighting without it first");
     if (m_ctx.persist) m_ctx.persist->removeSessionFile(s.id, kEnvironmentFile);
-    s.environmentMap.reset();
+    s.light.environmentMap.reset();
     m_ctx.saved(s);
 }
 

@@ -26,9 +26,9 @@ std::shared_ptr<Session> SessionsService::create(const protocol::CreateSessionRe
     s->created = isoNow();
     s->scene = request.scene;
     m_ctx.memory.checkNew(size_t(request.resolution) * request.resolution * request.resolution * 9 * sizeof(float), "a new session");
-    s->volume = core::makeBuiltinScene(request.builtinName(), request.resolution);  // InvalidArgument lists the scenes
-    s->lighting = core::defaultLighting();
-    s->versions.add(1);
+    s->volume.current = core::makeBuiltinScene(request.builtinName(), request.resolution);  // InvalidArgument lists the scenes
+    s->light.lighting = core::defaultLighting();
+    s->volume.versions.add(1);
     m_ctx.sessions.add(s);
     std::lock_guard lock(s->mutex);
     m_ctx.saved(*s);
@@ -50,7 +50,7 @@ void SessionsService::remove(const std::string& id) {
     bool holdsGpu = false;
     {
         std::lock_guard lock(s->mutex);
-        holdsGpu = s->gpu != nullptr;
+        holdsGpu = s->volume.gpu != nullptr;
     }
     for (const auto& jid : jobs)
         if (auto j = m_ctx.jobs.find(jid)) {
@@ -61,34 +61,34 @@ void SessionsService::remove(const std::string& id) {
     if (!holdsGpu) return;  // nothing for the GL thread to free
     m_ctx.gl->run([this, s](core::GpuDevice&) {
         std::lock_guard lock(s->mutex);
-        s->gpu.reset();
+        s->volume.gpu.reset();
         m_ctx.dropPreviews(*s);
     });
 }
 
 core::Lighting SessionsService::setLighting(Session& s, const protocol::LightingRequest& request) {
     std::lock_guard lock(s.mutex);
-    s.lighting = request.resolve(s.environmentMap);
+    s.light.lighting = request.resolve(s.light.environmentMap);
     m_ctx.saved(s);
-    return s.lighting;
+    return s.light.lighting;
 }
 
 std::shared_ptr<const core::Image> SessionsService::environmentMapIfAny(Session& s) const {
     std::lock_guard lock(s.mutex);
-    return s.environmentMap;
+    return s.light.environmentMap;
 }
 
 SessionView SessionsService::addView(Session& s, const core::Camera& camera, std::optional<int> frame) {
     std::lock_guard lock(s.mutex);
-    s.views.push_back({"v" + std::to_string(s.nextView++), camera, std::nullopt, std::nullopt, nullptr, frame});
+    s.views.list.push_back({"v" + std::to_string(s.views.next++), camera, std::nullopt, std::nullopt, nullptr, frame});
     m_ctx.saved(s);
-    return s.views.back();
+    return s.views.list.back();
 }
 
 void SessionsService::removeView(Session& s, const std::string& viewId) {
     std::lock_guard lock(s.mutex);
     findView(s, viewId);  // 404 if absent
-    std::erase_if(s.views, [&](const SessionView& v) { return v.id == viewId; });
+    std::erase_if(s.views.list, [&](const SessionView& v) { return v.id == viewId; });
     if (m_ctx.persist) m_ctx.persist->removeView(s.id, viewId);
     m_ctx.saved(s);
 }

@@ -95,7 +95,7 @@ StylizerSnapshot StylizerService::commitStylizerScene(Session& s, core::Stylizer
 StylizerSnapshot StylizerService::setStylizerScene(Session& s, const protocol::StylizerSceneRequest& request) {
     checkStylizerCameras(request.scene);
     std::lock_guard lock(s.mutex);
-    return commitStylizerScene(s, resolveStylizerScene(s.stylizer, request, &s.volume), request.meshRefs);
+    return commitStylizerScene(s, resolveStylizerScene(s.stylizer, request, &s.volume.current), request.meshRefs);
 }
 
 StylizerSnapshot StylizerService::undoStylizer(Session& s, bool redo) {

@@ -119,7 +119,7 @@ std::shared_ptr<Job> VolumeService::startAnimate(const std::shared_ptr<Session>&
         std::lock_guard lock(session->mutex);
         if (session->frames.empty()) throw ApiError(ErrorCode::InvalidArgument, "the session has no frames: PUT …/frames/{n} first");
         bool anyKey = false;
-        for (const auto& v : session->views)
+        for (const auto& v : session->views.list)
             if (v.frame && v.target) {
                 if (!session->frames.count(*v.frame))
                     throw ApiError(ErrorCode::InvalidArgument, "view '" + v.id + "' is on frame " + std::to_string(*v.frame) + ", which the session does not have");
@@ -142,10 +142,10 @@ void VolumeService::runAnimate(Job& job, Session& s, const protocol::AnimateRequ
     core::Lighting lighting;
     {
         std::lock_guard lock(s.mutex);
-        lighting = s.lighting;
+        lighting = s.light.lighting;
         for (const auto& [n, f] : s.frames) frames[n] = f.volume;
         std::map<int, std::vector<core::SolveView>> views;
-        for (const auto& v : s.views)
+        for (const auto& v : s.views.list)
             if (v.frame && v.target && s.frames.count(*v.frame)) views[*v.frame].push_back({v.id, v.camera, *v.target, v.weights, v.background});
         for (auto& [n, list] : views) keys.push_back({n, frames[n], std::move(list), {}});
     }
@@ -207,7 +207,7 @@ std::shared_ptr<Job> VolumeService::startFramesRender(const std::shared_ptr<Sess
             {
                 std::lock_guard lock(session->mutex);
                 for (const auto& [n, f] : session->frames) frames[n] = f.volume;
-                lighting = session->lighting;
+                lighting = session->light.lighting;
             }
             const std::filesystem::path dir = m_ctx.jobFilesDir(job->id);
             std::filesystem::create_directories(dir);

@@ -52,7 +52,7 @@ core::Image VolumeService::renderTranslucent(Session& s, const core::Camera& cam
     Int3 dims;
     {
         std::lock_guard lock(s.mutex);
-        dims = s.volume.dims();
+        dims = s.volume.current.dims();
     }
     const double seconds = core::TranslucentRenderer::estimatedTexels(dims, camera, settings) / kTranslucentTexelsPerSecond;
     if (m_ctx.limits.renderBudgetSeconds > 0 && seconds > m_ctx.limits.renderBudgetSeconds)

@@ -32,18 +32,18 @@ struct TempVdb {
 }  // namespace
 
 void VolumeService::checkVersion(const Session& s, int n) const {
-    if (!s.versions.has(n)) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no version " + std::to_string(n));
-    if (auto reason = s.versions.damage(n))
+    if (!s.volume.versions.has(n)) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' has no version " + std::to_string(n));
+    if (auto reason = s.volume.versions.damage(n))
         throw ApiError(ErrorCode::IoError, "version " + std::to_string(n) + " of session '" + s.id +
                                                "' is damaged and was quarantined (" + *reason + "); choose another version");
 }
 
 void VolumeService::recordDamage(Session& s, int n, const std::string& reason) {
     std::lock_guard lock(s.mutex);
-    if (s.removed || s.versions.damage(n)) return;
+    if (s.removed || s.volume.versions.damage(n)) return;
     const std::string file = Persistence::versionFile(n);
     m_ctx.persist->quarantineFile(s.id, file, reason);
-    s.versions.markDamaged(n, reason);
+    s.volume.versions.markDamaged(n, reason);
     s.damaged.push_back({file, reason});
     m_ctx.saved(s);
 }
@@ -53,9 +53,9 @@ core::Volume VolumeService::olderVersion(Session& s, int n) {
     {
         std::lock_guard lock(s.mutex);
         checkVersion(s, n);
-        if (n == s.version) return s.volume;
-        if (auto v = s.versions.inMemory(n)) return *v;
-        bytes = s.versions.storedBytes(n).value_or(0);
+        if (n == s.volume.version) return s.volume.current;
+        if (auto v = s.volume.versions.inMemory(n)) return *v;
+        bytes = s.volume.versions.storedBytes(n).value_or(0);
     }
     // Read from disk without the lock (a 256³ version takes a second).
     core::Volume v;
@@ -67,7 +67,7 @@ core::Volume VolumeService::olderVersion(Session& s, int n) {
         throw;
     }
     std::lock_guard lock(s.mutex);
-    s.versions.remember(n, v);
+    s.volume.versions.remember(n, v);
     return v;
 }
 
@@ -79,7 +79,7 @@ int VolumeService::revert(Session& s, int version) {
         std::lock_guard lock(s.mutex);
         m_ctx.memory.check(s, old.memoryBytes(), 0, "reverting to version " + std::to_string(version));
         stale = m_ctx.commitVersion(s, std::move(old));  // undo is a new version with the old content: nothing is lost
-        now = s.version;
+        now = s.volume.version;
     }
     m_ctx.release(std::move(stale));
     return now;
@@ -90,8 +90,8 @@ int VolumeService::editVolume(Session& s, const std::function<void(core::Volume&
     int base = 0;
     {
         std::lock_guard lock(s.mutex);
-        volume = s.volume;
-        base = s.version;
+        volume = s.volume.current;
+        base = s.volume.version;
     }
     edit(volume);  // off the lock: O(voxels)
     if (m_volumeEditHook) m_volumeEditHook();
@@ -101,12 +101,12 @@ int VolumeService::editVolume(Session& s, const std::function<void(core::Volume&
         std::lock_guard lock(s.mutex);
         // Another change committed while this edit ran off the lock: committing the copy would
         // silently drop that change (a lost update), so the stale edit is refused instead.
-        if (s.version != base)
-            throw ApiError(ErrorCode::Busy, "the volume changed (version " + std::to_string(base) + " → " + std::to_string(s.version) +
-                                                ") while this edit ran; send it again to apply it to version " + std::to_string(s.version));
+        if (s.volume.version != base)
+            throw ApiError(ErrorCode::Busy, "the volume changed (version " + std::to_string(base) + " → " + std::to_string(s.volume.version) +
+                                                ") while this edit ran; send it again to apply it to version " + std::to_string(s.volume.version));
         m_ctx.memory.check(s, volume.memoryBytes(), 0, "the edited volume");
         stale = m_ctx.commitVersion(s, std::move(volume));
-        now = s.version;
+        now = s.volume.version;
     }
     m_ctx.release(std::move(stale));
     return now;
@@ -170,9 +170,9 @@ std::string VolumeService::downloadVdb(Session& s, std::optional<int> version) {
     std::optional<std::uintmax_t> stored;
     {
         std::lock_guard lock(s.mutex);
-        n = version.value_or(s.version);
+        n = version.value_or(s.volume.version);
         checkVersion(s, n);
-        if (m_ctx.persist) stored = s.versions.storedBytes(n);
+        if (m_ctx.persist) stored = s.volume.versions.storedBytes(n);
     }
     if (stored) {  // the file as written: no decode, no encode
         try {

@@ -78,16 +78,16 @@ size_t SessionStore::size() const {
 }
 
 SessionView& findView(Session& s, const std::string& id) {
-    for (auto& v : s.views)
+    for (auto& v : s.views.list)
         if (v.id == id) return v;
     throw protocol::ApiError(protocol::ErrorCode::NotFound, "no view '" + id + "' in session '" + s.id + "'");
 }
 
 void attachVolumeDensity(Session& s, core::StylizerScene& scene) {
     if (!scene.volume) return;
-    if (!s.stylizer.density || s.stylizer.densityVersion != s.version) {
-        s.stylizer.density = core::densityGridOf(s.volume);
-        s.stylizer.densityVersion = s.version;
+    if (!s.stylizer.density || s.stylizer.densityVersion != s.volume.version) {
+        s.stylizer.density = core::densityGridOf(s.volume.current);
+        s.stylizer.densityVersion = s.volume.version;
     }
     scene.volume->grid = s.stylizer.density;
 }

@@ -50,24 +50,39 @@ struct SessionFrame {
     bool solved = false;
 };
 
+/// A session's volume (issue #36: the session split by concern): the current one, its number,
+/// every committed version, and its GPU copy.
+struct VolumeState {
+    core::Volume current;
+    int version = 1;
+    VersionHistory versions;                    ///< every committed version, for revert and download
+    std::shared_ptr<core::GpuVolume> gpu;       ///< created and destroyed on the GL thread
+};
+
+/// A session's views, and the next view's number ("v1", "v2", … never reused).
+struct ViewsState {
+    std::vector<SessionView> list;
+    int next = 1;
+};
+
+/// A session's lighting, and the uploaded lat-long map (PUT …/environment) that the lighting
+/// names "session" (its background.environment and environment.map point at it).
+struct LightingState {
+    core::Lighting lighting;
+    std::shared_ptr<const core::Image> environmentMap;
+};
+
 struct Session {
     std::string id;
     std::string created;  ///< ISO 8601, UTC
     std::string scene;    ///< where the volume came from
-    core::Volume volume;
-    int version = 1;
-    VersionHistory versions;               ///< every committed version, for revert and download
-    std::vector<DamagedFile> damaged;      ///< files of the session found unreadable (quarantined)
-    std::vector<SessionView> views;
-    int nextView = 1;
+    VolumeState volume;
+    ViewsState views;
+    LightingState light;
     std::map<int, SessionFrame> frames;    ///< the animation's frames by number (docs/ANIMATION.md)
-    std::vector<std::string> jobs;
-    core::Lighting lighting;
-    /// The uploaded lat-long map (PUT …/environment) that the lighting names "session"
-    /// (its background.environment and environment.map point at it).
-    std::shared_ptr<const core::Image> environmentMap;
-    std::shared_ptr<core::GpuVolume> gpu;  ///< created and destroyed on the GL thread
     StylizerState stylizer = defaultStylizer();
+    std::vector<std::string> jobs;
+    std::vector<DamagedFile> damaged;      ///< files of the session found unreadable (quarantined)
     std::condition_variable stylizerChanged;  ///< notified (with `mutex`) when its revision moves
     /// Set by DELETE: work still queued for the session neither caches GPU copies nor writes it
     /// back to disk (it answers not_found instead).

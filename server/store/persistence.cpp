@@ -23,12 +23,12 @@ std::string Persistence::versionFile(int version) { return store::versionFile(ve
 
 void Persistence::saveSession(Session& s) {
     const fs::path dir = sessionDir(s.id);
-    for (int n : s.versions.unstored()) {
+    for (int n : s.volume.versions.unstored()) {
         std::shared_ptr<const core::Volume> older;
-        if (n != s.version && !(older = s.versions.inMemory(n))) continue;  // cannot happen: unstored ones stay in memory
+        if (n != s.volume.version && !(older = s.volume.versions.inMemory(n))) continue;  // cannot happen: unstored ones stay in memory
         const fs::path vdb = dir / versionFile(n);
-        store::atomicWriteWith(vdb, [&](const fs::path& tmp) { core::saveVdb(tmp.string(), n == s.version ? s.volume : *older); });
-        s.versions.markStored(n, fs::file_size(vdb));
+        store::atomicWriteWith(vdb, [&](const fs::path& tmp) { core::saveVdb(tmp.string(), n == s.volume.version ? s.volume.current : *older); });
+        s.volume.versions.markStored(n, fs::file_size(vdb));
     }
     store::atomicWrite(dir / "session.json", store::encodeSessionRecord(s));
 }

@@ -34,50 +34,50 @@ void restoreLighting(DataDir& dir, Session& s, const fs::path& folder, const jso
             const std::string bytes = readFile(folder / file);
             auto map = std::make_shared<core::Image>(core::loadImageFromMemory(bytes.data(), bytes.size(), "the environment map").image);
             if (std::string why = core::latLongMapProblem(*map); !why.empty()) throw IoError(why);
-            s.environmentMap = std::move(map);
+            s.light.environmentMap = std::move(map);
         } catch (const std::exception& e) {
             dir.quarantineFile(s.id, file, e.what());
             s.damaged.push_back({file, e.what()});
         }
     }
     protocol::LightingRequest request = protocol::lightingFromJson(lighting);
-    if (!s.environmentMap) {  // damaged: the background's colour, and the lobes' radiances as they were
+    if (!s.light.environmentMap) {  // damaged: the background's colour, and the lobes' radiances as they were
         request.backgroundUsesSessionMap = request.environmentUsesSessionMap = false;
     }
-    s.lighting = request.resolve(s.environmentMap);
+    s.light.lighting = request.resolve(s.light.environmentMap);
 }
 
 /// Restores the versions the record lists; the current one is read (or the newest readable one,
 /// if it is damaged). Throws if no version is readable.
 void restoreVersions(DataDir& dir, Session& s, const json& j) {
     const json bytes = j.value("version_bytes", json::object());
-    for (int n : j.at("versions")) s.versions.add(n);
+    for (int n : j.at("versions")) s.volume.versions.add(n);
     for (const auto& d : s.damaged)  // damage found before a restart stays listed
-        for (int n : s.versions.numbers())
-            if (d.file == versionFile(n)) s.versions.markDamaged(n, d.reason);
+        for (int n : s.volume.versions.numbers())
+            if (d.file == versionFile(n)) s.volume.versions.markDamaged(n, d.reason);
     const auto damage = [&](int n, const std::string& reason) {
         dir.quarantineFile(s.id, versionFile(n), reason);
-        s.versions.markDamaged(n, reason);
+        s.volume.versions.markDamaged(n, reason);
         s.damaged.push_back({versionFile(n), reason});
     };
     // Every version's file must exist with the size it was written with (a stat, not a read).
-    for (int n : s.versions.numbers()) {
-        if (s.versions.damage(n)) continue;
+    for (int n : s.volume.versions.numbers()) {
+        if (s.volume.versions.damage(n)) continue;
         std::error_code ec;
         const std::uintmax_t size = fs::file_size(dir.sessionDir(s.id) / versionFile(n), ec);
         const std::uintmax_t expected = bytes.contains(std::to_string(n)) ? bytes[std::to_string(n)].get<std::uintmax_t>() : size;
         if (ec) damage(n, "the file is missing");
         else if (size != expected) damage(n, "the file is " + std::to_string(size) + " bytes; it was written with " + std::to_string(expected));
-        else s.versions.markStored(n, size);
+        else s.volume.versions.markStored(n, size);
     }
     // The current version is read now; if it is damaged, the newest readable one becomes current.
     const int recorded = j.at("version");
-    for (auto it = s.versions.numbers().rbegin(); it != s.versions.numbers().rend(); ++it) {
+    for (auto it = s.volume.versions.numbers().rbegin(); it != s.volume.versions.numbers().rend(); ++it) {
         const int n = *it;
-        if (n > recorded || s.versions.damage(n)) continue;
+        if (n > recorded || s.volume.versions.damage(n)) continue;
         try {
-            s.volume = loadVersionFile(dir, s.id, n, *s.versions.storedBytes(n));
-            s.version = n;
+            s.volume.current = loadVersionFile(dir, s.id, n, *s.volume.versions.storedBytes(n));
+            s.volume.version = n;
             if (n != recorded) spdlog::warn("restore: session {} falls back from version {} to {}", s.id, recorded, n);
             return;
         } catch (const std::exception& e) {
@@ -105,7 +105,7 @@ void restoreViews(DataDir& dir, Session& s, const fs::path& folder, const json& 
                 s.damaged.push_back({file, e.what()});
             }
         }
-        s.views.push_back(std::move(view));
+        s.views.list.push_back(std::move(view));
     }
 }
 
@@ -129,22 +129,22 @@ std::string versionFile(int version) { return "versions/" + std::to_string(versi
 
 std::string encodeSessionRecord(const Session& s) {
     json bytes = json::object(), damaged = json::array(), views = json::array(), frames = json::array();
-    for (int n : s.versions.numbers())
-        if (auto b = s.versions.storedBytes(n)) bytes[std::to_string(n)] = *b;
+    for (int n : s.volume.versions.numbers())
+        if (auto b = s.volume.versions.storedBytes(n)) bytes[std::to_string(n)] = *b;
     for (const auto& d : s.damaged) damaged.push_back({{"file", d.file}, {"reason", d.reason}});
-    for (const auto& v : s.views) views.push_back(viewRecord(v));
+    for (const auto& v : s.views.list) views.push_back(viewRecord(v));
     for (const auto& [n, f] : s.frames) frames.push_back({{"frame", n}, {"solved", f.solved}});
     const json j = {{"format", kFormat},
                     {"id", s.id},
                     {"created", s.created},
                     {"scene", s.scene},
-                    {"version", s.version},
-                    {"versions", s.versions.numbers()},
+                    {"version", s.volume.version},
+                    {"versions", s.volume.versions.numbers()},
                     {"version_bytes", bytes},
                     {"damaged", damaged},
-                    {"lighting", protocol::lightingToJson(s.lighting, s.environmentMap.get())},
+                    {"lighting", protocol::lightingToJson(s.light.lighting, s.light.environmentMap.get())},
                     {"views", views},
-                    {"next_view", s.nextView},
+                    {"next_view", s.views.next},
                     {"jobs", s.jobs},
                     {"frames", frames}};
     return protocol::toText(j, 2);
@@ -163,7 +163,7 @@ std::shared_ptr<Session> restoreSessionRecord(DataDir& dir, const fs::path& fold
     s->id = j.at("id");
     s->created = j.at("created");
     s->scene = j.at("scene");
-    s->nextView = j.at("next_view");
+    s->views.next = j.at("next_view");
     s->jobs = j.at("jobs").get<std::vector<std::string>>();
     for (const auto& d : j.value("damaged", json::array())) s->damaged.push_back({d.at("file"), d.at("reason")});
     recordedDamage = s->damaged.size();

@@ -66,11 +66,11 @@ protected:
     /// The session's current volume (a copy, under its lock).
     static core::Volume volumeOf(Session& s) {
         std::lock_guard lock(s.mutex);
-        return s.volume;
+        return s.volume.current;
     }
     static int versionOf(Session& s) {
         std::lock_guard lock(s.mutex);
-        return s.version;
+        return s.volume.version;
     }
     void TearDown() override { EXPECT_EQ(counts->shortTasks, allowedShortTasks) << "a GL-free operation posted work to the GL thread"; }
 

@@ -31,20 +31,20 @@ std::string refusal(F&& f, protocol::ErrorCode code = protocol::ErrorCode::OutOf
 
 TEST(MemoryBudget, DecodedBytesCountEverythingASessionHolds) {
     Session s;
-    s.volume = frame();
+    s.volume.current = frame();
     EXPECT_EQ(decodedBytes(s), kFrameBytes);
     s.frames[3].volume = frame();
     s.frames[3].volume.ensureAlbedo();
     EXPECT_EQ(decodedBytes(s), 3 * kFrameBytes) << "a frame's albedo counts too";
-    s.views.push_back({});
-    s.views.back().target = core::Image(10, 10);
+    s.views.list.push_back({});
+    s.views.list.back().target = core::Image(10, 10);
     EXPECT_EQ(decodedBytes(s), 3 * kFrameBytes + 10 * 10 * 4 * sizeof(float));
 }
 
 TEST(MemoryBudget, ASessionIsRefusedPastItsBudgetAndDeletionReleases) {
     MemoryBudget budget({/*perSession=*/4 * kFrameBytes, /*total=*/100 * kFrameBytes});
     Session s;
-    s.volume = frame();
+    s.volume.current = frame();
     budget.recount(s);
     for (int n = 0; n < 3; ++n) {
         EXPECT_EQ(refusal([&] { budget.check(s, kFrameBytes, 0, "frame " + std::to_string(n)); }), "") << n;
@@ -66,10 +66,10 @@ TEST(MemoryBudget, ASessionIsRefusedPastItsBudgetAndDeletionReleases) {
 TEST(MemoryBudget, TheServersBudgetCountsEverySession) {
     MemoryBudget budget({/*perSession=*/10 * kFrameBytes, /*total=*/5 * kFrameBytes});
     Session a, b;
-    a.volume = frame();
+    a.volume.current = frame();
     for (int n = 0; n < 3; ++n) a.frames[n].volume = frame();
     budget.recount(a);
-    b.volume = frame();
+    b.volume.current = frame();
     budget.recount(b);
     EXPECT_EQ(budget.total(), 5 * kFrameBytes);
     // The server's budget is the server's state: 503 overloaded (with Retry-After at the door).

@@ -14,7 +14,7 @@ nlohmann::json framesJson(Session& s) {
     nlohmann::json list = nlohmann::json::array();
     for (const auto& [n, f] : s.frames) {
         int views = 0;
-        for (const auto& v : s.views) views += v.frame == n ? 1 : 0;
+        for (const auto& v : s.views.list) views += v.frame == n ? 1 : 0;
         const Int3 d = f.volume.dims();
         list.push_back({{"frame", n}, {"dims", {d.x, d.y, d.z}}, {"solved", f.solved}, {"views", views}});
     }
