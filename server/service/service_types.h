@@ -22,6 +22,7 @@
 #include "core/volume/volume.h"
 #include "protocol/render_json.h"
 #include "protocol/requests.h"
+#include "protocol/response_values.h"
 #include "server/runtime/gl_executor.h"
 #include "server/state/job_store.h"
 #include "server/service/memory_budget.h"
@@ -39,6 +40,12 @@ struct StylizedFrame;
 }  // namespace volstyle::core
 
 namespace volstyle::server {
+
+// What stylizer calls answer (protocol/response_values.h).
+using protocol::AddedTfConstraint;
+using protocol::OccluderMeshInfo;
+using protocol::StylizerPick;
+using protocol::TransferImageInfo;
 
 // The API's error and job vocabulary, as every service names it.
 using protocol::ApiError;
@@ -78,41 +85,6 @@ struct StylizerSnapshot {
     core::StylizerScene scene;
     std::vector<std::string> meshRefs;
     uint64_t revision = 0;
-};
-
-/// What a click at a pixel of the stylizer's frame finds (POST …/stylizer/pick): the pixel's TF
-/// position (V̄ and linear depth d), its distance, the occluder seen there and the point.
-struct StylizerPick {
-    int x = 0, y = 0;
-    double vBar = 0, depth = 0, distance = 0;
-    int occluder = -1;         ///< index in the scene; −1: the sky (no surface)
-    std::string occluderName;  ///< empty for the sky
-    Vec3d position;            ///< the world point at `distance` along the pixel's ray
-    core::TfAnchor anchor;     ///< what the request's `anchor` asked for (position empty for "none")
-    /// The TF a constraint there goes into: on a path whose keys carry TFs, the key nearest the
-    /// time (its depth range gives `depth`); −1: the scene's own.
-    int key = -1;
-};
-
-/// A constraint clicked into the scene (POST …/stylizer/constraints).
-struct AddedTfConstraint {
-    StylizerPick pick;
-    int layer = 0, index = 0;  ///< where it went: transfer_function/layers/{layer}/constraints/{index}
-    int key = -1;              ///< … of key frame `key` (on a path whose keys carry TFs); −1: the scene's TF
-    core::TfConstraint constraint;
-    uint64_t revision = 0;
-};
-
-struct OccluderMeshInfo {
-    std::string name, format;
-    size_t vertices = 0, triangles = 0, fileBytes = 0;
-    Vec3 boundsLo, boundsHi;  ///< in the mesh's own space
-    bool used = false;              ///< the scene's occluders use it
-};
-
-struct TransferImageInfo {
-    int width = 0, height = 0, channels = 0;
-    bool used = false;  ///< the scene has a transfer_function
 };
 
 }  // namespace volstyle::server

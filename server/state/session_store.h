@@ -17,6 +17,7 @@
 #include "core/scene/render_settings.h"
 #include "core/volume/volume.h"
 #include "protocol/error_code.h"
+#include "protocol/response_values.h"
 #include "server/state/stylizer_state.h"
 #include "server/state/version_history.h"
 
@@ -92,10 +93,7 @@ struct Session {
     std::mutex mutex;                      ///< guards the fields above
 };
 
-struct EnvironmentMapInfo {
-    int width = 0, height = 0;
-    bool used = false;  ///< the lighting names it (background or environment light)
-};
+using protocol::EnvironmentMapInfo;
 /// The session's environment map, if any (call with its lock held).
 std::optional<EnvironmentMapInfo> environmentMapInfo(const Session& s);
 

@@ -1,7 +1,8 @@
 // A session's animation (issue #16, docs/ANIMATION.md): PUT/GET/DELETE …/frames/{n}[.vdb],
 // GET …/frames, POST …/animate (the key-frame solve, a job), POST …/frames/render (a job
 // rendering every frame to PNG).
-#include "server/http/responses.h"
+#include "protocol/response_json.h"
+#include "server/state/session_info.h"
 #include "server/http/routes/route_context.h"
 
 namespace volstyle::server {
@@ -9,34 +10,22 @@ namespace {
 
 const std::string kFramePath = kSessionPath + R"(/frames/([0-9]{1,5}))";
 
-nlohmann::json framesJson(Session& s) {
-    std::lock_guard lock(s.mutex);
-    nlohmann::json list = nlohmann::json::array();
-    for (const auto& [n, f] : s.frames) {
-        int views = 0;
-        for (const auto& v : s.views.list) views += v.frame == n ? 1 : 0;
-        const Int3 d = f.volume.dims();
-        list.push_back({{"frame", n}, {"dims", {d.x, d.y, d.z}}, {"solved", f.solved}, {"views", views}});
-    }
-    return list;
-}
-
 }  // namespace
 
 void addFrameRoutes(RouteContext& c) {
     putUpload(c, kFramePath, [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
         auto s = c.services.sessions.find(req.matches[1]);
         c.services.volumes.uploadFrame(*s, std::stoi(req.matches[2]), bytes);
-        reply(res, 200, framesJson(*s));
+        reply(res, 200, protocol::framesToJson(frameInfos(*s)));
     });
     // One VDB holding the whole animation (grids stamped with their frames): every frame at once.
     putUpload(c, kSessionPath + "/frames", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
         auto s = c.services.sessions.find(req.matches[1]);
         c.services.volumes.uploadFrames(*s, bytes);
-        reply(res, 200, framesJson(*s));
+        reply(res, 200, protocol::framesToJson(frameInfos(*s)));
     });
     c.http.Get(kSessionPath + "/frames", [&c](const httplib::Request& req, httplib::Response& res) {
-        reply(res, 200, framesJson(*c.services.sessions.find(req.matches[1])));
+        reply(res, 200, protocol::framesToJson(frameInfos(*c.services.sessions.find(req.matches[1]))));
     });
     c.http.Get(kFramePath + R"(\.vdb)", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
@@ -45,7 +34,7 @@ void addFrameRoutes(RouteContext& c) {
     c.http.Delete(kFramePath, [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         c.services.volumes.removeFrame(*s, std::stoi(req.matches[2]));
-        reply(res, 200, framesJson(*s));
+        reply(res, 200, protocol::framesToJson(frameInfos(*s)));
     });
     c.http.Post(kSessionPath + "/animate", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);

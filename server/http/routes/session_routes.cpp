@@ -4,7 +4,8 @@
 #include "core/image/image_io.h"
 #include "core/scene/environment_lobes.h"
 #include "protocol/render_json.h"
-#include "server/http/responses.h"
+#include "protocol/response_json.h"
+#include "server/state/session_info.h"
 #include "server/http/routes/route_context.h"
 
 namespace volstyle::server {
@@ -39,15 +40,15 @@ httplib::Server::Handler renderRoute(RouteContext& c) {
 void addSessionItselfRoutes(RouteContext& c) {
     c.http.Post(kApi + "/sessions", [&c](const httplib::Request& req, httplib::Response& res) {
         auto request = protocol::CreateSessionRequest::fromJson(c.body(req), c.limits);
-        reply(res, 201, sessionJson(*c.services.sessions.create(request)));
+        reply(res, 201, protocol::sessionToJson(sessionInfo(*c.services.sessions.create(request))));
     });
     c.http.Get(kApi + "/sessions", [&c](const httplib::Request&, httplib::Response& res) {
         nlohmann::json list = nlohmann::json::array();
-        for (auto& s : c.services.sessions.all()) list.push_back(sessionJson(*s));
+        for (auto& s : c.services.sessions.all()) list.push_back(protocol::sessionToJson(sessionInfo(*s)));
         reply(res, 200, list);
     });
     c.http.Get(kSessionPath, [&c](const httplib::Request& req, httplib::Response& res) {
-        reply(res, 200, sessionJson(*c.services.sessions.find(req.matches[1])));
+        reply(res, 200, protocol::sessionToJson(sessionInfo(*c.services.sessions.find(req.matches[1]))));
     });
     c.http.Delete(kSessionPath, [&c](const httplib::Request& req, httplib::Response& res) {
         c.services.sessions.remove(req.matches[1]);
@@ -85,7 +86,7 @@ void addLightingRoutes(RouteContext& c) {
     // lighting names "session" (docs/LIGHTING.md).
     putUpload(c, kSessionPath + "/environment", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
         const EnvironmentMapInfo info = c.services.sessions.setEnvironmentMap(*c.services.sessions.find(req.matches[1]), bytes);
-        reply(res, 200, {{"width", info.width}, {"height", info.height}, {"used", info.used}});
+        reply(res, 200, protocol::environmentMapToJson(info));
     });
     c.http.Get(kSessionPath + R"(/environment\.(exr|png))", [&c](const httplib::Request& req, httplib::Response& res) {
         auto map = c.services.sessions.environmentMap(*c.services.sessions.find(req.matches[1]));

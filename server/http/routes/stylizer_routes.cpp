@@ -12,6 +12,7 @@
 #include "core/stylize/stylizer.h"
 #include "core/stylize/stylizer_files.h"
 #include "protocol/error_body.h"
+#include "protocol/response_json.h"
 #include "protocol/stylize_json.h"
 #include "server/http/routes/route_context.h"
 
@@ -28,26 +29,10 @@ constexpr int kPollsPerKeepAlive = 30;
 
 const std::string kStylizerPath = kSessionPath + "/stylizer";
 
-nlohmann::json meshJson(const OccluderMeshInfo& m) {
-    return {{"name", m.name},
-            {"format", m.format},
-            {"vertices", m.vertices},
-            {"triangles", m.triangles},
-            {"file_bytes", m.fileBytes},
-            {"bounds", {{m.boundsLo.x, m.boundsLo.y, m.boundsLo.z}, {m.boundsHi.x, m.boundsHi.y, m.boundsHi.z}}},
-            {"used", m.used}};
-}
-
 /// The scene as its JSON, its revision in the ETag (the body round-trips through PUT).
 void replyScene(httplib::Response& res, const StylizerSnapshot& s) {
     res.set_header("ETag", fmt::format("\"r{}\"", s.revision));
     reply(res, 200, protocol::stylizerSceneToJson(s.scene, s.meshRefs));
-}
-
-nlohmann::json pickJson(const StylizerPick& p) {
-    return {{"x", p.x}, {"y", p.y}, {"v_bar", p.vBar}, {"depth", p.depth}, {"distance", p.distance},
-            {"occluder", p.occluderName.empty() ? nlohmann::json() : nlohmann::json(p.occluderName)},
-            {"position", {p.position.x, p.position.y, p.position.z}}};
 }
 
 std::string frameUrl(const std::string& session, uint64_t revision) {
@@ -116,16 +101,13 @@ void addStylizerSceneRoutes(RouteContext& c) {
         });
     c.http.Post(kStylizerPath + "/pick", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
-        reply(res, 200, pickJson(c.services.stylizer.pickStylizer(*s, protocol::StylizerPickRequest::fromJson(c.body(req), c.limits, false))));
+        reply(res, 200, protocol::stylizerPickToJson(c.services.stylizer.pickStylizer(*s, protocol::StylizerPickRequest::fromJson(c.body(req), c.limits, false))));
     });
     c.http.Post(kStylizerPath + "/constraints", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         const AddedTfConstraint a = c.services.stylizer.addTfConstraint(*s, protocol::StylizerPickRequest::fromJson(c.body(req), c.limits, true));
         res.set_header("ETag", fmt::format("\"r{}\"", a.revision));
-        nlohmann::json body = {{"revision", a.revision}, {"layer", a.layer}, {"index", a.index},
-                               {"constraint", protocol::tfConstraintToJson(a.constraint)}, {"pick", pickJson(a.pick)}};
-        if (a.key >= 0) body["key"] = a.key;
-        reply(res, 200, body);
+        reply(res, 200, protocol::addedTfConstraintToJson(a));
     });
     c.http.Post(kStylizerPath + "/sequence", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
@@ -137,12 +119,12 @@ void addStylizerSceneRoutes(RouteContext& c) {
 void addStylizerUploadRoutes(RouteContext& c) {
     c.http.Get(kStylizerPath + "/occluders", [&c](const httplib::Request& req, httplib::Response& res) {
         nlohmann::json list = nlohmann::json::array();
-        for (const auto& m : c.services.stylizer.occluderMeshes(*c.services.sessions.find(req.matches[1]))) list.push_back(meshJson(m));
+        for (const auto& m : c.services.stylizer.occluderMeshes(*c.services.sessions.find(req.matches[1]))) list.push_back(protocol::occluderMeshToJson(m));
         reply(res, 200, list);
     });
     putUpload(c, kStylizerPath + "/occluders/([^/]+)", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
         auto s = c.services.sessions.find(req.matches[1]);
-        reply(res, 200, meshJson(c.services.stylizer.putOccluderMesh(*s, req.matches[2], bytes)));
+        reply(res, 200, protocol::occluderMeshToJson(c.services.stylizer.putOccluderMesh(*s, req.matches[2], bytes)));
     });
     c.http.Delete(kStylizerPath + "/occluders/([^/]+)", [&c](const httplib::Request& req, httplib::Response& res) {
         c.services.stylizer.removeOccluderMesh(*c.services.sessions.find(req.matches[1]), req.matches[2]);
@@ -150,7 +132,7 @@ void addStylizerUploadRoutes(RouteContext& c) {
     });
     putUpload(c, kStylizerPath + "/tf", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
         const TransferImageInfo t = c.services.stylizer.setTransferImage(*c.services.sessions.find(req.matches[1]), bytes);
-        reply(res, 200, {{"width", t.width}, {"height", t.height}, {"channels", t.channels}, {"used", t.used}});
+        reply(res, 200, protocol::transferImageToJson(t));
     });
     c.http.Get(kStylizerPath + R"(/tf\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
         core::SaveOptions save;

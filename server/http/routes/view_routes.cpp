@@ -1,7 +1,8 @@
 // A session's views: POST/GET …/views, GET/DELETE …/views/{vid}, PUT/DELETE …/target, …/weights
 // and …/background (the plate), GET …/target.png, …/background.{png,exr} and …/render.{png,exr}.
 #include "core/image/image_io.h"
-#include "server/http/responses.h"
+#include "protocol/response_json.h"
+#include "server/state/session_info.h"
 #include "server/http/routes/route_context.h"
 
 namespace volstyle::server {
@@ -10,15 +11,13 @@ void addViewRoutes(RouteContext& c) {
     c.http.Post(kSessionPath + "/views", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         auto request = protocol::AddViewRequest::fromJson(c.body(req), c.limits);
-        reply(res, 201, viewJson(c.services.sessions.addView(*s, request.camera, request.frame)));
+        reply(res, 201, protocol::viewToJson(viewInfo(c.services.sessions.addView(*s, request.camera, request.frame))));
     });
     c.http.Get(kSessionPath + "/views", [&c](const httplib::Request& req, httplib::Response& res) {
-        auto s = c.services.sessions.find(req.matches[1]);
-        std::lock_guard lock(s->mutex);
-        reply(res, 200, viewsJson(*s));
+        reply(res, 200, protocol::viewsToJson(viewInfos(*c.services.sessions.find(req.matches[1]))));
     });
     c.http.Get(kViewPath, [&c](const httplib::Request& req, httplib::Response& res) {
-        reply(res, 200, viewJson(c.services.sessions.view(*c.services.sessions.find(req.matches[1]), req.matches[2])));
+        reply(res, 200, protocol::viewToJson(viewInfo(c.services.sessions.view(*c.services.sessions.find(req.matches[1]), req.matches[2]))));
     });
     c.http.Delete(kViewPath, [&c](const httplib::Request& req, httplib::Response& res) {
         c.services.sessions.removeView(*c.services.sessions.find(req.matches[1]), req.matches[2]);
@@ -28,11 +27,11 @@ void addViewRoutes(RouteContext& c) {
         const std::string part = std::string("/") + viewImageName(kind);
         putUpload(c, kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
             auto s = c.services.sessions.find(req.matches[1]);
-            reply(res, 200, viewJson(c.services.sessions.setViewImage(*s, req.matches[2], kind, bytes)));
+            reply(res, 200, protocol::viewToJson(viewInfo(c.services.sessions.setViewImage(*s, req.matches[2], kind, bytes))));
         });
         c.http.Delete(kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res) {
             auto s = c.services.sessions.find(req.matches[1]);
-            reply(res, 200, viewJson(c.services.sessions.removeViewImage(*s, req.matches[2], kind)));
+            reply(res, 200, protocol::viewToJson(viewInfo(c.services.sessions.removeViewImage(*s, req.matches[2], kind))));
         });
     }
     // The plate as stored (linear): EXR exactly, PNG sRGB-encoded for the page.

@@ -1,7 +1,8 @@
 // A session's volume versions: PUT …/volume (upload a VDB), GET …/volume.vdb[?version=N],
 // POST …/revert, POST …/perturb (bake a perturbation into a new version), POST/DELETE
 // …/refraction (a generated glass sphere's refractive index, or none).
-#include "server/http/responses.h"
+#include "protocol/response_json.h"
+#include "server/state/session_info.h"
 #include "server/http/routes/route_context.h"
 
 namespace volstyle::server {
@@ -10,7 +11,7 @@ void addVolumeRoutes(RouteContext& c) {
     putUpload(c, kSessionPath + "/volume", [&c](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
         auto s = c.services.sessions.find(req.matches[1]);
         c.services.volumes.uploadVdb(*s, bytes);
-        reply(res, 200, sessionJson(*s));
+        reply(res, 200, protocol::sessionToJson(sessionInfo(*s)));
     });
     c.http.Get(kSessionPath + R"(/volume\.vdb)", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
@@ -22,24 +23,24 @@ void addVolumeRoutes(RouteContext& c) {
         auto s = c.services.sessions.find(req.matches[1]);
         const core::Perturbation p = protocol::perturbationFromJson(c.body(req));
         c.services.volumes.perturb(*s, p);
-        reply(res, 200, sessionJson(*s));
+        reply(res, 200, protocol::sessionToJson(sessionInfo(*s)));
     });
     // A generated refractive index (a glass sphere with noise, issue #16), or none: a new version.
     c.http.Post(kSessionPath + "/refraction", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         c.services.volumes.setRefraction(*s, protocol::glassSphereFromJson(c.body(req)));
-        reply(res, 200, sessionJson(*s));
+        reply(res, 200, protocol::sessionToJson(sessionInfo(*s)));
     });
     c.http.Delete(kSessionPath + "/refraction", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         c.services.volumes.setRefraction(*s, std::nullopt);
-        reply(res, 200, sessionJson(*s));
+        reply(res, 200, protocol::sessionToJson(sessionInfo(*s)));
     });
     c.http.Post(kSessionPath + "/revert", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         auto request = protocol::RevertRequest::fromJson(c.body(req));
         c.services.volumes.revert(*s, request.version);
-        reply(res, 200, sessionJson(*s));
+        reply(res, 200, protocol::sessionToJson(sessionInfo(*s)));
     });
 }
 

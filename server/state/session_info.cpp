@@ -1,0 +1,53 @@
+#include "server/state/session_info.h"
+
+#include <tuple>
+
+namespace volstyle::server {
+
+protocol::ViewInfo viewInfo(const SessionView& v) {
+    return {v.id, v.camera, v.target.has_value(), v.weights.has_value(), bool(v.background), v.frame};
+}
+
+std::vector<protocol::ViewInfo> viewInfos(Session& s) {
+    std::lock_guard lock(s.mutex);
+    std::vector<protocol::ViewInfo> out;
+    for (const auto& v : s.views.list) out.push_back(viewInfo(v));
+    return out;
+}
+
+protocol::SessionInfo sessionInfo(Session& s) {
+    std::lock_guard lock(s.mutex);
+    const core::Volume& v = s.volume.current;
+    protocol::SessionInfo info;
+    info.id = s.id, info.created = s.created, info.scene = s.scene;
+    info.dims = v.dims();
+    std::tie(info.lo, info.hi) = v.worldBounds();
+    info.voxelSize = v.voxelSize();
+    info.grids = {"extinction"};
+    if (v.hasAlbedo()) info.grids.push_back("albedo");
+    if (v.hasEmission()) info.grids.push_back("emission");
+    if (v.refractiveIndex()) info.grids.push_back("refractive_index");
+    info.version = s.volume.version;
+    info.lighting = s.light.lighting;
+    info.environmentMap = s.light.environmentMap;
+    for (const auto& view : s.views.list) info.views.push_back(viewInfo(view));
+    info.jobs = s.jobs;
+    const auto& numbers = s.volume.versions.numbers();
+    info.versions.assign(numbers.begin(), numbers.end());
+    for (const auto& d : s.damaged) info.damaged.emplace_back(d.file, d.reason);
+    info.environmentMapInfo = environmentMapInfo(s);
+    return info;
+}
+
+std::vector<protocol::FrameInfo> frameInfos(Session& s) {
+    std::lock_guard lock(s.mutex);
+    std::vector<protocol::FrameInfo> out;
+    for (const auto& [n, f] : s.frames) {
+        int views = 0;
+        for (const auto& v : s.views.list) views += v.frame == n ? 1 : 0;
+        out.push_back({n, f.volume.dims(), f.solved, views});
+    }
+    return out;
+}
+
+}  // namespace volstyle::server
