@@ -1,6 +1,8 @@
 #include "core/stylize/medium_gpu.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <string>
 #include <vector>
 
 #include "core/base/errors.h"
@@ -53,16 +55,58 @@ std::vector<float> brickMaxima(const std::vector<float>& sigma, Int3 n) {
 
 }  // namespace
 
-double StylizerMediumCache::bind(GpuDevice& device, const std::optional<StylizerVolume>& volume, layout::StylizeParams& p) {
+namespace {
+
+/// A number exactly, for a cache key.
+std::string exact(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%a", v);
+    return buf;
+}
+
+struct MediumTextures {
+    gl::Texture density, occupancy;
+};
+
+struct LightOpticalDepth {
+    gl::Texture texture;
+};
+
+/// The optical depth toward the light per voxel (stylize_transmittance.comp), from the device's
+/// cache when the grid, its scale, box and the light are the same; `built` when it was made.
+std::shared_ptr<const LightOpticalDepth> lightOpticalDepth(GpuDevice& device, const StylizerVolume& v, const std::string& densityKey,
+                                                           layout::StylizeParams& p, bool& built) {
+    std::string key = "stylizer-light/" + densityKey;
+    for (double x : {v.lo.x, v.lo.y, v.lo.z, v.hi.x, v.hi.y, v.hi.z, double(p.options.z), double(p.lightDirection.x), double(p.lightDirection.y),
+                     double(p.lightDirection.z), double(p.spot.x), double(p.spot.y), double(p.spot.z)})
+        key += "/" + exact(x);
+    if (auto cached = device.cache().find<LightOpticalDepth>(key)) return cached;
+    const Int3 n = v.grid->dims;
+    LightOpticalDepth made{texture3D(n, nullptr, "stylizer-light-optical-depth")};
+    device.setParams(p);
+    glUseProgram(device.program(gl::ShaderBuilder("stylize_transmittance.comp")).id());
+    glBindImageTexture(layout::kImageUnitOut, made.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R32F);
+    const int g = layout::kWorkgroup3D;
+    glDispatchCompute(GLuint((n.x + g - 1) / g), GLuint((n.y + g - 1) / g), GLuint((n.z + g - 1) / g));
+    gl::barrierAfterComputeWrites();
+    built = true;
+    return device.cache().insert(key, std::make_shared<const LightOpticalDepth>(std::move(made)));
+}
+
+}  // namespace
+
+double bindStylizerMedium(GpuDevice& device, const std::optional<StylizerVolume>& volume, layout::StylizeParams& p) {
     p.volumeLo = {0, 0, 0, 0};
     p.volumeHi = {1, 1, 1, 0};
+    ResourceCache& cache = device.cache();
     if (!volume) {
-        if (!m_empty) {
+        auto empty = cache.find<gl::Texture>("stylizer-no-medium");
+        if (!empty) {
             const float one = 1;
-            m_empty = texture3D({1, 1, 1}, &one, "stylizer-no-medium");
+            empty = cache.insert("stylizer-no-medium", std::make_shared<const gl::Texture>(texture3D({1, 1, 1}, &one, "stylizer-no-medium")));
         }
         for (int unit : {layout::kUnitStylizeDensity, layout::kUnitStylizeTransmittance, layout::kUnitStylizeOccupancy})
-            glBindTextureUnit(GLuint(unit), m_empty.id());
+            glBindTextureUnit(GLuint(unit), empty->id());
         return 0;
     }
     const auto t0 = Clock::now();
@@ -71,35 +115,25 @@ double StylizerMediumCache::bind(GpuDevice& device, const std::optional<Stylizer
     p.volumeLo = {float(v.lo.x), float(v.lo.y), float(v.lo.z), float(v.steps)};
     p.volumeHi = {float(v.hi.x), float(v.hi.y), float(v.hi.z), v.lightTransmittance ? 1.0f : 0.0f};
     bool built = false;
-    const DensityKey densityKey{v.grid->id, v.extinctionScale};
-    if (m_densityKey != densityKey) {
+    // σt and its bricks' maxima: one entry per grid and scale.
+    const std::string densityKey = "stylizer-medium/" + std::to_string(v.grid->id) + "/" + exact(v.extinctionScale);
+    auto medium = cache.find<MediumTextures>(densityKey);
+    if (!medium) {
         std::vector<float> sigma(v.grid->sigma);
         for (float& s : sigma) s = float(s * v.extinctionScale);
-        m_density = texture3D(n, sigma.data(), "stylizer-density");
+        MediumTextures made{texture3D(n, sigma.data(), "stylizer-density"), {}};
         const std::vector<float> bricks = brickMaxima(sigma, n);
-        m_occupancy = texture3D(brickDims(n), bricks.data(), "stylizer-occupancy");
-        glTextureParameteri(m_occupancy.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-        glTextureParameteri(m_occupancy.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-        m_densityKey = densityKey;
-        m_lightKey.reset();
+        made.occupancy = texture3D(brickDims(n), bricks.data(), "stylizer-occupancy");
+        glTextureParameteri(made.occupancy.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTextureParameteri(made.occupancy.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        medium = cache.insert(densityKey, std::make_shared<const MediumTextures>(std::move(made)));
         built = true;
     }
-    glBindTextureUnit(layout::kUnitStylizeDensity, m_density.id());
-    glBindTextureUnit(layout::kUnitStylizeOccupancy, m_occupancy.id());
-    const LightKey lightKey{double(v.grid->id), v.extinctionScale, v.lo.x, v.lo.y, v.lo.z, v.hi.x, v.hi.y, v.hi.z, double(p.options.z),
-                            p.lightDirection.x, p.lightDirection.y, p.lightDirection.z, p.spot.x, p.spot.y, p.spot.z};
-    if (v.lightTransmittance && m_lightKey != lightKey) {
-        m_transmittance = texture3D(n, nullptr, "stylizer-light-optical-depth");
-        device.setParams(p);
-        glUseProgram(device.program(gl::ShaderBuilder("stylize_transmittance.comp")).id());
-        glBindImageTexture(layout::kImageUnitOut, m_transmittance.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R32F);
-        const int g = layout::kWorkgroup3D;
-        glDispatchCompute(GLuint((n.x + g - 1) / g), GLuint((n.y + g - 1) / g), GLuint((n.z + g - 1) / g));
-        gl::barrierAfterComputeWrites();
-        m_lightKey = lightKey;
-        built = true;
-    }
-    glBindTextureUnit(layout::kUnitStylizeTransmittance, v.lightTransmittance ? m_transmittance.id() : m_density.id());  // off: unread
+    glBindTextureUnit(layout::kUnitStylizeDensity, medium->density.id());
+    glBindTextureUnit(layout::kUnitStylizeOccupancy, medium->occupancy.id());
+    std::shared_ptr<const LightOpticalDepth> depth;
+    if (v.lightTransmittance) depth = lightOpticalDepth(device, v, densityKey, p, built);
+    glBindTextureUnit(layout::kUnitStylizeTransmittance, depth ? depth->texture.id() : medium->density.id());  // off: unread
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory for the stylizer's volume");
     if (!built) return 0;
     device.finish();

@@ -32,7 +32,6 @@ constexpr size_t kKeptFrameBytes = size_t(64) << 20;
 
 struct Stylizer::Gpu {
     std::map<std::tuple<double, int, double, uint32_t>, float> holeThresholds;  // calibrations, reused
-    StylizerMediumCache medium;  ///< the heterogeneous medium's textures
 
     float threshold(const Manipulation& m) {
         const auto key = std::make_tuple(m.holeProbability, m.holeOctaves, m.holePersistence, m.holeSeed);
@@ -176,7 +175,7 @@ StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSett
     out.gbufferMs = msSince(t);
     // 5. Per pixel: V̄ and the frame.
     t = Clock::now();
-    stylize::shade(f, [&](layout::StylizeParams& p) { (void)m_gpu->medium.bind(m_device, scene.volume, p); }, out);
+    stylize::shade(f, [&](layout::StylizeParams& p) { (void)bindStylizerMedium(m_device, scene.volume, p); }, out);
     out.shadeMs = msSince(t);
     // 6. What was asked for, back to the CPU.
     t = Clock::now();
