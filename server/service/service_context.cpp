@@ -37,7 +37,8 @@ ServiceContext::ServiceContext(ServiceLimits serviceLimits, const std::string& d
     }
 }
 
-ServiceContext::~ServiceContext() {
+void ServiceContext::shutdown() {
+    if (!gl) return;
     // Stop the solves (a running one ends at its next iteration, queued ones before they start),
     // then free every GPU object on the GL thread while the context lives: the last short task
     // runs before the worker drains the cancelled solves, which create nothing on the way out.
@@ -47,6 +48,11 @@ ServiceContext::~ServiceContext() {
     } catch (const std::exception& e) {
         spdlog::debug("shutting down: the GPU objects were not freed on the GL thread: {}", e.what());
     }
+    gl.reset();  // drains the queued work (it calls into the services: they must still live)
+}
+
+ServiceContext::~ServiceContext() {
+    shutdown();
     std::error_code ec;
     if (!scratch.empty()) std::filesystem::remove_all(scratch, ec);
 }

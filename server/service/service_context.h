@@ -18,7 +18,10 @@ struct ServiceContext {
     /// Restores sessions and jobs from `dataDir` (empty: in memory only). GL work goes to `gl`;
     /// none given: its own GL thread (GlWorker).
     ServiceContext(ServiceLimits limits, const std::string& dataDir, std::unique_ptr<GlExecutor> gl);
-    ~ServiceContext();  ///< cancels the jobs and frees GPU objects on the GL thread
+    ~ServiceContext();  ///< shutdown(), then the job scratch folder goes
+    /// Cancels the jobs, frees GPU objects on the GL thread, then stops it once the work queued
+    /// for it is drained (that work calls into the services). Idempotent.
+    void shutdown();
     ServiceContext(const ServiceContext&) = delete;
     ServiceContext& operator=(const ServiceContext&) = delete;
 

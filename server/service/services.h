@@ -19,6 +19,10 @@ struct Services {
     /// (none: its own GL thread).
     Services(ServiceLimits limits, const std::string& dataDir, std::unique_ptr<GlExecutor> gl = nullptr)
         : context(std::move(limits), dataDir, std::move(gl)) {}
+    /// The GL thread stops before the services go: the work queued for it calls into them.
+    ~Services() { context.shutdown(); }
+    Services(const Services&) = delete;
+    Services& operator=(const Services&) = delete;
 
     ServiceContext context;
     SessionsService sessions{context};

@@ -55,10 +55,18 @@ StylizerState defaultStylizer() {
     return s;
 }
 
+StylizerSceneEntry sceneEntry(core::StylizerScene scene, std::vector<std::string> meshRefs, size_t bytes) {
+    // What can be made again is not kept: the session volume's density (attached again when the
+    // scene is current) and the images layered TFs compile to (up to 1024² × 16 bytes each, per
+    // TF and key: 64 entries of those would hold gigabytes).
+    if (scene.volume) scene.volume->grid.reset();
+    for (core::TransferFunction* tf : scene.transferFunctions())
+        if (!tf->layers.empty()) tf->image.reset();
+    return {std::move(scene), std::move(meshRefs), bytes};
+}
+
 StylizerSceneEntry currentSceneEntry(const StylizerState& state) {
-    StylizerSceneEntry entry{state.scene, state.meshRefs, protocol::stylizerSceneToJson(state.scene, state.meshRefs).dump().size()};
-    if (entry.scene.volume) entry.scene.volume->grid.reset();  // the session volume's: attached again when it is current
-    return entry;
+    return sceneEntry(state.scene, state.meshRefs, protocol::stylizerSceneToJson(state.scene, state.meshRefs).dump().size());
 }
 
 core::StylizerScene resolveSceneEntry(const StylizerState& state, const StylizerSceneEntry& entry) {
@@ -73,6 +81,8 @@ core::StylizerScene resolveSceneEntry(const StylizerState& state, const Stylizer
     const bool usesImage = std::any_of(tfs.begin(), tfs.end(), [](const core::TransferFunction* tf) { return showsImage(*tf); });
     if (usesImage && !state.transferImage) throw InvalidArgument("its transfer-function image was deleted");
     if (usesImage) attachTransferImage(scene, state.transferImage);
+    for (core::TransferFunction* tf : scene.transferFunctions())
+        if (!tf->layers.empty() && !tf->image) core::compileTransferFunction(*tf);  // sceneEntry dropped it
     return scene;
 }
 

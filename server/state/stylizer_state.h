@@ -79,6 +79,9 @@ StylizerState defaultStylizer();
 /// Puts a new uploaded TF image into `scene`'s TFs where they show it (compiling their layers again).
 void attachTransferImage(core::StylizerScene& scene, const std::shared_ptr<const core::Image>& image);
 
+/// An undo entry of `scene`: without what can be made again (the medium's density, layered TFs'
+/// compiled images), so an entry holds little beyond its JSON's `bytes`.
+StylizerSceneEntry sceneEntry(core::StylizerScene scene, std::vector<std::string> meshRefs, size_t bytes);
 /// An undo entry of the state's scene now (its size measured by its JSON, as the store writes it).
 StylizerSceneEntry currentSceneEntry(const StylizerState& state);
 

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <vector>
 
 #include "core/base/errors.h"
 #include "protocol/validation.h"
@@ -84,15 +85,29 @@ void atomicWriteWith(const fs::path& path, const std::function<void(const fs::pa
 
 namespace {
 
-void writeThrough(const fs::path& path, bool keepExtension, const std::function<void(const fs::path& tmp)>& write) {
+/// Creates `dir` and the folders above it that are missing, each made durable: a new folder's
+/// entry lives in its parent, so the parent is fsynced after it (top down).
+void createFolders(const fs::path& dir) {
+    std::vector<fs::path> missing;
     std::error_code ec;
-    fs::create_directories(path.parent_path(), ec);
-    if (ec) throw IoError("cannot create the folder '" + path.parent_path().string() + "': " + ec.message());
+    for (fs::path d = dir; !d.empty() && !fs::exists(d, ec); d = d.parent_path()) {
+        missing.push_back(d);
+        if (d == d.parent_path()) break;
+    }
+    if (missing.empty()) return;
+    fs::create_directories(dir, ec);
+    if (ec) throw IoError("cannot create the folder '" + dir.string() + "': " + ec.message());
+    for (auto it = missing.rbegin(); it != missing.rend(); ++it) syncFolder(it->parent_path());
+}
+
+void writeThrough(const fs::path& path, bool keepExtension, const std::function<void(const fs::path& tmp)>& write) {
+    createFolders(path.parent_path());
     const fs::path tmp = temporaryFor(path, keepExtension);
     try {
         write(tmp);
         syncPath(tmp, O_RDONLY, "fsync");
     } catch (...) {
+        std::error_code ec;
         fs::remove(tmp, ec);
         throw;
     }
@@ -117,10 +132,12 @@ std::string readFile(const fs::path& p) {
 }
 
 DataDir::DataDir(fs::path root) : m_root(std::move(root)) {
-    std::error_code ec;
-    fs::create_directories(m_root / "sessions", ec);
-    fs::create_directories(m_root / "jobs", ec);
-    if (ec) throw IoError("serve: cannot create the data directory '" + m_root.string() + "': " + ec.message());
+    try {
+        createFolders(m_root / "sessions");
+        createFolders(m_root / "jobs");
+    } catch (const IoError& e) {
+        throw IoError("serve: cannot create the data directory '" + m_root.string() + "': " + e.what());
+    }
 }
 
 void DataDir::writeReason(const fs::path& to, const std::string& session, const std::string& file, const std::string& reason) {

@@ -28,12 +28,12 @@ std::string encodeStylizerHistory(const std::vector<StylizerSceneEntry>& undo, c
 
 namespace {
 
-/// An undo entry read back: the scene resolved against the uploads restored before it. Throws
-/// when it no longer resolves (the caller drops it, as an undo to it would).
-StylizerSceneEntry entryOf(const StylizerState& state, const json& scene) {
-    const protocol::StylizerSceneRequest request = protocol::stylizerSceneFromJson(scene, "", protocol::SceneSource::Api);
-    StylizerSceneEntry entry{resolveStylizerScene(state, request), request.meshRefs, scene.dump().size()};
-    return entry;
+/// An undo entry read back, as it was written: its meshes, TF image and compiled TFs are found
+/// when an undo makes it current again (resolveSceneEntry), so a restart compiles nothing here,
+/// and a step whose mesh was deleted is dropped then, as before the restart.
+StylizerSceneEntry entryOf(const json& scene) {
+    protocol::StylizerSceneRequest request = protocol::stylizerSceneFromJson(scene, "", protocol::SceneSource::Api);
+    return sceneEntry(std::move(request.scene), std::move(request.meshRefs), scene.dump().size());
 }
 
 }  // namespace
@@ -71,17 +71,17 @@ void restoreUploads(DataDir& data, Session& s, const fs::path& dir, const MeshRe
     }
 }
 
-/// The undo and redo stacks: a convenience, so an unreadable file is dropped, not the scene, and
-/// a step that no longer resolves (its mesh deleted) is dropped as an undo to it would drop it.
+/// The undo and redo stacks: a convenience, so an unreadable file is dropped, not the scene (and
+/// a step that no longer reads, alone).
 void restoreHistory(Session& s, const fs::path& dir) {
     if (!fs::exists(dir / "stylizer" / "history.json")) return;
     try {
         const json h = json::parse(readFile(dir / "stylizer" / "history.json"));
         for (auto [stack, name] : {std::pair{&s.stylizer.undo, "undo"}, std::pair{&s.stylizer.redo, "redo"}})
             for (const json& scene : h.at(name)) try {
-                    stack->push_back(entryOf(s.stylizer, scene));
+                    stack->push_back(entryOf(scene));
                 } catch (const std::exception& e) {
-                    spdlog::info("session {}: a stylizer {} step no longer resolves and was dropped: {}", s.id, name, e.what());
+                    spdlog::info("session {}: a stylizer {} step does not read and was dropped: {}", s.id, name, e.what());
                 }
     } catch (const std::exception& e) {
         s.stylizer.undo.clear(), s.stylizer.redo.clear();

@@ -372,5 +372,30 @@ TEST_F(ServiceTest, AnUndoToASceneWhoseMeshWasDeletedIsDropped) {
     EXPECT_EQ(first.scene.occluders[0].mesh, forest.scene.occluders[0].mesh);  // the built-in mesh, shared
 }
 
+// Review of #36: undo entries keep what cannot be made again, not layered TFs' compiled images
+// (1024² RGBA float is 16 MiB each; 64 entries a stack held gigabytes); an undo compiles again.
+TEST_F(ServiceTest, UndoEntriesDoNotHoldCompiledTransferFunctions) {
+    auto service = makeService();
+    auto s = service->sessions.create(smallCloud());
+    const server::StylizerSnapshot forest = service->stylizer.stylizer(*s);
+    nlohmann::json j = protocol::stylizerSceneToJson(forest.scene, forest.meshRefs);
+    j["transfer_function"] = {{"size", {256, 256}}, {"layers", {{{"type", "solid"}, {"colour", {0.2, 0.4, 0.6}}, {"alpha", 1.0}}}}};
+    service->stylizer.setStylizerScene(*s, protocol::stylizerSceneFromJson(j, "", protocol::SceneSource::Api));
+    j["transfer_function"]["layers"][0]["colour"] = {0.9, 0.1, 0.1};
+    service->stylizer.setStylizerScene(*s, protocol::stylizerSceneFromJson(j, "", protocol::SceneSource::Api));
+    {
+        std::lock_guard lock(s->mutex);
+        ASSERT_EQ(s->stylizer.undo.size(), 2u);
+        const auto& kept = s->stylizer.undo.back().scene.transferFunction;
+        ASSERT_TRUE(kept.has_value());
+        EXPECT_EQ(kept->image, nullptr) << "an undo entry holds a compiled TF image";
+        EXPECT_LT(s->stylizer.undo.back().bytes, size_t(64) << 10);
+    }
+    const server::StylizerSnapshot undone = service->stylizer.undoStylizer(*s, false);
+    ASSERT_TRUE(undone.scene.transferFunction && undone.scene.transferFunction->image);
+    EXPECT_EQ(undone.scene.transferFunction->image->width, 256);
+    EXPECT_NEAR(undone.scene.transferFunction->image->pixel(10, 10)[2], 0.6f, 1e-6);  // the first TF, compiled again
+}
+
 }  // namespace
 }  // namespace volstyle

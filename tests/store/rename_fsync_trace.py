@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Every rename that acknowledges a write is followed by an fsync of its folder (issue #36,
-"Durability"): runs `volstyle serve` under strace, makes writes of every kind the data directory
+"Durability"), and every folder it creates is followed by an fsync of the folder above it (the
+new folder's entry lives there): runs `volstyle serve` under strace, makes writes of every kind the data directory
 holds (a session, a view and its target image, the lighting, a mesh, an uploaded volume version, a
 frame, a job record), stops the server, and reads the trace: after each rename into the data
 directory, the same thread must fsync the target's folder before its next rename.
@@ -51,7 +52,7 @@ def main():
         return 1
     work = tempfile.mkdtemp()
     data, trace, log = os.path.join(work, 'data'), os.path.join(work, 'trace.txt'), os.path.join(work, 'server.log')
-    server = subprocess.Popen(['strace', '-f', '--seccomp-bpf', '-y', '-qq', '-e', 'trace=rename,renameat,renameat2,fsync', '-o', trace,
+    server = subprocess.Popen(['strace', '-f', '--seccomp-bpf', '-y', '-qq', '-e', 'trace=rename,renameat,renameat2,fsync,mkdir,mkdirat', '-o', trace,
                                binary, 'serve', '--port', '0', '--data-dir', data, '--web-dir', work],
                               stdout=open(log, 'w'), stderr=subprocess.STDOUT)
     try:
@@ -105,8 +106,8 @@ def main():
         print('[ measured ] the server stopped %.1f s after SIGTERM' % (time.monotonic() - t1))
     # 1234  rename("/d/sessions/x/session.json.tmp-1a2b3c4d", "/d/sessions/x/session.json") = 0
     # 1234  fsync(7</d/sessions/x>) = 0
-    rename = re.compile(r'^(\d+)\s+rename(?:at2?)?\(.*"([^"]+)"(?:, \w+)?\) = 0')
-    fsync = re.compile(r'^(\d+)\s+fsync\(\d+<([^>]+)>\) = 0')
+    rename = re.compile(r'^(\d+)\s+rename(?:at2?)?\(.*"([^"]+)"(?:, \w+)?\)\s+= 0')
+    fsync = re.compile(r'^(\d+)\s+fsync\(\d+<([^>]+)>\)\s+= 0')
     pending, checked, missing = {}, 0, []
     for line in open(trace):
         m = rename.match(line)
@@ -124,7 +125,24 @@ def main():
         if m and m.group(1) in pending and m.group(2) == os.path.dirname(pending[m.group(1)]):
             del pending[m.group(1)]
     missing += pending.values()
+    # 1234  mkdir("/d/sessions/x", 0777) = 0  (or mkdirat(AT_FDCWD, "/d/…", 0777) = 0)
+    mkdir = re.compile(r'^(\d+)\s+mkdir(?:at)?\((?:AT_FDCWD[^,]*, )?"([^"]+)"')
+    made, unsynced = 0, []
+    for line in open(trace):
+        m = mkdir.match(line)
+        if m and line.rstrip().endswith('= 0') and m.group(2).startswith(data):
+            unsynced.append((m.group(1), m.group(2).rstrip('/')))
+            made += 1
+            continue
+        m = fsync.match(line)
+        if m:
+            unsynced = [(tid, d) for tid, d in unsynced if not (tid == m.group(1) and os.path.dirname(d) == m.group(2))]
     shutil.rmtree(work, ignore_errors=True)
+    print('[ measured ] %d folders created in the data directory, %d without an fsync of the folder above them' % (made, len(unsynced)))
+    for _, folder in unsynced[:10]:
+        print('FAIL: no fsync of the folder above the new folder ' + folder)
+    if unsynced:
+        return 1
     print('[ measured ] %d renames into the data directory, %d without an fsync of their folder after them' % (checked, len(missing)))
     for target in missing[:10]:
         print('FAIL: no fsync of the folder after the rename into ' + target)
