@@ -1,6 +1,6 @@
 // The solver's set-up (TVCG Sec. 4.2, 5.1–5.2): validated inputs, the observations and weights of
-// every pixel, the hull of unknowns that can matter, the bounds, the regularizer rows and the warm
-// start. Everything is built once, before the first iteration.
+// every pixel, the bounds, the regularizer rows and the warm start (the hull of unknowns that can
+// matter is solver_hull.cpp). Everything is built once, before the first iteration.
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -18,8 +18,6 @@ namespace {
 
 /// Extinction solves divide by L_bg − L_m: below this the pixel carries no information.
 constexpr double kMinRadianceContrast = 1e-6;
-/// A masked pixel whose observation is below this everywhere sees empty space (carves the hull).
-constexpr float kEmptyObservation = 1e-6f;
 /// An upper bound that means "none" in float vectors.
 constexpr float kUnbounded = 3e38f;
 
@@ -172,82 +170,6 @@ void Solver::State::buildObservations() {
     sqrtW.upload(w);
     sqrtWHost = std::move(w);
     obsHost = std::move(o);
-}
-
-void Solver::State::buildHull() {
-    hullHost.assign(elements * 4, 0.0f);
-    if (!opt.useHull) {
-        for (size_t e = 0; e < elements; ++e) hullHost[4 * e] = hullHost[4 * e + 1] = hullHost[4 * e + 2] = 1.0f;
-    } else if (opt.unknown != Unknown::Extinction) {
-        markHullFromExtinction();
-    } else {
-        markHullFromMasks(obsHost, sqrtWHost);
-    }
-    hull.upload(hullHost);
-    movable.upload(hullHost);
-    size_t count = 0;
-    for (size_t e = 0; e < elements; ++e) count += hullHost[4 * e] > 0 ? 1 : 0;
-    report.unknownCount = elements;
-    report.hullCount = count;
-}
-
-namespace {
-
-/// Marks unknown (i, j, k) in every block.
-void markCell(std::vector<float>& hull, size_t cells, size_t blocks, Int3 udims, int i, int j, int k) {
-    for (size_t b = 0; b < blocks; ++b) {
-        size_t e = b * cells + (size_t(k) * udims.y + size_t(j)) * udims.x + size_t(i);
-        hull[4 * e] = hull[4 * e + 1] = hull[4 * e + 2] = 1.0f;
-    }
-}
-
-}  // namespace
-
-void Solver::State::markHullFromExtinction() {
-    // Unknowns whose basis support overlaps non-zero extinction (TVCG Sec. 5.2, visual hulls): the
-    // rest have no influence on any pixel.
-    const Int3 n = volume.dims();
-    const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
-    for (int k = 0; k < n.z; ++k)
-        for (int j = 0; j < n.y; ++j)
-            for (int i = 0; i < n.x; ++i) {
-                if (maxComponent(volume.extinctionAt(i, j, k)) <= 0) continue;
-                int lo[3], hi[3];
-                for (int a = 0; a < 3; ++a) {
-                    int v = a == 0 ? i : (a == 1 ? j : k);
-                    double qlo = (v - 1 + 0.5) * scale[a] - 0.5, qhi = (v + 1 + 0.5) * scale[a] - 0.5;
-                    lo[a] = std::clamp(int(std::floor(qlo)), 0, udims[a] - 1);
-                    hi[a] = std::clamp(int(std::ceil(qhi)), 0, udims[a] - 1);
-                }
-                for (int z = lo[2]; z <= hi[2]; ++z)
-                    for (int y = lo[1]; y <= hi[1]; ++y)
-                        for (int x = lo[0]; x <= hi[0]; ++x) markCell(hullHost, cells, elements / cells, udims, x, y, z);
-            }
-}
-
-void Solver::State::markHullFromMasks(const std::vector<float>& o, const std::vector<float>& w) {
-    // Extinction: carve with the targets' masks. An unknown whose centre a view sees through a
-    // constrained pixel that shows only background (o = 0) is outside the hull.
-    const Int3 n = volume.dims();
-    const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
-    for (int k = 0; k < udims.z; ++k)
-        for (int j = 0; j < udims.y; ++j)
-            for (int i = 0; i < udims.x; ++i) {
-                const Vec3d pw = volume.worldFromIndex().applyPoint((Vec3d(i, j, k) + Vec3d(0.5)) / scale - Vec3d(0.5));
-                bool inside = true;
-                size_t offset = 0;
-                for (const auto& v : views) {
-                    if (auto px = v.camera.project(pw)) {
-                        size_t idx = 4 * (offset + size_t(px->y) * v.camera.width + size_t(px->x));
-                        bool constrained = w[idx] > 0 || w[idx + 1] > 0 || w[idx + 2] > 0;
-                        bool empty = o[idx] <= kEmptyObservation && o[idx + 1] <= kEmptyObservation &&
-                                     o[idx + 2] <= kEmptyObservation;
-                        if (constrained && empty) inside = false;
-                    }
-                    offset += size_t(v.camera.width) * v.camera.height;
-                }
-                if (inside) markCell(hullHost, cells, elements / cells, udims, i, j, k);
-            }
 }
 
 void Solver::State::cacheOperator() {

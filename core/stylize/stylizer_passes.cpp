@@ -31,6 +31,21 @@ MinMaxLevels minMaxLevels(int n) {
     return l;
 }
 
+/// A framebuffer drawing into `colours` (in order: attachment 0, 1, …; none: depth only) and `depth`.
+gl::Framebuffer framebuffer(const char* label, const gl::Texture& depth, std::initializer_list<const gl::Texture*> colours, const char* what) {
+    gl::Framebuffer fb = gl::createFramebuffer(label);
+    glNamedFramebufferTexture(fb.id(), GL_DEPTH_ATTACHMENT, depth.id(), 0);
+    std::vector<GLenum> buffers;
+    for (const gl::Texture* c : colours) {
+        buffers.push_back(GLenum(GL_COLOR_ATTACHMENT0 + buffers.size()));
+        glNamedFramebufferTexture(fb.id(), buffers.back(), c->id(), 0);
+    }
+    if (buffers.empty()) glNamedFramebufferDrawBuffer(fb.id(), GL_NONE);
+    else glNamedFramebufferDrawBuffers(fb.id(), GLsizei(buffers.size()), buffers.data());
+    gl::checkFramebufferComplete(fb, what);
+    return fb;
+}
+
 /// A mesh's GPU copy in the device's cache, with the mesh it was made from (a key names the
 /// mesh's address, which a new mesh may reuse once the old one is gone).
 struct CachedMesh {
@@ -138,14 +153,8 @@ StylizerTargets::StylizerTargets(int n, int w, int h, bool accelerated) : n(n), 
     shadowDepth = texture2D(GL_DEPTH_COMPONENT32F, n, n, "shadow-depth");
     shadowIds = texture2D(GL_R32F, n, n, "shadow-ids");
     scratchDepth = texture2D(GL_DEPTH_COMPONENT32F, n, n, "shadow-depth-part");
-    shadowFb = gl::createFramebuffer("shadow-map");
-    glNamedFramebufferTexture(shadowFb.id(), GL_DEPTH_ATTACHMENT, shadowDepth.id(), 0);
-    glNamedFramebufferTexture(shadowFb.id(), GL_COLOR_ATTACHMENT0, shadowIds.id(), 0);
-    gl::checkFramebufferComplete(shadowFb, "the shadow map's");
-    scratchFb = gl::createFramebuffer("shadow-map-part");
-    glNamedFramebufferTexture(scratchFb.id(), GL_DEPTH_ATTACHMENT, scratchDepth.id(), 0);
-    glNamedFramebufferDrawBuffer(scratchFb.id(), GL_NONE);
-    gl::checkFramebufferComplete(scratchFb, "the shadow map's");
+    shadowFb = framebuffer("shadow-map", shadowDepth, {&shadowIds}, "the shadow map's");
+    scratchFb = framebuffer("shadow-map-part", scratchDepth, {}, "the shadow map's");
     // The accelerated V̄'s min-max levels follow the map in its buffer (no copy of level 0).
     const size_t pyramidBytes = accelerated ? (minMaxLevels(n).entries - size_t(n) * n) * sizeof(uint32_t) : 0;
     scatterDepth = gl::createBuffer(mapBytes + pyramidBytes, nullptr, 0, "scatter-shadow-map");
@@ -153,13 +162,7 @@ StylizerTargets::StylizerTargets(int n, int w, int h, bool accelerated) : n(n), 
     surface = texture2D(GL_RGBA32F, w, h, "gbuffer-surface");
     colour = texture2D(GL_RGBA32F, w, h, "gbuffer-colour");
     depth = texture2D(GL_DEPTH_COMPONENT32F, w, h, "gbuffer-depth");
-    gbufferFb = gl::createFramebuffer("gbuffer");
-    glNamedFramebufferTexture(gbufferFb.id(), GL_COLOR_ATTACHMENT0, surface.id(), 0);
-    glNamedFramebufferTexture(gbufferFb.id(), GL_COLOR_ATTACHMENT1, colour.id(), 0);
-    glNamedFramebufferTexture(gbufferFb.id(), GL_DEPTH_ATTACHMENT, depth.id(), 0);
-    const GLenum buffers[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-    glNamedFramebufferDrawBuffers(gbufferFb.id(), 2, buffers);
-    gl::checkFramebufferComplete(gbufferFb, "the G-buffer's");
+    gbufferFb = framebuffer("gbuffer", depth, {&surface, &colour}, "the G-buffer's");
     pixels = gl::createBuffer(pixelBytes, nullptr, GL_DYNAMIC_STORAGE_BIT, "stylized-frame");
     layers = gl::createBuffer(pixelBytes * layout::kStylizeLayers, nullptr, GL_DYNAMIC_STORAGE_BIT, "stylized-aovs");
     m_bytes = 4 * mapBytes + pyramidBytes + pixelBytes * (3 + 1 + layout::kStylizeLayers);
