@@ -7,10 +7,12 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <tuple>
 
 #include "core/base/errors.h"
 #include "core/gpu/gpu_device.h"
+#include "core/render/gpu_volume.h"
 #include "core/image/image_io.h"
 #include "core/stylize/keyframes.h"
 #include "core/stylize/stylizer.h"
@@ -59,7 +61,8 @@ const CommandSpec kStylize{
     "  volstyle stylize --scene docs/examples/stylize/path.json --sequence out/path --video out/path.mp4\n"};
 
 /// builtin:forest, or a SCENE.json whose mesh paths are relative to it.
-core::StylizerScene loadStylizerScene(const std::string& spec) {
+/// The scene file `spec`, and in `medium` the volume its /volume/source names (if any).
+core::StylizerScene loadStylizerScene(const std::string& spec, std::optional<core::Volume>& medium) {
     if (spec == "builtin:forest") return core::builtinForest();
     if (spec.rfind("builtin:", 0) == 0) throw InvalidArgument("--scene: unknown scene '" + spec + "' (built-in: builtin:forest)");
     protocol::StylizerSceneRequest request =
@@ -97,8 +100,8 @@ core::StylizerScene loadStylizerScene(const std::string& spec) {
         } catch (const Error& e) {
             throw InvalidArgument("'" + spec + "': /volume/source: " + e.what());
         }
-        request.scene.volume->grid = core::densityGridOf(volume);
         if (!request.volumeBoxGiven) std::tie(request.scene.volume->lo, request.scene.volume->hi) = volume.worldBounds();
+        medium = std::move(volume);
     }
     return request.scene;
 }
@@ -113,7 +116,8 @@ namespace {
 /// A sequence's frames at most (10 minutes at 24 fps).
 constexpr size_t kMaxSequenceFrames = 14400;
 
-int renderSequence(const Arguments& args, const core::StylizerScene& scene, const core::StylizeSettings& settings, core::StylizerOutput output) {
+int renderSequence(const Arguments& args, const core::StylizerScene& scene, const std::optional<core::Volume>& volume,
+                   const core::StylizeSettings& settings, core::StylizerOutput output) {
     const fs::path folder = args.get("sequence");
     const double fps = args.number("fps", 24);
     const auto [first, last] = core::pathSpan(scene.keyframes);
@@ -137,9 +141,11 @@ int renderSequence(const Arguments& args, const core::StylizerScene& scene, cons
     fs::create_directories(folder);
     auto device = core::GpuDevice::create();
     core::Stylizer stylizer(*device);
+    std::optional<core::GpuVolume> medium;
+    if (volume) medium.emplace(*volume);
     const core::SaveOptions save = core::stylizerSaveOptions(output, args.number("exposure", 0));
     for (size_t i = 0; i < times.size(); ++i) {
-        const core::StylizedFrame f = stylizer.render(core::sceneAtTime(scene, times[i]), settings);
+        const core::StylizedFrame f = stylizer.render(core::sceneAtTime(scene, times[i]), settings, medium ? &*medium : nullptr);
         core::saveImage((folder / server::sequenceFrameName(i)).string(), f.output(output), save);
         spdlog::info("frame {}/{} (t = {:.3f}) in {:.0f} ms", i + 1, times.size(), times[i], f.totalMs);
     }
@@ -168,7 +174,8 @@ int runStylize(const std::vector<std::string>& argv) {
     const auto output = protocol::stylizerOutputFromName(aov);
     if (!output) throw InvalidArgument("--aov: '" + aov + "' is not one of " + protocol::kStylizerAovNames);
 
-    core::StylizerScene scene = loadStylizerScene(args.get("scene"));
+    std::optional<core::Volume> volume;
+    core::StylizerScene scene = loadStylizerScene(args.get("scene"), volume);
     if (args.has("camera") && !scene.keyframes.empty())
         throw InvalidArgument("--camera: the scene's key frames set the camera (a camera path); leave --camera out");
     if (args.has("camera"))
@@ -185,11 +192,13 @@ int runStylize(const std::vector<std::string>& argv) {
     core::readBackOnly(settings, *output);
     settings.validate();
 
-    if (sequence) return renderSequence(args, scene, settings, *output);
+    if (sequence) return renderSequence(args, scene, volume, settings, *output);
     scene = core::sceneAtTime(scene, scene.time);  // on a path: its camera at the scene's time
     auto device = core::GpuDevice::create();
     core::Stylizer stylizer(*device);
-    const core::StylizedFrame f = stylizer.render(scene, settings);
+    std::optional<core::GpuVolume> medium;
+    if (volume) medium.emplace(*volume);
+    const core::StylizedFrame f = stylizer.render(scene, settings, medium ? &*medium : nullptr);
     const core::SaveOptions save = core::stylizerSaveOptions(*output, args.number("exposure", 0));
     core::saveImage(outputPath, f.output(*output), save);
     spdlog::info("stylized {}x{} in {:.1f} ms (shadow maps and edits {:.1f}, min-max mipmap {:.1f}, G-buffer {:.1f}, shading {:.1f}, read back {:.1f})",

@@ -45,6 +45,7 @@ struct Camera {
         int x, y;
     };
     std::optional<Pixel> project(const Vec3d& world) const;
+    bool operator==(const Camera&) const = default;
 };
 
 /// The default view: 480×480 from +z, slightly above the horizon, framing [-1, 1]³.

@@ -27,6 +27,7 @@ enum class PhaseType { Isotropic, HenyeyGreenstein };
 struct Phase {
     PhaseType type = PhaseType::Isotropic;
     double g = 0;  ///< HG asymmetry in (-1, 1)
+    bool operator==(const Phase&) const = default;
 };
 
 /// Radiance arriving from behind the volume: a constant colour or a lat-long environment map.

@@ -17,6 +17,8 @@
 #include "common/phase.glsl"
 #include "common/min_max_entry.glsl"
 #include "common/ray_box.glsl"
+#include "common/stylize_medium.glsl"
+#include "common/march_segments.glsl"
 
 layout(local_size_x = kWorkgroup2D, local_size_y = kWorkgroup2D) in;
 
@@ -24,7 +26,6 @@ layout(binding = kUnitShadowDepth) uniform sampler2D s_shadowDepth;
 layout(binding = kUnitGBufferSurface) uniform sampler2D s_surface;
 layout(binding = kUnitGBufferColour) uniform sampler2D s_colour;
 layout(binding = kUnitTransferFunction) uniform sampler2D s_transfer;
-layout(binding = kUnitStylizeDensity) uniform sampler3D s_density;
 layout(binding = kUnitStylizeTransmittance) uniform sampler3D s_lightDepth;  // τ_l: optical depth toward the light
 layout(binding = kUnitStylizeOccupancy) uniform sampler3D s_occupancy;
 
@@ -291,8 +292,6 @@ vec4 transferFunction(float vBar, float d) {
     return mix(top, bottom, f.y);
 }
 
-// The heterogeneous medium's grid coordinates of world point x ([0, 1]³ over the box).
-vec3 volumeUvw(vec3 x) { return (x - u.volumeLo.xyz) / (u.volumeHi.xyz - u.volumeLo.xyz); }
 bool insideVolume(vec3 x) { return all(greaterThanEqual(x, u.volumeLo.xyz)) && all(lessThanEqual(x, u.volumeHi.xyz)); }
 // T_l at x: the grid's transmittance toward the light, e^{−τ_l} (1 when it is off). Outside the
 // box, the ray toward the light may cross it: then τ_l where it enters (the same ray onward), so a
@@ -323,7 +322,7 @@ vec3 emittedTowardEye(vec3 x, vec3 dir) {
     return u.irradiance.rgb * cone / (d * d) * phaseValue(u.medium.z, u.medium.w, dot(l, -dir));
 }
 
-// Marches the view ray's part in the box, [0, s] clipped to it, at u.volumeLo.w midpoints:
+// Marches the view ray's part in the box, [0, s] clipped to it, at u.volumeLo.w equal segments' midpoints:
 // V̄ (−1 when the ray meets no medium), ∫σt e^{−τ} L_e dt and e^{−τ(s)}.
 void marchVolume(vec3 e, vec3 dir, float s, out float vBar, out vec3 inScattered, out float transmittance) {
     vBar = -1.0;
@@ -333,26 +332,22 @@ void marchVolume(vec3 e, vec3 dir, float s, out float vBar, out vec3 inScattered
     float ta = max(span.x, 0.0), tb = min(span.y, s);
     if (!(tb > ta)) return;
     int steps = int(u.volumeLo.w);
-    float dt = (tb - ta) / float(steps), tau = 0.0, weighted = 0.0, weights = 0.0;
-    // Empty bricks (no σt any lookup inside can return) are crossed in one go: the midpoints
-    // stay those of the uniform march, so skipping changes nothing but the time.
+    Segments seg = Segments(ta, (tb - ta) / float(steps), steps);
+    // The volume's index space (voxel centres at integers over the box), where its occupancy
+    // bricks are: empty ones are crossed in one go, the midpoints staying those of the uniform
+    // march (common/march_segments.glsl), so skipping changes nothing but the time.
     vec3 voxels = vec3(textureSize(s_density, 0)), size = u.volumeHi.xyz - u.volumeLo.xyz;
+    vec3 o = (e - u.volumeLo.xyz) / size * voxels - 0.5, d = dir * voxels / size;
     ivec3 bricks = textureSize(s_occupancy, 0);
-    vec3 gPerT = dir * voxels / size;  // voxel coordinates per unit of t
-    vec3 gInv = safeInverse(gPerT);
+    float tau = 0.0, weighted = 0.0, weights = 0.0;
     for (int i = 0; i < steps;) {
-        float t = ta + (float(i) + 0.5) * dt;
-        vec3 x = e + t * dir;
-        vec3 g = volumeUvw(x) * voxels;
-        ivec3 b = clamp(ivec3(floor(g / float(kStylizeBrick))), ivec3(0), bricks - 1);
-        if (texelFetch(s_occupancy, b, 0).r <= 0.0) {
-            vec3 lo = vec3(b * kStylizeBrick);
-            float leave = t + max(rayBox(g, gInv, lo, lo + float(kStylizeBrick)).y, 0.0);
-            i = max(i + 1, int(ceil((leave - ta) / dt - 0.5)));
+        int next = skipEmptyBricksOn(s_occupancy, bricks, i, seg, o, d);
+        if (next != i) {
+            i = next;
             continue;
         }
-        ++i;
-        float w = texture(s_density, volumeUvw(x)).r * dt;  // σt dt
+        vec3 x = e + segmentMidpoint(seg, i++) * dir;
+        float w = densityAt(volumeUvw(x)) * seg.dt;  // σt dt
         if (w <= 0.0) continue;
         weighted += w * visibility(x, true) * lightTransmittance(x);
         weights += w;
@@ -369,7 +364,7 @@ float averageVisibility(vec3 dir, float s) {
 }
 
 void main() {
-    ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 pix = ivec2(gl_GlobalInvocationID.xy) + u.pixelOrigin.xy;
     ivec2 size = u.imageSize.xy;
     if (pix.x >= size.x || pix.y >= size.y) return;
     vec3 dir = pinholeRay(pix, size, u.camForward, u.camRight, u.camUp.xyz);

@@ -4,12 +4,11 @@
 // interpolates τ_l trilinearly and takes T_l = e^{−τ_l} (inside V̄ and on surfaces): the optical
 // depth varies smoothly where the transmittance falls off exponentially inside a dense layer, so
 // interpolating it, not T_l, keeps a slab's shadow within 1% of the exact integral.
-#include "common/stylize_params.glsl"
+#include "common/stylize_medium.glsl"
 #include "common/ray_box.glsl"
 
 layout(local_size_x = kWorkgroup3D, local_size_y = kWorkgroup3D, local_size_z = kWorkgroup3D) in;
 
-layout(binding = kUnitStylizeDensity) uniform sampler3D s_density;
 layout(r32f, binding = kImageUnitOut) writeonly uniform image3D o_opticalDepth;
 
 void main() {
@@ -32,6 +31,6 @@ void main() {
     float step = 0.5 * min(size.x / float(n.x), min(size.y / float(n.y), size.z / float(n.z)));
     int k = clamp(int(ceil(length_ / step)), 1, 4096);
     float dt = length_ / float(k), tau = 0.0;
-    for (int i = 0; i < k; ++i) tau += texture(s_density, (x + (float(i) + 0.5) * dt * l - lo) / size).r * dt;
+    for (int i = 0; i < k; ++i) tau += densityAt((x + (float(i) + 0.5) * dt * l - lo) / size) * dt;
     imageStore(o_opticalDepth, v, vec4(tau));
 }

@@ -1,7 +1,6 @@
 #include "core/stylize/scene.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -75,17 +74,6 @@ void validateKeyframes(const std::vector<StylizerKeyframe>& keys, const std::vec
 }
 
 }  // namespace
-
-std::shared_ptr<const DensityGrid> densityGridOf(const Volume& volume) {
-    static std::atomic<uint64_t> nextId{1};
-    auto grid = std::make_shared<DensityGrid>();
-    grid->dims = volume.dims();
-    grid->sigma.resize(volume.voxelCount());
-    const std::vector<float>& e = volume.extinction();
-    for (size_t i = 0; i < grid->sigma.size(); ++i) grid->sigma[i] = (e[3 * i] + e[3 * i + 1] + e[3 * i + 2]) / 3.0f;
-    grid->id = nextId++;
-    return grid;
-}
 
 std::vector<TransferFunction*> StylizerScene::transferFunctions() {
     std::vector<TransferFunction*> out;
@@ -182,8 +170,6 @@ void StylizerScene::validate() const {
     if (transferFunction) validateTransferFunction(*transferFunction, "/transfer_function", occluders);
     if (volume) {
         const StylizerVolume& v = *volume;
-        if (!v.grid || v.grid->sigma.size() != size_t(v.grid->dims.volume()) || v.grid->sigma.empty())
-            throw InvalidArgument("/volume: has no grid (the session has no volume?)");
         for (int k = 0; k < 3; ++k)
             if (!(v.hi[k] > v.lo[k]) || !(std::abs(v.lo[k]) <= 1e9 && std::abs(v.hi[k]) <= 1e9))
                 throw InvalidArgument("/volume/box: must be [[x0, y0, z0], [x1, y1, z1]], finite, with x1 > x0, y1 > y0, z1 > z0");
@@ -267,6 +253,11 @@ StylizerScene builtinForest() {
     s.camera.height = 360;
     s.camera.farDist = 80;
     return s;
+}
+
+bool TransferFunction::operator==(const TransferFunction& o) const {
+    return mode == o.mode && depthNear == o.depthNear && depthFar == o.depthFar && layers == o.layers && width == o.width &&
+           height == o.height && (!layers.empty() || image == o.image);
 }
 
 }  // namespace volstyle::core

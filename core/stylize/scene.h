@@ -45,6 +45,7 @@ struct Manipulation {
     /// "holes/octaves", …): the one place these ranges are checked (the API parser, the scene's
     /// validate() and the schema test read them from here).
     std::vector<FieldProblem> check() const;
+    bool operator==(const Manipulation&) const = default;
 };
 
 /// The ranges of a Manipulation (SPEC §7 `manipulation`; the schema states the same, checked by
@@ -64,6 +65,7 @@ struct Occluder {
     Mat4 worldFromObject;
     Vec3d colour{0.4, 0.35, 0.3};  ///< diffuse albedo of its surface
     Manipulation manipulation;
+    bool operator==(const Occluder&) const = default;
 };
 
 enum class StylizerLightType { Directional, Spot };
@@ -78,6 +80,7 @@ struct StylizerLight {
     /// Every value out of its range, with its JSON field ("shadow_map_size", …): the one check
     /// (the API parser and StylizerScene::validate report it).
     std::vector<FieldProblem> check() const;
+    bool operator==(const StylizerLight&) const = default;
 };
 
 struct HomogeneousMedium {
@@ -85,32 +88,22 @@ struct HomogeneousMedium {
     double albedo = 0.9;       ///< ρ
     Phase phase{PhaseType::HenyeyGreenstein, 0.4};
     std::vector<FieldProblem> check() const;  ///< "extinction" in [0, 1e6], "albedo" in [0, 1]
+    bool operator==(const HomogeneousMedium&) const = default;
 };
-
-/// σt of a volume on its voxel grid, for the stylizer's heterogeneous medium (issue #15): the
-/// mean of its RGB extinction per voxel, x fastest. Immutable and shared; `id` names its values
-/// (a new grid, a new id) so the stylizer keeps one GPU copy per grid.
-struct DensityGrid {
-    Int3 dims;
-    std::vector<float> sigma;
-    uint64_t id = 0;
-};
-
-/// The grid of a volume (its extinction's RGB mean), with a fresh id.
-std::shared_ptr<const DensityGrid> densityGridOf(const Volume& volume);
 
 /// A heterogeneous medium in place of the homogeneous one (issue #15, beyond the paper): σt =
-/// extinctionScale × the grid, stretched over the box [lo, hi] (the voxels' box maps onto it;
-/// nothing outside it), with the medium's albedo and phase. V̄ becomes the σt-weighted average,
+/// extinctionScale × the mean of a volume's RGB extinction, the volume's voxels stretched over the
+/// box [lo, hi] (nothing outside it). The volume itself is not part of the scene: whoever renders
+/// passes it (Stylizer::render; the server passes the session's volume on the GPU), with the medium's albedo and phase. V̄ becomes the σt-weighted average,
 /// along the view ray inside the box, of the visibility times the volume's transmittance toward
 /// the light, and the first integral ∫σt e^{−τ(t)} dt is marched through the grid
 /// (docs/STYLIZER.md "Heterogeneous media").
 struct StylizerVolume {
-    std::shared_ptr<const DensityGrid> grid;  ///< null until the caller attaches it (the API: the session's volume)
     Vec3d lo{-1, -1, -1}, hi{1, 1, 1};
     double extinctionScale = 1;
     bool lightTransmittance = true;  ///< off: the medium does not dim the light (as the homogeneous model)
     int steps = 128;                 ///< samples along a view ray's part in the box, 1–4096
+    bool operator==(const StylizerVolume&) const = default;
 };
 
 /// The transfer function F (SPEC §7): an RGBA image over (V̄ ∈ [0, 1] left to right, linear
@@ -127,6 +120,8 @@ struct TransferFunction {
     std::vector<TfLayer> layers = {};  ///< non-empty: `image` is compiled from these
     int width = 128, height = 128;     ///< the compiled image's size, 1–1024
     bool hasAnchors() const;
+    /// Equal looks: a layered TF's compiled image is left out (made again from its layers).
+    bool operator==(const TransferFunction& o) const;
 };
 
 /// A key of the camera path (issue #15): at `time` the camera is `camera` and the TF is
@@ -136,6 +131,7 @@ struct StylizerKeyframe {
     double time = 0;
     Camera camera;
     std::optional<TransferFunction> transferFunction = std::nullopt;
+    bool operator==(const StylizerKeyframe&) const = default;
 };
 
 inline constexpr size_t kMaxKeyframes = 256;
@@ -169,6 +165,7 @@ struct StylizerScene {
     /// Throws InvalidArgument naming the first problem (a bad mesh, a degenerate
     /// light, a shadow map outside 512–4096, a negative σt, ρ outside [0,1], a bad camera).
     void validate() const;
+    bool operator==(const StylizerScene&) const = default;
 };
 
 /// How V̄ is found: N midpoint lookups per view ray (the reference), or the exact traversal of

@@ -48,7 +48,11 @@ Stylizer::Stylizer(GpuDevice& device) : m_device(device), m_gpu(std::make_unique
 Stylizer::~Stylizer() = default;
 
 double Stylizer::estimatedLookups(const StylizerScene& scene, const StylizeSettings& settings) {
-    const double pixels = double(scene.camera.width) * scene.camera.height;
+    // A pick shades its one pixel, unless anchored constraints need the whole frame's AOVs.
+    bool anchored = false;
+    for (const TransferFunction* tf : scene.transferFunctions()) anchored = anchored || tf->hasAnchors();
+    const bool onePixel = settings.pick && settings.pickOnly && !anchored;
+    const double pixels = onePixel ? 1.0 : double(scene.camera.width) * scene.camera.height;
     const double texels = double(scene.light.shadowMapSize) * scene.light.shadowMapSize;
     double lookups = pixels * (settings.method == VisibilityMethod::Naive ? settings.steps : kAcceleratedLookupsPerRay);
     if (scene.light.type == StylizerLightType::Spot) lookups += pixels * settings.spotSteps;
@@ -92,7 +96,7 @@ double Stylizer::measureLookupsPerSecond() {
     return estimatedLookups(probe, settings) / std::max(best, 1e-6);
 }
 
-StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings& settings) {
+StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings& settings, GpuVolume* medium) {
     scene.validate();
     // The TFs to blend, weighted: the two keys' around the scene's time on a path, else its own.
     std::vector<std::pair<TransferFunction, double>> tfs;
@@ -118,7 +122,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     s.transferFunction.reset();
     if (!anchored) {
         if (!tfs.empty()) s.transferFunction = blended();
-        StylizedFrame f = renderPass(s, settings);
+        StylizedFrame f = renderPass(s, settings, medium);
         f.transferFunction = s.transferFunction;
         return f;
     }
@@ -127,7 +131,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     StylizeSettings withAovs = settings;
     withAovs.readAovs = true;
     withAovs.pickOnly = false;  // the anchors read the AOVs where they are
-    StylizedFrame f = renderPass(s, withAovs);
+    StylizedFrame f = renderPass(s, withAovs, medium);
     const auto t = Clock::now();
     for (auto& [tf, w] : tfs) resolveAnchors(tf, scene, f);
     f.transferFunction = blended();
@@ -143,7 +147,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     return f;
 }
 
-StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSettings& settings) {
+StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSettings& settings, GpuVolume* medium) {
     VOLSTYLE_CHECK(m_device.isOwnedByThisThread(), ==, true);  // the scene: validated by render()
     settings.validate();
     if (settings.pick && !(settings.pick->x >= 0 && settings.pick->y >= 0 && settings.pick->x < scene.camera.width &&
@@ -175,7 +179,7 @@ StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSett
     out.gbufferMs = msSince(t);
     // 5. Per pixel: V̄ and the frame.
     t = Clock::now();
-    stylize::shade(f, [&](layout::StylizeParams& p) { (void)bindStylizerMedium(m_device, scene.volume, p); }, out);
+    stylize::shade(f, [&](layout::StylizeParams& p) { (void)bindStylizerMedium(m_device, scene.volume, medium, p); }, out);
     out.shadeMs = msSince(t);
     // 6. What was asked for, back to the CPU.
     t = Clock::now();

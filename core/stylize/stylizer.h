@@ -17,6 +17,8 @@
 
 namespace volstyle::core {
 
+class GpuVolume;
+
 /// A frame and its AOVs (SPEC §7 "Outputs"), all linear.
 struct StylizedFrame {
     Image frame;              ///< RGBA, alpha 1
@@ -63,7 +65,9 @@ public:
     /// path: sceneAtTime() places it). A TF of layers is compiled first; on a path the TFs of the
     /// keys around the scene's time are blended; with constraints anchored in the scene the frame
     /// is rendered without the TF, the anchors are found in its AOVs and the TF applied on the CPU.
-    StylizedFrame render(const StylizerScene& scene, const StylizeSettings& settings = {});
+    /// `medium`: the volume whose extinction is the scene's heterogeneous medium (`scene.volume`;
+    /// the server passes the session's own GPU copy, never a second one); required with it.
+    StylizedFrame render(const StylizerScene& scene, const StylizeSettings& settings = {}, GpuVolume* medium = nullptr);
 
     /// About how many shadow-map lookups (or texel operations) a frame costs: the per-pixel pass
     /// and each manipulated occluder's edits (a dilation costs its kernel per texel). For a
@@ -79,7 +83,7 @@ public:
     double measureLookupsPerSecond();
 
 private:
-    StylizedFrame renderPass(const StylizerScene& scene, const StylizeSettings& settings);
+    StylizedFrame renderPass(const StylizerScene& scene, const StylizeSettings& settings, GpuVolume* medium);
     struct Gpu;
     GpuDevice& m_device;
     std::unique_ptr<Gpu> m_gpu;

@@ -292,6 +292,10 @@ void shade(Frame& f, const std::function<void(layout::StylizeParams&)>& bindMedi
     }
     if (f.scene.volume) f.p.medium.x = 0;  // the grid's σt replaces the homogeneous one (a spot's surfaces: T_l instead)
     bindMedium(f.p);  // inside the shading time
+    // A pick reads one pixel back: only that pixel is shaded (a 4096² pick costs one ray).
+    const bool onePixel = f.settings.pick && f.settings.pickOnly;
+    f.p.pixelOrigin = {0, 0, 0, 0};
+    if (onePixel) f.p.pixelOrigin = {f.settings.pick->x, f.settings.pick->y, 0, 0};
     f.device.setParams(f.p);
     glBindTextureUnit(layout::kUnitTransferFunction, transfer.id());
     glBindTextureUnit(layout::kUnitShadowDepth, t.shadowDepth.id());
@@ -306,7 +310,8 @@ void shade(Frame& f, const std::function<void(layout::StylizeParams&)>& bindMedi
     gl::GpuTimer timer;
     {
         gl::GpuTimer::Scope timed(timer);
-        glDispatchCompute(GLuint((cam.width + g - 1) / g), GLuint((cam.height + g - 1) / g), 1);
+        if (onePixel) glDispatchCompute(1, 1, 1);
+        else glDispatchCompute(GLuint((cam.width + g - 1) / g), GLuint((cam.height + g - 1) / g), 1);
     }
     gl::barrierAfterComputeWrites();
     f.device.finish();

@@ -22,6 +22,7 @@ namespace volstyle::core {
 struct TfAnchor {
     Vec3d position;      ///< world space, or the followed occluder's object space
     std::string follow;  ///< an occluder's name: the anchor moves with it; empty: fixed in the world
+    bool operator==(const TfAnchor&) const = default;
 };
 
 /// A colour and alpha pinned at a point of the TF square: the texels of its bilinear footprint are
@@ -32,6 +33,7 @@ struct TfConstraint {
     Vec3d colour{1, 1, 1};
     double alpha = 1;
     std::optional<TfAnchor> anchor = std::nullopt;  ///< set: (vBar, depth) follow the scene
+    bool operator==(const TfConstraint&) const = default;
 };
 
 enum class TfLayerKind { Solid, Gradient, Image, Diffusion };
@@ -45,6 +47,7 @@ struct TfLayer {
     TfConstraint from, to;             ///< Gradient: linear from `from` to `to` along their line, clamped
     std::shared_ptr<const Image> image;  ///< Image: stretched over the square (bilinear)
     std::vector<TfConstraint> constraints;  ///< Diffusion
+    bool operator==(const TfLayer&) const = default;
 };
 
 struct TfCompileStats {

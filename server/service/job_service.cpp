@@ -9,8 +9,6 @@
 #include "core/solve/solve_cache.h"
 #include "core/solve/solver.h"
 #include "protocol/error_body.h"
-#include "protocol/render_json.h"
-#include "protocol/solve_json.h"
 #include "server/service/services.h"
 
 namespace volstyle::server {
@@ -65,12 +63,7 @@ void JobService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s, con
     auto lastPreview = Clock::now() - std::chrono::hours(1);
     core::SolveResult result = solver.run(
         [&](const core::SolveProgress& p) {
-            nlohmann::json progress = protocol::solveProgressToJson(p);
-            {
-                std::lock_guard lock(job.mutex);
-                job.progress = progress;
-            }
-            job.emit(JobEvent::Progress, progress);
+            job.report(protocol::SolveJobProgress{p, {}, 0});
             if (Clock::now() - lastPreview >= kPreviewInterval) {
                 // The latest iterate in the job's one GPU copy (its extinction is unchanged for
                 // emission and albedo solves, so its light volumes stay cached).
@@ -82,13 +75,13 @@ void JobService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s, con
                 }
                 if (preview) preview->upload(solver.currentVolume());
                 else preview = std::make_shared<core::GpuVolume>(solver.currentVolume());
-                nlohmann::json urls = nlohmann::json::object();
-                for (const auto& id : in.viewIds) urls[id] = "/api/v1/jobs/" + job.id + "/preview/" + id + ".png";
+                protocol::PreviewEvent event{p.iteration, {}};
+                for (const auto& id : in.viewIds) event.urls.emplace_back(id, "/api/v1/jobs/" + job.id + "/preview/" + id + ".png");
                 {
                     std::lock_guard lock(job.mutex);
                     job.preview = std::move(preview);
                 }
-                job.emit(JobEvent::Preview, {{"iteration", p.iteration}, {"urls", urls}});
+                job.emit({JobEvent::Preview, std::move(event)});
             }
             m_ctx.gl->runShortTasks(device);  // renders waiting for the GL thread run between iterations
         },
@@ -102,7 +95,7 @@ void JobService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s, con
     }
     std::lock_guard lock(job.mutex);
     job.state = JobState::Done;
-    job.result = {{"version", version}, {"report", protocol::solveReportToJson(result.report)}};
+    job.result = protocol::SolveJobResult{version, result.report};
 }
 
 void JobService::solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,
@@ -110,17 +103,10 @@ void JobService::solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& 
     SolveInputs in = snapshot(*s);
     core::Lighting lighting = core::lightingForLightSolve(in.lighting, options.lights);
     auto report = [&](const core::SolveProgress& p, const char* block, int round) {
-        nlohmann::json progress = protocol::solveProgressToJson(p);
-        progress["block"] = block;
-        if (round > 0) progress["round"] = round;
-        {
-            std::lock_guard lock(job.mutex);
-            job.progress = progress;
-        }
-        job.emit(JobEvent::Progress, progress);
+        job.report(protocol::SolveJobProgress{p, block, round});
         m_ctx.gl->runShortTasks(device);  // renders waiting for the GL thread run between iterations
     };
-    nlohmann::json result;
+    protocol::LightsJobResult result;
     std::optional<core::Volume> volume;
     if (options.lights.withVolume) {
         core::CombinedSolveResult r = core::solveLightsAndVolume(
@@ -128,15 +114,16 @@ void JobService::solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& 
             [&](const core::CombinedProgress& p) { report(p.inner, p.block, p.round); }, &job.cancel);
         lighting.environment.setRadiance(r.radiance);
         volume = std::move(r.volume);
-        result["rounds"] = r.rounds;
-        result["rms_history"] = r.rmsHistory;
-        result["total_ms"] = r.totalMs;
+        result.rounds = r.rounds;
+        result.rmsHistory = r.rmsHistory;
+        result.totalMs = r.totalMs;
     } else {
         core::LightSolver solver(device, in.volume, lighting, std::move(in.views), options, &job.cancel);
         const core::LightSolveResult r = solver.run([&](const core::SolveProgress& p) { report(p, "lights", 0); }, &job.cancel);
         lighting.environment.setRadiance(r.radiance);
-        result["report"] = protocol::solveReportToJson(r.report);
-        result["light_volumes"] = {{"ms", r.lightVolumeMs}, {"bytes", r.lightVolumeBytes}};
+        result.report = r.report;
+        result.lightVolumeMs = r.lightVolumeMs;
+        result.lightVolumeBytes = r.lightVolumeBytes;
     }
     std::shared_ptr<core::GpuVolume> stale;  // freed here, on the GL thread
     {
@@ -149,10 +136,11 @@ void JobService::solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& 
         lighting = s->light.lighting;
         if (volume) stale = m_ctx.commitVersion(*s, std::move(*volume));  // saves the session, lighting included
         else m_ctx.saved(*s);
-        result["version"] = s->volume.version;
-        result["lighting"] = protocol::lightingToJson(lighting, s->light.environmentMap.get());  // naming the session's map "session"
+        result.version = s->volume.version;
+        result.lighting = lighting;
+        result.sessionMap = s->light.environmentMap;  // named "session" in the answer
     }
-    result["environment_url"] = "/api/v1/sessions/" + s->id + "/lighting/environment.exr";
+    result.environmentUrl = "/api/v1/sessions/" + s->id + "/lighting/environment.exr";
     std::lock_guard lock(job.mutex);
     job.state = JobState::Done;
     job.result = std::move(result);

@@ -245,7 +245,7 @@ void ServiceContext::finishJob(Job& job) {
     } catch (const std::exception& e) {
         spdlog::error("job {}: cannot record its end: {}", job.id, e.what());
     }
-    job.emit(protocol::finalEvent(state), job.toJson());
+    job.emitFinal();
 }
 
 }  // namespace volstyle::server

@@ -57,43 +57,36 @@ std::shared_ptr<Job> StylizerService::startSequence(const std::shared_ptr<Sessio
                                                           "pixels or a smaller shadow map",
                                                           seconds, m_ctx.limits.renderBudgetSeconds));
     auto job = m_ctx.queueJob(*session);
-    m_ctx.gl->submit([this, job, scene, times, q](core::GpuDevice& device) {
-        m_ctx.runJob(*job, [&] { runSequence(*job, scene, times, q, device); });
+    m_ctx.gl->submit([this, job, session, scene, times, q](core::GpuDevice& device) {
+        m_ctx.runJob(*job, [&] { runSequence(*job, *session, scene, times, q, device); });
         m_ctx.finishJob(*job);
     });
     return job;
 }
 
-void StylizerService::runSequence(Job& job, const core::StylizerScene& scene, const std::vector<double>& times,
+void StylizerService::runSequence(Job& job, Session& session, const core::StylizerScene& scene, const std::vector<double>& times,
                                  const protocol::StylizerSequenceRequest& q, core::GpuDevice& device) {
     const std::filesystem::path dir = m_ctx.jobFilesDir(job.id);
     std::filesystem::create_directories(dir);
     const core::SaveOptions save = core::stylizerSaveOptions(q.output, q.exposure);
     core::StylizeSettings settings = q.settings;
     core::readBackOnly(settings, q.output);
-    nlohmann::json urls = nlohmann::json::array();
-    double totalMs = 0;
+    protocol::SequenceJobResult result{times.size(), q.fps, times.front(), times.back(), 0, {}, std::nullopt};
+    // A heterogeneous medium is the session's volume on the GPU, as the job found it.
+    const std::shared_ptr<core::GpuVolume> medium = scene.volume ? m_ctx.lockedSessionGpu(session) : nullptr;
     for (size_t i = 0; i < times.size(); ++i) {
         if (job.cancel) throw ApiError(ErrorCode::Cancelled, fmt::format("cancelled after {} of {} frames", i, times.size()));
-        const core::StylizedFrame f = m_ctx.stylizerEngine(device).render(core::sceneAtTime(scene, times[i]), settings);
+        const core::StylizedFrame f = m_ctx.stylizerEngine(device).render(core::sceneAtTime(scene, times[i]), settings, medium.get());
         const std::string name = sequenceFrameName(i);
         core::saveImage((dir / name).string(), f.output(q.output), save);
-        totalMs += f.totalMs;
-        urls.push_back(jobFileUrl(job.id, "frames/" + std::to_string(i) + ".png"));
-        const nlohmann::json progress = {{"frame", i + 1}, {"frames", times.size()}, {"time", times[i]}, {"url", urls.back()},
-                                         {"render_ms", f.totalMs}};
-        {
-            std::lock_guard lock(job.mutex);
-            job.progress = progress;
-        }
-        job.emit(JobEvent::Progress, progress);
+        result.renderMs += f.totalMs;
+        result.frameUrls.push_back(jobFileUrl(job.id, "frames/" + std::to_string(i) + ".png"));
+        job.report(protocol::SequenceJobProgress{i + 1, times.size(), times[i], f.totalMs, result.frameUrls.back()});
         m_ctx.gl->runShortTasks(device);  // frames and renders other clients wait for
     }
-    nlohmann::json result = {{"frames", times.size()}, {"fps", q.fps}, {"start", times.front()}, {"end", times.back()},
-                             {"frame_urls", urls}, {"render_ms", totalMs}};
     if (q.video) {
         encodeVideo(dir, times.size(), q.fps, dir / "video.mp4");
-        result["video_url"] = jobFileUrl(job.id, "video.mp4");
+        result.videoUrl = jobFileUrl(job.id, "video.mp4");
     }
     spdlog::info("job {}: {} frames{}", job.id, times.size(), q.video ? " and a video" : "");
     std::lock_guard lock(job.mutex);

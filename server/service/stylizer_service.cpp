@@ -43,12 +43,9 @@ void remember(std::vector<StylizerSceneEntry>& stack, StylizerSceneEntry entry) 
 
 namespace {
 
-/// The stylizer's state as a render reads it: the scene (with the session's current volume), its
-/// mesh references and revision. The session's lock held.
+/// The stylizer's state as a render reads it: the scene, its mesh references and revision. The session's lock held.
 StylizerSnapshot snapshotOf(Session& s) {
-    StylizerSnapshot out{s.stylizer.scene, s.stylizer.meshRefs, s.stylizer.revision};
-    attachVolumeDensity(s, out.scene);
-    return out;
+    return {s.stylizer.scene, s.stylizer.meshRefs, s.stylizer.revision};
 }
 
 }  // namespace
@@ -71,17 +68,13 @@ void StylizerService::checkStylizerCameras(const core::StylizerScene& scene) con
 }
 
 StylizerSnapshot StylizerService::commitStylizerScene(Session& s, core::StylizerScene scene, std::vector<std::string> meshRefs) {
-    attachVolumeDensity(s, scene);
     try {
         scene.validate();
     } catch (const InvalidArgument& e) {
         throw ApiError(ErrorCode::InvalidArgument, e.what());
     }
     // A change of time alone (scrubbing, playing) or none at all is not a step to undo.
-    nlohmann::json before = protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs);
-    nlohmann::json after = protocol::stylizerSceneToJson(scene, meshRefs);
-    before.erase("time"), after.erase("time");
-    const bool step = before != after;
+    const bool step = !sameSceneApartFromTime(s.stylizer.scene, scene) || meshRefs != s.stylizer.meshRefs;
     if (step) {
         remember(s.stylizer.undo, currentSceneEntry(s.stylizer));
         s.stylizer.redo.clear();
@@ -106,7 +99,6 @@ StylizerSnapshot StylizerService::undoStylizer(Session& s, bool redo) {
     core::StylizerScene scene;
     try {
         scene = resolveSceneEntry(s.stylizer, from.back());
-        attachVolumeDensity(s, scene);
         scene.validate();
     } catch (const std::exception& e) {  // a mesh or the TF image it used was deleted since: dropped, the one before is next
         from.pop_back();
@@ -123,7 +115,7 @@ StylizerSnapshot StylizerService::undoStylizer(Session& s, bool redo) {
 }
 
 
-core::StylizedFrame StylizerService::stylizeOnGl(const core::StylizerScene& scene, const core::StylizeSettings& settings) {
+core::StylizedFrame StylizerService::stylizeOnGl(Session& s, const core::StylizerScene& scene, const core::StylizeSettings& settings) {
     // Other sessions' frames and a solve's next iteration wait behind this one: estimate it first.
     const double seconds = stylizerSeconds(scene, settings);
     if (m_ctx.limits.renderBudgetSeconds > 0 && seconds > m_ctx.limits.renderBudgetSeconds)
@@ -132,19 +124,23 @@ core::StylizedFrame StylizerService::stylizeOnGl(const core::StylizerScene& scen
                                    "use fewer pixels, {}a smaller shadow map or shorter dilations",
                                    seconds, m_ctx.limits.renderBudgetSeconds,
                                    settings.method == core::VisibilityMethod::Naive ? "fewer steps or the accelerated method, " : ""));
-    return m_ctx.gl->run([&](core::GpuDevice& device) { return m_ctx.stylizerEngine(device).render(scene, settings); });
+    return m_ctx.gl->run([&](core::GpuDevice& device) {
+        // A heterogeneous medium is the session's volume as the renderer holds it (no copy).
+        const std::shared_ptr<core::GpuVolume> medium = scene.volume ? m_ctx.lockedSessionGpu(s) : nullptr;
+        return m_ctx.stylizerEngine(device).render(scene, settings, medium.get());
+    });
 }
 
 core::StylizedFrame StylizerService::stylize(Session& s, const protocol::StylizerFrameRequest& request) {
     core::StylizerScene scene = sceneFor(stylizer(s).scene, request.camera, request.time);
     core::StylizeSettings settings = request.settings;
     core::readBackOnly(settings, request.output);
-    return stylizeOnGl(scene, settings);
+    return stylizeOnGl(s, scene, settings);
 }
 
-StylizerPick StylizerService::pickStylizer(Session& s, const protocol::StylizerPickRequest& q) { return pickIn(stylizer(s).scene, q); }
+StylizerPick StylizerService::pickStylizer(Session& s, const protocol::StylizerPickRequest& q) { return pickIn(s, stylizer(s).scene, q); }
 
-StylizerPick StylizerService::pickIn(const core::StylizerScene& sessionScene, const protocol::StylizerPickRequest& q) {
+StylizerPick StylizerService::pickIn(Session& s, const core::StylizerScene& sessionScene, const protocol::StylizerPickRequest& q) {
     const core::StylizerScene scene = sceneFor(sessionScene, q.camera, q.time);
     const core::Camera& cam = scene.camera;
     if (!(q.x >= 0 && q.y >= 0 && q.x < cam.width && q.y < cam.height)) {
@@ -155,7 +151,7 @@ StylizerPick StylizerService::pickIn(const core::StylizerScene& sessionScene, co
     settings.readShadowMaps = false;
     settings.pick = core::StylizeSettings::Pixel{q.x, q.y};
     settings.pickOnly = true;  // the frame and its AOVs come back 1×1: the picked pixel at (0, 0)
-    const core::StylizedFrame f = stylizeOnGl(scene, settings);
+    const core::StylizedFrame f = stylizeOnGl(s, scene, settings);
     StylizerPick pick;
     if (!scene.keyframes.empty() && scene.keyframes.front().transferFunction) {
         const core::PathPosition on = core::pathPosition(scene.keyframes, scene.time);
@@ -216,7 +212,7 @@ int diffusionLayerFor(core::TransferFunction& tf, std::optional<int> asked, int 
 AddedTfConstraint StylizerService::addTfConstraint(Session& s, const protocol::StylizerPickRequest& q) {
     const StylizerSnapshot seen = stylizer(s);
     AddedTfConstraint out;
-    out.pick = pickIn(seen.scene, q);
+    out.pick = pickIn(s, seen.scene, q);
     out.constraint = {out.pick.vBar, out.pick.depth, q.colour, q.alpha};
     if (q.anchor != protocol::StylizerPickRequest::Anchor::None) out.constraint.anchor = out.pick.anchor;
     out.key = out.pick.key;
@@ -256,7 +252,7 @@ std::optional<LiveFrame> StylizerService::nextLiveFrame(Session& s, uint64_t aft
     core::StylizeSettings settings;
     core::readBackOnly(settings, core::StylizerOutput::Frame);  // the stream sends the frame alone
     const auto t0 = Clock::now();
-    const core::StylizedFrame f = stylizeOnGl(core::sceneAtTime(snapshot.scene, snapshot.scene.time), settings);
+    const core::StylizedFrame f = stylizeOnGl(s, core::sceneAtTime(snapshot.scene, snapshot.scene.time), settings);
     LiveFrame live{snapshot.revision, core::encodeImage(f.frame, "jpeg"), f.frame.width, f.frame.height,
                    std::chrono::duration<double, std::milli>(Clock::now() - t0).count()};
     std::lock_guard lock(s.mutex);

@@ -57,15 +57,15 @@ private:
     /// not a change of time alone), writes it and wakes the streams. The session's lock held.
     StylizerSnapshot commitStylizerScene(Session& s, core::StylizerScene scene, std::vector<std::string> meshRefs);
     /// The pixel `q` names in `scene` (the session's, before the request's camera and time).
-    StylizerPick pickIn(const core::StylizerScene& scene, const protocol::StylizerPickRequest& q);
-    core::StylizedFrame stylizeOnGl(const core::StylizerScene& scene, const core::StylizeSettings& settings);
+    StylizerPick pickIn(Session& s, const core::StylizerScene& scene, const protocol::StylizerPickRequest& q);
+    core::StylizedFrame stylizeOnGl(Session& s, const core::StylizerScene& scene, const core::StylizeSettings& settings);
     /// This device's stylizer speed (lookups per second) for frame estimates: measured on the GL
     /// thread when the stylizer first starts, never below kMinStylizerLookupsPerSecond.
     double stylizerLookupsPerSecond();
     /// Seconds a stylizer frame of `scene` with `settings` is estimated to hold the GL thread.
     double stylizerSeconds(const core::StylizerScene& scene, const core::StylizeSettings& settings);
     /// The sequence job on the GL thread (stylizer_sequence.cpp).
-    void runSequence(Job& job, const core::StylizerScene& scene, const std::vector<double>& times,
+    void runSequence(Job& job, Session& session, const core::StylizerScene& scene, const std::vector<double>& times,
                      const protocol::StylizerSequenceRequest& request, core::GpuDevice& device);
 
     ServiceContext& m_ctx;

@@ -121,7 +121,6 @@ TransferImageInfo StylizerService::setTransferImage(Session& s, const std::strin
     core::StylizerScene scene = s.stylizer.scene;
     if (used) {  // the scene must stay valid with it (key frames' TFs share a size)
         attachTransferImage(scene, image);
-        attachVolumeDensity(s, scene);
         try {
             scene.validate();
         } catch (const InvalidArgument& e) {

@@ -164,34 +164,28 @@ void VolumeService::runAnimate(Job& job, Session& s, const protocol::AnimateRequ
     const int total = q.sweeps * int(keys.size());
     const auto solved = core::solveKeyFrames(device, keys, lighting, o, &report, [&](int sweep, int k) {
         if (job.cancel) throw ApiError(ErrorCode::Cancelled, fmt::format("cancelled at sweep {} of {}", sweep + 1, q.sweeps));
-        const nlohmann::json progress = {{"sweep", sweep + 1}, {"sweeps", q.sweeps}, {"key_frame", keys[size_t(k)].frame},
-                                         {"step", ++steps}, {"steps", total}};
-        {
-            std::lock_guard lock(job.mutex);
-            job.progress = progress;
-        }
-        job.emit(JobEvent::Progress, progress);
+        job.report(protocol::AnimateJobProgress{sweep + 1, q.sweeps, keys[size_t(k)].frame, ++steps, total});
         m_ctx.gl->runShortTasks(device);
     });
     // Every frame from the key frames, stored (and written) as solved.
     for (auto& [n, v] : frames)
         (q.albedo ? v.ensureAlbedo() : v.ensureEmission()) = core::frameFromKeys(keys, solved, o.solve.unknown, n, o.followFlow);
-    nlohmann::json keyNumbers = nlohmann::json::array(), frameNumbers = nlohmann::json::array();
-    for (const auto& k : keys) keyNumbers.push_back(k.frame);
+    protocol::AnimateJobResult result{{}, {}, report.change};
+    for (const auto& k : keys) result.keyFrames.push_back(k.frame);
     {
         std::lock_guard lock(s.mutex);
         for (auto& [n, v] : frames) {
             if (!s.frames.count(n)) continue;  // removed while the job ran
             if (m_ctx.persist && !s.removed) m_ctx.persist->saveFrame(s.id, n, v);
             s.frames[n] = {std::move(v), true};
-            frameNumbers.push_back(n);
+            result.frames.push_back(n);
         }
         if (!s.removed) m_ctx.saved(s);
     }
-    spdlog::info("job {}: {} key frames solved, {} frames stored", job.id, keys.size(), frameNumbers.size());
+    spdlog::info("job {}: {} key frames solved, {} frames stored", job.id, keys.size(), result.frames.size());
     std::lock_guard lock(job.mutex);
     job.state = JobState::Done;
-    job.result = {{"key_frames", keyNumbers}, {"frames", frameNumbers}, {"change_per_sweep", report.change}};
+    job.result = std::move(result);
 }
 
 std::shared_ptr<Job> VolumeService::startFramesRender(const std::shared_ptr<Session>& session, const protocol::FramesRenderRequest& q) {
@@ -214,7 +208,7 @@ std::shared_ptr<Job> VolumeService::startFramesRender(const std::shared_ptr<Sess
             core::Renderer renderer(device);
             core::SaveOptions save;
             save.exposure = q.exposure;
-            nlohmann::json urls = nlohmann::json::array(), numbers = nlohmann::json::array();
+            protocol::FramesRenderJobResult result;
             size_t i = 0;
             for (const auto& [n, v] : frames) {
                 if (job->cancel) throw ApiError(ErrorCode::Cancelled, fmt::format("cancelled after {} of {} frames", i, frames.size()));
@@ -231,20 +225,15 @@ std::shared_ptr<Job> VolumeService::startFramesRender(const std::shared_ptr<Sess
                     throw ApiError(ErrorCode::OverBudget, fmt::format("frame {}: {}", n, e.what()));
                 }
                 core::saveImage((dir / sequenceFrameName(i)).string(), picture, save);
-                urls.push_back(jobFileUrl(job->id, "frames/" + std::to_string(i) + ".png"));
-                numbers.push_back(n);
-                const nlohmann::json progress = {{"frame", n}, {"done", i + 1}, {"frames", frames.size()}, {"url", urls.back()}};
-                {
-                    std::lock_guard lock(job->mutex);
-                    job->progress = progress;
-                }
-                job->emit(JobEvent::Progress, progress);
+                result.frameUrls.push_back(jobFileUrl(job->id, "frames/" + std::to_string(i) + ".png"));
+                result.frames.push_back(n);
+                job->report(protocol::FramesRenderJobProgress{n, i + 1, frames.size(), result.frameUrls.back()});
                 m_ctx.gl->runShortTasks(device);
                 ++i;
             }
             std::lock_guard lock(job->mutex);
             job->state = JobState::Done;
-            job->result = {{"frames", numbers}, {"frame_urls", urls}};
+            job->result = std::move(result);
         });
         m_ctx.finishJob(*job);
     });

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 
-#include "protocol/error_body.h"
 #include "server/state/session_store.h"
 
 namespace volstyle::server {
@@ -16,25 +15,34 @@ void Job::fail(protocol::JobState s, protocol::ErrorCode code, const std::string
                const std::vector<protocol::FieldError>& details) {
     std::lock_guard lock(mutex);
     state = s;
-    error = protocol::errorBody(code, message, details, "")["error"];
+    error = protocol::JobError{code, message, details};
 }
 
-void Job::emit(protocol::JobEvent event, nlohmann::json data) {
+void Job::report(protocol::JobProgress p) {
     {
         std::lock_guard lock(mutex);
-        events.emplace_back(event, std::move(data));
+        progress = p;
+        events.push_back({protocol::JobEvent::Progress, std::move(p)});
     }
     changed.notify_all();
 }
 
-nlohmann::json Job::toJson() const {
+void Job::emit(protocol::JobEventData event) {
+    {
+        std::lock_guard lock(mutex);
+        events.push_back(std::move(event));
+    }
+    changed.notify_all();
+}
+
+void Job::emitFinal() {
+    protocol::JobInfo snapshot = info();
+    emit({protocol::finalEvent(snapshot.state), std::move(snapshot)});
+}
+
+protocol::JobInfo Job::info() const {
     std::lock_guard lock(mutex);
-    return {{"id", id},
-            {"session", session},
-            {"state", protocol::jobStateName(state)},
-            {"progress", progress},
-            {"result", result},
-            {"error", error}};
+    return {id, session, state, progress, result, error};
 }
 
 std::shared_ptr<Job> JobStore::add(const std::string& session) {

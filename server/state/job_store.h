@@ -3,18 +3,18 @@
 /// Solve jobs: their state, progress and result, and the events the SSE stream replays
 /// (`progress`, `preview`, then one final event named after the final state).
 
-#include <nlohmann/json.hpp>
-
 #include <atomic>
 #include <condition_variable>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/render/gpu_volume.h"
 #include "protocol/error_code.h"
+#include "protocol/job_values.h"
 #include "protocol/vocabulary.h"
 
 namespace volstyle::server {
@@ -29,9 +29,10 @@ struct Job {
     mutable std::mutex mutex;
     std::condition_variable changed;
     protocol::JobState state = protocol::JobState::Queued;
-    nlohmann::json progress = nlohmann::json::object();
-    nlohmann::json result = nullptr, error = nullptr;
-    std::vector<std::pair<protocol::JobEvent, nlohmann::json>> events;
+    protocol::JobProgress progress;
+    protocol::JobResult result;
+    std::optional<protocol::JobError> error;
+    std::vector<protocol::JobEventData> events;
     /// The latest iterate on the GPU, for previews: created and updated on the GL thread while the
     /// job runs (one copy per job, not one upload per request). A done job frees it (previews
     /// then show the session's version, the solution); a failed or cancelled one keeps it until
@@ -43,8 +44,12 @@ struct Job {
     /// Ends the job in state `s` (failed or cancelled) with an error body of `code` and `message`.
     void fail(protocol::JobState s, protocol::ErrorCode code, const std::string& message,
               const std::vector<protocol::FieldError>& details = {});
-    void emit(protocol::JobEvent event, nlohmann::json data);  ///< appends and wakes listeners
-    nlohmann::json toJson() const;
+    /// Sets the progress and sends it as a progress event.
+    void report(protocol::JobProgress p);
+    void emit(protocol::JobEventData event);  ///< appends and wakes listeners
+    /// Sends the final event, the job's snapshot now (after its state became final).
+    void emitFinal();
+    protocol::JobInfo info() const;
 };
 
 class JobStore {

@@ -83,13 +83,5 @@ SessionView& findView(Session& s, const std::string& id) {
     throw protocol::ApiError(protocol::ErrorCode::NotFound, "no view '" + id + "' in session '" + s.id + "'");
 }
 
-void attachVolumeDensity(Session& s, core::StylizerScene& scene) {
-    if (!scene.volume) return;
-    if (!s.stylizer.density || s.stylizer.densityVersion != s.volume.version) {
-        s.stylizer.density = core::densityGridOf(s.volume.current);
-        s.stylizer.densityVersion = s.volume.version;
-    }
-    scene.volume->grid = s.stylizer.density;
-}
 
 }  // namespace volstyle::server

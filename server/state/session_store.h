@@ -97,10 +97,6 @@ using protocol::EnvironmentMapInfo;
 /// The session's environment map, if any (call with its lock held).
 std::optional<EnvironmentMapInfo> environmentMapInfo(const Session& s);
 
-/// Gives a heterogeneous medium of `scene` the session volume's σt grid (made once per version,
-/// kept in the stylizer's state). The session's lock held.
-void attachVolumeDensity(Session& s, core::StylizerScene& scene);
-
 /// The view `id` of `s` (its lock held); ApiError not_found names both.
 SessionView& findView(Session& s, const std::string& id);
 

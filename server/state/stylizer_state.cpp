@@ -56,10 +56,8 @@ StylizerState defaultStylizer() {
 }
 
 StylizerSceneEntry sceneEntry(core::StylizerScene scene, std::vector<std::string> meshRefs, size_t bytes) {
-    // What can be made again is not kept: the session volume's density (attached again when the
-    // scene is current) and the images layered TFs compile to (up to 1024² × 16 bytes each, per
+    // What can be made again is not kept: the images layered TFs compile to (up to 1024² × 16 bytes each, per
     // TF and key: 64 entries of those would hold gigabytes).
-    if (scene.volume) scene.volume->grid.reset();
     for (core::TransferFunction* tf : scene.transferFunctions())
         if (!tf->layers.empty()) tf->image.reset();
     return {std::move(scene), std::move(meshRefs), bytes};
@@ -84,6 +82,11 @@ core::StylizerScene resolveSceneEntry(const StylizerState& state, const Stylizer
     for (core::TransferFunction* tf : scene.transferFunctions())
         if (!tf->layers.empty() && !tf->image) core::compileTransferFunction(*tf);  // sceneEntry dropped it
     return scene;
+}
+
+bool sameSceneApartFromTime(core::StylizerScene a, const core::StylizerScene& b) {
+    a.time = b.time;
+    return a == b;
 }
 
 bool isMeshName(const std::string& name) {

@@ -51,9 +51,6 @@ struct StylizerState {
     /// Earlier scenes (oldest first) for POST …/stylizer/undo, and the ones undone for …/redo; a
     /// new scene clears the redo stack. At most kStylizerUndoDepth each, and kStylizerUndoBytes.
     std::vector<StylizerSceneEntry> undo, redo;
-    /// The session volume's σt grid for a heterogeneous medium, made once per volume version.
-    std::shared_ptr<const core::DensityGrid> density;
-    int densityVersion = 0;
 
     /// Whether the scene's occluders use the uploaded mesh `name` (it cannot be deleted then).
     bool uses(const std::string& name) const;
@@ -79,8 +76,7 @@ StylizerState defaultStylizer();
 /// Puts a new uploaded TF image into `scene`'s TFs where they show it (compiling their layers again).
 void attachTransferImage(core::StylizerScene& scene, const std::shared_ptr<const core::Image>& image);
 
-/// An undo entry of `scene`: without what can be made again (the medium's density, layered TFs'
-/// compiled images), so an entry holds little beyond its JSON's `bytes`.
+/// An undo entry of `scene`: without what can be made again (layered TFs' compiled images), so an entry holds little beyond its JSON's `bytes`.
 StylizerSceneEntry sceneEntry(core::StylizerScene scene, std::vector<std::string> meshRefs, size_t bytes);
 /// An undo entry of the state's scene now (its size measured by its JSON, as the store writes it).
 StylizerSceneEntry currentSceneEntry(const StylizerState& state);
@@ -89,6 +85,9 @@ StylizerSceneEntry currentSceneEntry(const StylizerState& state);
 /// uploaded again under its name is the new one) and the built-in ones, its TF image the uploaded
 /// one. Throws InvalidArgument naming what is gone (a deleted mesh, the TF image).
 core::StylizerScene resolveSceneEntry(const StylizerState& state, const StylizerSceneEntry& entry);
+
+/// Whether two scenes differ only in their time (scrubbing, playing: not a step to undo).
+bool sameSceneApartFromTime(core::StylizerScene a, const core::StylizerScene& b);
 
 /// Whether `name` may name an uploaded mesh: 1–64 of A–Z a–z 0–9 _ . - (it is a file name on disk).
 bool isMeshName(const std::string& name);

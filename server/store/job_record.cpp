@@ -1,5 +1,6 @@
 #include "server/store/job_record.h"
 
+#include "protocol/job_json.h"
 #include "protocol/validation.h"
 
 namespace volstyle::server::store {
@@ -9,7 +10,8 @@ using json = nlohmann::json;
 std::string encodeJobRecord(const Job& job) {
     std::lock_guard lock(job.mutex);
     const json j = {{"format", 1},      {"id", job.id},           {"session", job.session}, {"state", protocol::jobStateName(job.state)},
-                    {"progress", job.progress}, {"result", job.result}, {"error", job.error}};
+                    {"progress", protocol::jobProgressToJson(job.progress)}, {"result", protocol::jobResultToJson(job.result)},
+                    {"error", job.error ? protocol::jobErrorToJson(*job.error) : json(nullptr)}};
     return protocol::toText(j, 2);
 }
 
@@ -21,14 +23,15 @@ std::shared_ptr<Job> decodeJobRecord(const std::string& text, bool& interrupted)
     job->session = j.at("session");
     const std::string state = j.at("state");
     job->state = protocol::jobStateFromName(state).value_or(protocol::JobState::Running);
-    job->progress = j.at("progress");
-    job->result = j.at("result");
-    job->error = j.at("error");
+    // A finished job's progress and result are replayed as they were answered (see RecordedJobBody).
+    if (const json& p = j.at("progress"); !p.empty()) job->progress = protocol::RecordedJobBody{p.dump()};
+    if (const json& r = j.at("result"); !r.is_null()) job->result = protocol::RecordedJobBody{r.dump()};
+    if (const json& e = j.at("error"); !e.is_null()) job->error = protocol::jobErrorFromJson(e);
     interrupted = !job->isFinished();
     if (interrupted)
         job->fail(protocol::JobState::Failed, protocol::ErrorCode::Interrupted,
                   "the server stopped while this job was " + state + "; the volume keeps its last committed version");
-    job->events.emplace_back(protocol::finalEvent(job->state), job->toJson());
+    job->emitFinal();
     return job;
 }
 

@@ -258,7 +258,8 @@ TEST(Stylizer, AMovingCameraChangesTheEditedVisibilityInProportion) {
 
 TEST(Stylizer, APickReadsBackOnlyItsPixelAndItIsTheFramesPixel) {
     // Issue #35: a pick on a 4096² frame read the whole frame back (7.5 GB peak for one pixel).
-    // With pickOnly the frame and its AOVs come back 1×1, holding exactly the full frame's pixel.
+    // With pickOnly the frame and its AOVs come back 1×1, holding exactly the full frame's pixel;
+    // since issue #36 only that pixel is shaded (its dispatch starts at the pixel).
     VOLSTYLE_REQUIRE_GL();
     const StylizerScene scene = smallForest(true);
     Stylizer stylizer(test::device());

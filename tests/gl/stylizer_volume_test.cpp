@@ -10,6 +10,7 @@
 
 #include "../common/image_compare.h"
 #include "../common/small_forest.h"
+#include "core/render/gpu_volume.h"
 #include "core/stylize/stylizer.h"
 #include "core/volume/builtin_scenes.h"
 #include "core/volume/vdb_io.h"
@@ -20,28 +21,28 @@ using namespace volstyle::core;
 
 namespace {
 
-/// A grid of `n`³ voxels with σt from `sigma(i, j, k)`.
-std::shared_ptr<const DensityGrid> grid(int n, double (*sigma)(int, int, int, int)) {
-    auto g = std::make_shared<DensityGrid>();
-    g->dims = {n, n, n};
-    static uint64_t id = 1000;
-    g->id = ++id;
+/// A volume of `n`³ voxels with grey σt from `sigma(i, j, k)` (the scene's box places it).
+Volume grid(int n, double (*sigma)(int, int, int, int)) {
+    Volume g({n, n, n}, unitBoxWorldFromIndex({n, n, n}));
     for (int k = 0; k < n; ++k)
         for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i) g->sigma.push_back(float(sigma(i, j, k, n)));
+            for (int i = 0; i < n; ++i) {
+                const float s = float(sigma(i, j, k, n));
+                g.setExtinction(i, j, k, {s, s, s});
+            }
     return g;
 }
 
 /// σt of `g` at `x` as the GPU samples it: trilinear between voxel centres over [lo, hi], clamped.
-double sampleGrid(const DensityGrid& g, Vec3d lo, Vec3d hi, Vec3d x) {
+double sampleGrid(const Volume& g, Vec3d lo, Vec3d hi, Vec3d x) {
     double f[3];
     int i0[3], i1[3];
     for (int a = 0; a < 3; ++a) {
-        const int n = g.dims[a];
+        const int n = g.dims()[a];
         const double c = std::clamp((x[a] - lo[a]) / (hi[a] - lo[a]) * n - 0.5, 0.0, double(n - 1));
         i0[a] = int(c), i1[a] = std::min(i0[a] + 1, n - 1), f[a] = c - i0[a];
     }
-    auto at = [&](int i, int j, int k) { return double(g.sigma[(size_t(k) * g.dims.y + size_t(j)) * g.dims.x + size_t(i)]); };
+    auto at = [&](int i, int j, int k) { return double(g.extinction()[3 * ((size_t(k) * g.dims().y + size_t(j)) * g.dims().x + size_t(i))]); };
     double v = 0;
     for (int c = 0; c < 8; ++c) {
         const double w = (c & 1 ? f[0] : 1 - f[0]) * (c & 2 ? f[1] : 1 - f[1]) * (c & 4 ? f[2] : 1 - f[2]);
@@ -66,6 +67,7 @@ TEST(StylizerVolume, AHomogeneousVdbFillingTheSceneIsTheHomogeneousMedium) {
     naive.steps = 128;
     StylizerScene volume = homogeneous;
     StylizerVolume v;
+    Volume fromFile;
     {  // a homogeneous VDB, written and read back as a user's file would be (σt 1, scaled below)
         Volume constant({4, 4, 4}, unitBoxWorldFromIndex({4, 4, 4}));
         for (int k = 0; k < 4; ++k)
@@ -73,7 +75,7 @@ TEST(StylizerVolume, AHomogeneousVdbFillingTheSceneIsTheHomogeneousMedium) {
                 for (int i = 0; i < 4; ++i) constant.setExtinction(i, j, k, {1, 1, 1});
         const std::string path = (std::filesystem::temp_directory_path() / "volstyle-stylizer-homogeneous.vdb").string();
         saveVdb(path, constant);
-        v.grid = densityGridOf(loadVdb(path));
+        fromFile = loadVdb(path);
         std::filesystem::remove(path);
     }
     v.extinctionScale = homogeneous.medium.extinction;
@@ -82,7 +84,8 @@ TEST(StylizerVolume, AHomogeneousVdbFillingTheSceneIsTheHomogeneousMedium) {
     v.lightTransmittance = false;                      // the homogeneous model does not dim the sun
     volume.volume = v;
     Stylizer stylizer(test::device());
-    const StylizedFrame a = stylizer.render(homogeneous, naive), b = stylizer.render(volume, naive);
+    GpuVolume medium(fromFile);
+    const StylizedFrame a = stylizer.render(homogeneous, naive), b = stylizer.render(volume, naive, &medium);
     const double frame = test::maxAbsDifference(a.frame, b.frame), vBar = test::maxAbsDifference(a.averageVisibility, b.averageVisibility);
     std::printf("[ measured ] homogeneous VDB vs the homogeneous path: frame %.2e, V̄ %.2e, scattering %.2e (max abs)\n", frame, vBar,
                 test::maxAbsDifference(a.scattering, b.scattering));
@@ -113,17 +116,18 @@ TEST(StylizerVolume, AverageVisibilityUnderADenseSlabMatchesACpuReference) {
     scene.camera.width = 32, scene.camera.height = 32;
     scene.camera.farDist = 30;
     StylizerVolume v;
-    v.grid = grid(32, [](int, int j, int, int n) { return (j + 0.5) / n * 8 - 4 > 1 && (j + 0.5) / n * 8 - 4 < 2.5 ? 1.5 : 0.05; });
+    const Volume slab = grid(32, [](int, int j, int, int n) { return (j + 0.5) / n * 8 - 4 > 1 && (j + 0.5) / n * 8 - 4 < 2.5 ? 1.5 : 0.05; });
     v.lo = {-4, -4, -4}, v.hi = {4, 4, 4};
     v.steps = 256;
     scene.volume = v;
     Stylizer stylizer(test::device());
-    const StylizedFrame f = stylizer.render(scene);
+    GpuVolume medium(slab);
+    const StylizedFrame f = stylizer.render(scene, {}, &medium);
     // σt depends on y alone (so does T_l, the sun straight above): τ_l(y) = ∫_y^4 σt, tabulated.
     constexpr int kTable = 100000;
     std::vector<double> tauAbove(kTable + 1, 0.0);  // at y = -4 + 8 i / kTable
     for (int i = kTable - 1; i >= 0; --i)
-        tauAbove[size_t(i)] = tauAbove[size_t(i) + 1] + sampleGrid(*v.grid, v.lo, v.hi, {0, -4 + 8 * (i + 0.5) / kTable, 0}) * 8.0 / kTable;
+        tauAbove[size_t(i)] = tauAbove[size_t(i) + 1] + sampleGrid(slab, v.lo, v.hi, {0, -4 + 8 * (i + 0.5) / kTable, 0}) * 8.0 / kTable;
     auto lightDepth = [&](double y) {
         const double c = std::clamp((y + 4) / 8 * kTable, 0.0, double(kTable));
         const int i = std::min(int(c), kTable - 1);
@@ -145,7 +149,7 @@ TEST(StylizerVolume, AverageVisibilityUnderADenseSlabMatchesACpuReference) {
             double num = 0, den = 0;
             for (int i = 0; i < 20000; ++i) {
                 const Vec3d p = e + dir * (ta + (i + 0.5) / 20000 * (tb - ta));
-                const double sigma = sampleGrid(*v.grid, v.lo, v.hi, p);
+                const double sigma = sampleGrid(slab, v.lo, v.hi, p);
                 num += sigma * std::exp(-lightDepth(p.y)), den += sigma;
             }
             const double want = num / den, got = f.averageVisibility.pixel(x, y)[0];
@@ -163,14 +167,13 @@ TEST(StylizerVolume, SkippingEmptyBricksChangesNothing) {
     // (no brick empty: every midpoint sampled): the frames and V̄ agree.
     StylizerScene scene = test::smallForest();
     StylizerVolume v;
-    v.grid = grid(40, blob);
     v.lo = {-7, 0, -8}, v.hi = {5, 7, 2};
     v.extinctionScale = 1.5;
     scene.volume = v;
     Stylizer stylizer(test::device());
-    const StylizedFrame sparse = stylizer.render(scene);
-    scene.volume->grid = grid(40, [](int i, int j, int k, int n) { return 1e-30 + blob(i, j, k, n); });
-    const StylizedFrame dense = stylizer.render(scene);
+    GpuVolume blobOnly(grid(40, blob)), blobOverAFloor(grid(40, [](int i, int j, int k, int n) { return 1e-30 + blob(i, j, k, n); }));
+    const StylizedFrame sparse = stylizer.render(scene, {}, &blobOnly);
+    const StylizedFrame dense = stylizer.render(scene, {}, &blobOverAFloor);
     const double frame = test::maxAbsDifference(sparse.frame, dense.frame), scattering = test::maxAbsDifference(sparse.scattering, dense.scattering);
     double peak = 0;
     for (float x : sparse.scattering.rgba) peak = std::max(peak, double(x));

@@ -12,6 +12,7 @@
 
 #include "core/image/image_io.h"
 #include "core/translucent/perturbation.h"
+#include "protocol/job_json.h"
 #include "protocol/stylize_json.h"
 #include "server/service/services.h"
 #include "tests/service/fake_gl_executor.h"
@@ -302,7 +303,8 @@ TEST_F(ServiceTest, AJobQueuedAtAStopIsInterruptedAfterTheRestart) {
     auto service = makeService(dir.path.string());
     auto job = service->jobs.job(jobId);
     EXPECT_EQ(job->state, protocol::JobState::Failed);
-    EXPECT_EQ(job->error.at("code"), "interrupted");
+    ASSERT_TRUE(job->error.has_value());
+    EXPECT_EQ(job->error->code, protocol::ErrorCode::Interrupted);
     // Written back: a third start reads the same.
     auto again = makeService(dir.path.string());
     EXPECT_EQ(again->jobs.job(jobId)->state, protocol::JobState::Failed);
@@ -395,6 +397,77 @@ TEST_F(ServiceTest, UndoEntriesDoNotHoldCompiledTransferFunctions) {
     ASSERT_TRUE(undone.scene.transferFunction && undone.scene.transferFunction->image);
     EXPECT_EQ(undone.scene.transferFunction->image->width, 256);
     EXPECT_NEAR(undone.scene.transferFunction->image->pixel(10, 10)[2], 0.6f, 1e-6);  // the first TF, compiled again
+}
+
+TEST_F(ServiceTest, OnlyAChangeBeyondTheTimeIsAStepToUndo) {
+    // Scrubbing is not a step; the same layered TF PUT again (compiled again into a new image) is
+    // not either; a moved occluder is. Compared as core values, not as their JSON.
+    auto service = makeService();
+    auto s = service->sessions.create(smallCloud());
+    const server::StylizerSnapshot forest = service->stylizer.stylizer(*s);
+    nlohmann::json j = protocol::stylizerSceneToJson(forest.scene, forest.meshRefs);
+    j["transfer_function"] = {{"size", {64, 64}}, {"layers", {{{"type", "solid"}, {"colour", {0.2, 0.4, 0.6}}, {"alpha", 1.0}}}}};
+    auto put = [&] { service->stylizer.setStylizerScene(*s, protocol::stylizerSceneFromJson(j, "", protocol::SceneSource::Api)); };
+    auto undoDepth = [&] {
+        std::lock_guard lock(s->mutex);
+        return s->stylizer.undo.size();
+    };
+    put();
+    ASSERT_EQ(undoDepth(), 1u);
+    j["time"] = 2.5;
+    put();
+    EXPECT_EQ(undoDepth(), 1u) << "a change of time alone";
+    put();
+    EXPECT_EQ(undoDepth(), 1u) << "the same scene again (its TF compiled again)";
+    j["occluders"][0]["colour"] = {0.9, 0.1, 0.1};
+    put();
+    EXPECT_EQ(undoDepth(), 2u) << "an occluder painted another colour";
+}
+
+TEST_F(ServiceTest, AFinishedJobsAnswerIsTheSameAfterARestart) {
+    // A job's progress and result are typed values (protocol/job_values.h); its record keeps the
+    // answer as it was given, so GET /jobs/{jid} reads the same before and after a restart.
+    TempDir dir;
+    std::string before, jobId;
+    {
+        auto service = makeService(dir.path.string());
+        auto s = service->sessions.create(smallCloud());
+        auto job = service->context.jobs.add(s->id);
+        core::SolveProgress p;
+        p.iteration = 7;
+        p.objective = 0.125;
+        p.rmsPerView = {0.5};
+        job->report(protocol::SolveJobProgress{p, "lights", 2});
+        protocol::LightsJobResult r;
+        r.version = 3;
+        r.rounds = 2;
+        r.rmsHistory = {0.5, 0.25};
+        r.totalMs = 12.5;
+        r.environmentUrl = "/api/v1/sessions/" + s->id + "/lighting/environment.exr";
+        {
+            std::lock_guard lock(job->mutex);
+            job->state = protocol::JobState::Done;
+            job->result = r;
+        }
+        service->context.saved(*job);
+        jobId = job->id;
+        const nlohmann::json answer = protocol::jobToJson(job->info());
+        EXPECT_EQ(answer["progress"]["block"], "lights");
+        EXPECT_EQ(answer["progress"]["round"], 2);
+        EXPECT_EQ(answer["progress"]["iteration"], 7);
+        EXPECT_EQ(answer["result"]["rounds"], 2);
+        EXPECT_EQ(answer["result"]["rms_history"], nlohmann::json({0.5, 0.25}));
+        EXPECT_EQ(answer["result"]["version"], 3);
+        EXPECT_FALSE(answer["result"].contains("report")) << "a combined solve reports its rounds";
+        EXPECT_TRUE(answer["error"].is_null());
+        before = answer.dump();
+    }
+    auto service = makeService(dir.path.string());
+    auto job = service->jobs.job(jobId);
+    EXPECT_EQ(protocol::jobToJson(job->info()).dump(), before);
+    ASSERT_EQ(job->events.size(), 1u) << "a restored job replays its final event";
+    EXPECT_EQ(job->events[0].event, protocol::JobEvent::Done);
+    EXPECT_EQ(protocol::jobEventDataToJson(job->events[0]).dump(), before);
 }
 
 }  // namespace

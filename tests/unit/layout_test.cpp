@@ -33,7 +33,8 @@ static_assert(sizeof(volstyle::core::layout::VectorParams) == 64);
 static_assert(offsetof(volstyle::core::layout::StylizeParams, options) == 384);
 static_assert(offsetof(volstyle::core::layout::StylizeParams, mipOffset) == 432);
 static_assert(offsetof(volstyle::core::layout::StylizeParams, volumeLo) == 496);  // issue #15's heterogeneous medium
-static_assert(sizeof(volstyle::core::layout::StylizeParams) == 528);
+static_assert(offsetof(volstyle::core::layout::StylizeParams, volumeScale) == 528);  // issue #36: the session volume's scale
+static_assert(sizeof(volstyle::core::layout::StylizeParams) == 560);
 static_assert(sizeof(volstyle::core::layout::EditParams) == 64);
 
 TEST(Layout, MarchParamsMatchesStd140) {

@@ -9,7 +9,7 @@
 // straight ray is, so W and Wᵀ still share every segment. Without it the code below is the
 // straight march, unchanged.
 #include "common/volume.glsl"
-#include "common/ray_box.glsl"
+#include "common/march_segments.glsl"
 
 #ifndef VOLSTYLE_SKIP_EMPTY
 #define VOLSTYLE_SKIP_EMPTY 1
@@ -33,12 +33,6 @@ layout(std430, binding = kBindingPathExit) readonly buffer b_PathExit {
 };
 #endif
 
-struct Segments {
-    float t0;
-    float dt;
-    int count;
-};
-
 Segments makeSegments(vec2 range, vec3 dIndex) {
     Segments s;
     float voxels = (range.y - range.x) * length(dIndex);
@@ -48,20 +42,10 @@ Segments makeSegments(vec2 range, vec3 dIndex) {
     return s;
 }
 
-float segmentMidpoint(Segments s, int i) { return s.t0 + (float(i) + 0.5) * s.dt; }
-
-// Empty-space skipping: if the midpoint of segment i lies in a brick whose extinction (with a
-// one-voxel apron, the reach of trilinear interpolation) is zero, return the first segment whose
-// midpoint is past that brick; otherwise i. Skipped segments contribute exactly nothing, so
-// skipping changes no result.
+// Empty-space skipping over the volume's occupancy bricks (common/march_segments.glsl).
 int skipEmptyBricks(int i, Segments s, vec3 o, vec3 d) {
 #if VOLSTYLE_SKIP_EMPTY
-    vec3 p = o + segmentMidpoint(s, i) * d;
-    ivec3 brick = clamp(ivec3(floor((p + 0.5) / float(kBrickSize))), ivec3(0), u.brickDims.xyz - 1);
-    if (texelFetch(s_occupancy, brick, 0).r > 0.0) return i;
-    vec3 lo = vec3(brick * kBrickSize) - 0.5;
-    float tExit = rayBox(o, safeInverse(d), lo, lo + float(kBrickSize)).y;
-    return max(i + 1, int(ceil((tExit - s.t0) / s.dt - 0.5)));
+    return skipEmptyBricksOn(s_occupancy, u.brickDims.xyz, i, s, o, d);
 #else
     return i;
 #endif
@@ -70,10 +54,9 @@ int skipEmptyBricks(int i, Segments s, vec3 o, vec3 d) {
 // Where the ray leaves the occupancy brick holding p, if that brick is empty; else -1.
 float emptyBrickExit(vec3 p, vec3 o, vec3 invD) {
 #if VOLSTYLE_SKIP_EMPTY
-    ivec3 brick = clamp(ivec3(floor((p + 0.5) / float(kBrickSize))), ivec3(0), u.brickDims.xyz - 1);
+    ivec3 brick = brickAt(p, u.brickDims.xyz);
     if (texelFetch(s_occupancy, brick, 0).r > 0.0) return -1.0;
-    vec3 lo = vec3(brick * kBrickSize) - 0.5;
-    return rayBox(o, invD, lo, lo + float(kBrickSize)).y;
+    return brickExit(brick, o, invD);
 #else
     return -1.0;
 #endif

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <mutex>
 
+#include "protocol/job_json.h"
 #include "server/http/routes/route_context.h"
 #include "server/runtime/video_encoder.h"
 
@@ -41,9 +42,10 @@ void streamEvents(httplib::Response& res, std::shared_ptr<Job> job, StreamLimite
         job->changed.wait_for(lock, kEventPoll, [&] { return job->events.size() > sent; });
         bool final = false;
         while (sent < job->events.size()) {
-            const auto& [event, data] = job->events[sent++];
-            final = protocol::isFinal(event);
-            std::string message = std::string("event: ") + protocol::jobEventName(event) + "\ndata: " + protocol::toText(data) + "\n\n";
+            const protocol::JobEventData& e = job->events[sent++];
+            final = protocol::isFinal(e.event);
+            std::string message = std::string("event: ") + protocol::jobEventName(e.event) + "\ndata: " +
+                                  protocol::toText(protocol::jobEventDataToJson(e)) + "\n\n";
             lock.unlock();
             if (!sink.write(message.data(), message.size())) return false;  // the client left
             lock.lock();
@@ -73,12 +75,12 @@ void addJobRoutes(RouteContext& c) {
         reply(res, 202, {{"job", c.services.jobs.startSolve(s, request.options)->id}});
     });
     c.http.Get(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {
-        reply(res, 200, c.services.jobs.job(req.matches[1])->toJson());
+        reply(res, 200, protocol::jobToJson(c.services.jobs.job(req.matches[1])->info()));
     });
     c.http.Delete(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {
         auto job = c.services.jobs.job(req.matches[1]);
         c.services.jobs.cancel(*job);
-        reply(res, 202, job->toJson());
+        reply(res, 202, protocol::jobToJson(job->info()));
     });
     c.http.Get(kJobPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
         streamEvents(res, c.services.jobs.job(req.matches[1]), c.streams, req.remote_addr);
