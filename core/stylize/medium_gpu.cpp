@@ -35,29 +35,48 @@ std::string exact(double v) {
     return buf;
 }
 
-struct LightOpticalDepth {
+/// A one-channel grid the stylizer derives from the volume on the GPU, in the device's cache.
+struct DerivedGrid {
     gl::Texture texture;
 };
 
+void dispatchOver(Int3 n) {
+    const int g = layout::kWorkgroup3D;
+    glDispatchCompute(GLuint((n.x + g - 1) / g), GLuint((n.y + g - 1) / g), GLuint((n.z + g - 1) / g));
+    gl::barrierAfterComputeWrites();
+}
+
+/// The mean of the volume's RGB extinction per voxel (stylize_extinction_mean.comp), once per
+/// extinction version; `built` when it was made.
+std::shared_ptr<const DerivedGrid> meanExtinction(GpuDevice& device, const GpuVolume& gpu, bool& built) {
+    const std::string key = "stylizer-extinction-mean/" + std::to_string(gpu.extinctionVersion());
+    if (auto cached = device.cache().find<DerivedGrid>(key)) return cached;
+    DerivedGrid made{texture3D(gpu.dims(), nullptr, "stylizer-extinction-mean")};
+    glBindTextureUnit(layout::kUnitStylizeDensity, gpu.extinctionTexture());
+    glUseProgram(device.program(gl::ShaderBuilder("stylize_extinction_mean.comp")).id());
+    glBindImageTexture(layout::kImageUnitOut, made.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R32F);
+    dispatchOver(gpu.dims());
+    built = true;
+    return device.cache().insert(key, std::make_shared<const DerivedGrid>(std::move(made)));
+}
+
 /// The optical depth toward the light per voxel (stylize_transmittance.comp), from the device's
 /// cache when the grid, its scale, box and the light are the same; `built` when it was made.
-std::shared_ptr<const LightOpticalDepth> lightOpticalDepth(GpuDevice& device, const StylizerVolume& v, const GpuVolume& gpu,
-                                                           layout::StylizeParams& p, bool& built) {
+std::shared_ptr<const DerivedGrid> lightOpticalDepth(GpuDevice& device, const StylizerVolume& v, const GpuVolume& gpu,
+                                                     layout::StylizeParams& p, bool& built) {
     std::string key = "stylizer-light/" + std::to_string(gpu.extinctionVersion());
     for (double x : {v.extinctionScale, v.lo.x, v.lo.y, v.lo.z, v.hi.x, v.hi.y, v.hi.z, double(p.options.z), double(p.lightDirection.x), double(p.lightDirection.y),
                      double(p.lightDirection.z), double(p.spot.x), double(p.spot.y), double(p.spot.z)})
         key += "/" + exact(x);
-    if (auto cached = device.cache().find<LightOpticalDepth>(key)) return cached;
+    if (auto cached = device.cache().find<DerivedGrid>(key)) return cached;
     const Int3 n = gpu.dims();
-    LightOpticalDepth made{texture3D(n, nullptr, "stylizer-light-optical-depth")};
+    DerivedGrid made{texture3D(n, nullptr, "stylizer-light-optical-depth")};
     device.setParams(p);
     glUseProgram(device.program(gl::ShaderBuilder("stylize_transmittance.comp")).id());
     glBindImageTexture(layout::kImageUnitOut, made.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R32F);
-    const int g = layout::kWorkgroup3D;
-    glDispatchCompute(GLuint((n.x + g - 1) / g), GLuint((n.y + g - 1) / g), GLuint((n.z + g - 1) / g));
-    gl::barrierAfterComputeWrites();
+    dispatchOver(n);
     built = true;
-    return device.cache().insert(key, std::make_shared<const LightOpticalDepth>(std::move(made)));
+    return device.cache().insert(key, std::make_shared<const DerivedGrid>(std::move(made)));
 }
 
 }  // namespace
@@ -88,9 +107,9 @@ double bindStylizerMedium(GpuDevice& device, const std::optional<StylizerVolume>
     RenderStats stats;
     updateOccupancy(device, *gpu, stats);
     bool built = stats.occupancyMs > 0;
-    glBindTextureUnit(layout::kUnitStylizeDensity, gpu->extinctionTexture());
+    glBindTextureUnit(layout::kUnitStylizeDensity, meanExtinction(device, *gpu, built)->texture.id());
     glBindTextureUnit(layout::kUnitStylizeOccupancy, gpu->occupancyTexture());
-    std::shared_ptr<const LightOpticalDepth> depth;
+    std::shared_ptr<const DerivedGrid> depth;
     if (v.lightTransmittance) depth = lightOpticalDepth(device, v, *gpu, p, built);
     glBindTextureUnit(layout::kUnitStylizeTransmittance, depth ? depth->texture.id() : gpu->extinctionTexture());  // off: unread
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory for the stylizer's volume");

@@ -2,10 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
-#include <map>
 #include <numbers>
-#include <tuple>
 
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
@@ -28,23 +27,20 @@ namespace {
 /// 1080p frame's are about 170 MB... see StylizerTargets::bytes); larger ones are freed once read.
 constexpr size_t kKeptFrameBytes = size_t(64) << 20;
 
+/// The hole noise's threshold for a manipulation's probability (a CPU calibration of the noise,
+/// shadow_edits.h), made once per setting and kept in the device's cache with the other derived data.
+float holeThresholdFor(GpuDevice& device, const Manipulation& m) {
+    char key[128];
+    std::snprintf(key, sizeof key, "stylizer-hole-threshold/%a/%d/%a/%u", m.holeProbability, m.holeOctaves, m.holePersistence, m.holeSeed);
+    auto cached = device.cache().find<float>(key);
+    if (!cached)
+        cached = device.cache().insert(key, std::make_shared<const float>(holeThreshold(m.holeProbability, m.holeOctaves, m.holePersistence, m.holeSeed)));
+    return *cached;
+}
+
 }  // namespace
 
-struct Stylizer::Gpu {
-    std::map<std::tuple<double, int, double, uint32_t>, float> holeThresholds;  // calibrations, reused
-
-    float threshold(const Manipulation& m) {
-        const auto key = std::make_tuple(m.holeProbability, m.holeOctaves, m.holePersistence, m.holeSeed);
-        auto it = holeThresholds.find(key);
-        if (it == holeThresholds.end()) {
-            if (holeThresholds.size() > 256) holeThresholds.clear();
-            it = holeThresholds.emplace(key, holeThreshold(m.holeProbability, m.holeOctaves, m.holePersistence, m.holeSeed)).first;
-        }
-        return it->second;
-    }
-};
-
-Stylizer::Stylizer(GpuDevice& device) : m_device(device), m_gpu(std::make_unique<Gpu>()) {}
+Stylizer::Stylizer(GpuDevice& device) : m_device(device) {}
 Stylizer::~Stylizer() = default;
 
 double Stylizer::estimatedLookups(const StylizerScene& scene, const StylizeSettings& settings) {
@@ -164,7 +160,7 @@ StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSett
     // 1–2. The light's shadow maps: the unmodified one, then the scattering's with the edits.
     auto t = Clock::now();
     stylize::shadowMaps(f);
-    stylize::shadowEdits(f, [this](const Manipulation& m) { return m_gpu->threshold(m); }, out);
+    stylize::shadowEdits(f, [this](const Manipulation& m) { return holeThresholdFor(m_device, m); }, out);
     m_device.finish();
     out.shadowMs = msSince(t);
     // 3. The min-max mipmap (accelerated V̄).

@@ -84,9 +84,7 @@ public:
 
 private:
     StylizedFrame renderPass(const StylizerScene& scene, const StylizeSettings& settings, GpuVolume* medium);
-    struct Gpu;
     GpuDevice& m_device;
-    std::unique_ptr<Gpu> m_gpu;
 };
 
 }  // namespace volstyle::core

@@ -12,7 +12,6 @@
 #include "core/stylize/stylizer.h"
 #include "core/translucent/translucent_renderer.h"
 #include "protocol/error_body.h"
-#include "protocol/stylize_json.h"
 #include "server/runtime/gl_worker.h"
 #include "server/runtime/mesh_reader.h"
 
@@ -206,7 +205,7 @@ void ServiceContext::stylizerChanged(Session& s, bool history) {
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
     if (persist) {
         if (history) persist->saveStylizerHistory(s.id, s.stylizer.undo, s.stylizer.redo);
-        persist->saveStylizerScene(s.id, protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), s.stylizer.revision + 1);
+        persist->saveStylizerScene(s.id, s.stylizer.scene, s.stylizer.meshRefs, s.stylizer.revision + 1);
     }
     ++s.stylizer.revision;
     s.stylizerChanged.notify_all();

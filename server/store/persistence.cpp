@@ -97,8 +97,10 @@ void Persistence::removeFrame(const std::string& session, int frame) {
 
 void Persistence::saveJob(const Job& job) { store::atomicWrite(m_dir.jobsDir() / (job.id + ".json"), store::encodeJobRecord(job)); }
 
-void Persistence::saveStylizerScene(const std::string& session, const json& scene, uint64_t revision) {
-    store::atomicWrite(sessionDir(session) / "stylizer" / "scene.json", store::encodeStylizerScene(scene, revision));
+void Persistence::saveStylizerScene(const std::string& session, const core::StylizerScene& scene, const std::vector<std::string>& meshRefs,
+                                    uint64_t revision) {
+    store::atomicWrite(sessionDir(session) / "stylizer" / "scene.json",
+                       store::encodeStylizerScene(protocol::stylizerSceneToJson(scene, meshRefs), revision));
 }
 
 void Persistence::saveStylizerHistory(const std::string& session, const std::vector<StylizerSceneEntry>& undo,
@@ -135,7 +137,9 @@ std::shared_ptr<Session> Persistence::loadSession(const fs::path& dir) {
     size_t recordedDamage = 0;
     std::shared_ptr<Session> s = store::restoreSessionRecord(m_dir, dir, recordedDamage);
     store::restoreStylizerRecord(m_dir, *s, dir, m_readMesh,
-                                 [&](const json& scene, uint64_t revision) { saveStylizerScene(s->id, scene, revision); });
+                                 [&](const json& scene, uint64_t revision) {
+                                     store::atomicWrite(dir / "stylizer" / "scene.json", store::encodeStylizerScene(scene, revision));
+                                 });
     if (s->damaged.size() != recordedDamage) saveSession(*s);  // the damage (and any fall-back) is recorded
     return s;
 }

@@ -51,8 +51,9 @@ public:
     void removeView(const std::string& session, const std::string& view);
     void removeSession(const std::string& session);
     /// The stylizer (stylizer/scene.json, stylizer/occluders/NAME.EXT, stylizer/tf.image): the
-    /// scene as JSON; uploaded files as they were sent.
-    void saveStylizerScene(const std::string& session, const nlohmann::json& scene, uint64_t revision);
+    /// scene with its meshes named as the client named them; uploaded files as they were sent.
+    void saveStylizerScene(const std::string& session, const core::StylizerScene& scene, const std::vector<std::string>& meshRefs,
+                           uint64_t revision);
     /// The stylizer's undo and redo stacks (arrays of scenes), apart from the scene: written only
     /// when they change (not for each frame of a played path).
     void saveStylizerHistory(const std::string& session, const std::vector<StylizerSceneEntry>& undo, const std::vector<StylizerSceneEntry>& redo);
