@@ -21,7 +21,9 @@ enum class ErrorCode {
     InvalidJson,         ///< the body does not parse
     Unauthorized,        ///< the bearer token is missing or wrong
     NotFound,            ///< no such route, session, view, job or version
+    MethodNotAllowed,    ///< the path has routes, none under this method (the answer's Allow lists them)
     Busy,                ///< the resource is in use
+    IdempotencyConflict, ///< an Idempotency-Key used again with another body
     Cancelled,           ///< the job was cancelled
     TooLarge,            ///< a body, upload or volume over its limit (the message names it)
     UnsupportedMedia,    ///< an upload that is not a readable image or VDB
@@ -52,7 +54,9 @@ inline constexpr ErrorCodeInfo kErrorCodes[] = {
     {ErrorCode::InvalidJson, "invalid_json", 400},
     {ErrorCode::Unauthorized, "unauthorized", 401},
     {ErrorCode::NotFound, "not_found", 404},
+    {ErrorCode::MethodNotAllowed, "method_not_allowed", 405},
     {ErrorCode::Busy, "busy", 409},
+    {ErrorCode::IdempotencyConflict, "idempotency_conflict", 422},
     {ErrorCode::Cancelled, "cancelled", 409},
     {ErrorCode::TooLarge, "too_large", 413},
     {ErrorCode::UnsupportedMedia, "unsupported_media", 422},

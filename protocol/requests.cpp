@@ -1,5 +1,7 @@
 #include "protocol/requests.h"
 
+#include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <sstream>
@@ -214,6 +216,27 @@ ViewRenderQuery ViewRenderQuery::fromQuery(const QueryParams& params) {
     if (auto text = lastValue(params, "exr_type")) {
         if (*text == "float") q.exrHalf = false;
         else if (*text != "half") r.fail("?exr_type", "must be 'half' or 'float', got '" + *text + "'");
+    }
+    r.throwIfErrors();
+    return q;
+}
+
+ListQuery ListQuery::fromQuery(const QueryParams& params, bool bySession) {
+    JsonReader r;
+    ListQuery q;
+    if (auto text = lastValue(params, "limit")) {
+        auto v = parseWhole<int>(*text);
+        if (!v || *v < 1 || *v > kMaxLimit) r.fail("?limit", "must be an integer in [1, " + std::to_string(kMaxLimit) + "], got '" + *text + "'");
+        else q.limit = *v;
+    }
+    if (auto text = lastValue(params, "cursor")) {
+        const bool hex = text->size() <= 256 && std::all_of(text->begin(), text->end(), [](char c) { return std::isxdigit((unsigned char)c); });
+        if (text->empty() || !hex) r.fail("?cursor", "must be the cursor a page's Link header names");
+        else q.cursor = *text;
+    }
+    if (auto text = lastValue(params, "session")) {
+        if (!bySession) r.fail("?session", "this list has no session filter");
+        else q.session = *text;
     }
     r.throwIfErrors();
     return q;

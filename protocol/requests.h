@@ -127,6 +127,16 @@ struct ViewRenderQuery {
     static ViewRenderQuery fromQuery(const QueryParams& params);
 };
 
+/// GET /sessions and GET /jobs: ?limit=N (1–1000, default 100) items after ?cursor=C (the
+/// `Link: <…>; rel="next"` of the page before names it); GET /jobs also ?session=SID.
+struct ListQuery {
+    static constexpr int kDefaultLimit = 100, kMaxLimit = 1000;
+    int limit = kDefaultLimit;
+    std::string cursor;   ///< empty: from the first
+    std::string session;  ///< GET /jobs: only this session's; empty: all
+    static ListQuery fromQuery(const QueryParams& params, bool bySession);
+};
+
 /// GET /sessions/{sid}/volume.vdb?version=N (default: the newest).
 struct VolumeQuery {
     std::optional<int> version;

@@ -66,6 +66,8 @@ struct HttpServer::Impl {
     GuardedHttpServer http;
     Services services;
     StreamLimiter streams;
+    RouteTable table;
+    IdempotencyKeys idempotency;
     RouteContext routes;
     std::atomic<uint64_t> requestCounter{0};
 
@@ -74,9 +76,12 @@ struct HttpServer::Impl {
           http(opt.connections),
           services(serviceLimits(opt), opt.dataDir),
           streams(opt.maxEventStreams, opt.maxEventStreamsPerClient),
-          routes{http, services, requestLimits(opt), opt.maxJsonBytes, streams} {}
+          routes{http, services, requestLimits(opt), opt.maxJsonBytes, streams, table, idempotency} {}
 
     void addMiddleware();
+    /// 405 with Allow where the path has routes under other methods (OPTIONS: 204 with Allow),
+    /// else 404 naming what is missing.
+    void answerNoRoute(const httplib::Request& req, httplib::Response& res);
     /// The SPEC error body for every exception a route throws and every error the library raises itself.
     void addErrorHandlers();
     /// A fresh request id for this thread's request, also sent as X-Request-Id.
@@ -113,6 +118,8 @@ int HttpServer::bind() {
 
 void HttpServer::listen() { m->http.listen_after_bind(); }
 void HttpServer::stop() { m->http.stop(); }
+
+std::vector<RouteEntry> HttpServer::routes() const { return m->table.entries(); }
 
 void HttpServer::Impl::addMiddleware() {
     http.set_payload_max_length(opt.maxUploadBytes + (1 << 20));
@@ -155,6 +162,23 @@ void HttpServer::Impl::addMiddleware() {
     });
 }
 
+void HttpServer::Impl::answerNoRoute(const httplib::Request& req, httplib::Response& res) {
+    const std::vector<std::string> methods = table.methodsAt(req.path);
+    if (methods.empty()) {
+        replyError(res, protocol::ErrorCode::NotFound, describeMissing(req.method, req.path));
+        res.status = 404;
+        return;
+    }
+    std::string allow;
+    for (const std::string& m : methods) allow += (allow.empty() ? "" : ", ") + m;
+    res.set_header("Allow", allow);
+    if (req.method == "OPTIONS") {
+        res.status = 204;
+        return;
+    }
+    replyError(res, protocol::ErrorCode::MethodNotAllowed, req.method + " is not a method of " + req.path + "; it has " + allow);
+}
+
 void HttpServer::Impl::addErrorHandlers() {
     // One exception handler for every route (cpp-httplib's advice): the SPEC's error body.
     http.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
@@ -170,7 +194,7 @@ void HttpServer::Impl::addErrorHandlers() {
         if (!res.body.empty()) return;
         if (!res.has_header("X-Request-Id")) beginRequest(res);  // refused before routing began
         const int status = res.status;
-        if (status == 404) replyError(res, protocol::ErrorCode::NotFound, "no route " + req.method + " " + req.path);
+        if (status == 404) return answerNoRoute(req, res);
         else if (status == 413 && req.get_header_value("Content-Type").rfind("application/x-www-form-urlencoded", 0) == 0)
             // cpp-httplib parses a form body itself and refuses one over 8 KiB (curl -d's default type).
             replyError(res, protocol::ErrorCode::TooLarge,

@@ -6,9 +6,11 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/volume/volume.h"
 #include "server/http/guarded_http_server.h"
+#include "server/http/route_table.h"
 #include "server/service/memory_budget.h"
 
 namespace volstyle::server {
@@ -48,6 +50,9 @@ public:
     int bind();     ///< binds host:port (port 0: any free one) and returns the port
     void listen();  ///< serves until stop(); call after bind()
     void stop();
+
+    /// Every API route, by method and path pattern (the OpenAPI test compares the document with it).
+    std::vector<RouteEntry> routes() const;
 
 private:
     struct Impl;

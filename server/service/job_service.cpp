@@ -2,6 +2,8 @@
 // the result as a new version, record the final state (JobService, SPEC §3 jobs).
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
 #include "core/solve/combined_solve.h"
@@ -51,6 +53,12 @@ void JobService::runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr
         if (job->state == JobState::Done) preview = std::move(job->preview);
     }
     m_ctx.finishJob(*job);
+}
+
+std::vector<std::shared_ptr<Job>> JobService::all() const {
+    std::vector<std::shared_ptr<Job>> jobs = m_ctx.jobs.all();
+    std::sort(jobs.begin(), jobs.end(), [](const auto& a, const auto& b) { return a->sequence < b->sequence; });
+    return jobs;
 }
 
 void JobService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,

@@ -87,4 +87,10 @@ struct StylizerSnapshot {
     uint64_t revision = 0;
 };
 
+/// A VDB to download, with a tag naming its content (an ETag's value): equal tags, equal volumes.
+struct VdbDownload {
+    std::string bytes;
+    std::string tag;
+};
+
 }  // namespace volstyle::server

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/base/content_hash.h"
 #include "core/base/errors.h"
 #include "core/image/image_io.h"
 #include "core/render/gpu_volume.h"
@@ -105,13 +106,16 @@ void VolumeService::removeFrame(Session& s, int n) {
     m_ctx.saved(s);
 }
 
-std::string VolumeService::downloadFrame(Session& s, int n) {
+VdbDownload VolumeService::downloadFrame(Session& s, int n) {
     core::Volume v;
     {
         std::lock_guard lock(s.mutex);
         v = frameOf(s, n).volume;
     }
-    return vdbBytes(v);
+    uint64_t hash = 0;
+    for (const std::vector<float>* grid : {&v.extinction(), &v.albedo(), &v.emission()})
+        hash ^= contentHash(std::string_view(reinterpret_cast<const char*>(grid->data()), grid->size() * sizeof(float))) + 0x9e3779b97f4a7c15ull + (hash << 6);
+    return {vdbBytes(v), fmt::format("{}-f{}-{:016x}", s.id, n, hash)};
 }
 
 std::shared_ptr<Job> VolumeService::startAnimate(const std::shared_ptr<Session>& session, const protocol::AnimateRequest& q) {

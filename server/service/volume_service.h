@@ -20,8 +20,9 @@ public:
     int setRefraction(Session& s, const std::optional<core::GlassSphere>& glass);
     void uploadVdb(Session& s, const std::string& bytes);  ///< a new version
     /// The VDB of a version (the current one by default): a stored version's file is sent as it
-    /// was written (its size checked). A damaged version answers io_error (422).
-    std::string downloadVdb(Session& s, std::optional<int> version);
+    /// was written (its size checked). A damaged version answers io_error (422). Its tag is the
+    /// session and version (a VDB's bytes differ on every write: OpenVDB stamps a new UUID).
+    VdbDownload downloadVdb(Session& s, std::optional<int> version);
 
     // The session's animation (issue #16, docs/ANIMATION.md; session_frames.cpp).
     /// Stores an uploaded VDB as frame n (replacing it); must share the other frames' grid.
@@ -29,7 +30,8 @@ public:
     /// Stores every frame of one VDB holding a whole animation (core::loadVdbFrames); their numbers.
     std::vector<int> uploadFrames(Session& s, const std::string& bytes);
     void removeFrame(Session& s, int n);
-    std::string downloadFrame(Session& s, int n);
+    /// Frame n's VDB; its tag is a hash of the frame's voxels.
+    VdbDownload downloadFrame(Session& s, int n);
     /// Solves the frames that have views with targets (key frames) jointly, fills every other
     /// frame from them, and stores the results (solved): a job with a progress event per key
     /// frame and sweep.

@@ -165,7 +165,7 @@ T VolumeService::readUpload(const std::string& bytes, const std::function<T(cons
     return v;
 }
 
-std::string VolumeService::downloadVdb(Session& s, std::optional<int> version) {
+VdbDownload VolumeService::downloadVdb(Session& s, std::optional<int> version) {
     int n = 0;
     std::optional<std::uintmax_t> stored;
     {
@@ -174,16 +174,17 @@ std::string VolumeService::downloadVdb(Session& s, std::optional<int> version) {
         checkVersion(s, n);
         if (m_ctx.persist) stored = s.volume.versions.storedBytes(n);
     }
+    const std::string tag = s.id + "-v" + std::to_string(n);
     if (stored) {  // the file as written: no decode, no encode
         try {
-            return m_ctx.persist->readVersionFile(s.id, n, *stored);
+            return {m_ctx.persist->readVersionFile(s.id, n, *stored), tag};
         } catch (const Error& e) {
             recordDamage(s, n, e.what());
             checkVersion(s, n);
             throw;
         }
     }
-    return vdbBytes(olderVersion(s, n));
+    return {vdbBytes(olderVersion(s, n)), tag};
 }
 
 std::string VolumeService::vdbBytes(const core::Volume& v) {

@@ -24,23 +24,26 @@ void addFrameRoutes(RouteContext& c) {
         c.services.volumes.uploadFrames(*s, bytes);
         reply(res, 200, protocol::framesToJson(frameInfos(*s)));
     });
-    c.http.Get(kSessionPath + "/frames", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kSessionPath + "/frames", [&c](const httplib::Request& req, httplib::Response& res) {
         reply(res, 200, protocol::framesToJson(frameInfos(*c.services.sessions.find(req.matches[1]))));
     });
-    c.http.Get(kFramePath + R"(\.vdb)", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kFramePath + R"(\.vdb)", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
-        res.set_content(c.services.volumes.downloadFrame(*s, std::stoi(req.matches[2])), "application/octet-stream");
+        const int frame = std::stoi(req.matches[2]);
+        VdbDownload vdb = c.services.volumes.downloadFrame(*s, frame);
+        replyDownload(req, res, std::move(vdb.bytes), "application/octet-stream",
+                      "volstyle-" + s->id.substr(0, 8) + "-frame" + std::to_string(frame) + ".vdb", vdb.tag);
     });
-    c.http.Delete(kFramePath, [&c](const httplib::Request& req, httplib::Response& res) {
+    c.del(kFramePath, [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         c.services.volumes.removeFrame(*s, std::stoi(req.matches[2]));
         reply(res, 200, protocol::framesToJson(frameInfos(*s)));
     });
-    c.http.Post(kSessionPath + "/animate", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.postCreating(kSessionPath + "/animate", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         reply(res, 202, {{"job", c.services.volumes.startAnimate(s, protocol::AnimateRequest::fromJson(c.body(req)))->id}});
     });
-    c.http.Post(kSessionPath + "/frames/render", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.postCreating(kSessionPath + "/frames/render", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         reply(res, 202, {{"job", c.services.volumes.startFramesRender(s, protocol::FramesRenderRequest::fromJson(c.body(req), c.limits))->id}});
     });

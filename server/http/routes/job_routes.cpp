@@ -7,6 +7,7 @@
 #include <mutex>
 
 #include "protocol/job_json.h"
+#include "server/http/routes/list_pages.h"
 #include "server/http/routes/route_context.h"
 #include "server/runtime/video_encoder.h"
 
@@ -58,41 +59,52 @@ void streamEvents(httplib::Response& res, std::shared_ptr<Job> job, StreamLimite
     }, [&streams, client](bool) { streams.release(client); });
 }
 
-/// A file as the answer's body (frames and videos are small enough to send whole).
-void replyFile(httplib::Response& res, const std::filesystem::path& path, const char* mime) {
+/// A job's file to download (frames and videos are small enough to send whole).
+void replyFile(const httplib::Request& req, httplib::Response& res, const std::filesystem::path& path, const char* mime) {
     std::ifstream in(path, std::ios::binary);
     std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    res.set_content(std::move(bytes), mime);
+    replyDownload(req, res, std::move(bytes), mime, path.filename().string());
 }
 
 }  // namespace
 
 void addJobRoutes(RouteContext& c) {
-    c.http.Post(kSessionPath + "/solve", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.postCreating(kSessionPath + "/solve", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         const Vec3d background = c.services.sessions.lighting(*s).background.color;  // offered when L_m is left out
         const protocol::SolveRequest request = protocol::SolveRequest::fromJson(c.body(req), c.limits, &background);
         reply(res, 202, {{"job", c.services.jobs.startSolve(s, request.options)->id}});
     });
-    c.http.Get(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kApi + "/jobs", [&c](const httplib::Request& req, httplib::Response& res) {
+        const protocol::ListQuery q = protocol::ListQuery::fromQuery(req.params, true);
+        if (!q.session.empty()) (void)c.services.sessions.find(q.session);  // 404 names an unknown session
+        std::vector<std::pair<std::string, nlohmann::json>> keyed;
+        for (const auto& job : c.services.jobs.all()) {
+            const protocol::JobInfo info = job->info();
+            if (!q.session.empty() && info.session != q.session) continue;
+            keyed.emplace_back(fmt::format("{:016x}", job->sequence), protocol::jobToJson(info));  // oldest first
+        }
+        replyPage(res, std::move(keyed), q, kApi + "/jobs", q.session.empty() ? "" : "&session=" + q.session);
+    });
+    c.get(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {
         reply(res, 200, protocol::jobToJson(c.services.jobs.job(req.matches[1])->info()));
     });
-    c.http.Delete(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {
+    c.del(kJobPath, [&c](const httplib::Request& req, httplib::Response& res) {
         auto job = c.services.jobs.job(req.matches[1]);
         c.services.jobs.cancel(*job);
         reply(res, 202, protocol::jobToJson(job->info()));
     });
-    c.http.Get(kJobPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kJobPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
         streamEvents(res, c.services.jobs.job(req.matches[1]), c.streams, req.remote_addr);
     });
     // A sequence job's files (issue #15): its frames and its video.
-    c.http.Get(kJobPath + R"(/frames/([0-9]{1,6})\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
-        replyFile(res, c.services.jobs.jobFile(req.matches[1], sequenceFrameName(std::stoul(req.matches[2]))), "image/png");
+    c.get(kJobPath + R"(/frames/([0-9]{1,6})\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
+        replyFile(req, res, c.services.jobs.jobFile(req.matches[1], sequenceFrameName(std::stoul(req.matches[2]))), "image/png");
     });
-    c.http.Get(kJobPath + R"(/video\.mp4)", [&c](const httplib::Request& req, httplib::Response& res) {
-        replyFile(res, c.services.jobs.jobFile(req.matches[1], "video.mp4"), "video/mp4");
+    c.get(kJobPath + R"(/video\.mp4)", [&c](const httplib::Request& req, httplib::Response& res) {
+        replyFile(req, res, c.services.jobs.jobFile(req.matches[1], "video.mp4"), "video/mp4");
     });
-    c.http.Get(kJobPath + R"(/preview/(v[0-9]+)\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kJobPath + R"(/preview/(v[0-9]+)\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
         replyImage(res, c.services.volumes.renderPreview(req.matches[1], req.matches[2]), protocol::ImageFormat::Png);
     });
 }

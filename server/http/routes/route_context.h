@@ -15,6 +15,8 @@
 #include "core/image/image.h"
 #include "core/render/renderer.h"
 #include "protocol/requests.h"
+#include "server/http/idempotency.h"
+#include "server/http/route_table.h"
 #include "server/service/services.h"
 
 namespace volstyle::server {
@@ -41,9 +43,20 @@ struct RouteContext {
     protocol::RequestLimits limits;
     size_t maxJsonBytes = 1 << 20;
     StreamLimiter& streams;
+    RouteTable& table;
+    IdempotencyKeys& idempotency;
 
     /// The JSON body ({} when empty): 413 over maxJsonBytes, 400 invalid_json.
     nlohmann::json body(const httplib::Request& req) const;
+
+    /// Registers a route with cpp-httplib and in the route table.
+    void get(const std::string& pattern, httplib::Server::Handler handler);
+    void post(const std::string& pattern, httplib::Server::Handler handler);
+    void put(const std::string& pattern, httplib::Server::Handler handler);
+    void del(const std::string& pattern, httplib::Server::Handler handler);
+    /// A POST that creates a session or a job: an `Idempotency-Key` header makes a retry with the
+    /// same body answer what the first request did (idempotency.h).
+    void postCreating(const std::string& pattern, httplib::Server::Handler handler);
 };
 
 /// Path patterns (regular expressions; the groups are the ids).
@@ -60,6 +73,12 @@ void putUpload(RouteContext& c, const std::string& pattern,
                std::function<void(const httplib::Request&, httplib::Response&, const std::string&)> handler);
 
 void reply(httplib::Response& res, int status, const nlohmann::json& body);
+/// 201 with `body` and `Location: location` (the new resource).
+void replyCreated(httplib::Response& res, const std::string& location, const nlohmann::json& body);
+/// A file to download: `ETag` (`tag`, or a hash of the bytes; `If-None-Match` with it answers
+/// 304 without them) and `Content-Disposition: attachment; filename="…"`.
+void replyDownload(const httplib::Request& req, httplib::Response& res, std::string bytes, const std::string& mime,
+                   const std::string& filename, const std::string& tag = "");
 /// Encodes `image` (PNG: sRGB with `exposure` stops; EXR: linear) as the answer.
 void replyImage(httplib::Response& res, const core::Image& image, protocol::ImageFormat format, double exposure = 0);
 /// A render as PNG (the beauty, sRGB with `exposure` stops) or layered EXR (docs/FORMATS.md).

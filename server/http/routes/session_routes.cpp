@@ -6,6 +6,7 @@
 #include "protocol/render_json.h"
 #include "protocol/response_json.h"
 #include "server/state/session_info.h"
+#include "server/http/routes/list_pages.h"
 #include "server/http/routes/route_context.h"
 
 namespace volstyle::server {
@@ -38,34 +39,39 @@ httplib::Server::Handler renderRoute(RouteContext& c) {
 
 /// Sessions: create, list, get, delete, and a render of one.
 void addSessionItselfRoutes(RouteContext& c) {
-    c.http.Post(kApi + "/sessions", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.postCreating(kApi + "/sessions", [&c](const httplib::Request& req, httplib::Response& res) {
         auto request = protocol::CreateSessionRequest::fromJson(c.body(req), c.limits);
-        reply(res, 201, protocol::sessionToJson(sessionInfo(*c.services.sessions.create(request))));
+        const protocol::SessionInfo created = sessionInfo(*c.services.sessions.create(request));
+        replyCreated(res, kApi + "/sessions/" + created.id, protocol::sessionToJson(created));
     });
-    c.http.Get(kApi + "/sessions", [&c](const httplib::Request&, httplib::Response& res) {
-        nlohmann::json list = nlohmann::json::array();
-        for (auto& s : c.services.sessions.all()) list.push_back(protocol::sessionToJson(sessionInfo(*s)));
-        reply(res, 200, list);
+    c.get(kApi + "/sessions", [&c](const httplib::Request& req, httplib::Response& res) {
+        const protocol::ListQuery q = protocol::ListQuery::fromQuery(req.params, false);
+        std::vector<std::pair<std::string, nlohmann::json>> keyed;
+        for (auto& s : c.services.sessions.all()) {
+            const protocol::SessionInfo info = sessionInfo(*s);
+            keyed.emplace_back(info.created + "/" + info.id, protocol::sessionToJson(info));  // oldest first
+        }
+        replyPage(res, std::move(keyed), q, kApi + "/sessions");
     });
-    c.http.Get(kSessionPath, [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kSessionPath, [&c](const httplib::Request& req, httplib::Response& res) {
         reply(res, 200, protocol::sessionToJson(sessionInfo(*c.services.sessions.find(req.matches[1]))));
     });
-    c.http.Delete(kSessionPath, [&c](const httplib::Request& req, httplib::Response& res) {
+    c.del(kSessionPath, [&c](const httplib::Request& req, httplib::Response& res) {
         c.services.sessions.remove(req.matches[1]);
         res.status = 204;
     });
-    c.http.Post(kSessionPath + "/render", renderRoute(c));
+    c.post(kSessionPath + "/render", renderRoute(c));
 }
 
 /// The lighting, the environment light's lobes as a map, and the session's environment map.
 void addLightingRoutes(RouteContext& c) {
-    c.http.Get(kSessionPath + "/lighting", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kSessionPath + "/lighting", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         reply(res, 200, lightingResponse(c, *s, c.services.sessions.lighting(*s)));
     });
     // The environment light's lobes as a lat-long map (docs/LIGHTING.md): EXR (linear) for
     // `background: {"environment": …}` and Blender, PNG (sRGB) for the page's thumbnail.
-    c.http.Get(kSessionPath + R"(/lighting/environment\.(exr|png))", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kSessionPath + R"(/lighting/environment\.(exr|png))", [&c](const httplib::Request& req, httplib::Response& res) {
         const core::Lighting l = c.services.sessions.lighting(*c.services.sessions.find(req.matches[1]));
         if (!l.environment.active())
             throw protocol::ApiError(protocol::ErrorCode::NotFound, "the lighting has no environment light (environment.lobes is 0)");
@@ -74,7 +80,7 @@ void addLightingRoutes(RouteContext& c) {
         replyImage(res, core::lobesToLatLong(l.environment.basis(), core::lobeRadiance(l.environment), width, width / 2),
                    exr ? protocol::ImageFormat::Exr : protocol::ImageFormat::Png);
     });
-    c.http.Put(kSessionPath + "/lighting", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.put(kSessionPath + "/lighting", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         // An empty body is a client mistake, not "no lights" (send {} for that).
         if (req.body.find_first_not_of(" \t\r\n") == std::string::npos)
@@ -88,11 +94,11 @@ void addLightingRoutes(RouteContext& c) {
         const EnvironmentMapInfo info = c.services.sessions.setEnvironmentMap(*c.services.sessions.find(req.matches[1]), bytes);
         reply(res, 200, protocol::environmentMapToJson(info));
     });
-    c.http.Get(kSessionPath + R"(/environment\.(exr|png))", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kSessionPath + R"(/environment\.(exr|png))", [&c](const httplib::Request& req, httplib::Response& res) {
         auto map = c.services.sessions.environmentMap(*c.services.sessions.find(req.matches[1]));
         replyImage(res, *map, req.matches[2] == "exr" ? protocol::ImageFormat::Exr : protocol::ImageFormat::Png);
     });
-    c.http.Delete(kSessionPath + "/environment", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.del(kSessionPath + "/environment", [&c](const httplib::Request& req, httplib::Response& res) {
         c.services.sessions.removeEnvironmentMap(*c.services.sessions.find(req.matches[1]));
         res.status = 204;
     });

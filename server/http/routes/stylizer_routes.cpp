@@ -85,10 +85,10 @@ namespace {
 
 /// The scene: GET/PUT, undo and redo, picks and clicked constraints, sequences.
 void addStylizerSceneRoutes(RouteContext& c) {
-    c.http.Get(kStylizerPath, [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kStylizerPath, [&c](const httplib::Request& req, httplib::Response& res) {
         replyScene(res, c.services.stylizer.stylizer(*c.services.sessions.find(req.matches[1])));
     });
-    c.http.Put(kStylizerPath, [&c](const httplib::Request& req, httplib::Response& res) {
+    c.put(kStylizerPath, [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         if (req.body.find_first_not_of(" \t\r\n") == std::string::npos)  // a mistake, not "the defaults"
             throw ApiError(ErrorCode::InvalidArgument, "the body is empty; send the scene (GET …/stylizer gives the current one)");
@@ -96,20 +96,20 @@ void addStylizerSceneRoutes(RouteContext& c) {
         replyScene(res, c.services.stylizer.setStylizerScene(*s, request));
     });
     for (auto [route, redo] : {std::pair{"/undo", false}, std::pair{"/redo", true}})
-        c.http.Post(kStylizerPath + route, [&c, redo](const httplib::Request& req, httplib::Response& res) {
+        c.post(kStylizerPath + route, [&c, redo](const httplib::Request& req, httplib::Response& res) {
             replyScene(res, c.services.stylizer.undoStylizer(*c.services.sessions.find(req.matches[1]), redo));
         });
-    c.http.Post(kStylizerPath + "/pick", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.post(kStylizerPath + "/pick", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         reply(res, 200, protocol::stylizerPickToJson(c.services.stylizer.pickStylizer(*s, protocol::StylizerPickRequest::fromJson(c.body(req), c.limits, false))));
     });
-    c.http.Post(kStylizerPath + "/constraints", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.post(kStylizerPath + "/constraints", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         const AddedTfConstraint a = c.services.stylizer.addTfConstraint(*s, protocol::StylizerPickRequest::fromJson(c.body(req), c.limits, true));
         res.set_header("ETag", fmt::format("\"r{}\"", a.revision));
         reply(res, 200, protocol::addedTfConstraintToJson(a));
     });
-    c.http.Post(kStylizerPath + "/sequence", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.postCreating(kStylizerPath + "/sequence", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         reply(res, 202, {{"job", c.services.stylizer.startSequence(s, protocol::StylizerSequenceRequest::fromJson(c.body(req)))->id}});
     });
@@ -117,7 +117,7 @@ void addStylizerSceneRoutes(RouteContext& c) {
 
 /// The uploads: occluder meshes and the transfer-function image.
 void addStylizerUploadRoutes(RouteContext& c) {
-    c.http.Get(kStylizerPath + "/occluders", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kStylizerPath + "/occluders", [&c](const httplib::Request& req, httplib::Response& res) {
         nlohmann::json list = nlohmann::json::array();
         for (const auto& m : c.services.stylizer.occluderMeshes(*c.services.sessions.find(req.matches[1]))) list.push_back(protocol::occluderMeshToJson(m));
         reply(res, 200, list);
@@ -126,7 +126,7 @@ void addStylizerUploadRoutes(RouteContext& c) {
         auto s = c.services.sessions.find(req.matches[1]);
         reply(res, 200, protocol::occluderMeshToJson(c.services.stylizer.putOccluderMesh(*s, req.matches[2], bytes)));
     });
-    c.http.Delete(kStylizerPath + "/occluders/([^/]+)", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.del(kStylizerPath + "/occluders/([^/]+)", [&c](const httplib::Request& req, httplib::Response& res) {
         c.services.stylizer.removeOccluderMesh(*c.services.sessions.find(req.matches[1]), req.matches[2]);
         res.status = 204;
     });
@@ -134,18 +134,21 @@ void addStylizerUploadRoutes(RouteContext& c) {
         const TransferImageInfo t = c.services.stylizer.setTransferImage(*c.services.sessions.find(req.matches[1]), bytes);
         reply(res, 200, protocol::transferImageToJson(t));
     });
-    c.http.Get(kStylizerPath + R"(/tf\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kStylizerPath + R"(/tf\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
         core::SaveOptions save;
         save.writeAlpha = true;
-        res.set_content(core::encodeImage(c.services.stylizer.transferImage(*c.services.sessions.find(req.matches[1])), "png", save), "image/png");
+        replyDownload(req, res, core::encodeImage(c.services.stylizer.transferImage(*c.services.sessions.find(req.matches[1])), "png", save),
+                      "image/png", "tf.png");
     });
-    c.http.Get(kStylizerPath + R"(/transfer_function\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kStylizerPath + R"(/transfer_function\.png)", [&c](const httplib::Request& req, httplib::Response& res) {
         core::SaveOptions save;
         save.writeAlpha = true;
         save.data = true;  // the TF's values as they are (it multiplies linear radiance)
-        res.set_content(core::encodeImage(c.services.stylizer.compiledTransferFunction(*c.services.sessions.find(req.matches[1])), "png", save), "image/png");
+        replyDownload(req, res,
+                      core::encodeImage(c.services.stylizer.compiledTransferFunction(*c.services.sessions.find(req.matches[1])), "png", save),
+                      "image/png", "transfer_function.png");
     });
-    c.http.Delete(kStylizerPath + "/tf", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.del(kStylizerPath + "/tf", [&c](const httplib::Request& req, httplib::Response& res) {
         c.services.stylizer.removeTransferImage(*c.services.sessions.find(req.matches[1]));
         res.status = 204;
     });
@@ -153,7 +156,7 @@ void addStylizerUploadRoutes(RouteContext& c) {
 
 /// Frames: one on request, and the live stream's.
 void addStylizerFrameRoutes(RouteContext& c) {
-    c.http.Post(kStylizerPath + "/frame", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.post(kStylizerPath + "/frame", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         const auto request = protocol::StylizerFrameRequest::fromJson(c.body(req), c.limits);
         const core::StylizedFrame f = c.services.stylizer.stylize(*s, request);
@@ -163,10 +166,10 @@ void addStylizerFrameRoutes(RouteContext& c) {
         res.set_content(core::encodeImage(f.output(request.output), protocol::imageFormatName(request.format), save),
                         protocol::imageMimeType(request.format));
     });
-    c.http.Get(kStylizerPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kStylizerPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
         streamLiveFrames(c, res, c.services.sessions.find(req.matches[1]), req.remote_addr);
     });
-    c.http.Get(kStylizerPath + R"(/frames/([0-9]+)\.jpeg)", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kStylizerPath + R"(/frames/([0-9]+)\.jpeg)", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         const uint64_t revision = std::stoull(req.matches[2].str().substr(0, 19));
         auto f = c.services.stylizer.liveFrame(*s, revision);

@@ -7,21 +7,21 @@
 namespace volstyle::server {
 
 void addSystemRoutes(RouteContext& c) {
-    c.http.Get(kApi + "/health", [&c](const httplib::Request&, httplib::Response& res) {
+    c.get(kApi + "/health", [&c](const httplib::Request&, httplib::Response& res) {
         const auto& caps = c.services.sessions.capabilities();
         reply(res, 200, {{"status", "ok"}, {"version", protocol::versionString()}, {"api", protocol::kApiVersion},
                          {"gl_renderer", caps.renderer}, {"gl_version", caps.version}});
     });
-    c.http.Get(kApi + "/schema.json", [](const httplib::Request&, httplib::Response& res) {
+    c.get(kApi + "/schema.json", [](const httplib::Request&, httplib::Response& res) {
         res.set_content(protocol::kSchemaV1, "application/schema+json");
     });
-    c.http.Get(kApi + "/scenes", [](const httplib::Request&, httplib::Response& res) {
+    c.get(kApi + "/scenes", [](const httplib::Request&, httplib::Response& res) {
         nlohmann::json list = nlohmann::json::array();
         for (const auto& s : core::builtinScenes()) list.push_back({{"name", s.name}, {"description", s.description}});
         reply(res, 200, list);
     });
     // Files (or whole sessions) found damaged in the data directory and moved aside, with why.
-    c.http.Get(kApi + "/quarantine", [&c](const httplib::Request&, httplib::Response& res) {
+    c.get(kApi + "/quarantine", [&c](const httplib::Request&, httplib::Response& res) {
         nlohmann::json list = nlohmann::json::array();
         for (const auto& q : c.services.sessions.quarantine())
             list.push_back({{"session", q.session}, {"file", q.file}, {"reason", q.reason}, {"time", q.time}});

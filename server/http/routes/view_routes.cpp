@@ -8,18 +8,19 @@
 namespace volstyle::server {
 
 void addViewRoutes(RouteContext& c) {
-    c.http.Post(kSessionPath + "/views", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.post(kSessionPath + "/views", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         auto request = protocol::AddViewRequest::fromJson(c.body(req), c.limits);
-        reply(res, 201, protocol::viewToJson(viewInfo(c.services.sessions.addView(*s, request.camera, request.frame))));
+        const protocol::ViewInfo view = viewInfo(c.services.sessions.addView(*s, request.camera, request.frame));
+        replyCreated(res, kApi + "/sessions/" + s->id + "/views/" + view.id, protocol::viewToJson(view));
     });
-    c.http.Get(kSessionPath + "/views", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kSessionPath + "/views", [&c](const httplib::Request& req, httplib::Response& res) {
         reply(res, 200, protocol::viewsToJson(viewInfos(*c.services.sessions.find(req.matches[1]))));
     });
-    c.http.Get(kViewPath, [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kViewPath, [&c](const httplib::Request& req, httplib::Response& res) {
         reply(res, 200, protocol::viewToJson(viewInfo(c.services.sessions.view(*c.services.sessions.find(req.matches[1]), req.matches[2]))));
     });
-    c.http.Delete(kViewPath, [&c](const httplib::Request& req, httplib::Response& res) {
+    c.del(kViewPath, [&c](const httplib::Request& req, httplib::Response& res) {
         c.services.sessions.removeView(*c.services.sessions.find(req.matches[1]), req.matches[2]);
         res.status = 204;
     });
@@ -29,25 +30,25 @@ void addViewRoutes(RouteContext& c) {
             auto s = c.services.sessions.find(req.matches[1]);
             reply(res, 200, protocol::viewToJson(viewInfo(c.services.sessions.setViewImage(*s, req.matches[2], kind, bytes))));
         });
-        c.http.Delete(kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res) {
+        c.del(kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res) {
             auto s = c.services.sessions.find(req.matches[1]);
             reply(res, 200, protocol::viewToJson(viewInfo(c.services.sessions.removeViewImage(*s, req.matches[2], kind))));
         });
     }
     // The plate as stored (linear): EXR exactly, PNG sRGB-encoded for the page.
-    c.http.Get(kViewPath + R"(/background\.(png|exr))", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kViewPath + R"(/background\.(png|exr))", [&c](const httplib::Request& req, httplib::Response& res) {
         SessionView v = c.services.sessions.view(*c.services.sessions.find(req.matches[1]), req.matches[2]);
         if (!v.background) throw protocol::ApiError(protocol::ErrorCode::NotFound, "view " + v.id + " has no background plate");
         replyImage(res, *v.background, req.matches[3] == "exr" ? protocol::ImageFormat::Exr : protocol::ImageFormat::Png);
     });
-    c.http.Get(kViewPath + "/target.png", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kViewPath + "/target.png", [&c](const httplib::Request& req, httplib::Response& res) {
         SessionView v = c.services.sessions.view(*c.services.sessions.find(req.matches[1]), req.matches[2]);
         if (!v.target) throw protocol::ApiError(protocol::ErrorCode::NotFound, "view " + v.id + " has no target yet");
         core::SaveOptions save;
         save.writeAlpha = true;  // alpha is the painted weight
-        res.set_content(core::encodeImage(*v.target, "png", save), "image/png");
+        replyDownload(req, res, core::encodeImage(*v.target, "png", save), "image/png", "target-" + v.id + ".png");
     });
-    c.http.Get(kViewPath + R"(/render\.(png|exr))", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kViewPath + R"(/render\.(png|exr))", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         auto query = protocol::ViewRenderQuery::fromQuery(req.params);
         const auto format = req.matches[3] == "png" ? protocol::ImageFormat::Png : protocol::ImageFormat::Exr;

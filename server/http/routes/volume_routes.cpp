@@ -13,30 +13,32 @@ void addVolumeRoutes(RouteContext& c) {
         c.services.volumes.uploadVdb(*s, bytes);
         reply(res, 200, protocol::sessionToJson(sessionInfo(*s)));
     });
-    c.http.Get(kSessionPath + R"(/volume\.vdb)", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.get(kSessionPath + R"(/volume\.vdb)", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         auto query = protocol::VolumeQuery::fromQuery(req.params);
-        res.set_content(c.services.volumes.downloadVdb(*s, query.version), "application/octet-stream");
+        const std::string name = "volstyle-" + s->id.substr(0, 8) + (query.version ? "-v" + std::to_string(*query.version) : "") + ".vdb";
+        VdbDownload vdb = c.services.volumes.downloadVdb(*s, query.version);
+        replyDownload(req, res, std::move(vdb.bytes), "application/octet-stream", name, vdb.tag);
     });
     // Volume perturbation baked into a new version (SPEC §9; docs/TRANSLUCENT.md).
-    c.http.Post(kSessionPath + "/perturb", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.post(kSessionPath + "/perturb", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         const core::Perturbation p = protocol::perturbationFromJson(c.body(req));
         c.services.volumes.perturb(*s, p);
         reply(res, 200, protocol::sessionToJson(sessionInfo(*s)));
     });
     // A generated refractive index (a glass sphere with noise, issue #16), or none: a new version.
-    c.http.Post(kSessionPath + "/refraction", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.post(kSessionPath + "/refraction", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         c.services.volumes.setRefraction(*s, protocol::glassSphereFromJson(c.body(req)));
         reply(res, 200, protocol::sessionToJson(sessionInfo(*s)));
     });
-    c.http.Delete(kSessionPath + "/refraction", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.del(kSessionPath + "/refraction", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         c.services.volumes.setRefraction(*s, std::nullopt);
         reply(res, 200, protocol::sessionToJson(sessionInfo(*s)));
     });
-    c.http.Post(kSessionPath + "/revert", [&c](const httplib::Request& req, httplib::Response& res) {
+    c.post(kSessionPath + "/revert", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
         auto request = protocol::RevertRequest::fromJson(c.body(req));
         c.services.volumes.revert(*s, request.version);
