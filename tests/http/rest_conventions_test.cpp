@@ -1,6 +1,10 @@
 // The REST conventions of SPEC §10 (issue #37): 405 with Allow, 404 naming what is missing,
 // Location on 201, ETag / If-None-Match / Content-Disposition on downloads, lists with limit and
 // a cursor, and Idempotency-Key on the POSTs that create sessions and jobs.
+#include <cctype>
+#include <functional>
+#include <map>
+#include <regex>
 #include <set>
 
 #include "api_fixture.h"
@@ -196,6 +200,68 @@ TEST_F(Rest, AnIdempotencyKeyMakesARetryTheSameRequest) {
     ASSERT_EQ(job2->status, 202) << job2->body;
     EXPECT_EQ(json::parse(job1->body)["job"], json::parse(job2->body)["job"]);
     EXPECT_EQ(json::parse(client().Get(("/api/v1/jobs?session=" + sid).c_str())->body).size(), 1u);
+}
+
+/// An OpenAPI path as a concrete one: each {parameter} replaced by a value of its shape.
+std::string samplePath(std::string path) {
+    static const std::map<std::string, std::string> kSamples = {{"sid", "0123abcd"}, {"vid", "v1"},   {"jid", "4567cdef"}, {"n", "3"},
+                                                                {"i", "0"},         {"rev", "7"},    {"name", "floor"},   {"format", "png"}};
+    for (const auto& [name, value] : kSamples)
+        for (size_t at; (at = path.find("{" + name + "}")) != std::string::npos;) path.replace(at, name.size() + 2, value);
+    return "/api/v1" + path;
+}
+
+TEST_F(Rest, TheOpenApiDocumentListsTheServersRoutes) {
+    // Issue #37: every route the server registers is in the document and every operation of the
+    // document is a route, by method and path.
+    auto r = client().Get("/api/v1/openapi.json");
+    ASSERT_EQ(r->status, 200);
+    const json doc = json::parse(r->body);
+    EXPECT_EQ(doc["openapi"], "3.1.0");
+    std::vector<std::regex> routes;
+    std::vector<std::string> methods;
+    std::vector<bool> documented;
+    for (const server::RouteEntry& e : m_server->routes()) {
+        routes.emplace_back(e.pattern);
+        methods.push_back(e.method);
+        documented.push_back(false);
+    }
+    ASSERT_GT(routes.size(), 50u);
+    int operations = 0;
+    for (const auto& [path, item] : doc["paths"].items())
+        for (const auto& [method, operation] : item.items()) {
+            ++operations;
+            std::string upper = method;
+            for (char& ch : upper) ch = char(std::toupper(ch));
+            const std::string sample = samplePath(path);
+            bool found = false;
+            for (size_t k = 0; k < routes.size(); ++k)
+                if (methods[k] == upper && std::regex_match(sample, routes[k])) found = true, documented[k] = true;
+            EXPECT_TRUE(found) << upper << " " << path << " is in the document but the server has no such route";
+            for (const auto& [status, answer] : operation["responses"].items()) EXPECT_TRUE(answer.is_object()) << path << " " << status;
+        }
+    for (size_t k = 0; k < routes.size(); ++k)
+        EXPECT_TRUE(documented[k]) << methods[k] << " " << m_server->routes()[k].pattern << " is a route the document does not list";
+    EXPECT_EQ(size_t(operations), routes.size());
+    // The bodies' schemas are the JSON Schema's definitions, and every reference resolves.
+    const json& schemas = doc["components"]["schemas"];
+    EXPECT_TRUE(schemas.contains("session") && schemas.contains("solve_options") && schemas.contains("error"));
+    std::function<void(const json&)> checkRefs = [&](const json& j) {
+        if (j.is_object()) {
+            for (const auto& [key, value] : j.items()) {
+                if (key == "$ref") {
+                    const std::string ref = value;
+                    ASSERT_EQ(ref.rfind("#/", 0), 0u) << ref;
+                    EXPECT_NO_THROW((void)doc.at(json::json_pointer(ref.substr(1)))) << ref << " does not resolve";
+                } else {
+                    checkRefs(value);
+                }
+            }
+        } else if (j.is_array()) {
+            for (const auto& v : j) checkRefs(v);
+        }
+    };
+    checkRefs(doc);
 }
 
 }  // namespace

@@ -1,7 +1,8 @@
-// GET /health, /schema.json, /scenes, /quarantine.
+// GET /health, /schema.json, /openapi.json, /scenes, /quarantine.
 #include "core/volume/builtin_scenes.h"
-#include "protocol/validation.h"
 #include "protocol/build_version.h"
+#include "protocol/openapi.h"
+#include "protocol/validation.h"
 #include "server/http/routes/route_context.h"
 
 namespace volstyle::server {
@@ -14,6 +15,9 @@ void addSystemRoutes(RouteContext& c) {
     });
     c.get(kApi + "/schema.json", [](const httplib::Request&, httplib::Response& res) {
         res.set_content(protocol::kSchemaV1, "application/schema+json");
+    });
+    c.get(kApi + "/openapi.json", [](const httplib::Request&, httplib::Response& res) {
+        res.set_content(protocol::openApiDocument(), "application/json");
     });
     c.get(kApi + "/scenes", [](const httplib::Request&, httplib::Response& res) {
         nlohmann::json list = nlohmann::json::array();
