@@ -147,13 +147,19 @@
     $('shafts-main').hidden = !shafts;
     $('mode-paint').classList.toggle('selected', !shafts);
     $('mode-shafts').classList.toggle('selected', shafts);
+    // The header speaks of the mode on screen: the tab's title and what "Download VDB" gives.
+    document.title = shafts ? 'volstyle — light shafts' : 'volstyle — paint your volume';
+    $('download-vdb').title = shafts ? 'the session volume (the medium when the scene uses "source": "session")' : 'the volume as painted (its current version)';
     if (shafts && sh.sid) {
       connect();
       pushScene();
       status('light shafts: drag the camera or the light, edit the medium and the shadows, drop a transfer function', 'ok');
-    } else if (sh.events) {
-      sh.events.close();
-      sh.events = null;
+    } else {
+      if (sh.events) {
+        sh.events.close();
+        sh.events = null;
+      }
+      if (!shafts) status('painting: orbit the view, add views, paint them, solve', 'ok');
     }
   }
   $('mode-paint').onclick = () => setMode(false);
