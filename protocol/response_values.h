@@ -39,6 +39,8 @@ struct SessionInfo {
     Vec3d lo, hi, voxelSize;
     std::vector<std::string> grids;  ///< extinction, albedo, emission, refractive_index
     int version = 1;
+    int shows = 1;             ///< the version whose content the current one is (after an undo, redo or revert)
+    int undo = 0, redo = 0;    ///< steps POST …/undo and …/redo can take
     core::Lighting lighting;
     std::shared_ptr<const core::Image> environmentMap;  ///< what the lighting calls "session"
     std::vector<ViewInfo> views;

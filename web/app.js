@@ -115,7 +115,10 @@ const removeGlass = guard(async () => {
 function showSession(s) {
   state.sid = s.id;
   state.version = s.volume.version;
-  $('session-info').textContent = `${s.scene} · ${s.volume.dims.join('×')} · version ${s.volume.version}`;
+  const shows = s.volume.shows !== undefined && s.volume.shows !== s.volume.version ? ` (shows ${s.volume.shows})` : '';
+  $('session-info').textContent = `${s.scene} · ${s.volume.dims.join('×')} · version ${s.volume.version}${shows}`;
+  $('undo').disabled = !s.volume.undo;
+  $('redo').disabled = !s.volume.redo;
   $('download-vdb').href = `${api}/sessions/${s.id}/volume.vdb`;
   document.dispatchEvent(new CustomEvent('volstyle-session', { detail: s.id }));  // the light-shaft mode follows (shafts.js)
 }
@@ -354,13 +357,16 @@ const solve = guard(async () => {
 
 const cancel = guard(async () => { if (state.job) await call('DELETE', `/jobs/${state.job}`); });
 
-const undo = guard(async () => {
-  if (!state.sid || state.version <= 1) throw new Error('nothing to undo');
-  const s = await call('POST', `/sessions/${state.sid}/revert`, { version: state.version - 1 });
+// Undo and redo step through what the session showed (POST …/undo, …/redo): each step is a new
+// version holding an earlier one's content, so nothing is lost and the status names both.
+const step = (redo) => guard(async () => {
+  if (!state.sid) return;
+  const s = await call('POST', `/sessions/${state.sid}/${redo ? 'redo' : 'undo'}`);
   showSession(s);
   await renderViewport();
-  status(`reverted to the content of version ${state.version - 1}`, 'ok');
+  status(`${redo ? 'redone' : 'undone'}: version ${s.volume.version} shows version ${s.volume.shows}`, 'ok');
 });
+const undo = step(false), redo = step(true);
 
 // Orbit and zoom.
 let dragging = null;
@@ -411,6 +417,7 @@ $('upload-target').onclick = uploadTarget;
 $('solve').onclick = solve;
 $('cancel').onclick = cancel;
 $('undo').onclick = undo;
+$('redo').onclick = redo;
 
 guard(async () => {
   const scenes = await call('GET', '/scenes');

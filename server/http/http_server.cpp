@@ -150,6 +150,13 @@ void HttpServer::Impl::addMiddleware() {
     // Request ids, timing, and the bearer token on /api when one is set.
     http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
         beginRequest(res);
+        // A request with neither Content-Length nor Transfer-Encoding has no body (RFC 9112
+        // §6.3); cpp-httplib 0.11 would read a POST's body until the connection closes, so
+        // `curl -XPOST …/undo` waited out the read timeout and got a 400. The request object is
+        // the library's own (non-const) one, passed here as const.
+        if ((req.method == "POST" || req.method == "PUT" || req.method == "PATCH" || req.method == "DELETE") &&
+            !req.has_header("Content-Length") && !req.has_header("Transfer-Encoding"))
+            const_cast<httplib::Request&>(req).headers.emplace("Content-Length", "0");
         if (!opt.token.empty() && req.path.rfind("/api/", 0) == 0 &&
             !constantTimeEquals(req.get_header_value("Authorization"), "Bearer " + opt.token)) {
             replyError(res, protocol::ErrorCode::Unauthorized, "send 'Authorization: Bearer <token>'");

@@ -167,11 +167,20 @@ std::filesystem::path ServiceContext::jobFilesDir(const std::string& jobId) cons
     return persist ? persist->jobFilesDir(jobId) : scratch / jobId;
 }
 
-std::shared_ptr<core::GpuVolume> ServiceContext::commitVersion(Session& s, core::Volume volume) {
+std::shared_ptr<core::GpuVolume> ServiceContext::commitVersion(Session& s, core::Volume volume, int shows) {
+    // An edit: what was shown can be brought back by an undo; what was undone cannot be redone.
+    s.volume.undo.push_back(s.volume.shows);
+    if (s.volume.undo.size() > kMaxUndoSteps) s.volume.undo.erase(s.volume.undo.begin());
+    s.volume.redo.clear();
+    return commitStep(s, std::move(volume), shows);
+}
+
+std::shared_ptr<core::GpuVolume> ServiceContext::commitStep(Session& s, core::Volume volume, int shows) {
     const int n = s.volume.versions.newest() + 1;  // after damaged ones too: numbers are never reused
     s.volume.versions.retire(s.volume.version, std::move(s.volume.current));
     s.volume.current = std::move(volume);
     s.volume.version = n;
+    s.volume.shows = shows > 0 ? shows : n;
     s.volume.versions.add(n);
     saved(s);
     if (s.stylizer.scene.volume) stylizerChanged(s);  // its medium is the session's volume: live frames follow

@@ -43,7 +43,11 @@ struct ServiceContext {
     // Volume versions.
     /// Makes `volume` the newest version, on disk before it returns. Call with the session's
     /// lock held; returns the stale GPU copy (release() it after unlocking).
-    std::shared_ptr<core::GpuVolume> commitVersion(Session& s, core::Volume volume);
+    /// `shows`: the version whose content `volume` is (a revert); 0: new content.
+    std::shared_ptr<core::GpuVolume> commitVersion(Session& s, core::Volume volume, int shows = 0);
+    /// commitVersion() for an undo or redo: the new version shows `shows`, and the stacks are the
+    /// caller's (an edit's bookkeeping is skipped).
+    std::shared_ptr<core::GpuVolume> commitStep(Session& s, core::Volume volume, int shows);
     void release(std::shared_ptr<core::GpuVolume> gpu);
     /// Writes the stylizer's scene, moves its revision and wakes its streams (the lock held).
     /// `history`: the undo/redo stacks changed too (written apart from the scene).
@@ -80,6 +84,8 @@ struct ServiceContext {
         std::counting_semaphore<>& slots;
     };
     static constexpr int kConcurrentDecodes = 2;
+    /// Undo steps a session keeps (each names a version; the versions themselves stay).
+    static constexpr size_t kMaxUndoSteps = 256;
 
     ServiceLimits limits;
     MemoryBudget memory{limits.memory};

@@ -13,6 +13,10 @@ public:
 
     // Volume versions (session_volume.cpp).
     int revert(Session& s, int version);  ///< the new version number
+    /// One step back (or forward: redo) through what the session showed: a new version with the
+    /// content of the version before the last edit, undo or redo; its number. 409 with nothing
+    /// to undo (redo).
+    int step(Session& s, bool redo);
     /// Bakes the perturbation (core/translucent/perturbation.h) into a new version; its number.
     int perturb(Session& s, const core::Perturbation& perturbation);
     /// Gives the volume a generated refractive_index grid (a glass sphere with noise, issue #16),

@@ -78,7 +78,34 @@ int VolumeService::revert(Session& s, int version) {
     {
         std::lock_guard lock(s.mutex);
         m_ctx.memory.check(s, old.memoryBytes(), 0, "reverting to version " + std::to_string(version));
-        stale = m_ctx.commitVersion(s, std::move(old));  // undo is a new version with the old content: nothing is lost
+        stale = m_ctx.commitVersion(s, std::move(old), version);  // a new version with the old content: nothing is lost
+        now = s.volume.version;
+    }
+    m_ctx.release(std::move(stale));
+    return now;
+}
+
+int VolumeService::step(Session& s, bool redo) {
+    int target = 0;
+    {
+        std::lock_guard lock(s.mutex);
+        const std::vector<int>& from = redo ? s.volume.redo : s.volume.undo;
+        if (from.empty()) throw ApiError(ErrorCode::Busy, redo ? "nothing to redo" : "nothing to undo");
+        target = from.back();
+    }
+    core::Volume old = olderVersion(s, target);  // off the lock: a stored version is read from disk
+    std::shared_ptr<core::GpuVolume> stale;
+    int now = 0;
+    {
+        std::lock_guard lock(s.mutex);
+        std::vector<int>& from = redo ? s.volume.redo : s.volume.undo;
+        std::vector<int>& to = redo ? s.volume.undo : s.volume.redo;
+        if (from.empty() || from.back() != target)  // another step or an edit came first
+            throw ApiError(ErrorCode::Busy, "the volume changed meanwhile; look at the session and step again");
+        m_ctx.memory.check(s, old.memoryBytes(), 0, std::string(redo ? "redoing" : "undoing") + " to version " + std::to_string(target));
+        from.pop_back();
+        to.push_back(s.volume.shows);
+        stale = m_ctx.commitStep(s, std::move(old), target);
         now = s.volume.version;
     }
     m_ctx.release(std::move(stale));

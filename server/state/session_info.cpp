@@ -28,6 +28,9 @@ protocol::SessionInfo sessionInfo(Session& s) {
     if (v.hasEmission()) info.grids.push_back("emission");
     if (v.refractiveIndex()) info.grids.push_back("refractive_index");
     info.version = s.volume.version;
+    info.shows = s.volume.shows;
+    info.undo = int(s.volume.undo.size());
+    info.redo = int(s.volume.redo.size());
     info.lighting = s.light.lighting;
     info.environmentMap = s.light.environmentMap;
     for (const auto& view : s.views.list) info.views.push_back(viewInfo(view));

@@ -58,6 +58,12 @@ struct VolumeState {
     int version = 1;
     VersionHistory versions;                    ///< every committed version, for revert and download
     std::shared_ptr<core::GpuVolume> gpu;       ///< created and destroyed on the GL thread
+    /// The version whose content the current one is: its own number after an edit, the version
+    /// an undo, redo or revert brought back otherwise (every step is a new version: nothing lost).
+    int shows = 1;
+    /// POST …/undo and …/redo: what each step brings back, newest last. An edit (solve, upload,
+    /// perturbation, refraction, revert) pushes what was shown onto `undo` and clears `redo`.
+    std::vector<int> undo, redo;
 };
 
 /// A session's views, and the next view's number ("v1", "v2", … never reused).

@@ -78,6 +78,10 @@ void restoreVersions(DataDir& dir, Session& s, const json& j) {
         try {
             s.volume.current = loadVersionFile(dir, s.id, n, *s.volume.versions.storedBytes(n));
             s.volume.version = n;
+            // Undo and redo (since 2026-12-05; older records: none, the version shows itself).
+            s.volume.shows = n == recorded ? j.value("shows", n) : n;
+            s.volume.undo = j.value("undo", std::vector<int>{});
+            s.volume.redo = j.value("redo", std::vector<int>{});
             if (n != recorded) spdlog::warn("restore: session {} falls back from version {} to {}", s.id, recorded, n);
             return;
         } catch (const std::exception& e) {
@@ -139,6 +143,9 @@ std::string encodeSessionRecord(const Session& s) {
                     {"created", s.created},
                     {"scene", s.scene},
                     {"version", s.volume.version},
+                    {"shows", s.volume.shows},
+                    {"undo", s.volume.undo},
+                    {"redo", s.volume.redo},
                     {"versions", s.volume.versions.numbers()},
                     {"version_bytes", bytes},
                     {"damaged", damaged},

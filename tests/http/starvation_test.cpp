@@ -213,3 +213,23 @@ TEST_F(Starvation, OnlyTheNewestFinishedJobsAreKept) {
     const json listed = json::parse(client().Get(base.c_str())->body)["jobs"];
     EXPECT_EQ(listed, json(std::vector<std::string>(jobs.begin() + 1, jobs.end())));
 }
+
+TEST_F(Starvation, APostWithoutALengthHasNoBodyAndIsAnsweredAtOnce) {
+    // Issue #37: `curl -XPOST …/undo` sends neither Content-Length nor Transfer-Encoding; such a
+    // request has no body (RFC 9112 §6.3), but the server read until its timeout and answered 400
+    // after 10 s.
+    const std::string sid = createSession();
+    ASSERT_EQ(client().Post(("/api/v1/sessions/" + sid + "/perturb").c_str(), R"({"amplitude": 1})", "application/json")->status, 200);
+    const int fd = connectRaw();
+    ASSERT_GE(fd, 0);
+    const std::string request = "POST /api/v1/sessions/" + sid + "/undo HTTP/1.1\r\nHost: 127.0.0.1\r\nAccept: */*\r\n\r\n";
+    const auto t0 = std::chrono::steady_clock::now();
+    ASSERT_EQ(::send(fd, request.data(), request.size(), 0), ssize_t(request.size()));
+    const std::string answer = readResponse(fd);
+    ::close(fd);
+    EXPECT_LT(msSince(t0), 2000.0) << "answered only after a read timeout";
+    ASSERT_EQ(answer.rfind("HTTP/1.1 200", 0), 0u) << answer.substr(0, 300);
+    const json session = json::parse(answer.substr(answer.find("\r\n\r\n") + 4));
+    EXPECT_EQ(session["volume"]["shows"], 1);
+    EXPECT_EQ(session["volume"]["redo"], 1);
+}

@@ -399,6 +399,64 @@ TEST_F(ServiceTest, UndoEntriesDoNotHoldCompiledTransferFunctions) {
     EXPECT_NEAR(undone.scene.transferFunction->image->pixel(10, 10)[2], 0.6f, 1e-6);  // the first TF, compiled again
 }
 
+TEST_F(ServiceTest, UndoAndRedoStepThroughEveryVersionShown) {
+    // Issue #37: undo steps back through what the session showed (not between the last two
+    // versions), redo steps forward, an edit clears redo; each step is a new version holding the
+    // content of the one it brings back, and the stacks survive a restart.
+    TempDir dir;
+    std::string sid;
+    std::vector<core::Volume> shown;  // the content of versions 1, 2, 3, 4
+    auto sameAs = [&](Session& s, int version) {
+        const core::Volume now = volumeOf(s);
+        return now.extinction() == shown[size_t(version - 1)].extinction() && now.emission() == shown[size_t(version - 1)].emission();
+    };
+    auto showsOf = [](Session& s) {
+        std::lock_guard lock(s.mutex);
+        return std::tuple{s.volume.shows, s.volume.undo.size(), s.volume.redo.size()};
+    };
+    {
+        auto service = makeService(dir.path.string());
+        auto s = service->sessions.create(smallCloud());
+        sid = s->id;
+        shown.push_back(volumeOf(*s));
+        for (uint32_t seed : {1u, 2u, 3u}) {
+            service->volumes.perturb(*s, someNoise(seed));
+            shown.push_back(volumeOf(*s));
+        }
+        ASSERT_EQ(versionOf(*s), 4);
+        for (int back : {3, 2, 1}) {  // three undos: 4 → 3 → 2 → 1, each a new version
+            service->volumes.step(*s, false);
+            EXPECT_TRUE(sameAs(*s, back)) << "undo should show version " << back;
+            EXPECT_EQ(std::get<0>(showsOf(*s)), back);
+        }
+        EXPECT_EQ(versionOf(*s), 7);
+        try {
+            service->volumes.step(*s, false);
+            FAIL() << "an undo past the first version";
+        } catch (const ApiError& e) {
+            EXPECT_EQ(e.code(), ErrorCode::Busy);
+        }
+        service->volumes.step(*s, true);  // redo: 2
+        EXPECT_TRUE(sameAs(*s, 2));
+        EXPECT_EQ(showsOf(*s), std::tuple(2, size_t(1), size_t(2)));
+    }
+    auto service = makeService(dir.path.string());  // a restart keeps the stacks
+    auto s = service->sessions.find(sid);
+    EXPECT_EQ(showsOf(*s), std::tuple(2, size_t(1), size_t(2)));
+    service->volumes.step(*s, true);  // redo: 3
+    EXPECT_TRUE(sameAs(*s, 3));
+    service->volumes.perturb(*s, someNoise(9));  // an edit clears redo
+    EXPECT_EQ(std::get<2>(showsOf(*s)), 0u);
+    EXPECT_THROW(service->volumes.step(*s, true), ApiError);
+    service->volumes.step(*s, false);  // undo: back to 3, what the edit replaced
+    EXPECT_TRUE(sameAs(*s, 3));
+    service->volumes.revert(*s, 1);  // a revert is an edit that shows version 1
+    EXPECT_TRUE(sameAs(*s, 1));
+    EXPECT_EQ(std::get<0>(showsOf(*s)), 1);
+    service->volumes.step(*s, false);
+    EXPECT_TRUE(sameAs(*s, 3)) << "undoing a revert shows what it replaced";
+}
+
 TEST_F(ServiceTest, OnlyAChangeBeyondTheTimeIsAStepToUndo) {
     // Scrubbing is not a step; the same layered TF PUT again (compiled again into a new image) is
     // not either; a moved occluder is. Compared as core values, not as their JSON.

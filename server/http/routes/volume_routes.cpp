@@ -1,5 +1,5 @@
 // A session's volume versions: PUT …/volume (upload a VDB), GET …/volume.vdb[?version=N],
-// POST …/revert, POST …/perturb (bake a perturbation into a new version), POST/DELETE
+// POST …/revert, …/undo and …/redo, POST …/perturb (bake a perturbation into a new version), POST/DELETE
 // …/refraction (a generated glass sphere's refractive index, or none).
 #include "protocol/response_json.h"
 #include "server/state/session_info.h"
@@ -44,6 +44,13 @@ void addVolumeRoutes(RouteContext& c) {
         c.services.volumes.revert(*s, request.version);
         reply(res, 200, protocol::sessionToJson(sessionInfo(*s)));
     });
+    // One step back or forward through what the session showed (each a new version).
+    for (auto [route, redo] : {std::pair{"/undo", false}, std::pair{"/redo", true}})
+        c.post(kSessionPath + route, [&c, redo](const httplib::Request& req, httplib::Response& res) {
+            auto s = c.services.sessions.find(req.matches[1]);
+            c.services.volumes.step(*s, redo);
+            reply(res, 200, protocol::sessionToJson(sessionInfo(*s)));
+        });
 }
 
 }  // namespace volstyle::server
