@@ -50,4 +50,20 @@ async function openShafts(browser, url, fail, viewport) {
   return { page, revision, newFrame, settle };
 }
 
-module.exports = { openBrowser, openShafts };
+// Opens the painting page once its session is ready (console errors logged).
+async function openPainting(browser, url, viewport = { width: 1280, height: 800 }) {
+  const page = await browser.newPage({ viewport });
+  page.on('pageerror', (e) => console.error('page error:', e.message));
+  await page.goto(url);
+  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('session ready'), null, { timeout: 60000 });
+  return page;
+}
+
+// check(ok, message): fails the test (through `fail`) on the first that does not hold; counts the rest.
+function checker(fail) {
+  const c = { passed: 0 };
+  c.check = async (ok, message) => { if (!ok) await fail(message); ++c.passed; };
+  return c;
+}
+
+module.exports = { openBrowser, openShafts, openPainting, checker };

@@ -3,17 +3,13 @@
 // sideways at 900 px, the page has a favicon, and the tab's title names the mode on screen.
 // Saves a screenshot of each size. Usage: NODE_PATH=…/node_modules node e2e_layout.cjs URL OUT.png
 'use strict';
-const { openBrowser } = require('./browser.cjs');
+const { openBrowser, openPainting, checker } = require('./browser.cjs');
 
 (async () => {
 const { url, screenshot, browser, fail } = await openBrowser();
-let passed = 0;
-const check = async (ok, message) => { if (!ok) await fail(message); ++passed; };
+const checks = checker(fail), check = checks.check;
 try {
-  const page = await browser.newPage({ viewport: { width: 1280, height: 800 } });
-  page.on('pageerror', (e) => console.error('page error:', e.message));
-  await page.goto(url);
-  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('session ready'), null, { timeout: 60000 });
+  const page = await openPainting(browser, url);
   const shown = (id) => page.$eval('#' + id, (e) => e.getClientRects().length > 0 && getComputedStyle(e).display !== 'none');
   await check(!(await shown('translucent-controls')), 'the translucent sliders show while Translucent is off');
   await page.click('#translucent');
@@ -42,7 +38,7 @@ try {
   });
   await check(spill.length === 0, 'at 900 px: ' + spill.join('; '));
   await page.screenshot({ path: screenshot.replace(/\.png$/, '_900.png'), fullPage: true });
-  console.log(`layout: ${passed} checks passed`);
+  console.log(`layout: ${checks.passed} checks passed`);
 } catch (e) {
   await fail(e.stack || String(e));
 }

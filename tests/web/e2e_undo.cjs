@@ -4,17 +4,13 @@
 // the status names the new version and the one it shows; Redo steps forward again.
 // Usage: NODE_PATH=…/node_modules node e2e_undo.cjs URL OUT.png
 'use strict';
-const { openBrowser } = require('./browser.cjs');
+const { openBrowser, openPainting, checker } = require('./browser.cjs');
 
 (async () => {
 const { url, screenshot, browser, fail } = await openBrowser();
-let passed = 0;
-const check = async (ok, message) => { if (!ok) await fail(message); ++passed; };
+const checks = checker(fail), check = checks.check;
 try {
-  const page = await browser.newPage({ viewport: { width: 1280, height: 800 } });
-  page.on('pageerror', (e) => console.error('page error:', e.message));
-  await page.goto(url);
-  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('session ready'), null, { timeout: 60000 });
+  const page = await openPainting(browser, url);
   const session = () => page.evaluate(async () => {
     const sid = document.getElementById('download-vdb').href.split('/sessions/')[1].split('/')[0];
     return (await fetch(`api/v1/sessions/${sid}`)).json();
@@ -57,7 +53,7 @@ try {
   s = await session();
   await check(s.volume.shows === 2 && s.volume.grids.includes('refractive_index'), 'redo brings version 2 back');
   await page.screenshot({ path: screenshot });
-  console.log(`undo: ${passed} checks passed`);
+  console.log(`undo: ${checks.passed} checks passed`);
 } catch (e) {
   await fail(e.stack || String(e));
 }
