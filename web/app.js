@@ -42,13 +42,30 @@ function guard(fn) {
   };
 }
 
+const kFovYDeg = 38;
+
+// Frames a volume's bounding box (issue #37): the orbit aims at its centre from the distance at
+// which the box's largest side fills the view with a 15% margin (for the built-in 2-unit box,
+// 3.3 units: the page's framing before), the zoom range is relative to that distance, and the
+// clip planes hug the box's bounding sphere, so an asset off the origin, of 20 units or of 0.05,
+// is in view at once. Called when the box changes (a new session or an upload).
+function frameVolume(bbox) {
+  const [lo, hi] = bbox;
+  state.target = lo.map((x, k) => (x + hi[k]) / 2);
+  const half = Math.max(...hi.map((x, k) => x - lo[k])) / 2;
+  const fit = 1.15 * half / Math.tan((kFovYDeg / 2) * Math.PI / 180);
+  state.frame = { radius: Math.hypot(...hi.map((x, k) => x - lo[k])) / 2, fit, box: JSON.stringify(bbox) };
+  state.orbit.distance = fit;
+}
+
 function camera(size) {
   const { azimuth, elevation, distance } = state.orbit;
-  const t = state.target;
+  const t = state.target, r = state.frame ? state.frame.radius : 2;
   return {
     eye: [t[0] + distance * Math.sin(azimuth) * Math.cos(elevation), t[1] + distance * Math.sin(elevation),
           t[2] + distance * Math.cos(azimuth) * Math.cos(elevation)],
-    target: t, up: [0, 1, 0], fov_y_deg: 38, width: size, height: size,
+    target: t, up: [0, 1, 0], fov_y_deg: kFovYDeg, width: size, height: size,
+    near: Math.max(0, distance - 1.5 * r), far: distance + 1.5 * r,
   };
 }
 
@@ -115,6 +132,7 @@ const removeGlass = guard(async () => {
 function showSession(s) {
   state.sid = s.id;
   state.version = s.volume.version;
+  if (!state.frame || state.frame.box !== JSON.stringify(s.volume.bbox)) frameVolume(s.volume.bbox);
   const shows = s.volume.shows !== undefined && s.volume.shows !== s.volume.version ? ` (shows ${s.volume.shows})` : '';
   $('session-info').textContent = `${s.scene} · ${s.volume.dims.join('×')} · version ${s.volume.version}${shows}`;
   $('undo').disabled = !s.volume.undo;
@@ -381,7 +399,8 @@ $('viewport').addEventListener('pointermove', (e) => {
 $('viewport').addEventListener('pointerup', () => { dragging = null; });
 $('viewport').addEventListener('wheel', (e) => {
   e.preventDefault();
-  state.orbit.distance = Math.max(1.2, Math.min(10, state.orbit.distance * (e.deltaY > 0 ? 1.1 : 0.9)));
+  const fit = state.frame ? state.frame.fit : 3.4;  // zoom from a fifth of the framing distance to four times it
+  state.orbit.distance = Math.max(0.2 * fit, Math.min(4 * fit, state.orbit.distance * (e.deltaY > 0 ? 1.1 : 0.9)));
   renderViewport();
 }, { passive: false });
 
