@@ -138,7 +138,7 @@ class ProgressBar {
 public:
     ProgressBar(int total, bool quiet) : m_total(total), m_quiet(quiet), m_isTty(isatty(fileno(stderr))) {}
     void update(const core::SolveProgress& p) {
-        if (m_quiet) return;
+        if (m_quiet || p.phase != core::SolvePhase::Iterating) return;  // the bar counts iterations
         const int width = 24, filled = std::min(width, width * p.iteration / std::max(1, m_total));
         double rms = 0;
         for (double x : p.rmsPerView) rms += x / double(p.rmsPerView.size());

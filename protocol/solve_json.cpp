@@ -200,7 +200,7 @@ nlohmann::json solveReportToJson(const core::SolveReport& r) {
 }
 
 nlohmann::json solveProgressToJson(const core::SolveProgress& p) {
-    return {{"iteration", p.iteration}, {"objective", p.objective}, {"rms_per_view", p.rmsPerView},
+    return {{"phase", core::solvePhaseName(p.phase)}, {"iteration", p.iteration}, {"objective", p.objective}, {"rms_per_view", p.rmsPerView},
             {"elapsed_ms", p.elapsedMs}, {"forward_ms", p.forwardMs}, {"adjoint_ms", p.adjointMs},
             {"vector_ms", p.vectorMs}};
 }

@@ -327,8 +327,14 @@ const solve = guard(async () => {
   $('progress').value = 0; $('progress-text').textContent = 'queued';
   const es = new EventSource(`${api}/jobs/${job}/events`);
   state.events = es;
+  const phases = { preparing_views: 'preparing the views', analysing_reach: 'analysing what the paint asks', writing: 'writing the new version' };
   es.addEventListener('progress', (e) => {
     const p = JSON.parse(e.data);
+    if (p.phase && p.phase !== 'iterating') {  // a phase begins: the job is at work before (or between) iterations
+      $('progress-text').textContent = `${phases[p.phase] || p.phase}… · ${((p.elapsed_ms || 0) / 1000).toFixed(1)} s`;
+      if (!p.iteration) $('progress').removeAttribute('value');  // indeterminate until the first iteration
+      return;
+    }
     state.objectives.push(p.objective);
     $('progress').value = p.iteration / state.maxIterations;
     const rms = p.rms_per_view.reduce((a, b) => a + b, 0) / Math.max(1, p.rms_per_view.length);

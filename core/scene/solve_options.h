@@ -112,8 +112,20 @@ struct SolveView {
     void validate() const;
 };
 
-/// Reported after every iteration.
+/// What a solve is doing (issue #37: a person sees the first second of a solve, not "queued").
+enum class SolvePhase { PreparingViews, AnalysingReach, Iterating, Writing };
+inline constexpr Named<SolvePhase> kSolvePhases[] = {
+    {SolvePhase::PreparingViews, "preparing_views"},
+    {SolvePhase::AnalysingReach, "analysing_reach"},
+    {SolvePhase::Iterating, "iterating"},
+    {SolvePhase::Writing, "writing"},
+};
+static_assert(coversInOrder(kSolvePhases), "a name for every phase");
+constexpr const char* solvePhaseName(SolvePhase p) { return nameOf(kSolvePhases, p); }
+
+/// Reported after every iteration, and when a phase begins (then iteration is the last one done).
 struct SolveProgress {
+    SolvePhase phase = SolvePhase::Iterating;
     int iteration = 0;
     double objective = 0;
     std::vector<double> rmsPerView;  ///< weighted RMS error of each view (mean over RGB)

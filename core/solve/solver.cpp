@@ -228,14 +228,26 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
         spdlog::warn("solve: nothing to solve ({})", stopReasonName(rep.stopReason));
         return {st.volume, rep};
     }
-    if (st.opt.analyzeReach) {
+    // What the bounds leave out of reach, from the renders of the start: after the first
+    // iteration, so a person sees progress at once rather than after the analysis' renders.
+    bool reachPending = st.opt.analyzeReach;
+    auto analyseReach = [&](SolveProgress last) {
+        reachPending = false;
+        if (progress) {
+            last.phase = SolvePhase::AnalysingReach;
+            progress(last);
+        }
         const auto tReach = Clock::now();
-        analyzeReach(st.viewRenders, st.views, st.opt, rep);  // what the bounds leave out of reach
+        analyzeReach(st.viewRenders, st.views, st.opt, rep);
         rep.reach.ms = msSince(tReach);
         if (!rep.reach.advice.empty()) spdlog::info("solve: {}", rep.reach.advice);
+        st.viewRenders.clear();
+        st.viewRenders.shrink_to_fit();
+    };
+    if (!reachPending) {
+        st.viewRenders.clear();
+        st.viewRenders.shrink_to_fit();
     }
-    st.viewRenders.clear();
-    st.viewRenders.shrink_to_fit();
     if (st.opt.coarseIterations > 0 && !rep.local.active) st.warmStartFromCoarse(cancel);  // a re-solve starts where it is
     BoundedCgls cgls(st, st.cglsSettings());
     cgls.start();
@@ -268,6 +280,7 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
 
         const SolveProgress pr = st.recordIteration(it, fNew, t0, tIt, before);
         if (progress) progress(pr);
+        if (reachPending) analyseReach(pr);
 
         // A re-solve measures its decrease against the part of the objective it can move.
         const double fixed = st.untouchedObjective;
@@ -283,6 +296,11 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
             if (settled >= kSettledIterationsToStop) rep.stopReason = StopReason::Settled;
         }
         f = fNew;
+    }
+    if (reachPending) {  // no iteration ran (a zero gradient at the start)
+        SolveProgress none;
+        none.objective = f;
+        analyseReach(none);
     }
     if (rep.stopReason == StopReason::None) rep.stopReason = StopReason::MaxIterations;
     rep.finalObjective = rep.objectiveHistory.back();

@@ -55,6 +55,16 @@ void JobService::runSolve(const std::shared_ptr<Job>& job, const std::shared_ptr
     m_ctx.finishJob(*job);
 }
 
+void JobService::reportPhase(Job& job, core::SolvePhase phase) {
+    core::SolveProgress p;
+    p.phase = phase;
+    {
+        std::lock_guard lock(job.mutex);  // the iteration and its figures so far stay in the event
+        if (const auto* last = std::get_if<protocol::SolveJobProgress>(&job.progress)) p = last->solve, p.phase = phase;
+    }
+    job.report(protocol::SolveJobProgress{p, {}, 0});
+}
+
 std::vector<std::shared_ptr<Job>> JobService::all() const {
     std::vector<std::shared_ptr<Job>> jobs = m_ctx.jobs.all();
     std::sort(jobs.begin(), jobs.end(), [](const auto& a, const auto& b) { return a->sequence < b->sequence; });
@@ -64,6 +74,7 @@ std::vector<std::shared_ptr<Job>> JobService::all() const {
 void JobService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options,
                                     core::GpuDevice& device) {
     if (options.lights.solve) return solveLightsAndCommit(job, s, options, device);
+    reportPhase(job, core::SolvePhase::PreparingViews);
     SolveInputs in = snapshot(*s);
     // Every view a stroke left alone keeps its rows of W and renders from the last solve.
     if (!m_ctx.solveCache && m_ctx.limits.solveCacheBytes > 0) m_ctx.solveCache = std::make_unique<core::SolveCache>(m_ctx.limits.solveCacheBytes);
@@ -94,6 +105,7 @@ void JobService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s, con
             m_ctx.gl->runShortTasks(device);  // renders waiting for the GL thread run between iterations
         },
         &job.cancel);
+    reportPhase(job, core::SolvePhase::Writing);
     int version = 0;
     std::shared_ptr<core::GpuVolume> stale;  // freed here, on the GL thread
     {

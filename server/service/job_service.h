@@ -15,6 +15,8 @@ public:
     std::shared_ptr<Job> job(const std::string& id) const { return m_ctx.job(id); }  ///< ApiError not_found
     /// Every job the server holds (finished ones until pruned), oldest first.
     std::vector<std::shared_ptr<Job>> all() const;
+    /// A progress event naming the phase a solve begins (its last iteration's figures kept).
+    static void reportPhase(Job& job, core::SolvePhase phase);
     /// The path of a file job `jobId` wrote (frame_00000.png, video.mp4); not_found without it.
     std::filesystem::path jobFile(const std::string& jobId, const std::string& name) const;
     void cancel(Job& job) { job.cancel = true; }

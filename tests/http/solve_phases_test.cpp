@@ -1,0 +1,62 @@
+// A solve reports what it is doing from its first second (issue #37): its event stream names the
+// phases — preparing_views before anything else, iterating, analysing_reach once the first
+// iteration is out (not before it), writing before done — as progress events with a "phase".
+#include "api_fixture.h"
+
+namespace volstyle::test {
+namespace {
+
+class SolvePhases : public Api {};
+
+/// Every event of a job's stream as (name, data), to its final event.
+std::vector<std::pair<std::string, json>> eventsOf(httplib::Client& c, const std::string& job) {
+    std::string text;
+    auto r = c.Get(("/api/v1/jobs/" + job + "/events").c_str(), [&](const char* data, size_t n) {
+        text.append(data, n);
+        return true;
+    });
+    std::vector<std::pair<std::string, json>> out;
+    for (size_t at = 0; (at = text.find("event: ", at)) != std::string::npos;) {
+        const size_t eol = text.find('\n', at), data = text.find("data: ", eol), end = text.find("\n\n", data);
+        out.emplace_back(text.substr(at + 7, eol - at - 7), json::parse(text.substr(data + 6, end - data - 6)));
+        at = end;
+    }
+    return out;
+}
+
+TEST_F(SolvePhases, AnEventStreamNamesEachPhaseInTurn) {
+    const std::string sid = createSession();
+    const std::string base = "/api/v1/sessions/" + sid;
+    auto v = client().Post((base + "/views").c_str(), R"({"camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "width": 16, "height": 16}})",
+                           "application/json");
+    ASSERT_EQ(v->status, 201);
+    auto render = client().Get((base + "/views/v1/render.png").c_str());
+    ASSERT_EQ(client().Put((base + "/views/v1/target").c_str(), render->body, "image/png")->status, 200);
+    auto r = client().Post((base + "/solve").c_str(), R"({"unknowns": ["emission"], "max_iterations": 4})", "application/json");
+    ASSERT_EQ(r->status, 202) << r->body;
+    const auto events = eventsOf(client(), json::parse(r->body)["job"]);
+    ASSERT_GE(events.size(), 4u);
+    std::vector<std::string> phases;  // each phase as it begins
+    int firstIteration = -1, reach = -1;
+    for (size_t k = 0; k < events.size(); ++k) {
+        const auto& [name, data] = events[k];
+        if (name != "progress") continue;
+        const std::string phase = data.at("phase");
+        if (phases.empty() || phases.back() != phase) phases.push_back(phase);
+        if (phase == "iterating" && firstIteration < 0) firstIteration = int(k);
+        if (phase == "analysing_reach") reach = int(k);
+    }
+    EXPECT_EQ(events.front().first, "progress");
+    EXPECT_EQ(events.front().second["phase"], "preparing_views") << "the first event comes before the set-up";
+    ASSERT_GE(phases.size(), 4u);
+    EXPECT_EQ(phases[0], "preparing_views");
+    EXPECT_EQ(phases[1], "iterating");
+    EXPECT_EQ(phases[2], "analysing_reach");
+    EXPECT_EQ(phases.back(), "writing");
+    EXPECT_GT(reach, firstIteration) << "the reach analysis runs after the first iteration";
+    EXPECT_EQ(events.back().first, "done");
+    EXPECT_TRUE(events.back().second["result"]["report"].contains("reach"));
+}
+
+}  // namespace
+}  // namespace volstyle::test
