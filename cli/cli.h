@@ -117,7 +117,9 @@ core::Lighting lightingFromJsonFile(const nlohmann::json& j, const std::string& 
 /// The views of VIEWS.json: {"views": [{"name"?, "camera", "target", "weights"?, "background"?}],
 /// "lighting"?}; "background" is the view's plate (SPEC §1), an image of the camera's size. With
 /// `frames`, each view also names its "frame" (an animation's), returned in order.
-std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& lighting, std::vector<int>* frames = nullptr);
+/// `clipAware`: targets from 8/16-bit files get weight 0 where the picture was clipped.
+std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& lighting, std::vector<int>* frames = nullptr,
+                                       bool clipAware = true);
 
 int runRender(const std::vector<std::string>& args);
 int runAnimate(const std::vector<std::string>& args);

@@ -17,6 +17,7 @@
 
 #include "core/base/errors.h"
 #include "core/gpu/gpu_device.h"
+#include "core/image/clipped_pixels.h"
 #include "core/image/image_io.h"
 #include "core/scene/environment_lobes.h"
 #include "core/solve/combined_solve.h"
@@ -67,6 +68,7 @@ const CommandSpec kSolve{
         {"medium-radiance", "R,G,B", "L_m, the medium's own radiance: extinction solves need it (try the background's); default none"},
         {"options", "OPTS.json", "solver options as JSON (the API's solve body); flags override it; default none"},
         {"quiet", "", "no progress bar"},
+        {"keep-clipped", "", "fit 8/16-bit targets where the picture under the paint was clipped (by default those pixels get weight 0)"},
         {"output", "OUT.vdb", "the result; the folder must exist (required)"},
     },
     "  volstyle solve --scene builtin:cloud:32 --views views.json --unknowns emission,albedo -o out.vdb\n"
@@ -74,7 +76,7 @@ const CommandSpec kSolve{
 
 }  // namespace
 
-std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& lighting, std::vector<int>* frames) {
+std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& lighting, std::vector<int>* frames, bool clipAware) {
     nlohmann::json j = readJsonFile(path);
     protocol::JsonReader r;
     std::vector<core::SolveView> views;
@@ -109,7 +111,10 @@ std::vector<core::SolveView> readViews(const std::string& path, core::Lighting& 
                 auto weights = v.contains("weights") ? r.string(v["weights"], p + "/weights") : std::nullopt;
                 auto plate = v.contains("background") ? r.string(v["background"], p + "/background") : std::nullopt;
                 if (!r.ok()) continue;
-                view.target = core::pictureOf(core::loadImage((base / *target).string()));  // a render EXR: its picture
+                const core::LoadedImage loaded = core::loadImage((base / *target).string());
+                view.target = core::pictureOf(loaded);  // a render EXR: its picture
+                // Painted over an 8/16-bit picture: where it was clipped, the paint says nothing.
+                if (loaded.wasSrgb && clipAware) view.clippedPixels = core::ignoreClippedPixels(view.target);
                 if (weights) view.weights = core::loadImage((base / *weights).string()).image;
                 if (plate) view.background = std::make_shared<const core::Image>(core::loadImage((base / *plate).string()).image);
                 views.push_back(std::move(view));
@@ -329,7 +334,7 @@ int runSolve(const std::vector<std::string>& argv) {
         throw InvalidArgument("--lights, --lobe-domain, --rounds and --lights-background need --unknowns lights");
     requireParentFolder(output);  // before the work, not after it
     core::Lighting lighting = core::defaultLighting();
-    std::vector<core::SolveView> views = readViews(args.get("views"), lighting);
+    std::vector<core::SolveView> views = readViews(args.get("views"), lighting, nullptr, !args.has("keep-clipped"));
     const core::SolveOptions opt = solveOptions(args, lighting);
     if (lights) return runLightSolve(args, lighting, std::move(views), opt, output, withVolume);
 

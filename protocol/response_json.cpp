@@ -12,7 +12,7 @@ nlohmann::json vec(const Vec3d& v) { return nlohmann::json::array({v.x, v.y, v.z
 
 nlohmann::json viewToJson(const ViewInfo& v) {
     nlohmann::json j = {{"id", v.id}, {"camera", cameraToJson(v.camera)}, {"has_target", v.hasTarget},
-                        {"has_weights", v.hasWeights}, {"has_background", v.hasBackground}};
+                        {"has_weights", v.hasWeights}, {"has_background", v.hasBackground}, {"clipped_pixels", v.clippedPixels}};
     if (v.frame) j["frame"] = *v.frame;
     return j;
 }

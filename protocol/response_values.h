@@ -25,6 +25,7 @@ struct ViewInfo {
     core::Camera camera;
     bool hasTarget = false, hasWeights = false, hasBackground = false;
     std::optional<int> frame;  ///< the animation's frame it shows; none: the session's volume
+    size_t clippedPixels = 0;  ///< target pixels left out as clipped (clip-aware upload)
 };
 
 struct EnvironmentMapInfo {

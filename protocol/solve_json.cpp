@@ -179,7 +179,7 @@ nlohmann::json reachToJson(const core::ReachReport& r) {
         for (const auto& [u, rms] : view) list.push_back({{"unknowns", unknownNames(u)}, {"unreachable_rms", rms}});
         alternatives.push_back(list);
     }
-    return {{"unreachable_rms", r.unreachableRms}, {"alternatives", alternatives},
+    return {{"unreachable_rms", r.unreachableRms}, {"alternatives", alternatives}, {"clipped_pixels", r.clippedPixels},
             {"suggested_unknowns", r.suggestion ? nlohmann::json(unknownNames(*r.suggestion)) : nlohmann::json(nullptr)},
             {"advice", r.advice}, {"ms", r.ms}};
 }

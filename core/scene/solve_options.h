@@ -104,6 +104,9 @@ struct SolveView {
     /// The view's background plate (SPEC §1; the camera's size): what lies behind the volume in
     /// this view, replacing the lighting's background colour or map. Null: the lighting's.
     std::shared_ptr<const Image> background = nullptr;
+    /// Pixels of the target left out because the image under the paint was clipped there
+    /// (core/image/clipped_pixels.h): the reach report says so instead of blaming the unknowns.
+    size_t clippedPixels = 0;
 
     /// The lighting this view is rendered under: `lighting` with the view's plate, if any.
     Lighting lightingFor(const Lighting& lighting) const;
@@ -167,6 +170,7 @@ struct ReachReport {
     std::vector<std::vector<std::pair<Unknown, double>>> alternatives;
     std::optional<Unknown> suggestion;  ///< unknowns that reach clearly more of the paint, if any
     std::string advice;                 ///< one sentence for people (empty: the paint is within reach)
+    size_t clippedPixels = 0;           ///< target pixels left out as clipped, all views together
     double ms = 0;                      ///< the analysis' time (its renders)
 };
 

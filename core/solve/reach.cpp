@@ -131,6 +131,10 @@ std::vector<std::shared_ptr<const ViewRenders>> renderBounds(GpuDevice& device, 
     return share();
 }
 
+/// The unknowns' part of analyzeReach: what the chosen and the other unknowns leave out of reach.
+void analyzeReachOfUnknowns(const std::vector<std::shared_ptr<const ViewRenders>>& renders, const std::vector<SolveView>& views,
+                            const SolveOptions& options, ReachReport& reach);
+
 void analyzeReach(GpuDevice& device, const Volume& volume, const Lighting& lighting, const std::vector<SolveView>& views,
                   const SolveOptions& options, SolveReport& report) {
     const auto t0 = Clock::now();
@@ -142,6 +146,19 @@ void analyzeReach(GpuDevice& device, const Volume& volume, const Lighting& light
 void analyzeReach(const std::vector<std::shared_ptr<const ViewRenders>>& renders, const std::vector<SolveView>& views, const SolveOptions& options,
                   SolveReport& report) {
     ReachReport& reach = report.reach;
+    for (const SolveView& v : views) reach.clippedPixels += v.clippedPixels;
+    analyzeReachOfUnknowns(renders, views, options, reach);
+    if (reach.clippedPixels > 0) {  // said, never blamed on the unknowns: those pixels carry no weight
+        const std::string clipped = fmt::format(
+            "{} pixels of the targets were left out because the picture under the paint was clipped there (white, 255 in an 8-bit image): "
+            "paint over a linear EXR render to use them",
+            reach.clippedPixels);
+        reach.advice = reach.advice.empty() ? clipped : reach.advice + "; " + clipped;
+    }
+}
+
+void analyzeReachOfUnknowns(const std::vector<std::shared_ptr<const ViewRenders>>& renders, const std::vector<SolveView>& views,
+                            const SolveOptions& options, ReachReport& reach) {
     const Unknown candidates[] = {Unknown::Emission, Unknown::Albedo, Unknown::EmissionAlbedo};
     std::map<Unknown, double> meanUnreachable;
     double meanChosen = 0, meanResidual = 0;

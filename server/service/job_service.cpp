@@ -33,7 +33,7 @@ SolveInputs snapshot(Session& s) {
     for (const auto& v : s.views.list) {
         if (v.frame) continue;  // a frame of the animation: POST …/animate solves it
         in.viewIds.push_back(v.id);
-        in.views.push_back({v.id, v.camera, v.target.value_or(core::Image()), v.weights, v.background});
+        in.views.push_back({v.id, v.camera, v.target.value_or(core::Image()), v.weights, v.background, v.clippedPixels});
     }
     return in;
 }

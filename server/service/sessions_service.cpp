@@ -9,6 +9,7 @@
 #include <filesystem>
 
 #include "core/base/errors.h"
+#include "core/image/clipped_pixels.h"
 #include "core/image/image_io.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/renderer.h"
@@ -101,7 +102,7 @@ const char* viewImageName(ViewImage kind) {
     }
 }
 
-SessionView SessionsService::setViewImage(Session& s, const std::string& viewId, ViewImage kind, const std::string& bytes) {
+SessionView SessionsService::setViewImage(Session& s, const std::string& viewId, ViewImage kind, const std::string& bytes, bool clipAware) {
     const bool isTarget = kind == ViewImage::Target;
     const std::string what = isTarget ? "the target" : kind == ViewImage::Weights ? "the weight image" : "the background plate";
     m_ctx.checkUploadSize(bytes, what);
@@ -118,9 +119,12 @@ SessionView SessionsService::setViewImage(Session& s, const std::string& viewId,
         slot.emplace(m_ctx.decodeSlots);
     };
     core::Image image;
+    size_t clipped = 0;
     try {
         const core::LoadedImage loaded = core::loadImageFromMemory(bytes.data(), bytes.size(), what, m_ctx.limits.maxImageSide, checkHeader);
         image = isTarget ? core::pictureOf(loaded) : loaded.image;  // a render EXR as a target: the picture it shows
+        // Painted over an 8/16-bit picture: where it was clipped, the paint says nothing (issue #37).
+        if (isTarget && clipAware && loaded.wasSrgb) clipped = core::ignoreClippedPixels(image);
     } catch (const Error& e) {
         throw ApiError(ErrorCode::UnsupportedMedia, e.what());  // undecodable, or over the side limit
     }
@@ -144,7 +148,7 @@ SessionView SessionsService::setViewImage(Session& s, const std::string& viewId,
     m_ctx.memory.check(s, image.rgba.size() * sizeof(float), replaced * sizeof(float), "the " + std::string(viewImageName(kind)) + " of " + v.id);
     if (m_ctx.persist) m_ctx.persist->saveViewImage(s.id, v.id, viewImageName(kind), image);
     switch (kind) {
-        case ViewImage::Target: v.target = std::move(image); break;
+        case ViewImage::Target: v.target = std::move(image), v.clippedPixels = clipped; break;
         case ViewImage::Weights: v.weights = std::move(image); break;
         case ViewImage::Background: v.background = std::make_shared<const core::Image>(std::move(image)); break;
     }

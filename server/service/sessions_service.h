@@ -38,8 +38,9 @@ public:
     SessionView view(Session& s, const std::string& viewId) const { return m_ctx.view(s, viewId); }  ///< a copy; not_found
     void removeView(Session& s, const std::string& viewId);
     /// Decodes an uploaded image (413 over the upload limit, 422 undecodable or over the side
-    /// limit) and stores it as the view's target or weights.
-    SessionView setViewImage(Session& s, const std::string& viewId, ViewImage kind, const std::string& bytes);
+    /// limit) and stores it as the view's target or weights. `clipAware`: a target from an 8/16-bit
+    /// file gets weight 0 where the picture was clipped (core/image/clipped_pixels.h).
+    SessionView setViewImage(Session& s, const std::string& viewId, ViewImage kind, const std::string& bytes, bool clipAware = true);
     /// Forgets the view's image of `kind` (not_found without one).
     SessionView removeViewImage(Session& s, const std::string& viewId, ViewImage kind);
 

@@ -5,7 +5,7 @@
 namespace volstyle::server {
 
 protocol::ViewInfo viewInfo(const SessionView& v) {
-    return {v.id, v.camera, v.target.has_value(), v.weights.has_value(), bool(v.background), v.frame};
+    return {v.id, v.camera, v.target.has_value(), v.weights.has_value(), bool(v.background), v.frame, v.clippedPixels};
 }
 
 std::vector<protocol::ViewInfo> viewInfos(Session& s) {

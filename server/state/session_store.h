@@ -42,6 +42,8 @@ struct SessionView {
     /// The frame of the session's animation this view shows (issue #16), or none: the session's
     /// volume. Views of frames are solved by POST …/animate, not POST …/solve.
     std::optional<int> frame = std::nullopt;
+    /// Target pixels given weight 0 on upload because the image was clipped there (clip-aware).
+    size_t clippedPixels = 0;
 };
 
 /// A frame of the session's animation (issue #16): its volume as uploaded, or as the last

@@ -21,6 +21,7 @@ json viewRecord(const SessionView& v) {
     json j = {{"id", v.id}, {"camera", protocol::cameraToJson(v.camera)}, {"has_target", v.target.has_value()},
               {"has_weights", v.weights.has_value()}, {"has_background", bool(v.background)}};
     if (v.frame) j["frame"] = *v.frame;
+    if (v.clippedPixels) j["clipped_pixels"] = v.clippedPixels;
     return j;
 }
 
@@ -96,6 +97,7 @@ void restoreViews(DataDir& dir, Session& s, const fs::path& folder, const json& 
     for (const auto& v : views) {
         SessionView view{v.at("id"), protocol::cameraFromJson(v.at("camera")), std::nullopt, std::nullopt};
         if (v.contains("frame")) view.frame = v.at("frame").get<int>();
+        view.clippedPixels = v.value("clipped_pixels", size_t(0));
         for (const char* kind : {"target", "weights", "background"}) {
             if (!v.value(std::string("has_") + kind, false)) continue;  // "has_background": since 2026-12
             const std::string file = "views/" + view.id + "/" + kind + ".exr";

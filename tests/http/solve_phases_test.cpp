@@ -2,6 +2,7 @@
 // phases — preparing_views before anything else, iterating, analysing_reach once the first
 // iteration is out (not before it), writing before done — as progress events with a "phase".
 #include "api_fixture.h"
+#include "core/image/image.h"
 
 namespace volstyle::test {
 namespace {
@@ -56,6 +57,40 @@ TEST_F(SolvePhases, AnEventStreamNamesEachPhaseInTurn) {
     EXPECT_GT(reach, firstIteration) << "the reach analysis runs after the first iteration";
     EXPECT_EQ(events.back().first, "done");
     EXPECT_TRUE(events.back().second["result"]["report"].contains("reach"));
+}
+
+TEST_F(SolvePhases, ClippedTargetPixelsAreLeftOutAndTheReportSaysSo) {
+    // Issue #37: paint over an 8-bit render whose pixels were at 255 — those pixels say nothing
+    // of what the volume should show; they get weight 0, and the reach report names them instead
+    // of blaming the unknowns. ?clip_aware=false keeps them.
+    const std::string sid = createSession();
+    const std::string base = "/api/v1/sessions/" + sid;
+    ASSERT_EQ(client().Post((base + "/views").c_str(), R"({"camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "width": 16, "height": 16}})",
+                            "application/json")->status,
+              201);
+    core::Image painted(16, 16);  // a picture clipped (white) in its left half, orange paint over the right
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 16; ++x) {
+            float* p = painted.pixel(x, y);
+            p[0] = x < 8 ? 1.0f : 1.0f, p[1] = x < 8 ? 1.0f : 0.54f, p[2] = x < 8 ? 1.0f : 0.24f, p[3] = 1;  // white | the orange brush
+        }
+    core::SaveOptions png;
+    png.writeAlpha = true;
+    const std::string bytes = core::encodeImage(painted, "png", png);
+    auto r = client().Put((base + "/views/v1/target").c_str(), bytes, "image/png");
+    ASSERT_EQ(r->status, 200) << r->body;
+    EXPECT_EQ(json::parse(r->body)["clipped_pixels"], 128);
+    r = client().Post((base + "/solve").c_str(), R"({"unknowns": ["emission"], "max_iterations": 3})", "application/json");
+    ASSERT_EQ(r->status, 202) << r->body;
+    const auto events = eventsOf(client(), json::parse(r->body)["job"]);
+    ASSERT_EQ(events.back().first, "done");
+    const json reach = events.back().second["result"]["report"]["reach"];
+    EXPECT_EQ(reach["clipped_pixels"], 128);
+    EXPECT_NE(reach["advice"].get<std::string>().find("128 pixels of the targets were left out because the picture under the paint was clipped there"),
+              std::string::npos)
+        << reach;
+    r = client().Put((base + "/views/v1/target?clip_aware=false").c_str(), bytes, "image/png");
+    EXPECT_EQ(json::parse(r->body)["clipped_pixels"], 0);
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "core/base/errors.h"
+#include "core/image/clipped_pixels.h"
 #include "core/image/image_io.h"
 #include "test_files.h"
 
@@ -198,4 +199,18 @@ TEST(ImageIo, ExrHeaderWalkAcceptsRealFilesAndChecksTheDataWindow) {
     for (size_t cut : {size_t(4), size_t(20), size_t(60), bytes.size() / 3}) {
         EXPECT_THROW(loadImageFromMemory(bytes.data(), cut, "upload", 8), Error) << "cut at " << cut;
     }
+}
+
+TEST(ClippedPixels, AClippedPixelOfAnIntegerTargetWeighsNothing) {
+    // Issue #37: paint over an 8-bit picture that was white (255, 255, 255) says "at least this
+    // bright"; such pixels get weight 0, every other keeps its own.
+    volstyle::core::Image wide(4, 1);
+    const float values[4][4] = {{1.0f, 1.0f, 1.0f, 1.0f}, {1.0f, 0.54f, 0.24f, 1.0f}, {0.99f, 0.99f, 0.99f, 0.5f}, {1.0f, 1.0f, 1.0f, 0.0f}};
+    for (int x = 0; x < 4; ++x)
+        for (int c = 0; c < 4; ++c) wide.rgba[size_t(4 * x + c)] = values[x][c];
+    EXPECT_EQ(volstyle::core::ignoreClippedPixels(wide), 1u) << "only the white pixel; an already weightless one is not counted";
+    EXPECT_EQ(wide.rgba[3], 0.0f);
+    EXPECT_EQ(wide.rgba[7], 1.0f) << "a painted colour with one channel at 255 keeps its weight";
+    EXPECT_EQ(wide.rgba[11], 0.5f);
+    EXPECT_EQ(wide.rgba[15], 0.0f);
 }

@@ -50,12 +50,13 @@ async function openShafts(browser, url, fail, viewport) {
   return { page, revision, newFrame, settle };
 }
 
-// Opens the painting page once its session is ready (console errors logged).
+// Opens the painting page once its session is ready (console errors logged). The waits are long:
+// CTest runs a browser test beside the heaviest GL tests under -j2 (a first render took over 60 s).
 async function openPainting(browser, url, viewport = { width: 1280, height: 800 }) {
   const page = await browser.newPage({ viewport });
   page.on('pageerror', (e) => console.error('page error:', e.message));
   await page.goto(url);
-  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('session ready'), null, { timeout: 60000 });
+  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('session ready'), null, { timeout: 180000 });
   return page;
 }
 

@@ -19,8 +19,8 @@ try {
     const file = path.join(path.dirname(screenshot), a.name);
     execFileSync(process.env.MAKE_FRAMED_VDB, [file, String(a.size), ...a.centre.map(String)]);
     await page.setInputFiles('#vdb-file', file);
-    await page.waitForFunction((n) => document.getElementById('status').textContent === `${n} loaded`, a.name, { timeout: 60000 });
-    await page.waitForFunction(() => !state.renderBusy && !state.renderPending, null, { timeout: 60000 });
+    await page.waitForFunction((n) => document.getElementById('status').textContent === `${n} loaded`, a.name, { timeout: 180000 });
+    await page.waitForFunction(() => !state.renderBusy && !state.renderPending, null, { timeout: 180000 });
     // The share of the viewport's pixels that differ from its corner (the background), and how
     // many of them lie on its outermost 3 pixels.
     const m = await page.evaluate(async () => {

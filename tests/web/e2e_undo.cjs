@@ -19,7 +19,7 @@ try {
     const href = document.getElementById('download-vdb').href;
     return (await (await fetch(v ? `${href}?version=${v}` : href)).arrayBuffer()).byteLength;
   }, version);
-  const waitStatus = (prefix) => page.waitForFunction((p) => document.getElementById('status').textContent.startsWith(p), prefix, { timeout: 60000 });
+  const waitStatus = (prefix) => page.waitForFunction((p) => document.getElementById('status').textContent.startsWith(p), prefix, { timeout: 180000 });
   await check(await page.$eval('#undo', (b) => b.disabled), 'Undo is off before any edit');
 
   // Three edits: versions 2 (glass r 0.3), 3 (glass r 0.6), 4 (no glass).

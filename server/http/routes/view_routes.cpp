@@ -28,7 +28,9 @@ void addViewRoutes(RouteContext& c) {
         const std::string part = std::string("/") + viewImageName(kind);
         putUpload(c, kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
             auto s = c.services.sessions.find(req.matches[1]);
-            reply(res, 200, protocol::viewToJson(viewInfo(c.services.sessions.setViewImage(*s, req.matches[2], kind, bytes))));
+            // ?clip_aware=false keeps clipped pixels of an 8/16-bit target at their weight.
+            const bool clipAware = !(req.has_param("clip_aware") && req.get_param_value("clip_aware") == "false");
+            reply(res, 200, protocol::viewToJson(viewInfo(c.services.sessions.setViewImage(*s, req.matches[2], kind, bytes, clipAware))));
         });
         c.del(kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res) {
             auto s = c.services.sessions.find(req.matches[1]);
