@@ -1,6 +1,6 @@
 // Browser test of framing (issue #37): an artist's own VDB frames itself on the page. Uploads the
-// built-in cloud as a 20-unit asset at (20, 10, 5) and as a 0.05-unit one at (0.28, 0.08, −0.23)
-// (tests/tools/make_framed_vdb): after each upload the medium covers 10–80% of the viewport and
+// built-in cloud as a 20-unit asset at (20, 10, 5), a 0.05-unit one at (0.28, 0.08, −0.23), a
+// 0.01-unit one and a 10⁴-unit one (tests/tools/make_framed_vdb): after each upload the medium covers 10–80% of the viewport and
 // touches none of its edges (pixels that differ from the background). Before, the orbit aimed at
 // (0, −0.05, 0) from 1.2–10 units: the first was invisible, the second a speck.
 // Usage: MAKE_FRAMED_VDB=… NODE_PATH=…/node_modules node e2e_frame.cjs URL OUT.png
@@ -14,7 +14,8 @@ const { url, screenshot, browser, fail } = await openBrowser();
 const checks = checker(fail), check = checks.check;
 try {
   const page = await openPainting(browser, url);
-  const assets = [{ name: 'far-cloud.vdb', size: 20, centre: [20, 10, 5] }, { name: 'tiny-cloud.vdb', size: 0.05, centre: [0.28, 0.08, -0.23] }];
+  const assets = [{ name: 'far-cloud.vdb', size: 20, centre: [20, 10, 5] }, { name: 'tiny-cloud.vdb', size: 0.05, centre: [0.28, 0.08, -0.23] },
+                  { name: 'speck-cloud.vdb', size: 0.01, centre: [-3, 2, 1] }, { name: 'huge-cloud.vdb', size: 1e4, centre: [5000, -2000, 300] }];
   for (const a of assets) {
     const file = path.join(path.dirname(screenshot), a.name);
     execFileSync(process.env.MAKE_FRAMED_VDB, [file, String(a.size), ...a.centre.map(String)]);
