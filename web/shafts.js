@@ -140,6 +140,10 @@
     if (sh.shown) { connect(); await pushScene(); }
   });
   document.addEventListener('volstyle-session', (e) => open(e.detail));
+  // The page's first session may have been made before this script ran (app.js runs first and
+  // its POST can answer while this file still downloads): the CI run where Light shafts never
+  // opened. Take it up here.
+  if (typeof state !== 'undefined' && state.sid) open(state.sid);
 
   function setMode(shafts) {
     sh.shown = shafts;
