@@ -91,6 +91,8 @@ TEST_F(SolvePhases, ClippedTargetPixelsAreLeftOutAndTheReportSaysSo) {
         << reach;
     r = client().Put((base + "/views/v1/target?clip_aware=false").c_str(), bytes, "image/png");
     EXPECT_EQ(json::parse(r->body)["clipped_pixels"], 0);
+    json e = expectError(client().Put((base + "/views/v1/target?clip_aware=maybe").c_str(), bytes, "image/png"), 400, "invalid_argument");
+    EXPECT_EQ(e["error"]["details"][0]["path"], "?clip_aware") << "a bad value is refused by name, not read as the default";
 }
 
 }  // namespace

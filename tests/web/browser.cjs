@@ -67,4 +67,18 @@ function checker(fail) {
   return c;
 }
 
-module.exports = { openBrowser, openShafts, openPainting, checker };
+// Runs a browser test: `body({ url, screenshot, browser, fail, check })` with checks counted;
+// any throw fails the test; the browser is closed at the end. Prints "`name`: N checks passed".
+async function browserTest(name, body) {
+  const { url, screenshot, browser, fail } = await openBrowser();
+  const checks = checker(fail);
+  try {
+    await body({ url, screenshot, browser, fail, check: checks.check });
+    console.log(`${name}: ${checks.passed} checks passed`);
+  } catch (e) {
+    await fail(e.stack || String(e));
+  }
+  await browser.close();
+}
+
+module.exports = { openBrowser, openShafts, openPainting, checker, browserTest };

@@ -7,12 +7,9 @@
 'use strict';
 const { execFileSync } = require('child_process');
 const path = require('path');
-const { openBrowser, openPainting, checker } = require('./browser.cjs');
+const { browserTest, openPainting } = require('./browser.cjs');
 
-(async () => {
-const { url, screenshot, browser, fail } = await openBrowser();
-const checks = checker(fail), check = checks.check;
-try {
+browserTest('frame', async ({ url, screenshot, browser, check }) => {
   const page = await openPainting(browser, url);
   const assets = [{ name: 'far-cloud.vdb', size: 20, centre: [20, 10, 5] }, { name: 'tiny-cloud.vdb', size: 0.05, centre: [0.28, 0.08, -0.23] },
                   { name: 'speck-cloud.vdb', size: 0.01, centre: [-3, 2, 1] }, { name: 'huge-cloud.vdb', size: 1e4, centre: [5000, -2000, 300] }];
@@ -44,9 +41,4 @@ try {
     await check(m.edge === 0, `${a.name}: the medium touches the viewport's edge (${m.edge} pixels)`);
     await page.screenshot({ path: screenshot.replace(/\.png$/, '_' + a.name.replace('.vdb', '.png')) });
   }
-  console.log(`frame: ${checks.passed} checks passed`);
-} catch (e) {
-  await fail(e.stack || String(e));
-}
-await browser.close();
-})();
+});

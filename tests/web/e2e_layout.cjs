@@ -3,12 +3,9 @@
 // sideways at 900 px, the page has a favicon, and the tab's title names the mode on screen.
 // Saves a screenshot of each size. Usage: NODE_PATH=…/node_modules node e2e_layout.cjs URL OUT.png
 'use strict';
-const { openBrowser, openPainting, checker } = require('./browser.cjs');
+const { browserTest, openPainting } = require('./browser.cjs');
 
-(async () => {
-const { url, screenshot, browser, fail } = await openBrowser();
-const checks = checker(fail), check = checks.check;
-try {
+browserTest('layout', async ({ url, screenshot, browser, check }) => {
   const page = await openPainting(browser, url);
   const shown = (id) => page.$eval('#' + id, (e) => e.getClientRects().length > 0 && getComputedStyle(e).display !== 'none');
   await check(!(await shown('translucent-controls')), 'the translucent sliders show while Translucent is off');
@@ -38,9 +35,4 @@ try {
   });
   await check(spill.length === 0, 'at 900 px: ' + spill.join('; '));
   await page.screenshot({ path: screenshot.replace(/\.png$/, '_900.png'), fullPage: true });
-  console.log(`layout: ${checks.passed} checks passed`);
-} catch (e) {
-  await fail(e.stack || String(e));
-}
-await browser.close();
-})();
+});

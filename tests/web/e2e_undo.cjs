@@ -4,12 +4,9 @@
 // the status names the new version and the one it shows; Redo steps forward again.
 // Usage: NODE_PATH=…/node_modules node e2e_undo.cjs URL OUT.png
 'use strict';
-const { openBrowser, openPainting, checker } = require('./browser.cjs');
+const { browserTest, openPainting } = require('./browser.cjs');
 
-(async () => {
-const { url, screenshot, browser, fail } = await openBrowser();
-const checks = checker(fail), check = checks.check;
-try {
+browserTest('undo', async ({ url, screenshot, browser, check }) => {
   const page = await openPainting(browser, url);
   const session = () => page.evaluate(async () => {
     const sid = document.getElementById('download-vdb').href.split('/sessions/')[1].split('/')[0];
@@ -53,9 +50,4 @@ try {
   s = await session();
   await check(s.volume.shows === 2 && s.volume.grids.includes('refractive_index'), 'redo brings version 2 back');
   await page.screenshot({ path: screenshot });
-  console.log(`undo: ${checks.passed} checks passed`);
-} catch (e) {
-  await fail(e.stack || String(e));
-}
-await browser.close();
-})();
+});

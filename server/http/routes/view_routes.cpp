@@ -29,7 +29,11 @@ void addViewRoutes(RouteContext& c) {
         putUpload(c, kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res, const std::string& bytes) {
             auto s = c.services.sessions.find(req.matches[1]);
             // ?clip_aware=false keeps clipped pixels of an 8/16-bit target at their weight.
-            const bool clipAware = !(req.has_param("clip_aware") && req.get_param_value("clip_aware") == "false");
+            const std::string clip = req.has_param("clip_aware") ? req.get_param_value("clip_aware") : "true";
+            if (clip != "true" && clip != "false")
+                throw protocol::ApiError(protocol::ErrorCode::InvalidArgument, "?clip_aware must be true or false",
+                                         {{"?clip_aware", "must be true or false, got '" + clip.substr(0, 64) + "'"}});
+            const bool clipAware = clip == "true";
             reply(res, 200, protocol::viewToJson(viewInfo(c.services.sessions.setViewImage(*s, req.matches[2], kind, bytes, clipAware))));
         });
         c.del(kViewPath + part, [&c, kind](const httplib::Request& req, httplib::Response& res) {
