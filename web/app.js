@@ -147,7 +147,7 @@ const newSession = guard(async () => {
   showSession(s);
   state.views = []; state.selected = null; state.environment = false;
   $('env-preview').style.display = 'none'; $('env-hint').style.display = '';
-  renderViews(); clearPaint(); $('paint-base').removeAttribute('src');
+  renderViews(); clearPaint(); clearBase();
   await renderViewport();
   status('session ready: orbit the view, add views, paint them, solve', 'ok');
 });
@@ -187,82 +187,6 @@ const addView = guard(async () => {
   await refreshViews();
   selectView(v.id);
   status(`${v.id} added: paint over it, then "Use as target" (or drop a painted PNG/EXR)`, 'ok');
-});
-
-function selectView(id) {
-  state.selected = id;
-  $('paint-view').textContent = id;
-  $('paint-base').src = `${api}/sessions/${state.sid}/views/${id}/render.png?t=${Date.now()}`;
-  $('download-view').href = `${api}/sessions/${state.sid}/views/${id}/render.png`;
-  $('download-view').download = `${id}.png`;
-  clearPaint();
-  renderViews();
-}
-
-// Painting: strokes on a visible canvas; erased areas in a mask become weight 0.
-const paint = $('paint'), ctx = paint.getContext('2d');
-const mask = document.createElement('canvas');
-mask.width = paint.width; mask.height = paint.height;
-const maskCtx = mask.getContext('2d');
-let drawing = false;
-
-function clearPaint() {
-  ctx.clearRect(0, 0, paint.width, paint.height);
-  maskCtx.clearRect(0, 0, mask.width, mask.height);
-}
-
-function stroke(e) {
-  const r = paint.getBoundingClientRect();
-  const x = (e.clientX - r.left) * paint.width / r.width, y = (e.clientY - r.top) * paint.height / r.height;
-  const size = Number($('brush-size').value) * paint.width / 256;
-  if ($('eraser').checked) {
-    maskCtx.fillStyle = '#000';
-    maskCtx.beginPath(); maskCtx.arc(x, y, size, 0, 2 * Math.PI); maskCtx.fill();
-    ctx.globalAlpha = 1; ctx.fillStyle = 'rgba(20,20,20,0.65)';
-  } else {
-    ctx.globalAlpha = Number($('brush-opacity').value) / 100; ctx.fillStyle = $('brush-colour').value;
-  }
-  ctx.beginPath(); ctx.arc(x, y, size, 0, 2 * Math.PI); ctx.fill();
-  ctx.globalAlpha = 1;
-}
-paint.addEventListener('pointerdown', (e) => { if (!state.selected) return; drawing = true; paint.setPointerCapture(e.pointerId); stroke(e); });
-paint.addEventListener('pointermove', (e) => { if (drawing) stroke(e); });
-paint.addEventListener('pointerup', () => { drawing = false; });
-
-const uploadTarget = guard(async () => {
-  if (!state.selected) throw new Error('add a view first');
-  const base = $('paint-base');
-  await base.decode();
-  const out = document.createElement('canvas');
-  out.width = base.naturalWidth; out.height = base.naturalHeight;
-  const o = out.getContext('2d');
-  o.drawImage(base, 0, 0);
-  // Paint strokes (not the eraser's grey marks) over the rendering.
-  const strokes = document.createElement('canvas');
-  strokes.width = paint.width; strokes.height = paint.height;
-  const s = strokes.getContext('2d');
-  s.drawImage(paint, 0, 0);
-  s.globalCompositeOperation = 'destination-out';
-  s.drawImage(mask, 0, 0);
-  o.drawImage(strokes, 0, 0, out.width, out.height);
-  // Erased pixels: alpha 0 = unconstrained.
-  const m = document.createElement('canvas');
-  m.width = out.width; m.height = out.height;
-  m.getContext('2d').drawImage(mask, 0, 0, out.width, out.height);
-  const img = o.getImageData(0, 0, out.width, out.height), mk = m.getContext('2d').getImageData(0, 0, out.width, out.height);
-  for (let i = 3; i < img.data.length; i += 4) if (mk.data[i] > 0) img.data[i] = 0;
-  o.putImageData(img, 0, 0);
-  const blob = await new Promise((ok) => out.toBlob(ok, 'image/png'));
-  await call('PUT', `/sessions/${state.sid}/views/${state.selected}/target`, blob, { type: 'image/png' });
-  await refreshViews();
-  status(`target of ${state.selected} uploaded`, 'ok');
-});
-
-const dropTarget = guard(async (file) => {
-  if (!state.selected) throw new Error('add a view first, then drop its painted target');
-  await call('PUT', `/sessions/${state.sid}/views/${state.selected}/target`, file, { type: file.type || 'application/octet-stream' });
-  await refreshViews();
-  status(`${file.name} is the target of ${state.selected}`, 'ok');
 });
 
 // A background plate for the selected view: what lies behind the volume there (SPEC §1).
@@ -349,6 +273,7 @@ const solve = guard(async () => {
     es.close();
     $('solve').disabled = false; $('cancel').disabled = true;
     const j = JSON.parse(e.data);
+    $('progress-text').textContent = kind;
     if (kind === 'done' && j.result.lighting) {
       // A lights solve (docs/LIGHTING.md): the session's lighting now holds the solved lobes.
       $('progress').value = 1;
@@ -410,11 +335,6 @@ $('viewport').addEventListener('wheel', (e) => {
   renderViewport();
 }, { passive: false });
 
-// Drag and drop of painted images onto the paint area.
-const wrap = $('paint-wrap');
-wrap.addEventListener('dragover', (e) => { e.preventDefault(); wrap.classList.add('drop'); });
-wrap.addEventListener('dragleave', () => wrap.classList.remove('drop'));
-wrap.addEventListener('drop', (e) => { e.preventDefault(); wrap.classList.remove('drop'); if (e.dataTransfer.files[0]) dropTarget(e.dataTransfer.files[0]); });
 const envDrop = $('env-drop');
 envDrop.addEventListener('dragover', (e) => { e.preventDefault(); envDrop.classList.add('drop'); });
 envDrop.addEventListener('dragleave', () => envDrop.classList.remove('drop'));
@@ -437,8 +357,6 @@ $('tl-transport').addEventListener('input', () => renderViewport());
 $('new-session').onclick = newSession;
 $('vdb-file').onchange = (e) => e.target.files[0] && uploadVdb(e.target.files[0]);
 $('add-view').onclick = addView;
-$('clear-paint').onclick = clearPaint;
-$('upload-target').onclick = uploadTarget;
 $('solve').onclick = solve;
 $('cancel').onclick = cancel;
 $('undo').onclick = undo;

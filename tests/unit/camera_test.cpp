@@ -56,3 +56,26 @@ TEST(Camera, RaysPassThroughPixelCentres) {
     EXPECT_NEAR(tl.x / -tl.z, -2.0 / 3, 1e-12);
     EXPECT_NEAR(tl.y / -tl.z, 2.0 / 3, 1e-12);
 }
+
+TEST(Camera, TheDefaultCameraFramesAnyBoxFromAHundredthToTenThousandUnits) {
+    // Issue #37: `volstyle render` and `volstyle animate` without --camera use framingCamera (the
+    // page frames the same way): an artist's VDB, of any size and anywhere, is in view with
+    // margin — every corner of its box projects inside the image, and the box's projected
+    // extent covers 10–80% of the viewport.
+    for (double size : {0.01, 0.05, 2.0, 20.0, 1e4})
+        for (Vec3d centre : {Vec3d{0, 0, 0}, Vec3d{20, 10, 5}, Vec3d{0.28, 0.08, -0.23}, Vec3d{-3e4, 5e3, 1e4}}) {
+            const Vec3d half = Vec3d{1.0, 0.6, 0.8} * (size / 2);
+            const Camera c = framingCamera({centre - half, centre + half});
+            EXPECT_TRUE(c.check().empty()) << size;
+            int x0 = c.width, y0 = c.height, x1 = -1, y1 = -1;
+            for (int k = 0; k < 8; ++k) {
+                const Vec3d corner = centre + Vec3d{k & 1 ? half.x : -half.x, k & 2 ? half.y : -half.y, k & 4 ? half.z : -half.z};
+                const auto p = c.project(corner);
+                ASSERT_TRUE(p) << "a corner of the " << size << "-unit box at " << centre.x << " is out of view";
+                x0 = std::min(x0, p->x), x1 = std::max(x1, p->x), y0 = std::min(y0, p->y), y1 = std::max(y1, p->y);
+            }
+            const double share = double(x1 - x0 + 1) * (y1 - y0 + 1) / (double(c.width) * c.height);
+            EXPECT_GE(share, 0.10) << size;
+            EXPECT_LE(share, 0.80) << size;
+        }
+}

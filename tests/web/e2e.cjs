@@ -16,7 +16,7 @@ try {
 
   await page.click('#add-view');
   await page.waitForFunction(() => document.querySelectorAll('#views button').length === 1, null, { timeout: 30000 });
-  await page.waitForFunction(() => document.getElementById('paint-base').complete && document.getElementById('paint-base').naturalWidth > 0, null, { timeout: 30000 });
+  await page.waitForFunction(() => document.getElementById('paint-base').dataset.view === 'v1', null, { timeout: 60000 });
 
   // Paint a warm blob in the middle of the view.
   const box = await page.locator('#paint').boundingBox();
