@@ -14,6 +14,8 @@ packages=(
   chromium                                                 # the browser end-to-end test
   ffmpeg                                                   # stylizer sequences as video files
   python3 iproute2 strace                                  # the hostile probe; ss reads a listen backlog; strace traces fsyncs in a test
+  python3-venv python3-setuptools                         # the Python client, pip-installed into a fresh venv offline
+  blender                                                  # the Blender add-on's tests (headless: blender -b)
 )
 packages+=("$@")  # extra packages a script needs (scripts/fuzz.sh: clang)
 # Node and npm for the browser test: the machine's own if present (Debian's would clash with it).
