@@ -1,0 +1,48 @@
+"""Blender Images ↔ flat pixel lists. Blender keeps rows bottom to top; volstyle (and EXR) top to
+bottom. Views are float, linear Images: the artist paints them with Texture Paint."""
+from __future__ import annotations
+
+import bpy
+
+
+def linear(image) -> None:
+    """Marks a float Image as linear data (Blender 3.x calls it 'Linear', 4.x 'Linear Rec.709')."""
+    for name in ("Linear Rec.709", "Linear"):
+        try:
+            image.colorspace_settings.name = name
+            return
+        except TypeError:
+            continue
+
+
+def image_from_rgb(name: str, width: int, height: int, rgb: list, alpha: float = 1.0, hidden: bool = False):
+    """A float RGBA Image (made or reused) holding `rgb` (top-to-bottom rows, 3 values a pixel)."""
+    full = ("." if hidden else "") + name
+    image = bpy.data.images.get(full)
+    if image is not None and (image.size[0], image.size[1]) != (width, height):
+        bpy.data.images.remove(image)
+        image = None
+    if image is None:
+        image = bpy.data.images.new(full, width, height, alpha=True, float_buffer=True)
+    linear(image)
+    rgba = [0.0] * (4 * width * height)
+    for y in range(height):
+        src, dst = 3 * (height - 1 - y) * width, 4 * y * width
+        for x in range(width):
+            rgba[dst + 4 * x:dst + 4 * x + 3] = rgb[src + 3 * x:src + 3 * x + 3]
+            rgba[dst + 4 * x + 3] = alpha
+    image.pixels.foreach_set(rgba)
+    image.update()
+    image.use_fake_user = True  # kept in the .blend even while no editor shows it
+    return image
+
+
+def rgba_of(image) -> list:
+    """An Image's pixels as RGBA, rows top to bottom."""
+    w, h = image.size
+    flat = [0.0] * (4 * w * h)
+    image.pixels.foreach_get(flat)
+    out = [0.0] * (4 * w * h)
+    for y in range(h):
+        out[4 * y * w:4 * (y + 1) * w] = flat[4 * (h - 1 - y) * w:4 * (h - y) * w]
+    return out
