@@ -11,10 +11,12 @@
 
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
+#include "core/cpu_ref/reference_renderer.h"
 #include "core/gpu/gpu_device.h"
 #include "core/image/image_io.h"
 #include "core/render/exr_layers.h"
 #include "core/render/gpu_volume.h"
+#include "core/cpu_ref/reference_renderer.h"
 #include "core/render/renderer.h"
 #include "core/translucent/translucent_renderer.h"
 #include "protocol/render_json.h"
@@ -45,6 +47,7 @@ const CommandSpec kRender{
         {"no-skip", "", "march through empty space too (a check; same image, slower)"},
         {"hw-filter", "", "sample with the texture unit (faster on GPUs, 8-bit weights)"},
         {"exact-traversal", "", "one segment per voxel crossed instead of equal steps"},
+        {"reference", "", "the float64 CPU oracle with exact light integrals (slow: for checking accuracy; the picture only)"},
         {"glass", kGlassValue, kGlassHelp},
         {"no-refraction", "", "straight rays even through a refractive_index grid (default: rays bend, docs/REFRACTION.md)"},
         {"mode", "M", "single_scattering (default) or translucent"},
@@ -195,6 +198,15 @@ int runRender(const std::vector<std::string>& argv) {
     applyGlassOption(args, volume);
     if (!camera) camera = core::framingCamera(volume.worldBounds());
     spdlog::debug("scene {} loaded in {:.1f} ms", args.get("scene"), msSince(t0));
+    if (args.has("reference")) {  // no GL: every light integral marched from the sample itself
+        if (translucent) throw InvalidArgument("--reference renders single scattering; leave out --mode translucent");
+        t0 = Clock::now();
+        const core::Image image = core::cpu_ref::renderReference<double>(volume, *camera, lighting, settings.stepVoxels,
+                                                                         core::cpu_ref::LightDepthMethod::Exact, settings.stepVoxels / 4);
+        core::saveImage(output.path, image, output.picture);
+        spdlog::info("rendered {}x{} with the float64 reference in {:.1f} s", camera->width, camera->height, msSince(t0) / 1000);
+        return 0;
+    }
     t0 = Clock::now();
     auto device = core::GpuDevice::create();
     core::GpuVolume gpuVolume(volume);

@@ -352,9 +352,11 @@ namespace {
 /// Sets every voxel of the dense box whose value in `grid` differs from the volume's: on an empty
 /// grid, the voxels that differ from the background become active leaf voxels (never tiles, which
 /// Blender's Cycles 3.4 renders as empty); on a copy of the file's grid, only changed voxels are
-/// touched and its topology, tiles and values outside the box stay.
+/// touched and its topology, tiles and values outside the box stay. Voxels where `activeIn` (a
+/// dense RGB grid) is non-zero are made active even at the background value.
 template <typename GridT>
-void writeDense(GridT& grid, const openvdb::Coord& origin, Int3 dims, const std::vector<float>& rgb) {
+void writeDense(GridT& grid, const openvdb::Coord& origin, Int3 dims, const std::vector<float>& rgb,
+                const std::vector<float>* activeIn = nullptr) {
     using Value = typename GridT::ValueType;
     auto acc = grid.getAccessor();
     size_t n = 0;
@@ -365,15 +367,17 @@ void writeDense(GridT& grid, const openvdb::Coord& origin, Int3 dims, const std:
                 if constexpr (std::is_same_v<Value, float>) v = rgb[3 * n];
                 else v = Value(rgb[3 * n], rgb[3 * n + 1], rgb[3 * n + 2]);
                 const openvdb::Coord ijk = origin + openvdb::Coord(i, j, k);
-                if (acc.getValue(ijk) != v) acc.setValue(ijk, v);
+                const bool keep = activeIn && ((*activeIn)[3 * n] > 0 || (*activeIn)[3 * n + 1] > 0 || (*activeIn)[3 * n + 2] > 0);
+                if (keep || acc.getValue(ijk) != v) acc.setValue(ijk, v);
             }
 }
 
 /// A grid of `float` (grey data) or Vec3f holding `rgb`. With `like`, the grid continues it: same
 /// name, class and metadata, and (when `patch`) its tree, with only the changed voxels rewritten.
+/// `activeIn`: see writeDense.
 openvdb::GridBase::Ptr makeRoleGrid(Role role, const std::vector<float>& rgb, bool asFloat,
                                     const openvdb::GridBase::ConstPtr& like, bool patch, const openvdb::Coord& origin,
-                                    Int3 dims, const openvdb::math::Transform::Ptr& xf) {
+                                    Int3 dims, const openvdb::math::Transform::Ptr& xf, const std::vector<float>* activeIn = nullptr) {
     auto build = [&](auto typed) -> openvdb::GridBase::Ptr {
         using GridT = typename decltype(typed)::element_type;
         typename GridT::Ptr grid;
@@ -386,7 +390,7 @@ openvdb::GridBase::Ptr makeRoleGrid(Role role, const std::vector<float>& rgb, bo
             if (like) static_cast<openvdb::MetaMap&>(*grid) = static_cast<const openvdb::MetaMap&>(*like);
             grid->setTransform(xf);
         }
-        writeDense(*grid, origin, dims, rgb);
+        writeDense(*grid, origin, dims, rgb, activeIn);
         if (!patch) openvdb::tools::pruneInactive(grid->tree());  // only inactive background goes
         return grid;
     };
@@ -419,7 +423,10 @@ openvdb::GridBase::ConstPtr writeRole(Role role, const Volume& volume, const Vdb
     // Made from scratch; a float grid of the file stays float while the data stays grey.
     const bool asFloat = like ? (like->isType<openvdb::FloatGrid>() && grey)
                               : (role == kRefractiveIndex || (role == kExtinction && grey));
-    return makeRoleGrid(role, rgb, asFloat, like, /*patch=*/false, origin, dims, xf);
+    // Albedo's voxels inside the medium are active even where they are the background's 1:
+    // Blender's Cycles reads an inactive voxel as 0 (a white cloud would render black there).
+    const std::vector<float> medium = role == kAlbedo ? denseOfVolume(volume, kExtinction) : std::vector<float>();
+    return makeRoleGrid(role, rgb, asFloat, like, /*patch=*/false, origin, dims, xf, medium.empty() ? nullptr : &medium);
 }
 
 }  // namespace

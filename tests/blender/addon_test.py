@@ -1,5 +1,5 @@
 # The Blender add-on end to end, inside Blender against a live server ($VOLSTYLE_URL):
-#   blender -b --factory-startup -P tests/blender/addon_test.py -- ADDON.zip WORKDIR
+#   tests/blender/run_with_addon.sh BINARY addon_test.py "ADDON TEST"  (blender -b … -P addon_test.py -- ADDON.zip WORKDIR)
 # Installs the zip, builds a scene (an artist's VDB as a Volume object, moved and stood up; two
 # cameras; a sun; a world colour), checks the camera conversion against Blender's own projection
 # (ten points each, 0.5 px), then runs the operators: send the volume, render the views, paint one
@@ -59,6 +59,7 @@ def scene_with_volume(vs):
     scene.world = bpy.data.worlds.new("World")
     scene.world.color = (0.05, 0.07, 0.1)
     scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 64, 48, 100
+    bpy.context.view_layer.update()  # the new locations into matrix_world
     return obj
 
 
@@ -80,7 +81,8 @@ def main():
     rng = random.Random(3)
     for cam in (bpy.data.objects["Cam.A"], bpy.data.objects["Cam.B"]):
         vcam = convert.camera(scene, cam)
-        to_vs = obj.matrix_world.inverted()
+        check(Vector(vcam["eye"]).length > 1.0, f"{cam.name} stands away from the volume's centre")
+        to_vs = Matrix(convert.to_volstyle(scene))
         worst = 0.0
         for _ in range(10):
             p = obj.matrix_world @ Vector([rng.uniform(-0.8, 0.8) for _ in range(3)])

@@ -44,6 +44,29 @@ TEST(Cli, RendersABuiltinSceneToPngAndExr) {
     EXPECT_GT(exr.image.pixel(16, 12)[3], 0.5f) << "the sphere covers the centre";
 }
 
+TEST(Cli, TheReferenceRenderAgreesWithTheGlRender) {
+    // `--reference`: the float64 CPU oracle with exact light integrals (issue #38 used it to tell
+    // volstyle's error from Cycles'). On a smoke sphere the GL picture is within 1% of it.
+    auto dir = test::scratchDir();
+    writeText(dir / "cam.json", R"({"eye":[0,0.3,3],"target":[0,0,0],"width":24,"height":24})");
+    const std::string common = "render --scene builtin:sphere:24 --camera " + (dir / "cam.json").string() + " --lighting " +
+                               std::string(VOLSTYLE_SOURCE_DIR) + "/docs/examples/lighting.json --exr-type float -o ";
+    Result r = run(common + (dir / "gl.exr").string());
+    ASSERT_EQ(r.status, 0) << r.out;
+    r = run(common + (dir / "ref.exr").string() + " --reference");
+    ASSERT_EQ(r.status, 0) << r.out;
+    const core::Image gl = core::pictureOf(core::loadImage((dir / "gl.exr").string()));
+    const core::LoadedImage loaded = core::loadImage((dir / "ref.exr").string());
+    EXPECT_FALSE(loaded.isRender()) << "the reference writes the picture alone, not the GL path's layers";
+    const core::Image& ref = loaded.image;
+    double sumGl = 0, sumRef = 0;
+    for (size_t i = 0; i < ref.pixelCount(); ++i)
+        for (size_t c = 0; c < 3; ++c) sumGl += gl.rgba[4 * i + c], sumRef += ref.rgba[4 * i + c];
+    EXPECT_GT(sumRef, 1.0);
+    EXPECT_NEAR(sumGl / sumRef, 1.0, 0.01);
+    EXPECT_EQ(run(common + (dir / "t.exr").string() + " --reference --mode translucent").status, 2);
+}
+
 TEST(Cli, DegenerateCameraIsExit2WithOneLine) {
     auto dir = test::scratchDir();
     writeText(dir / "cam.json", R"({"eye":[0,0,3],"target":[0,0,3],"fov_y_deg":0})");

@@ -12,11 +12,29 @@ def rows(matrix) -> list[list[float]]:
     return [list(map(float, r)) for r in matrix]
 
 
+def half_voxel(volume) -> list[float]:
+    """Where Blender puts a voxel's value relative to volstyle, in the object's space: Blender
+    (Cycles, EEVEE) samples voxel ijk at the centre of the cell [ijk, ijk+1] of the grid's index
+    space, volstyle (and OpenVDB) at ijk itself — half a voxel apart along each index axis
+    (measured against Cycles: 0.5% relative RMS with this shift, 27–38% without)."""
+    volume.grids.load()
+    if not len(volume.grids):
+        return [0.0, 0.0, 0.0]
+    grid = volume.grids.get("density") or volume.grids.get("extinction") or volume.grids[0]
+    m = rows(grid.matrix_object)
+    return vcam.transform_direction(m, (0.5, 0.5, 0.5))
+
+
 def to_volstyle(scene) -> list[list[float]]:
-    """Blender world → volstyle world: the inverse of the volume object's world matrix (identity
-    without one)."""
+    """Blender world → volstyle world: the volume object's space (the inverse of its world
+    matrix), less Blender's half-voxel offset (half_voxel); identity without a volume object."""
+    bpy.context.view_layer.update()  # a script's new locations reach matrix_world only on update
     obj = scene.volstyle.volume_object
-    return vcam.invert(rows(obj.matrix_world)) if obj else vcam.IDENTITY
+    if obj is None:
+        return vcam.IDENTITY
+    d = half_voxel(obj.data)
+    shift = [[1, 0, 0, -d[0]], [0, 1, 0, -d[1]], [0, 0, 1, -d[2]], [0, 0, 0, 1]]
+    return vcam.multiply(shift, vcam.invert(rows(obj.matrix_world)))
 
 
 def camera(scene, cam_obj) -> dict:

@@ -17,7 +17,9 @@ class VOLSTYLE_PT_panel(bpy.types.Panel):
         row = box.row(align=True)
         row.operator("volstyle.send_volume", text="Send selected").builtin = False
         row.operator("volstyle.send_volume", text="Built-in cloud").builtin = True
-        box.prop(s, "builtin_resolution")
+        row = box.row(align=True)
+        row.prop(s, "builtin_scene", text="")
+        row.prop(s, "builtin_resolution")
         if s.session:
             box.label(text=f"session {s.session[:8]} · {s.volume_object.name if s.volume_object else '?'}")
         box = self.layout.box()

@@ -10,6 +10,11 @@ class VolstyleSettings(bpy.types.PropertyGroup):
     session: bpy.props.StringProperty(name="Session", default="", description="the server session this scene edits")
     volume_object: bpy.props.PointerProperty(name="Volume", type=bpy.types.Object,
                                              description="the Volume object whose space is volstyle's world (its VDB was sent)")
+    builtin_scene: bpy.props.EnumProperty(name="Built-in", default="cloud", items=[
+        ("cloud", "Cloud", "a cumulus cloud: noise-perturbed blobs with a flat base"),
+        ("plume", "Plume", "a rising, spreading smoke column"),
+        ("sphere", "Sphere", "a sphere of smoke with a smooth falloff"),
+    ])
     builtin_resolution: bpy.props.IntProperty(name="Resolution", default=64, min=8, max=256,
                                               description="voxels a side of a built-in cloud")
     unknowns: bpy.props.EnumProperty(name="Unknowns", default="emission,albedo", items=[

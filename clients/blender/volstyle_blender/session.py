@@ -60,12 +60,12 @@ def send_volume(scene, obj=None, builtin: bool = False) -> dict:
     upright: volstyle is y-up), and makes that object volstyle's space."""
     vs = client(scene)
     if builtin:
-        session = vs.create_session("builtin:cloud", scene.volstyle.builtin_resolution)
+        session = vs.create_session("builtin:" + scene.volstyle.builtin_scene, scene.volstyle.builtin_resolution)
         path = os.path.join(files_folder(), f"{session['id']}_v1.vdb")
         vs.download_volume(session["id"], path=path)
         from mathutils import Matrix
 
-        obj = import_vdb(scene, path, "volstyle cloud", Matrix(BLENDER_FROM_VOLSTYLE))
+        obj = import_vdb(scene, path, "volstyle " + scene.volstyle.builtin_scene, Matrix(BLENDER_FROM_VOLSTYLE))
     else:
         if obj is None or obj.type != "VOLUME":
             raise ValueError("select a Volume object (or send the built-in cloud)")

@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Runs a Blender test script with the add-on against a live server: builds the add-on zip, runs
+# Blender headless with a throw-away user folder (the add-on installs there, not in ~/.config),
+# passes `-- ZIP WORKDIR ARGS…` to the script and passes when it prints "NAME: PASS".
+# Usage: run_with_addon.sh VOLSTYLE_BINARY SCRIPT.py NAME [ARGS…]
+#   addon_test.py "ADDON TEST" — the operators end to end;
+#   cycles_match.py "CYCLES MATCH" [SAMPLES] — Cycles against volstyle (default 128 samples).
+set -euo pipefail
+binary=$(realpath "$1")
+script=$2
+name=$3
+shift 3
+root=$(cd "$(dirname "$0")/../.." && pwd)
+command -v blender >/dev/null || { echo "needs Blender (scripts/install_deps.sh installs Debian's)"; exit 1; }
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+zip=$(bash "$root/clients/blender/build_addon.sh" "$work/volstyle_blender.zip")
+export BLENDER_USER_CONFIG="$work/config" BLENDER_USER_SCRIPTS="$work/scripts"
+bash "$root/tests/web/with_server.sh" "$binary" \
+  blender -b --factory-startup -noaudio -P "$root/tests/blender/$script" -- "$zip" "$work/files" "$@" 2>&1 |
+  grep -E "measured|  ok:|$name|Error|Traceback|^  File|^Warning" | tee "$work/out.txt"
+grep -q "$name: PASS" "$work/out.txt"
