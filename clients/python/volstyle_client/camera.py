@@ -137,3 +137,17 @@ def sun_from_dcc(matrix_world: Matrix, strength: float, color: Vec = (1.0, 1.0, 
     m = multiply(to_volstyle, matrix_world)
     toward = _norm(transform_direction(m, (0.0, 0.0, 1.0)))
     return {"direction": toward, "irradiance": [strength * c for c in color[:3]]}
+
+
+def camera_from_houdini(world_transform: Matrix, *, focal: float, aperture: float, resx: int, resy: int, aspect: float = 1.0,
+                        win: tuple[float, float] = (0.0, 0.0), clip: tuple[float, float] | None = None, perspective: bool = True,
+                        to_volstyle: Matrix = IDENTITY) -> dict:
+    """A volstyle camera from a Houdini camera's parameters: `world_transform` as hou.Matrix4's
+    rows (Houdini multiplies row vectors, p·M: transposed here), focal length and horizontal
+    aperture in the same unit, resolution, pixel aspect, screen window offset (a lens shift:
+    refused). Houdini's world is y-up like volstyle's and it places voxels as OpenVDB does, so a
+    VDB from Houdini needs no other change."""
+    column = [[float(world_transform[j][i]) for j in range(4)] for i in range(4)]
+    return camera_from_dcc(column, lens_mm=focal, sensor_width_mm=aperture, sensor_height_mm=aperture, sensor_fit="HORIZONTAL",
+                           resolution=(resx, resy), pixel_aspect=(aspect, 1.0), shift=win, clip=clip, to_volstyle=to_volstyle,
+                           perspective=perspective)
