@@ -14,7 +14,7 @@ packages=(
   chromium                                                 # the browser end-to-end test
   ffmpeg                                                   # stylizer sequences as video files
   python3 iproute2 strace                                  # the hostile probe; ss reads a listen backlog; strace traces fsyncs in a test
-  python3-venv python3-setuptools                         # the Python client, pip-installed into a fresh venv offline
+  python3-venv python3-setuptools python3-wheel            # the Python client, pip-installed into a fresh venv offline
   blender                                                  # the Blender add-on's tests (headless: blender -b)
 )
 packages+=("$@")  # extra packages a script needs (scripts/fuzz.sh: clang)

@@ -2,10 +2,11 @@
 """Runs every example in README.md and docs/*.md, so the docs cannot rot (issue #10).
 
 Fenced blocks are examples by their language:
-  sh      run with bash -e -o pipefail, in a scratch folder that sees the repository's docs/ and the
-          build's bin/ as build/bin (so `build/bin/volstyle ...` and `docs/examples/...` work as written);
+  sh      run with bash -e -o pipefail, in a scratch folder that sees the repository's docs/, a copy
+          of its clients/ and the build's bin/ as build/bin (so `build/bin/volstyle ...`,
+          `docs/examples/...` and `pip install ./clients/python` work as written);
   json    must parse;
-  python  run with python3 in the same folder.
+  python  run with python3 in the same folder, the clients' packages importable (as installed).
 A block whose text uses the API ($H, http://127.0.0.1:8080) gets a fresh `volstyle serve` on a free
 port, substituted for 8080, and curl that fails on HTTP errors (--fail-with-body). A block preceded
 by `<!-- docs-test: skip (reason) -->` is listed as skipped with its reason; blocks without a
@@ -77,7 +78,8 @@ def run_block(lang, text, work, binary):
             text = text.replace("127.0.0.1:8080", "127.0.0.1:%d" % port)
             prelude = 'curl() { command curl --fail-with-body -sS "$@"; }\n'
         if lang == "python":
-            result = subprocess.run(["python3", "-c", text], cwd=work, capture_output=True, text=True, timeout=900)
+            env = dict(os.environ, PYTHONPATH=os.pathsep.join(str(work / "clients" / c) for c in ("python", "houdini")))
+            result = subprocess.run(["python3", "-c", text], cwd=work, capture_output=True, text=True, timeout=900, env=env)
         else:
             script = "set -eo pipefail\n" + prelude + text + "\n"
             result = subprocess.run(["bash", "-c", script], cwd=work, capture_output=True, text=True, timeout=900)
@@ -107,6 +109,7 @@ def main():
                 (work / "build").mkdir()
                 os.symlink(bin_dir, work / "build" / "bin")
                 os.symlink(repo / "docs", work / "docs")
+                shutil.copytree(repo / "clients", work / "clients", ignore=shutil.ignore_patterns("__pycache__"))
                 t0 = time.time()
                 run_block(lang, text, work, bin_dir / "volstyle")
                 ran += 1

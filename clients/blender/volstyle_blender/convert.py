@@ -65,13 +65,14 @@ def suns(scene) -> list:
     return [o for o in scene.objects if o.type == "LIGHT" and o.data.type == "SUN" and not o.hide_render]
 
 
-def lighting(scene) -> dict:
+def lighting(scene) -> dict | None:
     """The session's lighting from the scene: every sun (strength is irradiance, W/m²), the
-    world's colour behind the volume, the panel's anisotropy as the phase function."""
+    world's colour behind the volume, the panel's anisotropy as the phase function. None when the
+    scene has no sun (volstyle lights volumes with directional lights only)."""
     space = to_volstyle(scene)
     lights = [vcam.sun_from_dcc(rows(o.matrix_world), o.data.energy, list(o.data.color), space) for o in suns(scene)]
     if not lights:
-        raise ValueError("the scene has no sun lamp: add one (volstyle lights volumes with directional lights)")
+        return None
     g = scene.volstyle.anisotropy
     phase = {"type": "henyey_greenstein", "g": g} if abs(g) > 1e-6 else {"type": "isotropic"}
     return {"lights": lights, "background": {"color": world_colour(scene)}, "phase": phase}

@@ -85,8 +85,15 @@ def send_volume(scene, obj=None, builtin: bool = False) -> dict:
     return session
 
 
-def send_lighting(scene) -> dict:
-    return client(scene).set_lighting(require_session(scene), convert.lighting(scene))
+def send_lighting(scene) -> dict | None:
+    """The scene's suns and world colour as the session's lighting; without a sun the session
+    keeps volstyle's default lighting (a warm sun and a blue sky) and the status says so."""
+    lighting = convert.lighting(scene)
+    if lighting is None:
+        scene.volstyle["lighting_note"] = "no sun lamp in the scene: volstyle's default lighting is used"
+        return None
+    scene.volstyle["lighting_note"] = ""
+    return client(scene).set_lighting(require_session(scene), lighting)
 
 
 def cameras(scene, selected_only: bool = False) -> list:
@@ -115,7 +122,8 @@ def render_views(scene, cams=None) -> list:
         image = pixels.image_from_rgb("volstyle " + cam.name, w, h, picture)
         image[VIEW_KEY], image[SESSION_KEY], image["volstyle_camera"] = view["id"], sid, cam.name
         images.append(image)
-    scene.volstyle.status = f"{len(images)} views rendered: paint them (Texture Paint), then Send paintings"
+    note = scene.volstyle.get("lighting_note") or ""
+    scene.volstyle.status = f"{len(images)} views rendered: paint them (Texture Paint), then Send paintings" + (f" ({note})" if note else "")
     return images
 
 
@@ -195,7 +203,7 @@ def shafts(scene, width: int | None = None) -> object:
             vs.upload_occluder(sid, name, convert.mesh_obj(scene, obj))
             colour = list(obj.active_material.diffuse_color[:3]) if obj.active_material else [0.4, 0.35, 0.3]
             occluders.append({"name": name, "mesh": name, "colour": [min(1.0, max(0.0, c)) for c in colour]})
-    light = convert.lighting(scene)["lights"][0]
+    light = convert.lighting(scene)["lights"][0]  # a sun exists (checked above)
     cam = convert.camera(scene, scene.camera)
     if width:
         cam["height"], cam["width"] = max(1, round(cam["height"] * width / cam["width"])), width
