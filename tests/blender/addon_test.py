@@ -135,6 +135,17 @@ def main():
     check("emission" in grids, "the solve wrote emission")
     check(result.matrix_world == obj.matrix_world, "the result sits where the sent volume was")
     check(obj.hide_render and not result.hide_render, "the result replaces the sent volume in renders")
+    # Light shafts: a wall with a window between the sun and the camera, sent to the stylizer.
+    bpy.ops.mesh.primitive_plane_add(size=3, location=obj.matrix_world @ Vector((0, 0, 0)) + Vector((0, 1.5, 0)), rotation=(1.5708, 0, 0))
+    bpy.ops.mesh.primitive_cube_add(size=0.6, location=obj.matrix_world @ Vector((0, 0, 0)) + Vector((0.8, 0.2, 0.3)))
+    check(bpy.ops.volstyle.shafts() == {"FINISHED"}, f"light shafts: {scene.volstyle.status}")
+    shafts = bpy.data.images.get("volstyle shafts")
+    cam = convert.camera(scene, scene.camera)
+    check(shafts is not None and tuple(shafts.size) == (cam["width"], cam["height"]), "the stylizer's frame is an Image of the camera's size")
+    names = sorted(o["name"] for o in vs.list_occluders(sid))
+    check(names == ["Cube", "Plane"], f"the meshes went as occluders {names}")
+    frame = list(shafts.pixels)
+    check(max(frame[i] for i in range(0, len(frame), 4)) > 0.0, "the frame is not black")
     print(f"ADDON TEST: PASS ({len(checks)} checks)")
 
 
