@@ -4,7 +4,8 @@
 # passes `-- ZIP WORKDIR ARGS…` to the script and passes when it prints "NAME: PASS".
 # Usage: run_with_addon.sh VOLSTYLE_BINARY SCRIPT.py NAME [ARGS…]
 #   addon_test.py "ADDON TEST" — the operators end to end;
-#   cycles_match.py "CYCLES MATCH" [SAMPLES] — Cycles against volstyle (default 128 samples).
+#   cycles_match.py "CYCLES MATCH" [SAMPLES] — Cycles against volstyle (default 128 samples);
+#   ui_solve.py "UI SOLVE" — a script named ui_* runs in a real Blender window under Xvfb.
 set -euo pipefail
 binary=$(realpath "$1")
 script=$2
@@ -16,7 +17,13 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 zip=$(bash "$root/clients/blender/build_addon.sh" "$work/volstyle_blender.zip")
 export BLENDER_USER_CONFIG="$work/config" BLENDER_USER_SCRIPTS="$work/scripts"
+blender=(blender -b --factory-startup)
+if [[ $script == ui_* ]]; then  # a window: Xvfb, and a saved file to open (a file skips the splash)
+  command -v xvfb-run >/dev/null || { echo "needs xvfb-run (scripts/install_deps.sh installs xvfb)"; exit 1; }
+  blender -b --factory-startup -noaudio --python-expr "import bpy; bpy.ops.wm.save_as_mainfile(filepath='$work/start.blend')" >/dev/null
+  blender=(xvfb-run -a -s "-screen 0 1280x800x24" blender "$work/start.blend")
+fi
 bash "$root/tests/web/with_server.sh" "$binary" \
-  blender -b --factory-startup -noaudio -P "$root/tests/blender/$script" -- "$zip" "$work/files" "$@" 2>&1 |
+  "${blender[@]}" -noaudio -P "$root/tests/blender/$script" -- "$zip" "$work/files" "$@" 2>&1 |
   grep -E "measured|  ok:|$name|Error|Traceback|^  File|^Warning" | tee "$work/out.txt"
 grep -q "$name: PASS" "$work/out.txt"

@@ -142,6 +142,7 @@ class VOLSTYLE_OT_solve(bpy.types.Operator):
         wm = context.window_manager
         wm.progress_update(int(1000 * (self.state["fraction"] or 0.0)))
         context.workspace.status_text_set(f"volstyle: {self.state['text']}")
+        context.scene.volstyle["progress"] = self.state["text"]  # what the status bar shows, for scripts
         if self._thread.is_alive():
             return {"RUNNING_MODAL"}
         wm.event_timer_remove(self._timer)
