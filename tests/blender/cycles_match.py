@@ -108,8 +108,9 @@ def measure(scene, sun, cam, name):
             mean = {c: [(x + y) / 2 for x, y in zip(first[c], second[c])] for c in "RGB"}
         ratio, rms = agreement(mean, layer[part])
         held = HELD[name] and part != "both"
-        print(f"[ measured ] {name} {part}: Cycles/volstyle sum {ratio:.4f}, relative RMS {100 * rms:.2f}% "
-              f"(Cycles noise {100 * noise:.2f}%){'' if held else ' — measured, not held'}")
+        floor = f" (Cycles noise {100 * noise:.2f}%)" if noise == noise else ""  # not NaN: two seeds
+        print(f"[ measured ] {name} {part}: Cycles/volstyle sum {ratio:.4f}, relative RMS {100 * rms:.2f}%{floor}"
+              f"{'' if held else ' — measured, not held'}")
         out[part] = (ratio, rms, held)
     return out
 
