@@ -5,13 +5,15 @@ Install the client where Houdini's Python finds it (docs/CLIENTS.md):
 then make a shelf tool whose script is:
 
     import volstyle_houdini as vh
-    vh.shelf_tool()
+    vh.shelf_tool(kwargs=kwargs)   # shift-click starts over
 
-It asks for the steps in turn: send the selected SOP's VDB (written with a ROP, or a File SOP's
-file) and the scene's cameras, render each camera's view to $HIP/volstyle/<camera>.exr (paint it
-in COPs, Nuke or Mari and save it as <camera>.painted.exr, alpha = weight), send the paintings,
-solve, and write the result to $HIP/volstyle/solved.vdb for a File SOP. Everything below
-`houdini_camera` is plain Python on the client, tested without Houdini
+It does the steps in two clicks. First click (a File SOP reading the VDB selected): send the VDB
+and the scene's distant lights, render each camera's view to $HIP/volstyle/<camera>.exr (paint it
+in COPs, Nuke or Mari and save it as <camera>.painted.exr, alpha = weight). Second click: send
+the paintings, solve (Cancel in Houdini's interrupt dialog cancels the job on the server), write
+$HIP/volstyle/solved.vdb for a File SOP, and start over. Shift-click starts over at any time. The
+session lives in this Houdini process (hou.session), not in the .hip file. Everything but
+`shelf_tool` is plain Python on the client, tested without Houdini
 (clients/houdini/tests/test_recipe.py)."""
 from __future__ import annotations
 
@@ -45,7 +47,11 @@ def houdini_sun(node) -> dict:
 def send(vs: vc.Client, vdb_path: str, suns: Iterable[dict] = (), background=(0.0, 0.0, 0.0)) -> str:
     """A new session holding the VDB, lit by `suns` (none: volstyle's default lighting); its id."""
     sid = vs.create_session("builtin:cloud", 8)["id"]  # the smallest start, replaced at once
-    vs.upload_volume(sid, vdb_path)
+    try:
+        vs.upload_volume(sid, vdb_path)
+    except Exception:
+        vs.delete_session(sid)  # no orphan session on the server
+        raise
     suns = list(suns)
     if suns:
         vs.set_lighting(sid, {"lights": suns, "background": {"color": list(background)}})
@@ -86,18 +92,26 @@ def solve_and_fetch(vs: vc.Client, sid: str, out_path: str, unknowns=("emission"
     return result
 
 
-def shelf_tool(url: str | None = None) -> None:  # pragma: no cover - needs Houdini
-    """The shelf tool: one step per click, remembered in the hip file's session (hou.session)."""
+def shelf_tool(url: str | None = None, kwargs: dict | None = None, iterations: int = 30) -> None:  # pragma: no cover - needs Houdini
+    """The shelf tool: one step per click (pass the shelf script's `kwargs`: shift-click starts
+    over), remembered for this Houdini process in hou.session."""
     import hou
 
     vs = vc.Client(url or os.environ.get("VOLSTYLE_URL", "http://127.0.0.1:8080"))
     folder = hou.expandString("$HIP/volstyle")
+    if kwargs and kwargs.get("shiftclick"):
+        hou.session.volstyle = None
     state = getattr(hou.session, "volstyle", None)
+    if state is not None:
+        try:
+            vs.get_session(state["sid"])
+        except vc.NotFound:  # the server forgot it (restarted without its data folder): start over
+            state = None
     if state is None:
         sop = hou.selectedNodes()[0] if hou.selectedNodes() else None
         path = sop.parm("file").eval() if sop is not None and sop.parm("file") is not None else None
         if not path:
-            raise hou.Error("select a File SOP reading the VDB (or a ROP's output) first")
+            raise hou.Error("select a File SOP reading the VDB first (write a sim out with a ROP, then read it with a File SOP)")
         cams = {n.name(): houdini_camera(n) for n in hou.node("/obj").children() if n.type().name() == "cam"}
         lights = [houdini_sun(n) for n in hou.node("/obj").children() if n.type().name().startswith("hlight") and
                   n.parm("light_type") is not None and n.parm("light_type").evalAsString() == "distant"]
@@ -107,7 +121,9 @@ def shelf_tool(url: str | None = None) -> None:  # pragma: no cover - needs Houd
         return
     send_paintings(vs, state["sid"], state["views"], folder)
     with hou.InterruptableOperation("volstyle solve", open_interrupt_dialog=True) as op:
-        result = solve_and_fetch(vs, state["sid"], os.path.join(folder, "solved.vdb"),
+        # Cancel raises hou.OperationInterrupted from the callback: Job.wait cancels the job.
+        result = solve_and_fetch(vs, state["sid"], os.path.join(folder, "solved.vdb"), iterations=iterations,
                                  progress=lambda name, data: name == "progress" and op.updateProgress(
-                                     data.get("iteration", 0) / 30.0))
+                                     data.get("iteration", 0) / float(iterations)))
+    hou.session.volstyle = None  # the next click starts over with what the scene holds then
     hou.ui.displayMessage(f"solved: version {result['version']}; $HIP/volstyle/solved.vdb written")

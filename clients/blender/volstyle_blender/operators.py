@@ -46,7 +46,7 @@ class VOLSTYLE_OT_render_views(bpy.types.Operator):
     selected_only: bpy.props.BoolProperty(name="Selected cameras only", default=False)
 
     def execute(self, context):
-        return _run(self, context, lambda scene: session.render_views(scene, session.cameras(scene, self.selected_only) or None))
+        return _run(self, context, lambda scene: session.render_views(scene, session.cameras(scene, self.selected_only)))
 
 
 class VOLSTYLE_OT_send_targets(bpy.types.Operator):

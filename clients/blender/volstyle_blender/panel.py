@@ -10,7 +10,9 @@ class VOLSTYLE_PT_panel(bpy.types.Panel):
         s = context.scene.volstyle
         col = self.layout.column(align=True)
         col.prop(s, "url")
-        col.prop(s, "token")
+        addon = context.preferences.addons.get(__package__)
+        if addon:
+            col.prop(addon.preferences, "token")  # saved with the preferences, not the .blend
         col.operator("volstyle.connect", icon="URL")
         box = self.layout.box()
         box.label(text="1. Volume", icon="VOLUME_DATA")

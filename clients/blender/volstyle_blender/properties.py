@@ -5,8 +5,6 @@ import bpy
 
 class VolstyleSettings(bpy.types.PropertyGroup):
     url: bpy.props.StringProperty(name="Server", default="http://127.0.0.1:8080", description="the volstyle server's address")
-    token: bpy.props.StringProperty(name="Token", default="", subtype="PASSWORD",
-                                    description="the server's bearer token (empty: $VOLSTYLE_TOKEN or none)")
     session: bpy.props.StringProperty(name="Session", default="", description="the server session this scene edits")
     volume_object: bpy.props.PointerProperty(name="Volume", type=bpy.types.Object,
                                              description="the Volume object whose space is volstyle's world (its VDB was sent)")
@@ -14,6 +12,7 @@ class VolstyleSettings(bpy.types.PropertyGroup):
         ("cloud", "Cloud", "a cumulus cloud: noise-perturbed blobs with a flat base"),
         ("plume", "Plume", "a rising, spreading smoke column"),
         ("sphere", "Sphere", "a sphere of smoke with a smooth falloff"),
+        ("cube", "Cube", "a cube of constant extinction"),
     ])
     builtin_resolution: bpy.props.IntProperty(name="Resolution", default=64, min=8, max=256,
                                               description="voxels a side of a built-in cloud")
@@ -32,7 +31,17 @@ class VolstyleSettings(bpy.types.PropertyGroup):
     status: bpy.props.StringProperty(name="Status", default="")
 
 
-CLASSES = [VolstyleSettings]
+class VolstylePreferences(bpy.types.AddonPreferences):
+    """Kept with Blender's preferences, never in a .blend: the token."""
+    bl_idname = __package__
+    token: bpy.props.StringProperty(name="Token", default="", subtype="PASSWORD",
+                                    description="the server's bearer token (empty: $VOLSTYLE_TOKEN or none)")
+
+    def draw(self, context):
+        self.layout.prop(self, "token")
+
+
+CLASSES = [VolstyleSettings, VolstylePreferences]
 
 
 def register():

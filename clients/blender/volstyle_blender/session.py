@@ -14,9 +14,16 @@ from .volstyle_client import BLENDER_FROM_VOLSTYLE, Client, exr_rgba, picture_of
 VIEW_KEY, SESSION_KEY, BASE_PREFIX = "volstyle_view", "volstyle_session", "volstyle base "
 
 
+def token() -> str | None:
+    """The server's token: the add-on's preferences (kept with Blender's preferences, never in a
+    .blend), else $VOLSTYLE_TOKEN."""
+    addon = bpy.context.preferences.addons.get(__package__)
+    value = addon.preferences.token if addon and hasattr(addon.preferences, "token") else ""
+    return value or None
+
+
 def client(scene) -> Client:
-    s = scene.volstyle
-    return Client(s.url, s.token or None)
+    return Client(scene.volstyle.url, token())
 
 
 def require_session(scene) -> str:
@@ -105,9 +112,12 @@ def render_views(scene, cams=None) -> list:
     """Each camera's view through the server, as a float Image 'volstyle CAMERA' to paint (and a
     hidden copy of it, what the painting started from). Returns the Images."""
     sid, vs = require_session(scene), client(scene)
+    cams = cameras(scene) if cams is None else cams
+    if not cams:
+        raise ValueError("no camera to render: add one (or select one, with Selected cameras only)")
     send_lighting(scene)
     images = []
-    for cam in cams or cameras(scene):
+    for cam in cams:
         old = cam.get(VIEW_KEY)
         if old and cam.get(SESSION_KEY) == sid:
             try:

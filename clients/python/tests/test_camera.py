@@ -87,6 +87,33 @@ class CameraConversion(unittest.TestCase):
         self.assertEqual(sun["irradiance"], [3.0, 1.5, 0.75])
 
 
+class FollowingAJob(unittest.TestCase):
+    def test_a_broken_stream_is_followed_again_where_it_was(self):
+        # The server replays a job's stream from the first event; after a break the callback
+        # sees each event once, and the final one ends the wait.
+        events = [("progress", {"phase": "preparing_views"}), ("progress", {"iteration": 1, "rms_per_view": [0.5]}),
+                  ("progress", {"iteration": 2, "rms_per_view": [0.25]}), ("done", {"state": "done", "result": {"version": 2}})]
+
+        class Client:
+            calls = 0
+
+            def job_events(self, jid):
+                Client.calls += 1
+                for k, e in enumerate(events):
+                    if Client.calls == 1 and k == 2:
+                        raise vc.ConnectionFailed("the stream broke off")
+                    yield e
+
+            def get_job(self, jid):
+                return {"state": "running"}
+
+        seen = []
+        result = vc.Job(Client(), "j1", "solve", 2).wait(progress=lambda name, data: seen.append((name, data)))
+        self.assertEqual(result, {"version": 2})
+        self.assertEqual(seen, events)
+        self.assertEqual(Client.calls, 2)
+
+
 class ExrRoundTrip(unittest.TestCase):
     def test_write_then_read(self):
         rgb = [i / 7 for i in range(3 * 6 * 4)]

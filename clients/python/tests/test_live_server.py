@@ -144,6 +144,44 @@ class LiveServer(unittest.TestCase):
         self.assertEqual(len(self.vs.list_sessions(limit=1)), 1)
         self.assertTrue(any(j["session"] == sid for j in self.vs.iter_jobs(session=sid, page_size=1)))
 
+    def test_an_interrupted_wait_cancels_the_job(self):
+        # A DCC's Cancel button raises from the progress callback: the job stops on the server too.
+        sid = self.session(resolution=32)
+        self.vs.add_view(sid, {**CAMERA, "width": 64, "height": 64})
+        self.vs.set_target(sid, "v1", vc.exr_rgba(64, 64, [0.9, 0.4, 0.1] * 64 * 64, 1.0))
+        job = self.vs.solve(sid, unknowns=["emission"], max_iterations=5000, tolerance=0)
+
+        def cancel_button(name, data):
+            if name == "progress" and data.get("iteration"):
+                raise RuntimeError("the artist pressed Cancel")
+
+        with self.assertRaisesRegex(RuntimeError, "pressed Cancel"):
+            job.wait(progress=cancel_button)
+        with self.assertRaises(vc.JobCancelled):
+            job.wait(progress=False)
+
+    def test_pages_local_files_and_addresses(self):
+        for _ in range(2):
+            self.session(resolution=8)
+        first = self.vs.list_sessions(limit=1)
+        self.assertEqual(len(first), 1)
+        self.assertTrue(first.next_cursor, "a page says where the next one starts")
+        second = self.vs.list_sessions(limit=1, cursor=first.next_cursor)
+        self.assertNotEqual(first[0]["id"], second[0]["id"])
+        sid = self.session(resolution=8)
+        view = self.vs.add_view(sid, CAMERA)
+        with self.assertRaisesRegex(vc.LocalFileError, "cannot read '/no/such/painting.exr'"):
+            self.vs.set_target(sid, view["id"], "/no/such/painting.exr")
+        with self.assertRaisesRegex(vc.LocalFileError, "no folder"):
+            self.vs.download_volume(sid, path="/no/such/folder/out.vdb")
+        bare = URL.split("://", 1)[1]
+        self.assertEqual(vc.Client(bare).health()["status"], self.vs.health()["status"], "host:port means http")
+        self.assertTrue(vc.Client(URL + "/api/v1/").health(), "the API's own address works too")
+        with self.assertRaises(vc.InvalidRequest) as e:
+            self.vs.create_session("builtin:cloud", 3)
+        text = str(e.exception)
+        self.assertEqual(text.count("/resolution"), 1, f"each detail once: {text}")
+
     def test_the_command_line(self):
         out = subprocess.run([sys.executable, "-m", "volstyle_client", "--url", URL, "health"], capture_output=True, text=True)
         self.assertEqual(out.returncode, 0, out.stderr)

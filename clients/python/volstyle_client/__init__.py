@@ -10,16 +10,17 @@ pipeline needs (docs/CLIENTS.md).
     result = vs.solve(s["id"], unknowns=["emission", "albedo"]).wait()
     vs.download_volume(s["id"], path="solved.vdb")
 """
-from .camera import BLENDER_FROM_VOLSTYLE, camera_from_dcc, field_of_view_y, invert, project, sun_from_dcc
-from .client import Client, route
-from .errors import (ApiError, Conflict, ConnectionFailed, ErrorDetail, InvalidRequest, JobFailed, NotFound, Overloaded, ServerError,
-                     TooLarge, Unauthorized, VolstyleError)
+from .camera import BLENDER_FROM_VOLSTYLE, camera_from_dcc, camera_from_houdini, field_of_view_y, invert, project, sun_from_dcc
+from .client import Client, Page, route
+from .errors import (ApiError, Conflict, ConnectionFailed, ErrorDetail, InvalidRequest, JobCancelled, JobFailed, LocalFileError, NotFound,
+                     Overloaded, ServerError, TooLarge, Unauthorized, VolstyleError)
 from .images import exr_rgba, picture_of, read_exr, write_exr
 from .job import Job
 
 __version__ = "1.0.0"
 __all__ = [
-    "Client", "Job", "route", "ApiError", "Conflict", "ConnectionFailed", "ErrorDetail", "InvalidRequest", "JobFailed", "NotFound",
-    "Overloaded", "ServerError", "TooLarge", "Unauthorized", "VolstyleError", "BLENDER_FROM_VOLSTYLE", "camera_from_dcc",
+    "Client", "Job", "Page", "route", "ApiError", "Conflict", "ConnectionFailed", "ErrorDetail", "InvalidRequest", "JobCancelled",
+    "JobFailed", "LocalFileError", "NotFound", "Overloaded", "ServerError", "TooLarge", "Unauthorized", "VolstyleError",
+    "BLENDER_FROM_VOLSTYLE", "camera_from_dcc", "camera_from_houdini",
     "field_of_view_y", "invert", "project", "sun_from_dcc", "exr_rgba", "picture_of", "read_exr", "write_exr",
 ]

@@ -12,6 +12,7 @@ import urllib.parse
 import uuid
 from typing import Any, Callable, Iterator, Mapping, Sequence, TypeVar
 
+from .errors import LocalFileError
 from .job import Job
 from .transport import Transport
 
@@ -33,8 +34,18 @@ def _read(data: Any) -> bytes:
     """bytes as they are; a path (str or PathLike) read from disk."""
     if isinstance(data, (bytes, bytearray, memoryview)):
         return bytes(data)
-    with open(os.fspath(data), "rb") as f:
-        return f.read()
+    try:
+        with open(os.fspath(data), "rb") as f:
+            return f.read()
+    except OSError as e:
+        raise LocalFileError(f"cannot read '{os.fspath(data)}': {e.strerror}") from None
+
+
+class Page(list):
+    """One page of a listing: the items, and `next_cursor` (None on the last page) to pass as
+    `cursor=` for the next."""
+
+    next_cursor: str | None = None
 
 
 def _seg(value: Any) -> str:
@@ -75,10 +86,17 @@ class Client:
         return self.http.json(method, path, json_body=body, **kw)
 
     def _bytes(self, method: str, path: str, body: Any = None, path_out: Any = None, **kw: Any) -> bytes:
+        if path_out is not None:  # a folder that is not there fails before the download, not after
+            folder = os.path.dirname(os.path.abspath(os.fspath(path_out)))
+            if not os.path.isdir(folder):
+                raise LocalFileError(f"cannot write '{os.fspath(path_out)}': no folder '{folder}'")
         _, _, data = self.http.request(method, path, json_body=body, **kw)
         if path_out is not None:
-            with open(os.fspath(path_out), "wb") as f:
-                f.write(data)
+            try:
+                with open(os.fspath(path_out), "wb") as f:
+                    f.write(data)
+            except OSError as e:
+                raise LocalFileError(f"cannot write '{os.fspath(path_out)}': {e.strerror}") from None
         return data
 
     def _upload(self, method: str, path: str, data: Any, **kw: Any) -> Json:
@@ -89,12 +107,18 @@ class Client:
         answer = self.http.json("POST", path, json_body=body, headers={"Idempotency-Key": key})
         return Job(self, answer["job"], kind, total)
 
+    def _page(self, path: str, query: dict) -> Page:
+        _, headers, body = self.http.request("GET", path, query=query)
+        page = Page(json.loads(body))
+        page.next_cursor = next((v for k, v in headers.items() if k.lower() == "x-next-cursor"), None)
+        return page
+
     def _pages(self, path: str, query: dict) -> Iterator[Json]:
         cursor = None
         while True:
-            _, headers, body = self.http.request("GET", path, query={**query, "cursor": cursor})
-            yield from json.loads(body)
-            cursor = next((v for k, v in headers.items() if k.lower() == "x-next-cursor"), None)
+            page = self._page(path, {**query, "cursor": cursor})
+            yield from page
+            cursor = page.next_cursor
             if not cursor:
                 return
 
@@ -133,9 +157,10 @@ class Client:
         return self._json("POST", "/sessions", _fields(body, scene=scene, resolution=resolution), headers={"Idempotency-Key": key})
 
     @route("get_sessions", "GET", "/sessions")
-    def list_sessions(self, limit: int | None = None, cursor: str | None = None) -> Json:
-        """One page of sessions, oldest first (`iter_sessions` follows every page)."""
-        return self._json("GET", "/sessions", query={"limit": limit, "cursor": cursor})
+    def list_sessions(self, limit: int | None = None, cursor: str | None = None) -> Page:
+        """One page of sessions, oldest first; `.next_cursor` continues it (`iter_sessions`
+        follows every page)."""
+        return self._page("/sessions", {"limit": limit, "cursor": cursor})
 
     def iter_sessions(self, page_size: int = 100) -> Iterator[Json]:
         """Every session, page after page."""
@@ -323,12 +348,15 @@ class Client:
     def solve(self, sid: str, options: dict | None = None, *, unknowns: Sequence[str] | None = None, max_iterations: int | None = None,
               idempotency_key: str | None = None, **more: Any) -> Job:
         """Starts a solve (options as in docs/API.md: unknowns, max_iterations, regularization, …)."""
+        if isinstance(unknowns, str):  # "emission" or "emission,albedo"
+            unknowns = [u.strip() for u in unknowns.split(",") if u.strip()]
         body = _fields(options, unknowns=list(unknowns) if unknowns else None, max_iterations=max_iterations, **more)
         return self._job(f"/sessions/{_seg(sid)}/solve", body, "solve", idempotency_key, body.get("max_iterations"))
 
     @route("get_jobs", "GET", "/jobs")
-    def list_jobs(self, session: str | None = None, limit: int | None = None, cursor: str | None = None) -> Json:
-        return self._json("GET", "/jobs", query={"session": session, "limit": limit, "cursor": cursor})
+    def list_jobs(self, session: str | None = None, limit: int | None = None, cursor: str | None = None) -> Page:
+        """One page of jobs (of a session), oldest first; `.next_cursor` continues it."""
+        return self._page("/jobs", {"session": session, "limit": limit, "cursor": cursor})
 
     def iter_jobs(self, session: str | None = None, page_size: int = 100) -> Iterator[Json]:
         return self._pages("/jobs", {"session": session, "limit": page_size})

@@ -21,6 +21,10 @@ class ConnectionFailed(VolstyleError):
     """The server could not be reached (after the retries an idempotent request allows)."""
 
 
+class LocalFileError(VolstyleError):
+    """A file on this machine could not be read or written (an upload's path, a download's)."""
+
+
 @dataclass
 class ApiError(VolstyleError):
     """An error answer: HTTP status and the body `{"error": {code, message, details, request_id}}`."""
@@ -40,8 +44,9 @@ class ApiError(VolstyleError):
     def __str__(self) -> str:
         where = f"{self.method} {self.url}: " if self.method else ""
         text = f"{where}{self.status} {self.code}: {self.message}"
-        if self.details:
-            text += " — " + "; ".join(f"{d.path}: {d.message}" for d in self.details)
+        extra = [f"{d.path}: {d.message}" for d in self.details if f"{d.path}: {d.message}" not in self.message]
+        if extra:  # what the message does not already say
+            text += " — " + "; ".join(extra)
         return text
 
     @classmethod
@@ -84,7 +89,8 @@ class ServerError(ApiError):
 
 
 class JobFailed(VolstyleError):
-    """A job ended failed or cancelled; `job` is its final JSON, `error` its SPEC error (if any)."""
+    """A job ended failed (or cancelled: JobCancelled); `job` is its final JSON; `code`,
+    `message` and `details` are its SPEC error."""
 
     def __init__(self, job: dict):
         self.job = job
@@ -92,7 +98,16 @@ class JobFailed(VolstyleError):
         self.state = job.get("state", "failed")
         self.code = err.get("code", self.state)
         self.message = err.get("message", self.state)
-        super().__init__(f"job {job.get('id')} {self.state}: {self.code}: {self.message}")
+        self.details = [ErrorDetail(str(d.get("path", "")), str(d.get("message", ""))) for d in err.get("details", [])]
+        super().__init__(f"job {job.get('id')} {self.state}: {self.message}" + ("" if self.code == self.state else f" ({self.code})"))
+
+    @staticmethod
+    def of(job: dict) -> "JobFailed":
+        return JobCancelled(job) if job.get("state") == "cancelled" else JobFailed(job)
+
+
+class JobCancelled(JobFailed):
+    """A job ended cancelled (by DELETE /jobs/{jid}, or by its session's deletion)."""
 
 
 _BY_CODE = {

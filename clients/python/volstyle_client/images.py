@@ -4,6 +4,7 @@ FLOAT), as the page does (web/exr.js). Pixels are flat lists, rows top to bottom
 from __future__ import annotations
 
 import struct
+import sys
 import zlib
 from array import array
 from typing import Mapping, Sequence
@@ -109,7 +110,13 @@ def read_exr(data: bytes) -> tuple[int, int, dict[str, list[float]]]:
         for line in range(y, y + n):
             for c, kind in channels:
                 step = _PIXEL_BYTES[kind]
-                values = struct.unpack_from(f"<{width}{'e' if kind == 1 else 'f'}", block, pos)
+                if kind == 2:  # FLOAT: straight from the bytes (little-endian, as EXR stores them)
+                    values = array("f")
+                    values.frombytes(block[pos:pos + 4 * width])
+                    if sys.byteorder == "big":
+                        values.byteswap()
+                else:
+                    values = struct.unpack_from(f"<{width}e", block, pos)
                 out[c][line * width:(line + 1) * width] = values
                 pos += width * step
     return width, height, out

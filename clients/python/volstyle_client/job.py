@@ -2,6 +2,7 @@
 progress bar in a terminal (quiet in scripts), cancel, result."""
 from __future__ import annotations
 
+import shutil
 import sys
 import time
 from typing import TYPE_CHECKING, Any, Callable, Iterator, TextIO
@@ -21,21 +22,24 @@ class ProgressBar:
     """One line on a terminal, redrawn in place: `[#####-----] 12/30 iterating · RMS 0.0123`."""
 
     def __init__(self, stream: TextIO, width: int = 28):
-        self.stream, self.width, self.shown = stream, width, False
+        self.stream, self.width, self.shown, self.fraction = stream, width, False, None
+        self.columns = shutil.get_terminal_size((80, 24)).columns - 1  # never wrap the line
 
     def update(self, fraction: float | None, text: str) -> None:
-        if fraction is None:
-            bar = "[" + "?" * self.width + "]"
+        if fraction is not None:
+            self.fraction = fraction  # a phase after the first iteration keeps the bar where it was
+        if self.fraction is None:
+            bar = "[" + "." * self.width + "]"
         else:
-            full = int(round(max(0.0, min(1.0, fraction)) * self.width))
+            full = int(round(max(0.0, min(1.0, self.fraction)) * self.width))
             bar = "[" + "#" * full + "-" * (self.width - full) + "]"
-        self.stream.write("\r" + bar + " " + text[:90].ljust(60))
+        self.stream.write("\r" + (bar + " " + text)[:self.columns].ljust(self.columns))
         self.stream.flush()
         self.shown = True
 
     def close(self, text: str) -> None:
         if self.shown:
-            self.stream.write("\r" + text[:120].ljust(self.width + 63) + "\n")
+            self.stream.write("\r" + text[:self.columns].ljust(self.columns) + "\n")
             self.stream.flush()
 
 
@@ -84,10 +88,14 @@ class Job:
         """DELETE /jobs/{jid}: asks the job to stop (a finished job stays as it ended)."""
         return self.client.cancel_job(self.id)
 
-    def wait(self, progress: bool | TextIO | Callable[[str, dict], None] | None = None, timeout: float | None = None) -> dict:
-        """Waits for the job's end; returns its `result` (raises JobFailed when it failed or was
-        cancelled). `progress`: None draws a bar on stderr when stderr is a terminal (quiet in
-        scripts), True always, False never, a stream draws there, a callable gets (event, data)."""
+    def wait(self, progress: bool | TextIO | Callable[[str, dict], None] | None = None, timeout: float | None = None,
+             cancel_on_interrupt: bool = True) -> dict:
+        """Waits for the job's end; returns its `result` (raises JobFailed, or JobCancelled, when
+        it did not finish). `progress`: None draws a bar on stderr when stderr is a terminal
+        (quiet in scripts), True always, False never, a stream draws there, a callable gets
+        (event, data) once per event. A stream that breaks off is followed again where it was.
+        Ctrl-C, or an exception from the callable (a DCC's Cancel button), cancels the job on
+        the server before it is raised (`cancel_on_interrupt=False` leaves the job running)."""
         callback: Callable[[str, dict], None] | None = None
         bar: ProgressBar | None = None
         if callable(progress) and not hasattr(progress, "write"):
@@ -96,36 +104,51 @@ class Job:
             bar = ProgressBar(sys.stderr)
         elif progress not in (None, False):
             bar = ProgressBar(progress)  # type: ignore[arg-type]
+        try:
+            final = self._follow(callback, bar, timeout)
+        except TimeoutError:
+            raise  # waited long enough: the job goes on
+        except (KeyboardInterrupt, Exception):
+            if cancel_on_interrupt:
+                try:
+                    self.cancel()
+                except Exception:  # the interrupt is what the caller must see
+                    pass
+            raise
+        self.last = final
+        if bar:
+            bar.close(f"{self.kind} {final.get('state')}" + _summary(final))
+        if final.get("state") != "done":
+            raise JobFailed.of(final)
+        return final.get("result") or {}
+
+    def _follow(self, callback, bar, timeout) -> dict:
+        """The job's final JSON, following its stream (and again after a break, past the events
+        already seen: the server replays a stream from the first event)."""
         deadline = time.monotonic() + timeout if timeout else None
-        final: dict | None = None
-        while final is None:
+        seen = 0
+        while True:
             try:
-                for name, data in self.events():
+                for k, (name, data) in enumerate(self.events()):
+                    if k < seen:
+                        continue
+                    seen += 1
                     if callback:
                         callback(name, data)
                     if name == "progress" and bar:
                         bar.update(*describe_progress(self.kind, data, self.total))
                     if name in FINAL_STATES:
-                        final = data
-                        break
+                        return data
                     if deadline and time.monotonic() > deadline:
                         raise TimeoutError(f"job {self.id} still running after {timeout} s")
             except ConnectionFailed:
-                pass  # the stream dropped: read the state, then follow the stream again
-            if final is None:
-                info = self.info()
-                if info["state"] in FINAL_STATES:
-                    final = info
-                elif deadline and time.monotonic() > deadline:
-                    raise TimeoutError(f"job {self.id} still running after {timeout} s")
-                else:
-                    time.sleep(0.2)
-        self.last = final
-        if bar:
-            bar.close(f"{self.kind} {final.get('state')}" + _summary(final))
-        if final.get("state") != "done":
-            raise JobFailed(final)
-        return final.get("result") or {}
+                pass  # the stream broke off: read the state, then follow the stream again
+            info = self.info()
+            if info["state"] in FINAL_STATES:
+                return info
+            if deadline and time.monotonic() > deadline:
+                raise TimeoutError(f"job {self.id} still running after {timeout} s")
+            time.sleep(0.2)
 
 
 def _summary(job: dict) -> str:

@@ -3,6 +3,7 @@ bodies, the SPEC's error body as exceptions, retries where a retry cannot do har
 text/event-stream reading."""
 from __future__ import annotations
 
+import http.client
 import json
 import socket
 import time
@@ -20,7 +21,12 @@ class Transport:
     """One server: `base_url` is where `/api/v1` lives (http://host:port)."""
 
     def __init__(self, base_url: str, token: str | None = None, timeout: float = 120.0, retries: int = 3, backoff: float = 0.5):
-        self.base_url = base_url.rstrip("/")
+        base_url = base_url.strip().rstrip("/")
+        if "://" not in base_url:  # "127.0.0.1:8080" means http
+            base_url = "http://" + base_url
+        if base_url.endswith("/api/v1"):  # the API's own address given: the server is above it
+            base_url = base_url[: -len("/api/v1")]
+        self.base_url = base_url
         self.api = self.base_url + "/api/v1"
         self.token = token
         self.timeout = timeout
@@ -94,26 +100,34 @@ class Transport:
         except (urllib.error.URLError, ConnectionError, socket.timeout) as e:
             raise ConnectionFailed(f"GET {req.full_url}: {getattr(e, 'reason', e)}") from None
         with res:
+            try:
+                yield from _parse_events(res)
+            except (OSError, http.client.HTTPException) as e:  # a read timeout or reset mid-stream
+                raise ConnectionFailed(f"GET {req.full_url}: the stream broke off ({e})") from None
+
+
+def _parse_events(res) -> Iterator[tuple[str, Any]]:
+    """(event, data) of a text/event-stream: comment lines (keep-alives) are skipped."""
+    event, data = "message", []
+    for raw in res:
+        line = raw.decode("utf-8").rstrip("\r\n")
+        if not line:  # a blank line ends an event (text/event-stream)
+            if data:
+                text = "\n".join(data)
+                try:
+                    yield event, json.loads(text)
+                except ValueError:
+                    yield event, text
             event, data = "message", []
-            for raw in res:
-                line = raw.decode("utf-8").rstrip("\r\n")
-                if not line:  # a blank line ends an event (text/event-stream)
-                    if data:
-                        text = "\n".join(data)
-                        try:
-                            yield event, json.loads(text)
-                        except ValueError:
-                            yield event, text
-                    event, data = "message", []
-                elif line.startswith(":"):
-                    continue  # a comment (keep-alive)
-                else:
-                    name, _, value = line.partition(":")
-                    value = value[1:] if value.startswith(" ") else value
-                    if name == "event":
-                        event = value
-                    elif name == "data":
-                        data.append(value)
+        elif line.startswith(":"):
+            continue  # a comment: the server's keep-alive while a job is quiet
+        else:
+            name, _, value = line.partition(":")
+            value = value[1:] if value.startswith(" ") else value
+            if name == "event":
+                event = value
+            elif name == "data":
+                data.append(value)
 
 
 def _query_value(v: Any) -> str:

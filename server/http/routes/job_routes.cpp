@@ -2,6 +2,7 @@
 // GET …/preview/{vid}.png; a sequence's GET …/frames/{i}.png and …/video.mp4.
 #include <fmt/format.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -32,16 +33,29 @@ void endChunkedAnswer(httplib::DataSink& sink) {
     if (!ended) sink.done();
 }
 
+/// A comment line this often while a job's stream has nothing to send.
+constexpr auto kKeepAlive = std::chrono::seconds(15);
+
 /// Streams a job's events from the first: every one written so far, then each as it comes; the
 /// stream ends after the final event (the job's state flips before that event is queued, so the
 /// events decide, not the state).
 void streamEvents(httplib::Response& res, std::shared_ptr<Job> job, StreamLimiter& streams, const std::string& client) {
     streams.acquire(client);  // released when the response is destroyed, however the stream ends
     res.set_header("Cache-Control", "no-cache");
-    res.set_chunked_content_provider("text/event-stream", [job, sent = size_t(0)](size_t, httplib::DataSink& sink) mutable {
+    res.set_chunked_content_provider("text/event-stream", [job, sent = size_t(0), last = std::chrono::steady_clock::now()](
+                                                              size_t, httplib::DataSink& sink) mutable {
         std::unique_lock lock(job->mutex);
         job->changed.wait_for(lock, kEventPoll, [&] { return job->events.size() > sent; });
         bool final = false;
+        if (sent == job->events.size() && std::chrono::steady_clock::now() - last >= kKeepAlive) {
+            // A phase without events (a large solve's set-up): a comment line keeps proxies and
+            // clients' read timeouts from closing a stream that is only quiet.
+            lock.unlock();
+            if (!sink.write(": keep-alive\n\n", 14)) return false;
+            last = std::chrono::steady_clock::now();
+            return true;
+        }
+        if (sent < job->events.size()) last = std::chrono::steady_clock::now();
         while (sent < job->events.size()) {
             const protocol::JobEventData& e = job->events[sent++];
             final = protocol::isFinal(e.event);
