@@ -15,6 +15,7 @@ packages=(
   ffmpeg                                                   # stylizer sequences as video files
   python3 iproute2 strace                                  # the hostile probe; ss reads a listen backlog; strace traces fsyncs in a test
   python3-venv python3-setuptools python3-wheel            # the Python client, pip-installed into a fresh venv offline
+  python3-numpy                                            # the client's fast EXR path (Blender's and Houdini's Pythons have numpy)
   blender xvfb xauth                                       # the Blender add-on's tests (headless, and one in a window under Xvfb)
 )
 packages+=("$@")  # extra packages a script needs (scripts/fuzz.sh: clang)

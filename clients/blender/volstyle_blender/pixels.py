@@ -4,6 +4,11 @@ from __future__ import annotations
 
 import bpy
 
+try:  # Blender ships numpy (Debian's Blender: python3-numpy); per-pixel Python loops otherwise
+    import numpy as np
+except ImportError:
+    np = None
+
 
 def linear(image) -> None:
     """Marks a float Image as linear data (Blender 3.x calls it 'Linear', 4.x 'Linear Rec.709')."""
@@ -25,13 +30,19 @@ def image_from_rgb(name: str, width: int, height: int, rgb: list, alpha: float =
     if image is None:
         image = bpy.data.images.new(full, width, height, alpha=True, float_buffer=True)
     linear(image)
-    rgba = [0.0] * (4 * width * height)
-    for y in range(height):
-        src, dst = 3 * (height - 1 - y) * width, 4 * y * width
-        for x in range(width):
-            rgba[dst + 4 * x:dst + 4 * x + 3] = rgb[src + 3 * x:src + 3 * x + 3]
-            rgba[dst + 4 * x + 3] = alpha
-    image.pixels.foreach_set(rgba)
+    if np is not None:
+        a = np.empty((height, width, 4), np.float32)
+        a[..., :3] = np.asarray(rgb, np.float32).reshape(height, width, 3)[::-1]
+        a[..., 3] = alpha
+        image.pixels.foreach_set(a.ravel())
+    else:
+        rgba = [0.0] * (4 * width * height)
+        for y in range(height):
+            src, dst = 3 * (height - 1 - y) * width, 4 * y * width
+            for x in range(width):
+                rgba[dst + 4 * x:dst + 4 * x + 3] = rgb[src + 3 * x:src + 3 * x + 3]
+                rgba[dst + 4 * x + 3] = alpha
+        image.pixels.foreach_set(rgba)
     image.update()
     image.use_fake_user = True  # kept in the .blend even while no editor shows it
     return image
@@ -40,6 +51,10 @@ def image_from_rgb(name: str, width: int, height: int, rgb: list, alpha: float =
 def rgba_of(image) -> list:
     """An Image's pixels as RGBA, rows top to bottom."""
     w, h = image.size
+    if np is not None:
+        a = np.empty(4 * w * h, np.float32)
+        image.pixels.foreach_get(a)
+        return a.reshape(h, w, 4)[::-1].ravel().tolist()
     flat = [0.0] * (4 * w * h)
     image.pixels.foreach_get(flat)
     out = [0.0] * (4 * w * h)

@@ -82,6 +82,17 @@ class LiveServer(unittest.TestCase):
         a, b = vc.picture_of(half), vc.picture_of(full)
         self.assertGreater(max(b), 0.1)
         self.assertLess(max(abs(x - y) for x, y in zip(a, b)), 2e-3 * max(b))
+        # The numpy path (Blender, Houdini; Debian's python3-numpy here) and the standard
+        # library's read the same values.
+        from volstyle_client import images
+        self.assertIsNotNone(images._np, "numpy is installed by scripts/install_deps.sh")
+        data = self.vs.render_view(sid, view["id"], "exr")
+        fast = vc.read_exr(data)
+        saved, images._np = images._np, None
+        try:
+            self.assertEqual(vc.read_exr(data), fast)
+        finally:
+            images._np = saved
 
     def test_errors_carry_the_spec_body(self):
         with self.assertRaises(vc.Unauthorized) as e:
