@@ -16,7 +16,6 @@
 #include "core/image/image_io.h"
 #include "core/render/exr_layers.h"
 #include "core/render/gpu_volume.h"
-#include "core/cpu_ref/reference_renderer.h"
 #include "core/render/renderer.h"
 #include "core/translucent/translucent_renderer.h"
 #include "protocol/render_json.h"

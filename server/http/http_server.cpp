@@ -76,7 +76,7 @@ struct HttpServer::Impl {
           http(opt.connections),
           services(serviceLimits(opt), opt.dataDir),
           streams(opt.maxEventStreams, opt.maxEventStreamsPerClient),
-          routes{http, services, requestLimits(opt), opt.maxJsonBytes, streams, table, idempotency} {}
+          routes{http, services, requestLimits(opt), opt.maxJsonBytes, streams, table, idempotency, opt.eventKeepAliveSeconds} {}
 
     void addMiddleware();
     /// 405 with Allow where the path has routes under other methods (OPTIONS: 204 with Allow),

@@ -32,6 +32,7 @@ struct ServerOptions {
     int httpThreads = 48;            ///< HTTP worker threads (an open event stream holds one)
     int maxEventStreams = 16;        ///< open event streams in all (below httpThreads)
     int maxEventStreamsPerClient = 8;
+    double eventKeepAliveSeconds = 15;  ///< a job's quiet event stream sends a comment this often
     ConnectionLimits connections;    ///< read deadlines and connections per client (guarded_http_server.h)
     double renderBudgetSeconds = 60;  ///< a render's limit on the GL thread (422 over_budget); <= 0: none
     /// The volstyle binary that reads uploaded VDBs in a child process (`serve` sets itself);

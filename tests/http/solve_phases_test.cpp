@@ -2,6 +2,8 @@
 // phases — preparing_views before anything else, iterating, analysing_reach once the first
 // iteration is out (not before it), writing before done — as progress events with a "phase".
 #include "api_fixture.h"
+#include <chrono>
+
 #include "core/image/image.h"
 
 namespace volstyle::test {
@@ -93,6 +95,49 @@ TEST_F(SolvePhases, ClippedTargetPixelsAreLeftOutAndTheReportSaysSo) {
     EXPECT_EQ(json::parse(r->body)["clipped_pixels"], 0);
     json e = expectError(client().Put((base + "/views/v1/target?clip_aware=maybe").c_str(), bytes, "image/png"), 400, "invalid_argument");
     EXPECT_EQ(e["error"]["details"][0]["path"], "?clip_aware") << "a bad value is refused by name, not read as the default";
+}
+
+class QuietStreams : public Api {
+protected:
+    void SetUp() override {
+        server::ServerOptions opt;
+        opt.eventKeepAliveSeconds = 0.2;
+        start(opt);
+    }
+};
+
+TEST_F(QuietStreams, AQuietJobStreamSendsKeepAliveComments) {
+    // A solve queued behind another job of its session sends no event for a while: its stream still
+    // speaks (a comment line each eventKeepAliveSeconds), so a client's read timeout or a proxy
+    // does not close a stream that is only quiet.
+    const std::string base = "/api/v1/sessions/" + createSession(24);
+    ASSERT_EQ(client().Post((base + "/views").c_str(), R"({"camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "width": 48, "height": 48}})",
+                            "application/json")->status,
+              201);
+    core::Image orange(48, 48);  // far from the render: the solve has work for every iteration
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 48; ++x) orange.pixel(x, y)[0] = 0.9f, orange.pixel(x, y)[1] = 0.4f, orange.pixel(x, y)[3] = 1;
+    ASSERT_EQ(client().Put((base + "/views/v1/target").c_str(), core::encodeImage(orange, "exr"), "image/x-exr")->status, 200);
+    std::string jobs[2];  // a long light-shaft sequence holds the session, then a solve waits behind it
+    auto r = client().Post((base + "/stylizer/sequence").c_str(), R"({"fps": 24, "start": 0, "end": 100})", "application/json");
+    ASSERT_EQ(r->status, 202) << r->body;
+    jobs[0] = json::parse(r->body)["job"];
+    r = client().Post((base + "/solve").c_str(), R"({"unknowns": ["emission"], "max_iterations": 3})", "application/json");
+    ASSERT_EQ(r->status, 202) << r->body;
+    jobs[1] = json::parse(r->body)["job"];
+    std::string text;  // the second job's stream while the first runs
+    const auto t0 = std::chrono::steady_clock::now();
+    client().Get(("/api/v1/jobs/" + jobs[1] + "/events").c_str(), [&](const char* data, size_t n) {
+        text.append(data, n);
+        return std::chrono::steady_clock::now() - t0 < std::chrono::milliseconds(1500);
+    });
+    const json second = json::parse(client().Get(("/api/v1/jobs/" + jobs[1]).c_str())->body);
+    for (const std::string& job : jobs) client().Delete(("/api/v1/jobs/" + job).c_str());
+    ASSERT_EQ(second["state"], "queued") << "the second solve waited behind the first: " << second.dump().substr(0, 600);
+    EXPECT_EQ(text.find("event: "), std::string::npos) << "a queued job has nothing to say yet: " << text.substr(0, 300);
+    size_t comments = 0;
+    for (size_t at = 0; (at = text.find(": keep-alive\n\n", at)) != std::string::npos; ++at) ++comments;
+    EXPECT_GE(comments, 3u) << "1.5 s of a quiet stream at 0.2 s: " << text.substr(0, 300);
 }
 
 }  // namespace

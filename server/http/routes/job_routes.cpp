@@ -33,21 +33,21 @@ void endChunkedAnswer(httplib::DataSink& sink) {
     if (!ended) sink.done();
 }
 
-/// A comment line this often while a job's stream has nothing to send.
-constexpr auto kKeepAlive = std::chrono::seconds(15);
-
 /// Streams a job's events from the first: every one written so far, then each as it comes; the
 /// stream ends after the final event (the job's state flips before that event is queued, so the
 /// events decide, not the state).
-void streamEvents(httplib::Response& res, std::shared_ptr<Job> job, StreamLimiter& streams, const std::string& client) {
+/// While nothing happens, a comment line every `keepAliveSeconds`.
+void streamEvents(httplib::Response& res, std::shared_ptr<Job> job, StreamLimiter& streams, const std::string& client,
+                  double keepAliveSeconds) {
+    const auto keepAlive = std::chrono::duration<double>(keepAliveSeconds);
     streams.acquire(client);  // released when the response is destroyed, however the stream ends
     res.set_header("Cache-Control", "no-cache");
-    res.set_chunked_content_provider("text/event-stream", [job, sent = size_t(0), last = std::chrono::steady_clock::now()](
+    res.set_chunked_content_provider("text/event-stream", [job, keepAlive, sent = size_t(0), last = std::chrono::steady_clock::now()](
                                                               size_t, httplib::DataSink& sink) mutable {
         std::unique_lock lock(job->mutex);
         job->changed.wait_for(lock, kEventPoll, [&] { return job->events.size() > sent; });
         bool final = false;
-        if (sent == job->events.size() && std::chrono::steady_clock::now() - last >= kKeepAlive) {
+        if (sent == job->events.size() && std::chrono::steady_clock::now() - last >= keepAlive) {
             // A phase without events (a large solve's set-up): a comment line keeps proxies and
             // clients' read timeouts from closing a stream that is only quiet.
             lock.unlock();
@@ -109,7 +109,7 @@ void addJobRoutes(RouteContext& c) {
         reply(res, 202, protocol::jobToJson(job->info()));
     });
     c.get(kJobPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
-        streamEvents(res, c.services.jobs.job(req.matches[1]), c.streams, req.remote_addr);
+        streamEvents(res, c.services.jobs.job(req.matches[1]), c.streams, req.remote_addr, c.eventKeepAliveSeconds);
     });
     // A sequence job's files (issue #15): its frames and its video.
     c.get(kJobPath + R"(/frames/([0-9]{1,6})\.png)", [&c](const httplib::Request& req, httplib::Response& res) {

@@ -45,6 +45,7 @@ struct RouteContext {
     StreamLimiter& streams;
     RouteTable& table;
     IdempotencyKeys& idempotency;
+    double eventKeepAliveSeconds = 15;  ///< a quiet job event stream's comment interval
 
     /// The JSON body ({} when empty): 413 over maxJsonBytes, 400 invalid_json.
     nlohmann::json body(const httplib::Request& req) const;
