@@ -7,6 +7,7 @@ packages=(
   build-essential cmake pkg-config ccache
   libegl-dev libepoxy-dev libegl-mesa0 libgl1-mesa-dri   # headless GL: EGL + Mesa llvmpipe
   libopenvdb-dev libboost-iostreams-dev libtbb-dev         # OpenVDB (FindOpenVDB needs boost-iostreams)
+  libnanovdb-dev                                           # NanoVDB and PNanoVDB.h (bench/sparse_sampling, issue #39)
   libopenimageio-dev                                       # images (found with pkg-config)
   libassimp-dev                                            # occluder meshes: OBJ, PLY, glTF (pkg-config)
   libspdlog-dev libfmt-dev nlohmann-json3-dev libcpp-httplib-dev

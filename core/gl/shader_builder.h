@@ -48,7 +48,16 @@ public:
         return *this;
     }
 
-    PreprocessedShader preprocess(const ShaderLoader& loader = loadShaderSource) const;
+    /// Where `#include`d and main files come from (default: the embedded shaders). A benchmark
+    /// or a tool can add files from elsewhere (e.g. Debian's nanovdb/PNanoVDB.h).
+    ShaderBuilder& loader(ShaderLoader loader) {
+        m_loader = std::move(loader);
+        return *this;
+    }
+
+    /// Preprocesses with `loader`, or with the builder's own (default: loadShaderSource).
+    PreprocessedShader preprocess(const ShaderLoader& loader) const;
+    PreprocessedShader preprocess() const { return preprocess(m_loader ? m_loader : ShaderLoader(loadShaderSource)); }
     /// A key naming this variant (file + defines + extensions), for program caches.
     std::string variantKey() const;
     const std::string& mainFile() const { return m_main; }
@@ -64,6 +73,7 @@ private:
     std::string m_main;
     std::map<std::string, std::string> m_defines;
     std::vector<std::string> m_extensions;
+    ShaderLoader m_loader;
 };
 
 }  // namespace volstyle::core::gl
