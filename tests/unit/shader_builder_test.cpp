@@ -57,6 +57,13 @@ TEST(ShaderBuilder, VariantKeyDependsOnDefines) {
               ShaderBuilder("main.comp").define("B", 2).define("A", 1).variantKey());
 }
 
+TEST(ShaderBuilder, AGivenLoaderIsUsedByPreprocessAndBuild) {
+    // bench/sparse_sampling includes Debian's nanovdb/PNanoVDB.h through a loader of its own.
+    const PreprocessedShader s = ShaderBuilder("main.comp").loader(loader).preprocess();
+    EXPECT_EQ(count(s.text, "float f()"), 1u);
+    EXPECT_THROW(ShaderBuilder("main.comp").preprocess(), volstyle::NotFound) << "without it, the embedded shaders only";
+}
+
 TEST(ShaderBuilder, MissingIncludeIsNotFound) {
     EXPECT_THROW(ShaderBuilder("broken.comp").preprocess(loader), volstyle::NotFound);
 }
