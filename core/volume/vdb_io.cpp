@@ -425,8 +425,7 @@ openvdb::GridBase::ConstPtr writeRole(Role role, const Volume& volume, const Vdb
                               : (role == kRefractiveIndex || (role == kExtinction && grey));
     // Albedo's voxels inside the medium are active even where they are the background's 1:
     // Blender's Cycles reads an inactive voxel as 0 (a white cloud would render black there).
-    const std::vector<float> medium = role == kAlbedo ? denseOfVolume(volume, kExtinction) : std::vector<float>();
-    return makeRoleGrid(role, rgb, asFloat, like, /*patch=*/false, origin, dims, xf, medium.empty() ? nullptr : &medium);
+    return makeRoleGrid(role, rgb, asFloat, like, /*patch=*/false, origin, dims, xf, role == kAlbedo ? &volume.extinction() : nullptr);
 }
 
 }  // namespace

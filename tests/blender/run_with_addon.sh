@@ -5,7 +5,8 @@
 # Usage: run_with_addon.sh VOLSTYLE_BINARY SCRIPT.py NAME [ARGS…]
 #   addon_test.py "ADDON TEST" — the operators end to end;
 #   cycles_match.py "CYCLES MATCH" [SAMPLES] — Cycles against volstyle (default 128 samples);
-#   ui_solve.py "UI SOLVE" — a script named ui_* runs in a real Blender window under Xvfb.
+#   ui_solve.py "UI SOLVE" — a script named ui_* runs in a real Blender window under Xvfb;
+#   ui_panel_screenshot.py SCREENSHOT OUT.png — docs/images/blender_panel.png (scripts/blender_screenshot.sh).
 set -euo pipefail
 binary=$(realpath "$1")
 script=$2
@@ -21,9 +22,10 @@ blender=(blender -b --factory-startup)
 if [[ $script == ui_* ]]; then  # a window: Xvfb, and a saved file to open (a file skips the splash)
   command -v xvfb-run >/dev/null || { echo "needs xvfb-run (scripts/install_deps.sh installs xvfb)"; exit 1; }
   blender -b --factory-startup -noaudio --python-expr "import bpy; bpy.ops.wm.save_as_mainfile(filepath='$work/start.blend')" >/dev/null
-  blender=(xvfb-run -a -s "-screen 0 1280x800x24" blender "$work/start.blend")
+  # Event simulation: a script may click what Blender has no API for (the sidebar's tab).
+  blender=(xvfb-run -a -s "-screen 0 1400x860x24" blender "$work/start.blend" --enable-event-simulate)
 fi
 bash "$root/tests/web/with_server.sh" "$binary" \
   "${blender[@]}" -noaudio -P "$root/tests/blender/$script" -- "$zip" "$work/files" "$@" 2>&1 |
-  grep -E "measured|  ok:|$name|Error|Traceback|^  File|^Warning" | tee "$work/out.txt"
+  grep -E "measured|  ok:|$name|Error|Traceback|^  File|^Warning" | tee "$work/out.txt" || true
 grep -q "$name: PASS" "$work/out.txt"

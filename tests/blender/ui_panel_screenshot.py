@@ -1,13 +1,13 @@
 # docs/images/blender_panel.png: the add-on's sidebar tab in a real Blender window (under Xvfb),
 # after sending the built-in cloud and rendering a view. Run by scripts/blender_screenshot.sh:
-#   blender --factory-startup -P tests/blender/panel_screenshot.py -- ADDON.zip OUT.png
+#   tests/blender/run_with_addon.sh BINARY ui_panel_screenshot.py SCREENSHOT OUT.png
 import os
 import sys
 
 import bpy
 
 args = sys.argv[sys.argv.index("--") + 1:]
-zip_path, out = args[0], args[1]
+zip_path, out = args[0], args[2]
 bpy.ops.preferences.addon_install(filepath=zip_path, overwrite=True)
 bpy.ops.preferences.addon_enable(module="volstyle_blender")
 from volstyle_blender import session  # noqa: E402
@@ -66,7 +66,7 @@ def TAB_Y(ui):
 def capture(win):
     with bpy.context.temp_override(window=win):
         bpy.ops.screen.screenshot(filepath=out)
-    print("SCREENSHOT:", out)
+    print("SCREENSHOT: PASS", out)
     bpy.ops.wm.quit_blender()
     return None
 
