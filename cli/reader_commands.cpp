@@ -16,10 +16,13 @@
 namespace volstyle::cli {
 
 int runReadVdb(const std::vector<std::string>& argv) {
-    Arguments args = parseArguments(argv, {"max-voxels", "max-memory-mib"}, {"frames"});
-    if (args.positional.size() != 1) throw InvalidArgument("usage: volstyle read-vdb FILE --max-voxels N [--max-memory-mib M]");
+    Arguments args = parseArguments(argv, {"max-voxels", "max-active-voxels", "storage", "max-memory-mib"}, {"frames"});
+    if (args.positional.size() != 1)
+        throw InvalidArgument("usage: volstyle read-vdb FILE --max-voxels N [--max-active-voxels N] [--storage auto|dense|sparse] [--max-memory-mib M]");
     core::VolumeLimits limits;
     limits.maxVoxels = int64_t(args.number("max-voxels", double(limits.maxVoxels)));
+    limits.maxActiveVoxels = int64_t(args.number("max-active-voxels", double(limits.maxActiveVoxels)));
+    limits.storage = core::volumeStorageNamed(args.get("storage", "auto"));
     const double mib = args.number("max-memory-mib", 4096);
     server::limitChildMemory(mib);
     const std::string path = args.positional[0];

@@ -39,7 +39,9 @@ const CommandSpec kServe{
         {"max-upload-mib", "N", "largest VDB or image upload, MiB; default 512"},
         {"max-image-side", "N", "largest target or render side, pixels; default 4096"},
         {"max-mesh-vertices", "N", "vertices of an occluder mesh, and of a session's meshes together; default 4000000"},
-        {"max-voxels", "N", "largest volume, voxels; default 16777216 (256^3)"},
+        {"max-voxels", "N", "largest volume stored dense (its box), voxels; a larger box is stored sparse; default 16777216 (256^3)"},
+        {"max-active-voxels", "N", "largest sparse volume: voxels of its active 8^3 bricks; default 67108864 (64 M)"},
+        {"storage", "MODE", "how uploaded volumes are stored: auto (dense while the box fits --max-voxels), dense or sparse; default auto"},
         {"max-json-kib", "N", "largest JSON body, KiB; default 1024"},
         {"session-memory-mib", "N", "decoded frames, versions, meshes and images one session may hold, MiB (507 past it); default 2048"},
         {"memory-mib", "N", "the same for all sessions together, MiB; default 8192"},
@@ -73,6 +75,8 @@ int runServe(const std::vector<std::string>& argv) {
     opt.maxImageSide = int(wholeNumber(args, "max-image-side", opt.maxImageSide, 16, 65536));
     opt.maxMeshVertices = size_t(wholeNumber(args, "max-mesh-vertices", double(opt.maxMeshVertices), 3, 1e8));
     opt.volumeLimits.maxVoxels = int64_t(wholeNumber(args, "max-voxels", double(opt.volumeLimits.maxVoxels), 1, 1e10));
+    opt.volumeLimits.maxActiveVoxels = int64_t(wholeNumber(args, "max-active-voxels", double(int64_t(64) << 20), 512, 1e11));
+    opt.volumeLimits.storage = core::volumeStorageNamed(args.get("storage", "auto"));
     opt.maxJsonBytes = size_t(wholeNumber(args, "max-json-kib", double(opt.maxJsonBytes >> 10), 1, 1 << 20)) << 10;
     opt.memory.perSession = size_t(wholeNumber(args, "session-memory-mib", double(opt.memory.perSession >> 20), 1, 1 << 24)) << 20;
     opt.memory.total = size_t(wholeNumber(args, "memory-mib", double(opt.memory.total >> 20), 1, 1 << 24)) << 20;

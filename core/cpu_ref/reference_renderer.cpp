@@ -227,6 +227,7 @@ Image renderReference(const Volume& volume, const Camera& camera, const Lighting
     const double lightStep = method == LightDepthMethod::Exact && lightStepVoxels > 0 ? lightStepVoxels : stepVoxels;
     camera.validate();
     lighting.validate();
+    requireDense(volume, "the reference renderer");
     const Int3 n = volume.dims();
     const Mat4 indexFromWorld = volume.worldFromIndex().inverseAffine();
 

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
@@ -18,7 +19,20 @@ layout::MarchParams volumeParams(const GpuVolume& volume, const RenderSettings& 
     p.dims = i4(volume.dims());
     p.brickDims = i4(volume.brickDims());
     p.march = {float(settings.stepVoxels), float(settings.terminationThreshold), 0, 0};
+    p.sparseOffset = i4(volume.sparseOffset());
+    p.sparseAtlas = i4(volume.atlasBricks());
     return p;
+}
+
+gl::ShaderBuilder& forStorage(gl::ShaderBuilder& builder, const GpuVolume& volume) {
+    if (volume.isSparse()) builder.define("VOLSTYLE_SPARSE", 1);
+    return builder;
+}
+
+void bindExtinction(const GpuVolume& volume) {
+    glBindTextureUnit(layout::kUnitExtinction, volume.extinctionTexture());
+    glBindTextureUnit(layout::kUnitOccupancy, volume.occupancyTexture());
+    if (volume.isSparse()) glBindTextureUnit(layout::kUnitBrickTable, volume.brickTableTexture());
 }
 
 void dispatch3D(Int3 n) {
@@ -30,8 +44,8 @@ void updateOccupancy(GpuDevice& device, GpuVolume& volume, RenderStats& stats) {
     if (volume.occupancyVersion() == volume.extinctionVersion()) return;
     const auto t0 = Clock::now();
     device.setParams(volumeParams(volume, RenderSettings{}));
-    glUseProgram(device.program(gl::ShaderBuilder("occupancy.comp")).id());
-    glBindTextureUnit(layout::kUnitExtinction, volume.extinctionTexture());
+    glUseProgram(device.program(forStorage(gl::ShaderBuilder("occupancy.comp"), volume)).id());
+    bindExtinction(volume);
     glBindImageTexture(layout::kImageUnitOut, volume.occupancyTexture(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R32F);
     dispatch3D(volume.brickDims());
     gl::barrierAfterComputeWrites();
@@ -58,7 +72,22 @@ std::shared_ptr<LightDepthVolume> computeLightDepth(GpuDevice& device, const Gpu
     const Vec3d dir = normalize(towardLight);
     const auto t0 = Clock::now();
     auto result = std::make_shared<LightDepthVolume>();
-    result->grid = makeLightGrid(volume.dims(), volume.worldFromIndex().inverseAffine(), dir, across);
+    const Mat4 indexFromWorld = volume.worldFromIndex().inverseAffine();
+    if (volume.isSparse()) {
+        // Only the active region (and a voxel around it) can hold extinction: the grid covers that,
+        // with nodes spaced wider where it would be over kMaxSparseLightNodes.
+        const auto [lo, hi] = volume.activeBox();
+        const Vec3d a(lo.x - 0.5, lo.y - 0.5, lo.z - 0.5), b(hi.x + 0.5, hi.y + 0.5, hi.z + 0.5);
+        double along = kLightGridSpacing;
+        const double nodes = double(makeLightGrid(a, b, indexFromWorld, dir, across, along).dims.volume());
+        if (nodes > kMaxSparseLightNodes) {
+            const double widen = std::cbrt(nodes / kMaxSparseLightNodes);
+            across *= widen, along *= widen;
+        }
+        result->grid = makeLightGrid(a, b, indexFromWorld, dir, across, along);
+    } else {
+        result->grid = makeLightGrid(volume.dims(), indexFromWorld, dir, across);
+    }
     const Int3 n = result->grid.dims;
     GLint maxSize = 0;
     glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &maxSize);
@@ -85,9 +114,8 @@ std::shared_ptr<LightDepthVolume> computeLightDepth(GpuDevice& device, const Gpu
     p.lightKernel = {0, 0, 0, 0};
     p.lightGridDims[0] = i4(n);
     p.indexFromLightGrid = toGl(result->grid.indexFromGrid);
-    glUseProgram(device.program(gl::ShaderBuilder("light_depth.comp").define("VOLSTYLE_GREY_DEPTH", grey ? 1 : 0)).id());
-    glBindTextureUnit(layout::kUnitExtinction, volume.extinctionTexture());
-    glBindTextureUnit(layout::kUnitOccupancy, volume.occupancyTexture());
+    glUseProgram(device.program(forStorage(gl::ShaderBuilder("light_depth.comp").define("VOLSTYLE_GREY_DEPTH", grey ? 1 : 0), volume)).id());
+    bindExtinction(volume);
     glBindImageTexture(layout::kImageUnitOut, id, 0, GL_TRUE, 0, GL_WRITE_ONLY, grey ? GL_R32F : GL_RGBA32F);
     // A row of n.z nodes costs about as much as n.z / 4 per-pixel or per-voxel invocations (two
     // samples per node, most in empty bricks): chunks of about the same time as other passes'.

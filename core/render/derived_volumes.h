@@ -22,6 +22,13 @@
 
 namespace volstyle::core {
 
+/// The kernel variant for the volume's storage: VOLSTYLE_SPARSE for a sparse volume (a dense
+/// volume's kernel source is unchanged).
+gl::ShaderBuilder& forStorage(gl::ShaderBuilder& builder, const GpuVolume& volume);
+inline gl::ShaderBuilder forStorage(gl::ShaderBuilder&& builder, const GpuVolume& volume) { return std::move(forStorage(builder, volume)); }
+/// Binds the volume's extinction and occupancy (and a sparse volume's brick table) to their units.
+void bindExtinction(const GpuVolume& volume);
+
 /// Recomputes the occupancy bricks (occupancy.comp) if the extinction changed since.
 void updateOccupancy(GpuDevice& device, GpuVolume& volume, RenderStats& stats);
 

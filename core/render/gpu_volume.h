@@ -2,6 +2,8 @@
 /// \file gpu_volume.h
 /// A Volume resident on the GPU: RGB32F 3D textures for extinction, albedo and emission (absent
 /// grids are not uploaded), and the occupancy bricks used for empty-space skipping. GL thread only.
+/// A sparse volume's grids are atlases of its stored bricks, in slot order, with a table from brick
+/// to atlas brick (common/volume.glsl reads through it; kernels compile with VOLSTYLE_SPARSE).
 /// GL-free header: texture names are plain unsigned integers (GLuint) for the kernels' C++ sides.
 
 #include <cstdint>
@@ -41,6 +43,19 @@ public:
     unsigned albedoTexture() const;
     unsigned emissionTexture() const;
     unsigned occupancyTexture() const;
+    /// Sparse volumes: the r32ui table from brick to atlas brick (else 0), and where voxel 0 lies in its brick.
+    bool isSparse() const { return m_sparse; }
+    unsigned brickTableTexture() const;
+    Int3 sparseOffset() const { return m_sparseOffset; }
+    /// The index box holding everything a sample can read as non-zero extinction, inclusive:
+    /// the box, or a sparse volume's active bricks with a voxel of margin (clipped to the box).
+    std::pair<Int3, Int3> activeBox() const { return m_activeBox; }
+    /// Voxels each grid stores (a sparse volume's slots × 8³, the background brick included).
+    size_t storedVoxels() const { return m_storedVoxels; }
+    /// A sparse volume's atlas, in bricks (slot s at (s mod x, s / x mod y, s / (x y))).
+    Int3 atlasBricks() const { return m_atlasBricks; }
+    /// Bytes the textures take (grids, table, occupancy).
+    size_t deviceBytes() const { return m_deviceBytes; }
 
     /// A number unique to this volume's current extinction (across all GpuVolumes): caches of
     /// derived data (occupancy, light depth) compare it to know when to recompute.
@@ -56,7 +71,12 @@ public:
 private:
     struct Textures;
     std::unique_ptr<Textures> m_textures;
-    Int3 m_dims, m_brickDims;
+    Int3 m_dims, m_brickDims, m_sparseOffset, m_atlasBricks;
+    size_t m_storedVoxels = 0;
+    std::pair<Int3, Int3> m_activeBox;
+    bool m_sparse = false;
+    size_t m_tableSize = 0, m_tableHash = 0;  // to detect an unchanged brick layout on re-upload
+    size_t m_deviceBytes = 0;
     Mat4 m_worldFromIndex;
     std::shared_ptr<const RefractiveGrid> m_refraction;
     size_t m_extinctionHash = 0;  // to detect unchanged extinction on re-upload

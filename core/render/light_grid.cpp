@@ -15,6 +15,12 @@ double maxVoxelDepth(double maxExtinction, const Mat4& worldFromIndex) {
 double lightGridAcross(double voxelDepth) { return voxelDepth >= kDenseVoxelDepth ? 0.5 * kLightGridSpacing : kLightGridSpacing; }
 
 LightGrid makeLightGrid(Int3 volumeDims, const Mat4& indexFromWorld, const Vec3d& towardLight, double across, double along) {
+    return makeLightGrid(Vec3d(-0.5), Vec3d(volumeDims.x - 0.5, volumeDims.y - 0.5, volumeDims.z - 0.5), indexFromWorld, towardLight,
+                         across, along);
+}
+
+LightGrid makeLightGrid(const Vec3d& boxLo, const Vec3d& boxHi, const Mat4& indexFromWorld, const Vec3d& towardLight, double across,
+                        double along) {
     // An orthonormal frame in index space: w toward the light, u and v across the beam.
     const Vec3d w = normalize(indexFromWorld.applyVector(towardLight));
     const int minor = std::abs(w.x) <= std::abs(w.y) && std::abs(w.x) <= std::abs(w.z) ? 0 : (std::abs(w.y) <= std::abs(w.z) ? 1 : 2);
@@ -26,8 +32,7 @@ LightGrid makeLightGrid(Int3 volumeDims, const Mat4& indexFromWorld, const Vec3d
     // The box's extent in that frame.
     Vec3d lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
     for (int corner = 0; corner < 8; ++corner) {
-        const Vec3d p((corner & 1) ? volumeDims.x - 0.5 : -0.5, (corner & 2) ? volumeDims.y - 0.5 : -0.5,
-                      (corner & 4) ? volumeDims.z - 0.5 : -0.5);
+        const Vec3d p((corner & 1) ? boxHi.x : boxLo.x, (corner & 2) ? boxHi.y : boxLo.y, (corner & 4) ? boxHi.z : boxLo.z);
         const Vec3d q(dot(p, uAxis), dot(p, vAxis), dot(p, w));
         for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], q[a]), hi[a] = std::max(hi[a], q[a]);
     }

@@ -46,5 +46,13 @@ double lightGridAcross(double voxelDepth);
 /// voxel centres.
 LightGrid makeLightGrid(Int3 volumeDims, const Mat4& indexFromWorld, const Vec3d& towardLight,
                         double across = kLightGridSpacing, double along = kLightGridSpacing);
+/// The same over the index-space box [lo, hi] (a sparse volume's active region): nodes cover it,
+/// anchored as above, so a box that is the voxels' box gives the grid above.
+LightGrid makeLightGrid(const Vec3d& lo, const Vec3d& hi, const Mat4& indexFromWorld, const Vec3d& towardLight,
+                        double across = kLightGridSpacing, double along = kLightGridSpacing);
+
+/// The most nodes a sparse volume's light-depth grid may have (512 MiB as r32f): a larger active
+/// region spaces its nodes wider, by the cube root of the excess (dense volumes keep their spacing).
+inline constexpr double kMaxSparseLightNodes = double(128 << 20);
 
 }  // namespace volstyle::core

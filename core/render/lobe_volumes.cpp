@@ -58,7 +58,7 @@ std::shared_ptr<const LobeLightVolumes> lobeLightVolumes(GpuDevice& device, GpuV
         p.lobeScale = {float(dims.x) / float(volume.dims().x), float(dims.y) / float(volume.dims().y),
                        float(dims.z) / float(volume.dims().z), float(result->channels)};
         p.lobeKernel = {lobe, 0, 0, 0};
-        glUseProgram(device.program(gl::ShaderBuilder("lobe_volume.comp")).id());
+        glUseProgram(device.program(forStorage(gl::ShaderBuilder("lobe_volume.comp"), volume)).id());
         glBindTextureUnit(layout::kUnitLightDepth0, depth->texture.id());
         glBindImageTexture(layout::kImageUnitOut, result->texture.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
         dispatchChunked(device, p, dims, DispatchShape::Volume, budget, "environment light volumes");

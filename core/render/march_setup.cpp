@@ -109,8 +109,7 @@ MarchSetup prepareMarch(GpuDevice& device, GpuVolume& volume, const Camera& came
 
 void bindMarch(GpuDevice& device, const GpuVolume& volume, const MarchSetup& setup) {
     device.setParams(setup.params);
-    glBindTextureUnit(layout::kUnitExtinction, volume.extinctionTexture());
-    glBindTextureUnit(layout::kUnitOccupancy, volume.occupancyTexture());
+    bindExtinction(volume);
     if (setup.environment) glBindTextureUnit(layout::kUnitEnvironment, setup.environment->id());
     for (size_t i = 0; i < setup.lightDepth.size(); ++i)
         glBindTextureUnit(GLuint(layout::kUnitLightDepth0 + i), setup.lightDepth[i]->texture.id());

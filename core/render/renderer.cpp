@@ -56,7 +56,7 @@ Image Renderer::march(GpuVolume& volume, const Camera& camera, const Lighting& l
         .define("VOLSTYLE_EXACT_TRAVERSAL", settings.exactTraversal ? 1 : 0)
         .define("VOLSTYLE_LAYERS", layers ? 1 : 0);
     if (setup.paths) builder.define("VOLSTYLE_CURVED", 1);  // refracted rays (straight rays: the kernel unchanged)
-    glUseProgram(m_device.program(builder).id());
+    glUseProgram(m_device.program(forStorage(builder, volume)).id());
     bindMarch(m_device, volume, setup);  // dispatchChunked re-uploads the block per chunk
     if (volume.hasAlbedo()) glBindTextureUnit(layout::kUnitAlbedo, volume.albedoTexture());
     if (volume.hasEmission()) glBindTextureUnit(layout::kUnitEmission, volume.emissionTexture());

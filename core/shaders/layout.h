@@ -66,6 +66,8 @@ VS_CONSTANT(int, kUnitAlbedo, 1);
 VS_CONSTANT(int, kUnitEmission, 2);
 VS_CONSTANT(int, kUnitEnvironment, 3);
 VS_CONSTANT(int, kUnitOccupancy, 4);
+VS_CONSTANT(int, kUnitBrickTable, 11);    /* sparse volumes: usampler3D r32ui, per brick the atlas brick its voxels are in (packed by kAtlasBits) */
+VS_CONSTANT(int, kAtlasBits, 10);         /* bits per axis of a packed atlas brick coordinate */
 VS_CONSTANT(int, kUnitLightDepth0, 5);     /* 5..8 */
 VS_CONSTANT(int, kImageUnitOut, 0);        /* image store target of volume kernels */
 VS_CONSTANT(int, kBindingUnknown, 1);      /* SSBO: the solver's unknown coefficients (3 per voxel) */
@@ -114,6 +116,9 @@ struct MarchParams {
     VS_IVEC4 lobeGrid;    /* xyz: nodes of the light volumes' grid; w: lobes */
     VS_VEC4 lobeScale;    /* xyz: light-volume nodes per extinction voxel (both grids span the voxels' box); w: channels (1 grey, 3 rgb) */
     VS_IVEC4 lobeKernel;  /* lobe_volume.comp: x: the lobe it writes. lights_project.comp: x: first lobe of the chunk, y: its lobes */
+    /* Sparse volumes (VOLSTYLE_SPARSE, core/volume/brick_layout.h): voxel v lies in brick (v + xyz) / kBrickSize. */
+    VS_IVEC4 sparseOffset;
+    VS_IVEC4 sparseAtlas;    /* xyz: the atlas's bricks (slot s at (s mod x, s / x mod y, s / (x y))) */
 };
 
 /* The environment's lobes (core/render/environment_lobes.h), a uniform block of their own. */
@@ -227,7 +232,10 @@ struct VectorParams {
     VS_VEC4 bounds;          /* x, y: lower, upper bound of block 0; z, w: of block 1 */
     VS_IVEC4 count;          /* x: elements; y: first element (indexed: first list position); z: elements per block */
     VS_IVEC4 dims;           /* xyz: grid of one block (Laplacian) */
+    VS_IVEC4 sparseOffset;   /* VOLSTYLE_SPARSE Laplacian: xyz where voxel 0 lies in its brick (cells: stored voxels, brick_layout.h) */
 };
+VS_CONSTANT(int, kBindingSlotOfBrick, 8);  /* VOLSTYLE_SPARSE Laplacian: SSBO uint[bricks of the box]: slot, 0 inactive */
+VS_CONSTANT(int, kBindingBrickOfSlot, 9);  /* SSBO ivec4[slots]: the brick of each slot */
 
 /* The translucent preview (core/translucent/, SPEC §9; Kniss et al. 2003): half-angle slices
  * rasterized into the eye buffer (blended) and into two ping-pong light buffers (translucent.raster). */

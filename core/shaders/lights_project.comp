@@ -70,12 +70,12 @@ void main() {
             while (nextSegment(m, true, tMid, dt)) {
                 vec3 p = m.o + tMid * m.d;
                 Stencil st = stencilAt(p);
-                vec3 sigma = fetchTrilinear(s_extinction, st);
+                vec3 sigma = sampleGrid(s_extinction, st);
                 if (max3(sigma) <= 0.0) continue;
                 vec3 tau = sigma * dt;
                 vec3 w = transmittance * oneMinusExp(tau);  // T · (1 − e^{−σΔt}), then ρ
 #if VOLSTYLE_HAS_ALBEDO
-                w *= fetchTrilinear(s_albedo, st);
+                w *= sampleGrid(s_albedo, st);
 #endif
 #if VOLSTYLE_ADJOINT
                 LobeStencil ls = lobeStencilAt(p);

@@ -162,7 +162,17 @@ uint cornerIndex(Basis b, int c, out float weight) {
     ivec3 corner = mix(b.i0, b.i1, upper);
     vec3 w = mix(1.0 - b.f, b.f, upper);
     weight = w.x * w.y * w.z;
+#if VOLSTYLE_SPARSE
+    // A sparse volume's unknowns are its stored voxels (the unknown grid is its own): slot · 8³ +
+    // the voxel's place in its brick; a corner in an inactive brick is the background brick's
+    // (outside the hull: never moved).
+    ivec3 q = corner + u.sparseOffset.xyz;
+    ivec3 a = atlasBrick(q / kBrickSize), l = q % kBrickSize;
+    int slot = a.x + u.sparseAtlas.x * (a.y + u.sparseAtlas.y * a.z);
+    return uint(slot * (kBrickSize * kBrickSize * kBrickSize) + (l.z * kBrickSize + l.y) * kBrickSize + l.x);
+#else
     return uint((corner.z * u.unknownDims.y + corner.y) * u.unknownDims.x + corner.x);
+#endif
 }
 
 // Consecutive samples of a ray mostly fall between the same 8 unknowns (at 0.5 voxels a step,
@@ -339,7 +349,7 @@ void main() {
         CornerCache emission = emptyCache(0u), albedo = emptyCache(albedoBlock);
         while (nextSegment(m, true, tMid, dt)) {
             vec3 p = m.o + tMid * m.d;
-            vec3 sigma = fetchTrilinear(s_extinction, stencilAt(p));
+            vec3 sigma = sampleGrid(s_extinction, stencilAt(p));
             if (max3(sigma) <= 0.0) continue;
             vec3 tau = sigma * dt;
             vec3 opacity = transmittance * oneMinusExp(tau);  // T · (1 − e^{−σΔt})

@@ -46,17 +46,17 @@ void main() {
         float tMid, dt;
         while (nextSegment(m, true, tMid, dt)) {
             Stencil st = stencilAt(m.o + tMid * m.d);
-            vec3 sigma = fetchTrilinear(s_extinction, st);
+            vec3 sigma = sampleGrid(s_extinction, st);
             if (max3(sigma) <= 0.0) continue;
 
             // Medium radiance L_m = L_e + ρ L_scat at the segment midpoint (Eq. 2).
             vec3 Le = vec3(0.0), Ls = vec3(0.0);
 #if VOLSTYLE_HAS_EMISSION
-            Le = fetchTrilinear(s_emission, st);
+            Le = sampleGrid(s_emission, st);
 #endif
 #if VOLSTYLE_LIT
 #if VOLSTYLE_HAS_ALBEDO
-            vec3 albedo = fetchTrilinear(s_albedo, st);
+            vec3 albedo = sampleGrid(s_albedo, st);
 #else
             vec3 albedo = vec3(1.0);
 #endif

@@ -39,6 +39,38 @@ layout(std430, binding = kBindingPartials) writeonly buffer b_Partials {
 #ifndef VOLSTYLE_INDEXED
 #define VOLSTYLE_INDEXED 0
 #endif
+#ifndef VOLSTYLE_SPARSE
+#define VOLSTYLE_SPARSE 0
+#endif
+
+// The Laplacian's cells: the voxels of a dense grid (x fastest), or a sparse volume's stored
+// voxels (slot · 8³ + place in the brick; core/volume/brick_layout.h).
+#if VOLSTYLE_SPARSE
+layout(std430, binding = kBindingSlotOfBrick) readonly buffer b_SlotOfBrick {
+    uint slotOfBrick[];
+};
+layout(std430, binding = kBindingBrickOfSlot) readonly buffer b_BrickOfSlot {
+    ivec4 brickOfSlot[];
+};
+const int kCellsPerBrick = kBrickSize * kBrickSize * kBrickSize;
+ivec3 voxelOfCell(int cell) {
+    int l = cell % kCellsPerBrick;
+    return brickOfSlot[cell / kCellsPerBrick].xyz * kBrickSize - v.sparseOffset.xyz +
+           ivec3(l % kBrickSize, (l / kBrickSize) % kBrickSize, l / (kBrickSize * kBrickSize));
+}
+int cellOfVoxel(ivec3 q) {
+    ivec3 s = q + v.sparseOffset.xyz, b = s / kBrickSize, l = s % kBrickSize;
+    ivec3 bricks = (v.dims.xyz + v.sparseOffset.xyz + kBrickSize - 1) / kBrickSize;
+    int slot = int(slotOfBrick[(b.z * bricks.y + b.y) * bricks.x + b.x]);
+    return slot * kCellsPerBrick + (l.z * kBrickSize + l.y) * kBrickSize + l.x;
+}
+#else
+ivec3 voxelOfCell(int cell) {
+    ivec3 n = v.dims.xyz;
+    return ivec3(cell % n.x, (cell / n.x) % n.y, cell / (n.x * n.y));
+}
+int cellOfVoxel(ivec3 q) { return (q.z * v.dims.y + q.y) * v.dims.x + q.x; }
+#endif
 #if VOLSTYLE_INDEXED
 layout(std430, binding = kBindingIndexList) readonly buffer b_List {
     uint list[];
@@ -98,7 +130,7 @@ void main() {
     if (inside) {
         ivec3 n = v.dims.xyz;
         int block = int(i) / v.count.z, cell = int(i) % v.count.z;
-        ivec3 c = ivec3(cell % n.x, (cell / n.x) % n.y, cell / (n.x * n.y));
+        ivec3 c = voxelOfCell(cell);
         vec3 sum = vec3(0.0);
         if (z[i].r > 0.0) {
             const ivec3 offsets[6] = ivec3[6](ivec3(1, 0, 0), ivec3(-1, 0, 0), ivec3(0, 1, 0),
@@ -106,7 +138,7 @@ void main() {
             for (int o = 0; o < 6; ++o) {
                 ivec3 q = c + offsets[o];
                 if (any(lessThan(q, ivec3(0))) || any(greaterThanEqual(q, n))) continue;
-                uint j = uint(block * v.count.z + (q.z * n.y + q.y) * n.x + q.x);
+                uint j = uint(block * v.count.z + cellOfVoxel(q));
                 if (z[j].r > 0.0) sum += x[j].rgb - x[i].rgb;
             }
         }

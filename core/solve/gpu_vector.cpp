@@ -41,6 +41,18 @@ std::pair<size_t, size_t> Support::positions(size_t first, size_t count) const {
     return {size_t(lo - host.begin()), size_t(hi - host.begin())};
 }
 
+SparseCells::SparseCells(const BrickLayout& bricks)
+    : slotOfBrick(gl::createBuffer(bricks.slotTable().size() * 4, bricks.slotTable().data(), 0, "slot-of-brick")),
+      offset(bricks.offset()),
+      cells(bricks.storedVoxels()) {
+    std::vector<int32_t> b(bricks.slots() * 4, -1);
+    for (size_t s = 1; s < bricks.slots(); ++s) {
+        const Int3 brick = bricks.brickOfSlot(s);
+        b[4 * s] = brick.x, b[4 * s + 1] = brick.y, b[4 * s + 2] = brick.z;
+    }
+    brickOfSlot = gl::createBuffer(b.size() * 4, b.data(), 0, "brick-of-slot");
+}
+
 struct VectorOps::Dispatch {
     const GpuVector* x = nullptr;
     const GpuVector* y = nullptr;
@@ -49,6 +61,7 @@ struct VectorOps::Dispatch {
     Bounds bounds;
     Range range;
     Int3 dims;
+    const SparseCells* sparse = nullptr;
 };
 
 VectorOps::VectorOps(GpuDevice& device) : m_device(device) {}
@@ -66,8 +79,9 @@ std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
     p.alpha = {float(d.alpha.x), float(d.alpha.y), float(d.alpha.z), 0};
     p.bounds = {d.bounds.lower[0], d.bounds.upper[0], d.bounds.lower[1], d.bounds.upper[1]};
     p.count = {int(count), int(first), int(std::max<size_t>(d.bounds.blockSize, 1)), 0};
-    if (op == kLaplacian) p.count.z = int(d.dims.volume());
+    if (op == kLaplacian) p.count.z = int(d.sparse ? d.sparse->cells : size_t(d.dims.volume()));
     p.dims = {d.dims.x, d.dims.y, d.dims.z, 0};
+    if (d.sparse) p.sparseOffset = {d.sparse->offset.x, d.sparse->offset.y, d.sparse->offset.z, 1};
     m_device.setParams(p);
 
     const bool reduces = op == kDot || op == kStep || op == kMaxChange;
@@ -88,6 +102,11 @@ std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
     if (support) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingIndexList, support->list.id());
     gl::ShaderBuilder builder("vector_ops.comp");
     builder.define("VOLSTYLE_OP", op).define("VOLSTYLE_INDEXED", support ? 1 : 0);
+    if (d.sparse) {
+        builder.define("VOLSTYLE_SPARSE", 1);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSlotOfBrick, d.sparse->slotOfBrick.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingBrickOfSlot, d.sparse->brickOfSlot.id());
+    }
     glUseProgram(m_device.program(builder).id());
     if (count > 0) glDispatchCompute(GLuint(groups), 1, 1);
     gl::barrierAfterComputeWrites();
@@ -125,9 +144,10 @@ Vec3d VectorOps::dot(const GpuVector& x, const GpuVector& y, Range range) {
     return sum;
 }
 
-void VectorOps::laplacian(double scale, const GpuVector& x, const GpuVector& hull, Int3 dims, GpuVector& out, Range range) {
+void VectorOps::laplacian(double scale, const GpuVector& x, const GpuVector& hull, Int3 dims, GpuVector& out, Range range,
+                          const SparseCells* sparse) {
     Dispatch d;
-    d.x = &x, d.y = &out, d.z = &hull, d.alpha = Vec3d(scale), d.dims = dims, d.range = range;
+    d.x = &x, d.y = &out, d.z = &hull, d.alpha = Vec3d(scale), d.dims = dims, d.range = range, d.sparse = sparse;
     run(kLaplacian, d);
 }
 

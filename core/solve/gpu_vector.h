@@ -14,6 +14,7 @@
 #include "core/gpu/gpu_device.h"
 #include "core/math/vec.h"
 #include "core/shaders/layout.h"
+#include "core/volume/brick_layout.h"
 
 namespace volstyle::core {
 
@@ -61,6 +62,15 @@ struct Range {
     size_t count = size_t(-1);  ///< -1: to the end
 };
 
+/// A sparse volume's cells for the Laplacian (brick_layout.h): its brick-to-slot table and each
+/// slot's brick, on the GPU.
+struct SparseCells {
+    explicit SparseCells(const BrickLayout& bricks);
+    gl::Buffer slotOfBrick, brickOfSlot;
+    Int3 offset;
+    size_t cells = 0;  ///< stored voxels (slots × 8³)
+};
+
 class VectorOps {
 public:
     explicit VectorOps(GpuDevice& device);
@@ -68,8 +78,10 @@ public:
     void xpby(const GpuVector& x, const Vec3d& beta, GpuVector& y);                     ///< y = x + βy
     void multiply(const GpuVector& x, GpuVector& y, Range range = {});                 ///< y ⊙= x
     Vec3d dot(const GpuVector& x, const GpuVector& y, Range range = {});
-    /// out = scale · L x over the cells of `hull` (rgb > 0), per block of `dims` cells.
-    void laplacian(double scale, const GpuVector& x, const GpuVector& hull, Int3 dims, GpuVector& out, Range range = {});
+    /// out = scale · L x over the cells of `hull` (rgb > 0), per block of `dims` cells (or of a
+    /// sparse volume's stored voxels, neighbours found through `sparse`).
+    void laplacian(double scale, const GpuVector& x, const GpuVector& hull, Int3 dims, GpuVector& out, Range range = {},
+                   const SparseCells* sparse = nullptr);
     /// Zeroes s where a is at a bound and s points past it.
     void freeSet(const GpuVector& a, GpuVector& s, const Bounds& bounds);
     /// Per channel, the largest t ≥ 0 with a + t·p inside the bounds (1e300 if unbounded).

@@ -46,6 +46,7 @@ std::vector<uint8_t> occupied(const Volume& v) {
 std::vector<Volume> solveKeyFrames(GpuDevice& device, const std::vector<KeyFrame>& frames, const Lighting& lighting, const KeyFrameOptions& o,
                                    KeyFrameReport* report, const std::function<void(int, int)>& progress) {
     check(frames, o);
+    for (const KeyFrame& f : frames) requireDense(f.volume, "key-frame animation");
     const Unknown unknown = o.solve.unknown;
     const Int3 dims = frames[0].volume.dims();
     const Mat4 indexFromWorld = frames[0].volume.worldFromIndex().inverseAffine();

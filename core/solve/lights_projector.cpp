@@ -69,7 +69,7 @@ void LightsProjector::use(const View& v, bool adjoint) {
         .define("VOLSTYLE_HAS_ALBEDO", m_volume.hasAlbedo() ? 1 : 0)
         .define("VOLSTYLE_SKIP_EMPTY", 1);
     if (v.setup.paths) builder.define("VOLSTYLE_CURVED", 1);
-    glUseProgram(m_device.program(builder).id());
+    glUseProgram(m_device.program(forStorage(builder, m_volume)).id());
     bindMarch(m_device, m_volume, v.setup);
     if (m_volume.hasAlbedo()) glBindTextureUnit(layout::kUnitAlbedo, m_volume.albedoTexture());
 }

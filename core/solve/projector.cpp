@@ -21,6 +21,8 @@ Projector::Projector(GpuDevice& device, GpuVolume& volume, const Lighting& light
       m_unknownDims(unknownDims), m_step(stepVoxels), m_exactTraversal(exactTraversal) {
     if (unknownDims.x < 1 || unknownDims.y < 1 || unknownDims.z < 1)
         throw InvalidArgument("Projector: the unknown grid must have at least one voxel");
+    if (volume.isSparse() && !(unknownDims == volume.dims()))
+        throw InvalidArgument("Projector: a sparse volume's unknowns are its own voxels (no other resolution)");
     if (unknown == Unknown::Extinction) m_lighting.lights.clear();  // log-space tomography: no light
     // Only albedo's weights hold L_scat: the others need no light volumes for the environment.
     if (unknown == Unknown::Extinction || unknown == Unknown::Emission) m_lighting.environment = EnvironmentLight{};
@@ -45,7 +47,7 @@ void Projector::addView(const Camera& camera) {
     p.unknownDims = {m_unknownDims.x, m_unknownDims.y, m_unknownDims.z, 0};
     p.unknownScale = {float(m_unknownDims.x) / float(n.x), float(m_unknownDims.y) / float(n.y),
                       float(m_unknownDims.z) / float(n.z), 0};
-    p.unknownLayout = {int(m_unknownDims.volume()), 0, 0, 0};
+    p.unknownLayout = {int(cellCount()), 0, 0, 0};
     p.viewPixels = {int(m_pixelCount), 0, 0, 0};
     p.projectorCutoff = {kProjectorTermination, 0, 0, 0};
     m_pixelCount += size_t(camera.width) * camera.height;
@@ -61,7 +63,7 @@ void Projector::useProgram(const View& v, gl::ShaderBuilder& builder) {
         .define("VOLSTYLE_SKIP_EMPTY", 1)
         .define("VOLSTYLE_EXACT_TRAVERSAL", m_exactTraversal ? 1 : 0);
     if (v.setup.paths) builder.define("VOLSTYLE_CURVED", 1);  // the view's refracted paths, traced once in addView
-    glUseProgram(m_device.program(builder).id());
+    glUseProgram(m_device.program(forStorage(builder, m_volume)).id());
     bindMarch(m_device, m_volume, v.setup);
 }
 

@@ -42,7 +42,9 @@ public:
     size_t pixelCount() const { return m_pixelCount; }
     Range viewRange(size_t view) const { return {m_views[view].offset, size_t(m_views[view].camera.width) * m_views[view].camera.height}; }
     /// Unknown elements: voxels of the unknown grid, times 2 for emission + albedo.
-    size_t elementCount() const { return size_t(m_unknownDims.volume()) * (m_unknown == Unknown::EmissionAlbedo ? 2 : 1); }
+    /// Unknowns per block: the unknown grid's voxels, or a sparse volume's stored voxels (its own grid).
+    size_t cellCount() const { return m_volume.isSparse() ? m_volume.storedVoxels() : size_t(m_unknownDims.volume()); }
+    size_t elementCount() const { return cellCount() * (m_unknown == Unknown::EmissionAlbedo ? 2 : 1); }
     Int3 unknownDims() const { return m_unknownDims; }
     Unknown unknown() const { return m_unknown; }
 

@@ -122,7 +122,7 @@ std::vector<std::shared_ptr<const ViewRenders>> renderBounds(GpuDevice& device, 
     if (!withAlbedoOne) return share();
     // The same extinction, so the light-depth volumes come from the device's cache.
     Volume white = volume;
-    white.ensureAlbedo(1.0f).assign(white.voxelCount() * 3, 1.0f);
+    white.ensureAlbedo(1.0f).assign(white.storedVoxels() * 3, 1.0f);
     gpu.upload(white);
     for (size_t v = 0; v < views.size(); ++v) {
         const RenderLayers l = renderer.renderLayers(gpu, views[v].camera, views[v].lightingFor(lighting), settings);

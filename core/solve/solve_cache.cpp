@@ -22,7 +22,11 @@ std::string boxKey(const Volume& v) {
     return key;
 }
 
-std::string gridKey(const Volume& v) { return boxKey(v) + fmt::format(":σ{:x}", hashOf(v.extinction())); }
+std::string gridKey(const Volume& v) {
+    std::string key = boxKey(v) + fmt::format(":σ{:x}", hashOf(v.extinction()));
+    if (const BrickLayout* b = v.bricks()) key += fmt::format(":bricks{:x}", hashOf(b->slotTable().data(), b->slotTable().size() * 4));
+    return key;
+}
 
 std::string cameraKey(const Camera& c) {
     return fmt::format("cam:{},{},{}:{},{},{}:{},{},{}:{}:{}x{}:{},{}", c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y,

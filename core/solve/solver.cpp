@@ -45,7 +45,7 @@ void Solver::State::applyA(const GpuVector& x, GpuVector& img, GpuVector& lap) {
 
 void Solver::State::applyLaplacian(const GpuVector& x, GpuVector& lap) {
     for (const auto& b : blocks)
-        if (b.cLap > 0) ops.laplacian(b.cLap, x, hull, udims, lap, b.range);  // blocks without stay 0
+        if (b.cLap > 0) ops.laplacian(b.cLap, x, hull, udims, lap, b.range, sparseCells.get());  // blocks without stay 0
 }
 
 void Solver::State::move(const Vec3d& step, const GpuVector& x, const GpuVector& img, const GpuVector& lap) {
@@ -62,7 +62,7 @@ void Solver::State::applyAt() {
     W->adjoint(tmpImg, s);
     for (const auto& b : blocks) {
         if (b.cLap > 0) {
-            ops.laplacian(b.cLap, rLap, hull, udims, tmpU, b.range);  // L is symmetric
+            ops.laplacian(b.cLap, rLap, hull, udims, tmpU, b.range, sparseCells.get());  // L is symmetric
             ops.axpy(Vec3d(1.0), tmpU, s, b.range);
         }
         if (b.cId > 0) ops.axpy(Vec3d(b.cId), rId, s, b.range);
@@ -100,7 +100,7 @@ void Solver::State::computeResiduals() {
     rId.fill(0.0f);
     std::vector<float> av, r;
     for (const auto& b : blocks) {
-        if (b.cLap > 0) ops.laplacian(-b.cLap, a, hull, udims, rLap, b.range);
+        if (b.cLap > 0) ops.laplacian(-b.cLap, a, hull, udims, rLap, b.range, sparseCells.get());
         if (b.cId <= 0) continue;
         if (av.empty()) av = a.download(), r.assign(av.size(), 0.0f);
         for (size_t i = 4 * b.range.first; i < 4 * (b.range.first + b.range.count); ++i)

@@ -46,6 +46,22 @@ void Solver::State::markHullFromExtinction() {
     // Unknowns whose basis support overlaps non-zero extinction (TVCG Sec. 5.2, visual hulls): the
     // rest have no influence on any pixel.
     const Int3 n = volume.dims();
+    if (volume.isSparse()) {  // the unknowns are the stored voxels: the same ±1 neighbourhood, through the bricks
+        const size_t blocks = elements / cells;
+        const std::vector<float>& ext = volume.extinction();
+        forEachActiveVoxel(volume, [&](Int3 p, size_t s) {
+            if (std::max({ext[3 * s], ext[3 * s + 1], ext[3 * s + 2]}) <= 0) return;
+            for (int z = std::max(p.z - 1, 0); z <= std::min(p.z + 1, n.z - 1); ++z)
+                for (int y = std::max(p.y - 1, 0); y <= std::min(p.y + 1, n.y - 1); ++y)
+                    for (int x = std::max(p.x - 1, 0); x <= std::min(p.x + 1, n.x - 1); ++x) {
+                        const size_t cell = volume.index(x, y, z);
+                        if (cell < size_t(kBrickVoxels)) continue;  // the background brick: not an unknown
+                        for (size_t b = 0; b < blocks; ++b)
+                            hullHost[4 * (b * cells + cell)] = hullHost[4 * (b * cells + cell) + 1] = hullHost[4 * (b * cells + cell) + 2] = 1.0f;
+                    }
+        });
+        return;
+    }
     const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
     for (int k = 0; k < n.z; ++k)
         for (int j = 0; j < n.y; ++j)
@@ -69,22 +85,31 @@ void Solver::State::markHullFromMasks(const std::vector<float>& o, const std::ve
     // constrained pixel that shows only background (o = 0) is outside the hull.
     const Int3 n = volume.dims();
     const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
+    auto carved = [&](const Vec3d& pw) {
+        size_t offset = 0;
+        for (const auto& v : views) {
+            if (auto px = v.camera.project(pw)) {
+                size_t idx = 4 * (offset + size_t(px->y) * v.camera.width + size_t(px->x));
+                bool constrained = w[idx] > 0 || w[idx + 1] > 0 || w[idx + 2] > 0;
+                bool empty = o[idx] <= kEmptyObservation && o[idx + 1] <= kEmptyObservation && o[idx + 2] <= kEmptyObservation;
+                if (constrained && empty) return true;
+            }
+            offset += size_t(v.camera.width) * v.camera.height;
+        }
+        return false;
+    };
+    if (volume.isSparse()) {  // the unknowns are the stored voxels
+        forEachActiveVoxel(volume, [&](Int3 p, size_t cell) {
+            if (!carved(volume.worldFromIndex().applyPoint(Vec3d(p.x, p.y, p.z))))
+                hullHost[4 * cell] = hullHost[4 * cell + 1] = hullHost[4 * cell + 2] = 1.0f;
+        });
+        return;
+    }
     for (int k = 0; k < udims.z; ++k)
         for (int j = 0; j < udims.y; ++j)
             for (int i = 0; i < udims.x; ++i) {
                 const Vec3d pw = volume.worldFromIndex().applyPoint((Vec3d(i, j, k) + Vec3d(0.5)) / scale - Vec3d(0.5));
-                bool inside = true;
-                size_t offset = 0;
-                for (const auto& v : views) {
-                    if (auto px = v.camera.project(pw)) {
-                        size_t idx = 4 * (offset + size_t(px->y) * v.camera.width + size_t(px->x));
-                        bool constrained = w[idx] > 0 || w[idx + 1] > 0 || w[idx + 2] > 0;
-                        bool empty = o[idx] <= kEmptyObservation && o[idx + 1] <= kEmptyObservation &&
-                                     o[idx + 2] <= kEmptyObservation;
-                        if (constrained && empty) inside = false;
-                    }
-                    offset += size_t(v.camera.width) * v.camera.height;
-                }
+                const bool inside = !carved(pw);
                 if (inside) markCell(hullHost, cells, elements / cells, udims, i, j, k);
             }
 }

@@ -53,7 +53,7 @@ void Solver::State::restrictToStroke() {
     lastKey = lastSolveKey(volume, lighting, opt, udims, views);
     // The marks below read every view's rows; and the unknowns must be the volume's own grid: a
     // coarser one is resampled on the way in and out (a blur), so the rest would not stay put.
-    if (!opt.localResolve || opt.prior.weight > 0 || !W->allCached() || !(udims == volume.dims())) return;
+    if (!opt.localResolve || opt.prior.weight > 0 || !W->allCached() || !(udims == volume.dims()) || volume.isSparse()) return;
     const auto last = cache->findLastSolve(lastKey);
     if (!last || last->observations.size() != obsHost.size() || last->resultHash != unknownsHash(volume, opt.unknown))
         return;  // not the volume the last solve over these views left

@@ -44,6 +44,7 @@ struct Solver::State final : BoundedLeastSquares {
     size_t cells = 0, elements = 0;
     std::unique_ptr<GpuVolume> gpu;
     std::unique_ptr<Projector> W;
+    std::unique_ptr<SparseCells> sparseCells;  ///< a sparse volume's cells, for the Laplacian (else null)
     VectorOps ops;
     // The unknowns a, the previous iterate, gradient s and direction p; the image rows' data
     // (observations, √weights) and residual/work vectors; the Laplacian rows' residual and work.
@@ -78,6 +79,8 @@ struct Solver::State final : BoundedLeastSquares {
 
     // Set-up (solver_setup.cpp).
     void validateInputs();
+    /// A sparse volume: activates the bricks next to its active ones (the unknowns' apron).
+    void growApron();
     void allocate();
     void buildObservations();
     void buildHull();

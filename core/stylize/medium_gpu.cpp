@@ -49,6 +49,7 @@ void dispatchOver(Int3 n) {
 /// The mean of the volume's RGB extinction per voxel (stylize_extinction_mean.comp), once per
 /// extinction version; `built` when it was made.
 std::shared_ptr<const DerivedGrid> meanExtinction(GpuDevice& device, const GpuVolume& gpu, bool& built) {
+    if (gpu.isSparse()) throw InvalidArgument("the stylizer's heterogeneous medium works on dense volumes only, and this volume is sparse");
     const std::string key = "stylizer-extinction-mean/" + std::to_string(gpu.extinctionVersion());
     if (auto cached = device.cache().find<DerivedGrid>(key)) return cached;
     DerivedGrid made{texture3D(gpu.dims(), nullptr, "stylizer-extinction-mean")};

@@ -92,6 +92,7 @@ double PerturbationField::extinctionScale(const Vec3d& p) const {
 }
 
 Volume perturbVolume(const Volume& volume, const Perturbation& p) {
+    requireDense(volume, "the perturbation");
     Volume out = volume;
     if (!p.active()) return out;
     const PerturbationField field(p, volume.dims());

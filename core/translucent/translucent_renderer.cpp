@@ -171,6 +171,7 @@ Image TranslucentRenderer::render(GpuVolume& volume, const Camera& cam, const Li
                                   const TranslucentSettings& settings, TranslucentStats* statsOut, Image* medium,
                                   const WorkBudget& budget) {
     VOLSTYLE_CHECK(m_device.isOwnedByThisThread(), ==, true);
+    if (volume.isSparse()) throw InvalidArgument("the translucent preview works on dense volumes only, and this volume is sparse");
     cam.validate();
     lighting.validate();
     settings.validate();

@@ -3,7 +3,7 @@
 /// What the grids of a VDB file mean to volstyle, without OpenVDB: the role each grid plays in a
 /// Volume, the names a role is read from and written as, what a voxel the file does not store is
 /// worth, and the frame a grid's name stamps it with in a file that holds a whole animation.
-/// vdb_io.cpp, the OpenVDB side, applies them.
+/// vdb_read.cpp and vdb_write.cpp, the OpenVDB side, apply them.
 
 #include <optional>
 #include <string>

@@ -2,7 +2,7 @@
 /// \file vdb_io.h
 /// OpenVDB files (SPEC §1): grids `extinction` (float or Vec3f) or float `density`, `emission`
 /// and `albedo` (Vec3f or float), optional float `refractive_index`. OpenVDB headers stay inside
-/// vdb_io.cpp.
+/// vdb_read.cpp and vdb_write.cpp.
 
 #include <map>
 #include <string>

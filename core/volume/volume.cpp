@@ -18,14 +18,147 @@ Volume::Volume(Int3 dims, const Mat4& worldFromIndex)
     }
 }
 
+const char* volumeStorageName(VolumeStorage storage) {
+    return storage == VolumeStorage::Dense ? "dense" : storage == VolumeStorage::Sparse ? "sparse" : "auto";
+}
+
+VolumeStorage volumeStorageNamed(const std::string& name) {
+    if (name == "auto") return VolumeStorage::Automatic;
+    if (name == "dense") return VolumeStorage::Dense;
+    if (name == "sparse") return VolumeStorage::Sparse;
+    throw InvalidArgument("storage must be auto, dense or sparse, not '" + name + "'");
+}
+
+Volume::Volume(BrickLayout bricks, const Mat4& worldFromIndex)
+    : m_dims(bricks.dims()), m_worldFromIndex(worldFromIndex), m_bricks(std::move(bricks)) {
+    if (m_dims.x < 1 || m_dims.y < 1 || m_dims.z < 1) {
+        std::ostringstream s;
+        s << "a volume's dimensions must be at least 1x1x1, got " << m_dims;
+        throw InvalidArgument(s.str());
+    }
+    m_extinction.assign(m_bricks->storedVoxels() * 3, 0.0f);
+}
+
 std::vector<float>& Volume::ensureAlbedo(float value) {
-    if (m_albedo.empty()) m_albedo.assign(voxelCount() * 3, value);
+    // A sparse volume's inactive bricks read the background brick: albedo's default there.
+    if (m_albedo.empty()) m_albedo.assign(storedVoxels() * 3, m_bricks ? kDefaultAlbedo : value);
+    if (m_bricks && value != kDefaultAlbedo) std::fill(m_albedo.begin() + 3 * kBrickVoxels, m_albedo.end(), value);
     return m_albedo;
 }
 
 std::vector<float>& Volume::ensureEmission() {
-    if (m_emission.empty()) m_emission.assign(voxelCount() * 3, 0.0f);
+    if (m_emission.empty()) m_emission.assign(storedVoxels() * 3, 0.0f);
     return m_emission;
+}
+
+size_t Volume::activeVoxels() const {
+    if (!m_bricks) return voxelCount();
+    size_t n = 0;
+    for (size_t s = 1; s < m_bricks->slots(); ++s) {
+        const Int3 f = m_bricks->firstVoxel(m_bricks->brickOfSlot(s));
+        size_t c = 1;
+        for (int a = 0; a < 3; ++a) c *= size_t(std::min(f[a] + kBrickSide, m_dims[a]) - std::max(f[a], 0));
+        n += c;
+    }
+    return n;
+}
+
+uint32_t Volume::activateBrick(Int3 b) {
+    if (!m_bricks) throw InternalError("activateBrick on a dense volume");
+    const size_t before = m_bricks->slots();
+    const uint32_t slot = m_bricks->activate(b);
+    if (m_bricks->slots() != before) {
+        // The new brick starts as a copy of the background brick.
+        auto grow = [](std::vector<float>& g, size_t channels) {
+            if (g.empty()) return;
+            g.insert(g.end(), g.begin(), g.begin() + ptrdiff_t(channels * kBrickVoxels));
+        };
+        grow(m_extinction, 3), grow(m_albedo, 3), grow(m_emission, 3);
+        if (m_refractiveIndex) grow(*m_refractiveIndex, 1);
+    }
+    return slot;
+}
+
+Int3 Volume::voxelOfStored(size_t stored) const {
+    if (!m_bricks) {
+        const size_t nx = size_t(m_dims.x), ny = size_t(m_dims.y);
+        return {int(stored % nx), int((stored / nx) % ny), int(stored / (nx * ny))};
+    }
+    const size_t slot = stored / kBrickVoxels, local = stored % kBrickVoxels;
+    if (slot == 0) return {-1, -1, -1};
+    const Int3 f = m_bricks->firstVoxel(m_bricks->brickOfSlot(slot));
+    return {f.x + int(local % kBrickSide), f.y + int((local / kBrickSide) % kBrickSide), f.z + int(local / (kBrickSide * kBrickSide))};
+}
+
+namespace {
+
+/// Copies every voxel of the box from one volume's grid to another's (either layout).
+void copyBox(const Volume& from, const std::vector<float>& src, const Volume& to, std::vector<float>& dst, int channels) {
+    if (src.empty()) return;
+    const Int3 d = from.dims();
+    for (int k = 0; k < d.z; ++k)
+        for (int j = 0; j < d.y; ++j)
+            for (int i = 0; i < d.x; ++i) {
+                const size_t a = from.index(i, j, k), b = to.index(i, j, k);
+                for (int c = 0; c < channels; ++c) dst[size_t(channels) * b + size_t(c)] = src[size_t(channels) * a + size_t(c)];
+            }
+}
+
+template <typename F>
+void forEachGrid(const Volume& from, Volume& to, F&& f) {
+    f(from.extinction(), to.extinction(), 3);
+    if (from.hasAlbedo()) f(from.albedo(), to.ensureAlbedo(), 3);
+    if (from.hasEmission()) f(from.emission(), to.ensureEmission(), 3);
+    if (from.refractiveIndex()) {
+        to.refractiveIndex() = std::vector<float>(to.storedVoxels(), 1.0f);
+        f(*from.refractiveIndex(), *to.refractiveIndex(), 1);
+    }
+}
+
+}  // namespace
+
+Volume Volume::toDense(const VolumeLimits& limits) const {
+    if (!m_bricks) return *this;
+    if (m_dims.volume() > limits.maxVoxels || std::max({m_dims.x, m_dims.y, m_dims.z}) > limits.maxSide) {
+        std::ostringstream s;
+        s << "a dense copy of this " << m_dims << " volume is over the limit of " << limits.maxVoxels << " voxels (at most "
+          << limits.maxSide << " on a side)";
+        throw LimitExceeded(s.str());
+    }
+    Volume out(m_dims, m_worldFromIndex);
+    forEachGrid(*this, out, [&](const std::vector<float>& src, std::vector<float>& dst, int c) { copyBox(*this, src, out, dst, c); });
+    out.m_vdbSource = m_vdbSource;
+    return out;
+}
+
+Volume Volume::toSparse(Int3 offset) const {
+    if (m_bricks) return *this;
+    BrickLayout layout(m_dims, offset);
+    // A brick is active when any of its voxels differs from the background in any grid.
+    const float* grids[3] = {m_extinction.data(), hasAlbedo() ? m_albedo.data() : nullptr, hasEmission() ? m_emission.data() : nullptr};
+    const float background[3] = {0.0f, kDefaultAlbedo, 0.0f};
+    for (int k = 0; k < m_dims.z; ++k)
+        for (int j = 0; j < m_dims.y; ++j)
+            for (int i = 0; i < m_dims.x; ++i) {
+                const size_t n = index(i, j, k);
+                bool differs = m_refractiveIndex && (*m_refractiveIndex)[n] != 1.0f;
+                for (int g = 0; g < 3 && !differs; ++g)
+                    if (grids[g])
+                        for (int c = 0; c < 3; ++c) differs = differs || grids[g][3 * n + size_t(c)] != background[g];
+                if (differs) layout.activate(layout.brickOf({i, j, k}));
+            }
+    Volume out(std::move(layout), m_worldFromIndex);
+    forEachGrid(*this, out, [&](const std::vector<float>& src, std::vector<float>& dst, int c) { copyBox(*this, src, out, dst, c); });
+    out.m_vdbSource = m_vdbSource;
+    return out;
+}
+
+void requireDense(const Volume& volume, const char* what) {
+    if (!volume.isSparse()) return;
+    std::ostringstream s;
+    s << what << " works on dense volumes only, and this " << volume.dims() << " volume is sparse (" << volume.activeVoxels()
+      << " active voxels); load it with dense storage (e.g. --storage dense) if it fits";
+    throw InvalidArgument(s.str());
 }
 
 std::pair<Vec3d, Vec3d> Volume::worldBounds() const {
@@ -77,26 +210,42 @@ InvalidValues findInvalidValues(const std::vector<float>& grid, int channels, fl
 namespace {
 
 void checkGrid(const Volume& v, const std::vector<float>& g, int channels, const char* name, float lo, float hi) {
-    const size_t expected = v.voxelCount() * size_t(channels);
+    const size_t expected = v.storedVoxels() * size_t(channels);
     if (g.size() != expected) {
         throw InvalidArgument(std::string("grid '") + name + "' has " + std::to_string(g.size()) +
                               " values, expected " + std::to_string(expected));
     }
     InvalidValues bad = findInvalidValues(g, channels, lo, hi);
     if (bad.count > 0) {
-        const Int3 d = v.dims();
-        const size_t n = bad.firstVoxel;
+        const Int3 at = v.voxelOfStored(bad.firstVoxel);
         std::ostringstream s;
         s << "grid '" << name << "' has " << bad.count << " voxel(s) with values outside [" << lo << ", ";
         if (hi == std::numeric_limits<float>::max()) s << "inf)";
         else s << hi << "]";
-        s          << " or not finite; the first is " << bad.firstValue << " at voxel (" << n % size_t(d.x) << ", "
-          << (n / size_t(d.x)) % size_t(d.y) << ", " << n / (size_t(d.x) * size_t(d.y)) << ")";
+        s << " or not finite; the first is " << bad.firstValue;
+        if (at.x < 0) s << " in the background brick";
+        else s << " at voxel (" << at.x << ", " << at.y << ", " << at.z << ")";
         throw InvalidArgument(s.str());
     }
 }
 
 }  // namespace
+
+void checkSparseLimits(Int3 dims, size_t activeBricks, int rgbGrids, const VolumeLimits& limits) {
+    const int64_t voxels = int64_t(activeBricks) * kBrickVoxels;
+    const int64_t bytes = (voxels + kBrickVoxels) * 3 * int64_t(sizeof(float)) * rgbGrids;
+    std::ostringstream s;
+    if (std::max({dims.x, dims.y, dims.z}) > limits.maxSparseSide) {
+        s << "the " << dims << " box is over the limit of " << limits.maxSparseSide << " voxels on a side";
+        throw LimitExceeded(s.str());
+    }
+    if (voxels > limits.maxActiveVoxels || bytes > limits.maxSparseBytes) {
+        s << "the " << dims << " volume has " << activeBricks << " active bricks of " << kBrickSide << "^3 (" << voxels
+          << " voxels, " << (bytes >> 20) << " MiB for " << rgbGrids << " RGB grid(s)), over the limit of " << limits.maxActiveVoxels
+          << " active voxels and " << (limits.maxSparseBytes >> 20) << " MiB";
+        throw LimitExceeded(s.str());
+    }
+}
 
 void Volume::validate(const VolumeLimits& limits) const {
     std::ostringstream s;
@@ -104,7 +253,17 @@ void Volume::validate(const VolumeLimits& limits) const {
         s << "the volume's dimensions " << m_dims << " are empty";
         throw InvalidArgument(s.str());
     }
-    if (m_dims.volume() > limits.maxVoxels || m_dims.x > limits.maxSide ||
+    if (m_bricks) {
+        checkSparseLimits(m_dims, m_bricks->activeBricks(), 1 + int(hasAlbedo()) + int(hasEmission()), limits);
+        if (!(m_bricks->dims() == m_dims)) throw InternalError("a sparse volume's bricks cover another box");
+        // Empty-space skipping takes an inactive brick to be empty.
+        auto zeroBackground = [&](const std::vector<float>& g, const char* name) {
+            if (!g.empty() && std::any_of(g.begin(), g.begin() + 3 * kBrickVoxels, [](float v) { return v != 0.0f; }))
+                throw InvalidArgument(std::string("a sparse volume's ") + name + " must be 0 outside its active voxels (the grid's background is not)");
+        };
+        if (m_extinction.size() >= size_t(3 * kBrickVoxels)) zeroBackground(m_extinction, "extinction");
+        if (m_emission.size() >= size_t(3 * kBrickVoxels)) zeroBackground(m_emission, "emission");
+    } else if (m_dims.volume() > limits.maxVoxels || m_dims.x > limits.maxSide ||
         m_dims.y > limits.maxSide || m_dims.z > limits.maxSide) {
         s << m_dims << " voxels is over the limit of " << limits.maxVoxels << " voxels (at most "
           << limits.maxSide << " on a side)";

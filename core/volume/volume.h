@@ -1,9 +1,14 @@
 #pragma once
 /// \file volume.h
-/// A dense, host-side participating-medium volume (SPEC §1): RGB extinction, albedo and emission
-/// grids on one index space, and the index-to-world transform (voxel (i,j,k) has its centre at
+/// A host-side participating-medium volume (SPEC §1): RGB extinction, albedo and emission grids on
+/// one index space, and the index-to-world transform (voxel (i,j,k) has its centre at
 /// worldFromIndex·(i,j,k)). Values are trilinear between voxel centres, clamped to the edge inside
 /// the voxels' box [-0.5, n-0.5]³ (index space), and zero outside it.
+///
+/// Dense volumes store every voxel of the box (x fastest). Sparse ones (issue #39) store only their
+/// active bricks (brick_layout.h): the grids then hold bricks in slot order, the background brick
+/// first, and index() maps a voxel to its place there. Code that walks a grid as a dense box asks
+/// isSparse() first (or requireDense()).
 
 #include <cstdint>
 #include <memory>
@@ -12,19 +17,34 @@
 #include <vector>
 
 #include "core/math/vec.h"
+#include "core/volume/brick_layout.h"
 
 namespace volstyle::core {
 
-/// What a volume may be; over these, loading fails with a message naming the limit.
+/// How a loaded volume is stored: dense when its box fits VolumeLimits::maxVoxels (exactly as
+/// before sparse volumes existed), else sparse; or one of them always.
+enum class VolumeStorage { Automatic, Dense, Sparse };
+/// "auto", "dense", "sparse"; volumeStorageNamed throws InvalidArgument for any other name.
+const char* volumeStorageName(VolumeStorage storage);
+VolumeStorage volumeStorageNamed(const std::string& name);
+
+/// What a volume may be; over these, loading fails with a message naming the limit, before the
+/// grids are allocated.
 struct VolumeLimits {
+    /// Dense volumes: voxels of the box, and voxels on a side.
     int64_t maxVoxels = int64_t(256) * 256 * 256;
     int maxSide = 1024;
+    /// Sparse volumes: voxels of the active bricks, the bytes their grids take, and the box's side.
+    int64_t maxActiveVoxels = int64_t(256) << 20;
+    int64_t maxSparseBytes = int64_t(8) << 30;
+    int maxSparseSide = 4096;  // a brick table of at most 512³ entries (512 MiB)
+    VolumeStorage storage = VolumeStorage::Automatic;
 };
 
 /// What a volume read from a VDB file keeps of that file, so that writing it again loses nothing:
 /// the file's grids as read (names, value types, classes, transforms, metadata, the grids volstyle
-/// does not use), its metadata and the index box the dense grids cover. Opaque outside vdb_io.cpp,
-/// the one translation unit that includes OpenVDB; immutable and shared by every copy of the volume.
+/// does not use), its metadata and the index box the volume covers. Defined in vdb_file.h, which
+/// only the OpenVDB translation units include; immutable and shared by every copy of the volume.
 struct VdbSource;
 
 /// Defaults for absent grids: albedo 1 (white, lossless scattering: a cloud), emission 0.
@@ -35,13 +55,34 @@ public:
     Volume() = default;
     /// A volume of `dims` voxels, all extinction zero, with no albedo or emission grid.
     Volume(Int3 dims, const Mat4& worldFromIndex);
+    /// A sparse volume stored as `bricks`, all extinction zero, with no albedo or emission grid.
+    Volume(BrickLayout bricks, const Mat4& worldFromIndex);
+
+    bool isSparse() const { return m_bricks.has_value(); }
+    /// The bricks of a sparse volume, else null.
+    const BrickLayout* bricks() const { return m_bricks ? &*m_bricks : nullptr; }
+    /// Voxels each grid stores: the box's for a dense volume, the active bricks' (and the
+    /// background brick's) for a sparse one.
+    size_t storedVoxels() const { return m_bricks ? m_bricks->storedVoxels() : voxelCount(); }
+    /// Voxels that hold data: the box's, or the active bricks' (clipped to the box, background excluded).
+    size_t activeVoxels() const;
+    /// Activates brick b of a sparse volume: its voxels read the background's values until written.
+    /// Returns its slot.
+    uint32_t activateBrick(Int3 b);
+    /// The voxel of the box a stored voxel belongs to (the inverse of index(); background: none).
+    Int3 voxelOfStored(size_t stored) const;
+    /// The same volume stored densely (throws LimitExceeded over `limits`).
+    Volume toDense(const VolumeLimits& limits = {}) const;
+    /// The same volume stored as bricks with `offset` (every brick holding a voxel that differs
+    /// from the background active).
+    Volume toSparse(Int3 offset = {0, 0, 0}) const;
 
     Int3 dims() const { return m_dims; }
     size_t voxelCount() const { return size_t(m_dims.volume()); }
     const Mat4& worldFromIndex() const { return m_worldFromIndex; }
     void setWorldFromIndex(const Mat4& m) { m_worldFromIndex = m; }
 
-    /// RGB, 3 floats per voxel, x fastest then y then z. Albedo and emission may be empty
+    /// RGB, 3 floats per stored voxel (dense: x fastest then y then z). Albedo and emission may be empty
     /// (absent: kDefaultAlbedo and 0).
     std::vector<float>& extinction() { return m_extinction; }
     const std::vector<float>& extinction() const { return m_extinction; }
@@ -57,10 +98,11 @@ public:
     const std::shared_ptr<const VdbSource>& vdbSource() const { return m_vdbSource; }
     void setVdbSource(std::shared_ptr<const VdbSource> source) { m_vdbSource = std::move(source); }
 
-    /// Bytes its grids take in memory.
+    /// Bytes its grids (and brick table) take in memory.
     size_t memoryBytes() const {
         return (m_extinction.size() + m_albedo.size() + m_emission.size() + (m_refractiveIndex ? m_refractiveIndex->size() : 0)) *
-               sizeof(float);
+                   sizeof(float) +
+               (m_bricks ? m_bricks->tableBytes() : 0);
     }
 
     bool hasAlbedo() const { return !m_albedo.empty(); }
@@ -69,7 +111,10 @@ public:
     std::vector<float>& ensureAlbedo(float value = kDefaultAlbedo);
     std::vector<float>& ensureEmission();
 
+    /// Where voxel (i,j,k) is stored (× 3 for an RGB grid). Sparse: in the background brick when
+    /// its brick is inactive (read it; activateBrick before writing).
     size_t index(int i, int j, int k) const {
+        if (m_bricks) return m_bricks->storageIndex({i, j, k});
         return (size_t(k) * m_dims.y + size_t(j)) * m_dims.x + size_t(i);
     }
     void setExtinction(int i, int j, int k, Vec3 v) { put(m_extinction, i, j, k, v); }
@@ -101,10 +146,42 @@ private:
 
     Int3 m_dims;
     Mat4 m_worldFromIndex;
+    std::optional<BrickLayout> m_bricks;
     std::vector<float> m_extinction, m_albedo, m_emission;
     std::optional<std::vector<float>> m_refractiveIndex;
     std::shared_ptr<const VdbSource> m_vdbSource;
 };
+
+/// Calls f(Int3 voxel, size_t stored) for every voxel of the box that holds data: each voxel of a
+/// dense volume; each voxel of a sparse one's active bricks that lies inside the box.
+template <typename F>
+void forEachActiveVoxel(const Volume& v, F&& f) {
+    const Int3 d = v.dims();
+    if (const BrickLayout* bricks = v.bricks()) {
+        for (size_t slot = 1; slot < bricks->slots(); ++slot) {
+            const Int3 first = bricks->firstVoxel(bricks->brickOfSlot(slot));
+            size_t stored = slot * size_t(kBrickVoxels);
+            for (int z = 0; z < kBrickSide; ++z)
+                for (int y = 0; y < kBrickSide; ++y)
+                    for (int x = 0; x < kBrickSide; ++x, ++stored) {
+                        const Int3 p{first.x + x, first.y + y, first.z + z};
+                        if (p.x >= 0 && p.y >= 0 && p.z >= 0 && p.x < d.x && p.y < d.y && p.z < d.z) f(p, stored);
+                    }
+        }
+        return;
+    }
+    size_t n = 0;
+    for (int k = 0; k < d.z; ++k)
+        for (int j = 0; j < d.y; ++j)
+            for (int i = 0; i < d.x; ++i, ++n) f(Int3{i, j, k}, n);
+}
+
+/// Throws LimitExceeded when a sparse volume of `dims` with `activeBricks` and `rgbGrids` grids is
+/// over `limits` (checked before its grids are allocated, and by validate()).
+void checkSparseLimits(Int3 dims, size_t activeBricks, int rgbGrids, const VolumeLimits& limits);
+
+/// Throws InvalidArgument naming `what` when `volume` is sparse (code that walks the dense box).
+void requireDense(const Volume& volume, const char* what);
 
 /// Voxels of a grid with a value outside [lo, hi] or not finite: how many, and the first (flat
 /// voxel index) with its bad value.

@@ -11,7 +11,8 @@ namespace {
 void checkInChild(const std::string& path, const core::VolumeLimits& limits, const VdbReaderOptions& reader, bool frames) {
     if (reader.executable.empty()) return;
     std::vector<std::string> argv{reader.executable, "read-vdb", path, "--max-voxels", std::to_string(limits.maxVoxels),
-                                  "--max-memory-mib", std::to_string(reader.maxAddressSpaceMiB)};
+                                  "--max-active-voxels", std::to_string(limits.maxActiveVoxels), "--storage",
+                                  core::volumeStorageName(limits.storage), "--max-memory-mib", std::to_string(reader.maxAddressSpaceMiB)};
     if (frames) argv.push_back("--frames");
     throwChildFailure(runChild(argv, reader.seconds), path, "VDB", "OpenVDB", reader.seconds);
 }

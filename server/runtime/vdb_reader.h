@@ -29,7 +29,7 @@ core::Volume loadUntrustedVdb(const std::string& path, const core::VolumeLimits&
 /// is stamped with a frame).
 std::map<int, core::Volume> loadUntrustedVdbFrames(const std::string& path, const core::VolumeLimits& limits, const VdbReaderOptions& reader);
 
-/// The child's side is `volstyle read-vdb FILE --max-voxels N [--max-memory-mib M] [--frames]`
+/// The child's side is `volstyle read-vdb FILE --max-voxels N --max-active-voxels N --storage S [--max-memory-mib M] [--frames]`
 /// (cli/reader_commands.cpp). Exit status 0 (loads), 3 (over the limits), 4 (invalid), 5
 /// (unreadable); the reason on stderr.
 

@@ -8,7 +8,7 @@ cd "$root"
 status=0
 
 # The GL-free value headers of core (the volstyle_values target) that protocol may include.
-values='core/base/|core/math/|core/image/image\.h|core/scene/|core/render/(curved_ray|curved_paths)\.h|core/shaders/layout\.h|core/volume/(volume|glass_sphere|basis)\.h|core/volume/resample\.h|core/stylize/(mesh|scene|tf_layers)\.h|core/translucent/(translucent_settings|perturbation)\.h'
+values='core/base/|core/math/|core/image/image\.h|core/scene/|core/render/(curved_ray|curved_paths)\.h|core/shaders/layout\.h|core/volume/(volume|brick_layout|glass_sphere|basis)\.h|core/volume/resample\.h|core/stylize/(mesh|scene|tf_layers)\.h|core/translucent/(translucent_settings|perturbation)\.h'
 
 # check FILES... -- ALLOWED_REGEX: every project include ("core/…", "protocol/…", "server/…") and
 # every forbidden system header must match the allowed pattern.
@@ -29,7 +29,7 @@ check() {
 check "core/base depends on nothing" 'core/base/' core/base/*
 check "core/gl depends only on core/base" 'core/base/|core/gl/' core/gl/*
 check "value types are GL-free" "$values" core/math/* core/image/image.* core/scene/* core/render/curved_ray.* core/render/curved_paths.* \
-  core/volume/volume.* core/volume/basis.h core/volume/resample.* core/stylize/mesh.* core/stylize/scene.* core/stylize/tf_layers.* core/translucent/translucent_settings.* core/translucent/perturbation.*
+  core/volume/volume.* core/volume/brick_layout.* core/volume/basis.h core/volume/resample.* core/stylize/mesh.* core/stylize/scene.* core/stylize/tf_layers.* core/translucent/translucent_settings.* core/translucent/perturbation.*
 check "protocol sees only core's value types" "$values|protocol/" protocol/*.h protocol/*.cpp
 check "core never includes protocol, server or the CLI" 'core/' $(find core -name '*.h' -o -name '*.cpp')
 # Scene values (issue #36: camera, lighting, render settings, solve options) sit below every

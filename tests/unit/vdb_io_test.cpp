@@ -294,13 +294,21 @@ TEST(VdbIo, OverTheLimitIsRejectedBeforeAllocating) {
     auto grid = openvdb::FloatGrid::create();
     grid->setName("density");
     grid->tree().setValue(openvdb::Coord(0, 0, 0), 1.0f);
-    grid->tree().setValue(openvdb::Coord(4000, 4000, 4000), 1.0f);  // 4001³ box, two voxels
+    grid->tree().setValue(openvdb::Coord(5000, 5000, 5000), 1.0f);  // 5001³ box, two voxels
     openvdb::io::File((dir / "huge.vdb").string()).write({grid});
     try {
-        loadVdb((dir / "huge.vdb").string());
+        loadVdb((dir / "huge.vdb").string());  // sparse: over the 4096 a side that its brick table may span
         FAIL();
-    } catch (const InvalidArgument& e) {
-        EXPECT_NE(std::string(e.what()).find("over the limit"), std::string::npos) << e.what();
+    } catch (const LimitExceeded& e) {
+        EXPECT_NE(std::string(e.what()).find("over the limit of 4096 voxels on a side"), std::string::npos) << e.what();
+    }
+    VolumeLimits dense;
+    dense.storage = VolumeStorage::Dense;
+    try {
+        loadVdb((dir / "huge.vdb").string(), dense);
+        FAIL();
+    } catch (const LimitExceeded& e) {
+        EXPECT_NE(std::string(e.what()).find("for dense storage"), std::string::npos) << e.what();
     }
 }
 

@@ -59,6 +59,7 @@ TEST(VdbReader, TheChildsRefusalsKeepTheirKindAndMessage) {
     EXPECT_EQ(loadUntrustedVdb(good, {}, reader).dims(), core::loadVdb(good).dims());
     core::VolumeLimits small;
     small.maxVoxels = 500;
+    small.storage = core::VolumeStorage::Dense;  // (automatic storage would read it sparse)
     try {
         loadUntrustedVdb(good, small, reader);
         FAIL() << "expected LimitExceeded";

@@ -1,14 +1,46 @@
 // Sampling the property grids. Index space: voxel (i,j,k) has its centre at (i,j,k); values are
 // trilinear between centres, clamped to the edge within the voxels' box [-0.5, n-0.5]³, and zero
 // outside it (the march never samples outside).
+//
+// Dense volumes store the grids as 3D textures of the box. Sparse ones (VOLSTYLE_SPARSE, issue
+// #39) as atlases of kBrickSize³ bricks with a table from brick to atlas brick; inactive bricks
+// point at the background brick, so a fetch never branches. Either way a voxel reads the same value.
 #include "common/params.glsl"
 
 #ifndef VOLSTYLE_HW_FILTER
 #define VOLSTYLE_HW_FILTER 0
 #endif
+#ifndef VOLSTYLE_SPARSE
+#define VOLSTYLE_SPARSE 0
+#endif
 
 layout(binding = kUnitExtinction) uniform sampler3D s_extinction;
 layout(binding = kUnitOccupancy) uniform sampler3D s_occupancy;
+
+#if VOLSTYLE_SPARSE
+layout(binding = kUnitBrickTable) uniform usampler3D s_brickTable;
+
+// The atlas brick of brick b (r32ui: x | y << kAtlasBits | z << 2 kAtlasBits).
+ivec3 atlasBrick(ivec3 b) {
+    uint e = texelFetch(s_brickTable, b, 0).r;
+    uint mask = (1u << kAtlasBits) - 1u;
+    return ivec3(e & mask, (e >> kAtlasBits) & mask, e >> (2 * kAtlasBits));
+}
+
+// Where voxel v of the box is stored.
+ivec3 storedTexel(ivec3 v) {
+    ivec3 q = v + u.sparseOffset.xyz;
+    return atlasBrick(q / kBrickSize) * kBrickSize + q % kBrickSize;
+}
+#else
+ivec3 storedTexel(ivec3 v) { return v; }
+#endif
+
+// The texel of voxel v of a property grid (`grid`), or texel v of any other texture.
+ivec3 texelOf(ivec3 v, bool grid) { return grid ? storedTexel(v) : v; }
+
+// The value of voxel v (inside the box) of a property grid.
+vec3 voxelAt(sampler3D grid, ivec3 v) { return texelFetch(grid, storedTexel(v), 0).rgb; }
 
 // The 8-node trilinear stencil of point p on a grid of n nodes (node i at integer i): corners
 // i0..i1, weights from f, clamped to the edge.
@@ -39,16 +71,18 @@ struct Corners {
     vec3 c000, c100, c010, c110, c001, c101, c011, c111;
 };
 
-Corners fetchCorners(sampler3D tex, Stencil s) {
+// The 8 corners of a stencil on a texture: a property grid (`grid`: through the brick table of a
+// sparse volume) or a texture of its own lattice (light depth).
+Corners fetchCorners(sampler3D tex, Stencil s, bool grid) {
     Corners c;
-    c.c000 = texelFetch(tex, ivec3(s.i0.x, s.i0.y, s.i0.z), 0).rgb;
-    c.c100 = texelFetch(tex, ivec3(s.i1.x, s.i0.y, s.i0.z), 0).rgb;
-    c.c010 = texelFetch(tex, ivec3(s.i0.x, s.i1.y, s.i0.z), 0).rgb;
-    c.c110 = texelFetch(tex, ivec3(s.i1.x, s.i1.y, s.i0.z), 0).rgb;
-    c.c001 = texelFetch(tex, ivec3(s.i0.x, s.i0.y, s.i1.z), 0).rgb;
-    c.c101 = texelFetch(tex, ivec3(s.i1.x, s.i0.y, s.i1.z), 0).rgb;
-    c.c011 = texelFetch(tex, ivec3(s.i0.x, s.i1.y, s.i1.z), 0).rgb;
-    c.c111 = texelFetch(tex, ivec3(s.i1.x, s.i1.y, s.i1.z), 0).rgb;
+    c.c000 = texelFetch(tex, texelOf(ivec3(s.i0.x, s.i0.y, s.i0.z), grid), 0).rgb;
+    c.c100 = texelFetch(tex, texelOf(ivec3(s.i1.x, s.i0.y, s.i0.z), grid), 0).rgb;
+    c.c010 = texelFetch(tex, texelOf(ivec3(s.i0.x, s.i1.y, s.i0.z), grid), 0).rgb;
+    c.c110 = texelFetch(tex, texelOf(ivec3(s.i1.x, s.i1.y, s.i0.z), grid), 0).rgb;
+    c.c001 = texelFetch(tex, texelOf(ivec3(s.i0.x, s.i0.y, s.i1.z), grid), 0).rgb;
+    c.c101 = texelFetch(tex, texelOf(ivec3(s.i1.x, s.i0.y, s.i1.z), grid), 0).rgb;
+    c.c011 = texelFetch(tex, texelOf(ivec3(s.i0.x, s.i1.y, s.i1.z), grid), 0).rgb;
+    c.c111 = texelFetch(tex, texelOf(ivec3(s.i1.x, s.i1.y, s.i1.z), grid), 0).rgb;
     return c;
 }
 
@@ -58,12 +92,22 @@ vec3 interpolateCorners(Corners c, vec3 f) {
     return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
 }
 
+// Trilinear on a texture of its own lattice (light depth, lobes).
 vec3 fetchTrilinear(sampler3D tex, Stencil s) {
 #if VOLSTYLE_HW_FILTER
     // The texture unit's filter (clamp-to-edge sampler): fast, but GPUs quantise its weights.
     return texture(tex, (s.p + 0.5) / vec3(s.n)).rgb;
 #else
-    return interpolateCorners(fetchCorners(tex, s), s.f);
+    return interpolateCorners(fetchCorners(tex, s, false), s.f);
+#endif
+}
+
+// Trilinear on a property grid (extinction, albedo, emission), dense or sparse.
+vec3 sampleGrid(sampler3D grid, Stencil s) {
+#if VOLSTYLE_HW_FILTER && !VOLSTYLE_SPARSE
+    return texture(grid, (s.p + 0.5) / vec3(s.n)).rgb;
+#else
+    return interpolateCorners(fetchCorners(grid, s, true), s.f);
 #endif
 }
 
@@ -85,7 +129,7 @@ vec3 extinctionAt(inout CellCache cache, vec3 p) {
     Stencil s = stencilAt(p);
     if (s.i0 != cache.i0) {
         cache.i0 = s.i0;
-        cache.corners = fetchCorners(s_extinction, s);
+        cache.corners = fetchCorners(s_extinction, s, true);
     }
     return interpolateCorners(cache.corners, s.f);
 }

@@ -1,0 +1,84 @@
+#pragma once
+/// \file brick_layout.h
+/// The storage of a sparse volume (issue #39): the box is cut into bricks of kBrickSide³ voxels,
+/// and only the active ones are stored. A grid of a sparse volume holds one brick after another in
+/// slot order (3 floats a voxel, x fastest inside the brick, then y, then z); slot 0 is the
+/// background brick, which every inactive brick reads (extinction and emission 0, albedo its
+/// default): an absent brick costs nothing and needs no branch to read. The GPU keeps the same
+/// slots in an atlas with a table from brick to slot (gpu_volume.h), so an upload is one copy.
+///
+/// Bricks line up with the file's OpenVDB leaf nodes (8³ at multiples of 8 in file index space):
+/// the volume's voxel (i,j,k) lies in brick ((i,j,k) + offset) / kBrickSide, with `offset` the
+/// position of voxel 0 inside its brick. A leaf is then one brick, read without densifying.
+
+#include <cstdint>
+#include <vector>
+
+#include "core/math/vec.h"
+
+namespace volstyle::core {
+
+/// The brick edge, in voxels: the GPU's kBrickSize (core/shaders/layout.h; gpu_volume.cpp checks
+/// they agree), so the occupancy bricks are these bricks.
+inline constexpr int kBrickSide = 8;
+inline constexpr int kBrickVoxels = kBrickSide * kBrickSide * kBrickSide;
+
+class BrickLayout {
+public:
+    BrickLayout() = default;
+    /// No brick active yet: every brick reads the background slot.
+    BrickLayout(Int3 dims, Int3 offset);
+    /// Every brick of the box active, in x-fastest order (a dense volume as bricks).
+    static BrickLayout full(Int3 dims, Int3 offset = {0, 0, 0});
+
+    Int3 dims() const { return m_dims; }
+    Int3 offset() const { return m_offset; }
+    Int3 brickDims() const { return m_brickDims; }
+    /// Stored bricks, the background slot 0 included.
+    size_t slots() const { return m_brickOfSlot.size(); }
+    /// Active bricks (slots() − 1).
+    size_t activeBricks() const { return m_brickOfSlot.size() - 1; }
+    /// Voxels stored, the background brick included (what the grids hold).
+    size_t storedVoxels() const { return slots() * size_t(kBrickVoxels); }
+
+    size_t brickIndex(Int3 b) const { return (size_t(b.z) * size_t(m_brickDims.y) + size_t(b.y)) * size_t(m_brickDims.x) + size_t(b.x); }
+    /// The brick holding voxel v (v inside the box).
+    Int3 brickOf(Int3 v) const {
+        return {(v.x + m_offset.x) / kBrickSide, (v.y + m_offset.y) / kBrickSide, (v.z + m_offset.z) / kBrickSide};
+    }
+    /// The first voxel of brick b (may be negative: the low bricks start before the box).
+    Int3 firstVoxel(Int3 b) const {
+        return {b.x * kBrickSide - m_offset.x, b.y * kBrickSide - m_offset.y, b.z * kBrickSide - m_offset.z};
+    }
+    uint32_t slotOf(Int3 b) const { return m_slotOfBrick[brickIndex(b)]; }
+    Int3 brickOfSlot(size_t slot) const { return m_brickOfSlot[slot]; }
+    /// Where voxel v is stored (in voxels; × 3 for a grid's floats): in the background slot when
+    /// its brick is inactive.
+    size_t storageIndex(Int3 v) const {
+        const Int3 b = brickOf(v);
+        const int lx = (v.x + m_offset.x) % kBrickSide, ly = (v.y + m_offset.y) % kBrickSide, lz = (v.z + m_offset.z) % kBrickSide;
+        return size_t(slotOf(b)) * kBrickVoxels + size_t((lz * kBrickSide + ly) * kBrickSide + lx);
+    }
+    bool isActive(Int3 b) const { return slotOf(b) != 0; }
+    /// Activates brick b (no-op when active); returns its slot. Grids grow with Volume::activate.
+    uint32_t activate(Int3 b);
+    /// The table from brick to slot (x fastest), as the GPU's indirection texture holds it.
+    const std::vector<uint32_t>& slotTable() const { return m_slotOfBrick; }
+
+    /// The inclusive voxel box covered by active bricks, clipped to the volume (lo > hi: none).
+    std::pair<Int3, Int3> activeVoxelBox() const;
+
+    /// Bytes of the table and bookkeeping (not the grids).
+    size_t tableBytes() const { return m_slotOfBrick.size() * sizeof(uint32_t) + m_brickOfSlot.size() * sizeof(Int3); }
+
+    bool operator==(const BrickLayout& o) const {
+        return m_dims == o.m_dims && m_offset == o.m_offset && m_slotOfBrick == o.m_slotOfBrick;
+    }
+
+private:
+    Int3 m_dims, m_offset, m_brickDims;
+    std::vector<uint32_t> m_slotOfBrick;  ///< per brick of the box: its slot, 0 when inactive
+    std::vector<Int3> m_brickOfSlot;      ///< per slot: its brick (slot 0: unused)
+};
+
+}  // namespace volstyle::core
