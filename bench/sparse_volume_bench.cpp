@@ -1,14 +1,13 @@
 // Sparse volumes at production size (issue #39): memory and time against active voxels.
 //
 //   sparse_volume_bench                 the table: 256³–1024³ boxes at 1%, 5% and 20% active
-//   sparse_volume_bench --plume DIR     a Houdini-sized sim: writes DIR/plume.vdb (1024×512×1024,
-//                                       density, temperature, vel), reads it, renders two views,
+//   sparse_volume_bench --plume FILE    a Houdini-sized sim (tests/tools/make_plume_vdb: 1024×512×1024,
+//                                       density, temperature, vel): reads it, renders two views,
 //                                       writes it back and checks the round trip
 //
 // Each step prints its wall time and the process's peak RSS so far (getrusage), next to what the
 // dense equivalent would take. llvmpipe keeps textures in host memory, so the RSS includes the GPU's
 // copy here.
-#include <openvdb/openvdb.h>
 #include <spdlog/spdlog.h>
 #include <sys/resource.h>
 
@@ -108,56 +107,10 @@ void table(GpuDevice& device, Renderer& renderer) {
     }
 }
 
-/// A smoke plume in a 1024×512×1024 box: a column rising from the ground and bending downwind,
-/// widening as it rises, its edge broken up by noise; temperature falls with height, velocity
-/// follows the column. Written with OpenVDB as a sim would write it (leaf voxels, background 0).
-void writePlume(const std::string& path) {
-    openvdb::initialize();
-    auto density = openvdb::FloatGrid::create(0.0f);
-    density->setName("density");
-    density->setGridClass(openvdb::GRID_FOG_VOLUME);
-    auto temperature = openvdb::FloatGrid::create(0.0f);
-    temperature->setName("temperature");
-    auto vel = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
-    vel->setName("vel");
-    vel->setVectorType(openvdb::VEC_CONTRAVARIANT_RELATIVE);
-    auto xf = openvdb::math::Transform::createLinearTransform(0.02);  // 20 m wide at 2 cm voxels
-    for (auto g : {openvdb::GridBase::Ptr(density), openvdb::GridBase::Ptr(temperature), openvdb::GridBase::Ptr(vel)}) g->setTransform(xf);
-    auto d = density->getAccessor();
-    auto t = temperature->getAccessor();
-    auto v = vel->getAccessor();
-    const PerlinNoise noise(3);
-    // The column's centre at height y, and its radius.
-    auto centre = [](double y) { return Vec3d(200 + 600 * std::pow(y / 512, 2.0), y, 512 + 60 * std::sin(y / 90)); };
-    auto radius = [](double y) { return 28 + 70 * y / 512; };
-    for (int y = 0; y < 512; ++y) {
-        const Vec3d c = centre(y);
-        const double r = radius(y), reach = r * 1.35;
-        const Vec3d along = normalize(centre(y + 1) - c);
-        for (int z = int(c.z - reach); z <= int(c.z + reach); ++z)
-            for (int x = int(c.x - reach); x <= int(c.x + reach); ++x) {
-                const Vec3d p(x, y, z);
-                const double dist = std::hypot(p.x - c.x, p.z - c.z);
-                if (dist > reach) continue;
-                const double edge = dist / r + 0.35 * noise.fbm(p * (1.0 / 40), 3);
-                if (edge >= 1 || x < 0 || x >= 1024 || z < 0 || z >= 1024) continue;
-                const openvdb::Coord ijk(x, y, z);
-                d.setValue(ijk, float(0.6 * (1 - edge) * (1 - 0.5 * y / 512)));
-                t.setValue(ijk, float(1.5 * (1 - edge) * (1 - y / 512.0)));
-                v.setValue(ijk, openvdb::Vec3s(float(along.x * 2), float(along.y * 2), float(along.z * 2)));
-            }
-    }
-    openvdb::io::File(path).write({density, temperature, vel});
-}
-
-void plume(Renderer& renderer, const std::string& dir) {
-    std::filesystem::create_directories(dir);
-    const std::string path = dir + "/plume.vdb", back = dir + "/plume_written.vdb";
+void plume(Renderer& renderer, const std::string& path) {
+    const std::string dir = std::filesystem::path(path).parent_path().string(), back = dir + "/plume_written.vdb";
+    std::printf("%s: %.0f MiB\n", path.c_str(), double(std::filesystem::file_size(path)) / (1 << 20));
     auto t0 = Clock::now();
-    if (!std::filesystem::exists(path)) writePlume(path);
-    std::printf("plume.vdb: %.0f MiB, made in %.1f s (peak RSS %.0f MiB)\n", double(std::filesystem::file_size(path)) / (1 << 20),
-                msSince(t0) / 1000, peakRssMiB());
-    t0 = Clock::now();
     const Volume v = loadVdb(path);
     const double denseGiB = double(v.dims().volume()) * 12 / (1 << 30);
     std::printf("read: %dx%dx%d box, %s, %zu active voxels (%.2f%%) in %zu bricks, %.0f MiB (dense: %.1f GiB a grid); %.1f s, peak RSS %.0f MiB\n",

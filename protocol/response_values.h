@@ -39,6 +39,9 @@ struct SessionInfo {
     Int3 dims;
     Vec3d lo, hi, voxelSize;
     std::vector<std::string> grids;  ///< extinction, albedo, emission, refractive_index
+    bool sparse = false;             ///< stored as 8³ bricks (issue #39)
+    int64_t activeVoxels = 0;        ///< voxels of the active bricks in the box (dense: the box)
+    int64_t bytes = 0;               ///< what its grids take in memory
     int version = 1;
     int shows = 1;             ///< the version whose content the current one is (after an undo, redo or revert)
     int undo = 0, redo = 0;    ///< steps POST …/undo and …/redo can take

@@ -34,6 +34,8 @@ def main():
     p.add_argument("--token", default=None, help="the server's token (default $VOLSTYLE_TOKEN)")
     p.add_argument("--vdb", help="a VDB to restyle (default: the built-in cloud)")
     p.add_argument("--size", type=int, default=96, help="the views' size in pixels")
+    p.add_argument("--unknowns", default="emission,albedo", help="what the solve may change (comma-separated)")
+    p.add_argument("--iterations", type=int, default=20)
     p.add_argument("-o", "--output", default="solved.vdb")
     a = p.parse_args()
 
@@ -42,6 +44,9 @@ def main():
     sid = session["id"]
     if a.vdb:
         session = vs.upload_volume(sid, a.vdb)
+        vol = session["volume"]
+        print(f"uploaded {a.vdb}: {vol['dims'][0]}x{vol['dims'][1]}x{vol['dims'][2]}, stored {vol.get('storage', 'dense')}, "
+              f"{vol.get('active_voxels', 0)} active voxels, {vol.get('bytes', 0) / 2**20:.0f} MiB")
     lo, hi = session["volume"]["bbox"]
     centre = [(l + h) / 2 for l, h in zip(lo, hi)]
     radius = math.dist(lo, hi) / 2
@@ -53,10 +58,10 @@ def main():
         rgb, weights = glow(w, h, vc.picture_of(layers))
         vs.set_target(sid, view["id"], vc.exr_rgba(w, h, rgb, weights))
 
-    job = vs.solve(sid, unknowns=["emission", "albedo"], max_iterations=20)
+    job = vs.solve(sid, unknowns=a.unknowns.split(","), max_iterations=a.iterations)
     result = job.wait()  # a progress bar on a terminal; raises JobFailed if it fails
     report = result["report"]
-    print(f"solved: version {result['version']}, {report['iterations']} iterations, "
+    print(f"solved: version {result['version']}, {report['iterations']} iterations ({report['stop_reason']}), "
           f"RMS {sum(report['initial_rms']) / 2:.4g} -> {sum(report['final_rms']) / 2:.4g}")
     vs.download_volume(sid, path=a.output)
     print("wrote", a.output)

@@ -23,6 +23,9 @@ protocol::SessionInfo sessionInfo(Session& s) {
     info.dims = v.dims();
     std::tie(info.lo, info.hi) = v.worldBounds();
     info.voxelSize = v.voxelSize();
+    info.sparse = v.isSparse();
+    info.activeVoxels = int64_t(v.activeVoxels());
+    info.bytes = int64_t(v.memoryBytes());
     info.grids = {"extinction"};
     if (v.hasAlbedo()) info.grids.push_back("albedo");
     if (v.hasEmission()) info.grids.push_back("emission");
