@@ -20,7 +20,6 @@ layout::MarchParams volumeParams(const GpuVolume& volume, const RenderSettings& 
     p.brickDims = i4(volume.brickDims());
     p.march = {float(settings.stepVoxels), float(settings.terminationThreshold), 0, 0};
     p.sparseOffset = i4(volume.sparseOffset());
-    p.sparseAtlas = i4(volume.atlasBricks());
     return p;
 }
 

@@ -81,6 +81,7 @@ VS_CONSTANT(int, kBindingIndexList, 7);
 /* Refracted view rays (common/march.glsl, VOLSTYLE_CURVED; core/render/refracted_paths.h). */
 VS_CONSTANT(int, kBindingPathStart, 8);   /* SSBO uint[pixels + 1]: pixel p's vertices are [start[p], start[p+1]) */
 VS_CONSTANT(int, kBindingPathVertex, 9);  /* SSBO vec4[]: index-space position, arc length from the eye (world) */
+VS_CONSTANT(int, kBindingUnknownSlots, 11);  /* VOLSTYLE_SPARSE projector: SSBO uint[bricks of the unknown grid]: slot, 0 inactive */
 VS_CONSTANT(int, kBindingPathExit, 10);   /* SSBO vec4[pixels]: the world direction each ray leaves in (w 0: it misses) */    /* SSBO uint[]: the elements a vector kernel touches (VOLSTYLE_INDEXED) */
 
 /* Everything a march needs: camera, grid, lighting. World-space t parameterises rays. */
@@ -103,7 +104,7 @@ struct MarchParams {
     /* The solver's projector (project.comp) only. */
     VS_IVEC4 unknownDims;    /* xyz: voxels of the solver's unknown grid */
     VS_VEC4 unknownScale;    /* xyz: unknown voxels per extinction voxel (both grids span one box) */
-    VS_IVEC4 unknownLayout;  /* x: elements per block of unknowns (the albedo block's offset in joint solves) */
+    VS_IVEC4 unknownLayout;  /* x: elements per block of unknowns (the albedo block's offset in joint solves); yzw: a sparse unknown grid's brick offset (VOLSTYLE_SPARSE) */
     VS_IVEC4 viewPixels;     /* x: index of this view's first pixel in the solver's pixel vector */
     VS_VEC4 projectorCutoff; /* x: transmittance below which forward and adjoint rays both stop */
     /* Chunked dispatches (chunked_dispatch.h): the first cell (voxel or pixel) of this chunk. */
@@ -118,7 +119,6 @@ struct MarchParams {
     VS_IVEC4 lobeKernel;  /* lobe_volume.comp: x: the lobe it writes. lights_project.comp: x: first lobe of the chunk, y: its lobes */
     /* Sparse volumes (VOLSTYLE_SPARSE, core/volume/brick_layout.h): voxel v lies in brick (v + xyz) / kBrickSize. */
     VS_IVEC4 sparseOffset;
-    VS_IVEC4 sparseAtlas;    /* xyz: the atlas's bricks (slot s at (s mod x, s / x mod y, s / (x y))) */
 };
 
 /* The environment's lobes (core/render/environment_lobes.h), a uniform block of their own. */

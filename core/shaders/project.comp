@@ -131,6 +131,13 @@ layout(std430, binding = kBindingImageOut) writeonly buffer b_Image {
 };
 #endif
 
+#if VOLSTYLE_SPARSE
+// A sparse unknown grid's table from brick to slot (core/volume/brick_layout.h).
+layout(std430, binding = kBindingUnknownSlots) readonly buffer b_UnknownSlots {
+    uint unknownSlotOfBrick[];
+};
+#endif
+
 // The basis functions that are non-zero at extinction-index point p, over the unknown grid:
 // the corners i0..i1 and fractions f of a trilinear stencil (box: one corner, weight 1). No arrays:
 // llvmpipe keeps arrays in memory, which made the projector three times slower.
@@ -163,12 +170,13 @@ uint cornerIndex(Basis b, int c, out float weight) {
     vec3 w = mix(1.0 - b.f, b.f, upper);
     weight = w.x * w.y * w.z;
 #if VOLSTYLE_SPARSE
-    // A sparse volume's unknowns are its stored voxels (the unknown grid is its own): slot · 8³ +
-    // the voxel's place in its brick; a corner in an inactive brick is the background brick's
-    // (outside the hull: never moved).
-    ivec3 q = corner + u.sparseOffset.xyz;
-    ivec3 a = atlasBrick(q / kBrickSize), l = q % kBrickSize;
-    int slot = a.x + u.sparseAtlas.x * (a.y + u.sparseAtlas.y * a.z);
+    // A sparse volume's unknowns are the stored voxels of a sparse grid (the volume's own bricks,
+    // or coarser ones): slot · 8³ + the voxel's place in its brick. A corner in an inactive brick
+    // is the background brick's (outside the hull: never moved).
+    ivec3 q = corner + u.unknownLayout.yzw;
+    ivec3 bricks = (u.unknownDims.xyz + u.unknownLayout.yzw + kBrickSize - 1) / kBrickSize;
+    ivec3 brick = q / kBrickSize, l = q % kBrickSize;
+    int slot = int(unknownSlotOfBrick[(brick.z * bricks.y + brick.y) * bricks.x + brick.x]);
     return uint(slot * (kBrickSize * kBrickSize * kBrickSize) + (l.z * kBrickSize + l.y) * kBrickSize + l.x);
 #else
     return uint((corner.z * u.unknownDims.y + corner.y) * u.unknownDims.x + corner.x);

@@ -21,8 +21,6 @@ Projector::Projector(GpuDevice& device, GpuVolume& volume, const Lighting& light
       m_unknownDims(unknownDims), m_step(stepVoxels), m_exactTraversal(exactTraversal) {
     if (unknownDims.x < 1 || unknownDims.y < 1 || unknownDims.z < 1)
         throw InvalidArgument("Projector: the unknown grid must have at least one voxel");
-    if (volume.isSparse() && !(unknownDims == volume.dims()))
-        throw InvalidArgument("Projector: a sparse volume's unknowns are its own voxels (no other resolution)");
     if (unknown == Unknown::Extinction) m_lighting.lights.clear();  // log-space tomography: no light
     // Only albedo's weights hold L_scat: the others need no light volumes for the environment.
     if (unknown == Unknown::Extinction || unknown == Unknown::Emission) m_lighting.environment = EnvironmentLight{};
@@ -35,8 +33,15 @@ void Projector::setUseFloatAtomics(bool use) {
     m_useFloatAtomics = use;
 }
 
+void Projector::useSparseUnknowns(const BrickLayout& bricks) {
+    VOLSTYLE_CHECK(m_views.size(), ==, size_t(0));
+    if (!(bricks.dims() == m_unknownDims)) throw InternalError("Projector: the unknown bricks cover another grid");
+    m_sparseUnknowns = std::make_shared<const SparseCells>(bricks);
+}
+
 void Projector::addView(const Camera& camera) {
     camera.validate();
+    if (m_volume.isSparse() && !m_sparseUnknowns) throw InternalError("Projector: a sparse volume needs its unknown bricks (useSparseUnknowns)");
     RenderSettings settings;
     settings.stepVoxels = m_step;
     settings.exactTraversal = m_exactTraversal;
@@ -47,7 +52,8 @@ void Projector::addView(const Camera& camera) {
     p.unknownDims = {m_unknownDims.x, m_unknownDims.y, m_unknownDims.z, 0};
     p.unknownScale = {float(m_unknownDims.x) / float(n.x), float(m_unknownDims.y) / float(n.y),
                       float(m_unknownDims.z) / float(n.z), 0};
-    p.unknownLayout = {int(cellCount()), 0, 0, 0};
+    const Int3 o = m_sparseUnknowns ? m_sparseUnknowns->offset : Int3{};
+    p.unknownLayout = {int(cellCount()), o.x, o.y, o.z};
     p.viewPixels = {int(m_pixelCount), 0, 0, 0};
     p.projectorCutoff = {kProjectorTermination, 0, 0, 0};
     m_pixelCount += size_t(camera.width) * camera.height;
@@ -65,6 +71,7 @@ void Projector::useProgram(const View& v, gl::ShaderBuilder& builder) {
     if (v.setup.paths) builder.define("VOLSTYLE_CURVED", 1);  // the view's refracted paths, traced once in addView
     glUseProgram(m_device.program(forStorage(builder, m_volume)).id());
     bindMarch(m_device, m_volume, v.setup);
+    if (m_sparseUnknowns) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingUnknownSlots, m_sparseUnknowns->slotOfBrick.id());
 }
 
 void Projector::dispatchView(const View& v) {

@@ -35,15 +35,20 @@ public:
     Projector(GpuDevice& device, GpuVolume& volume, const Lighting& lighting, Unknown unknown,
               BasisType basis, Int3 unknownDims, double stepVoxels, bool exactTraversal = false);
 
+    /// A sparse volume's unknowns: the stored voxels of `bricks`, a sparse grid of unknownDims (the
+    /// volume's own bricks, or coarser ones over the same box). Required before addView for a
+    /// sparse volume.
+    void useSparseUnknowns(const BrickLayout& bricks);
+
     /// Adds a view; its pixels follow those of the views added before (row-major, top row first).
     /// The view holds its light-depth volumes for the projector's lifetime.
     void addView(const Camera& camera);
     size_t viewCount() const { return m_views.size(); }
     size_t pixelCount() const { return m_pixelCount; }
     Range viewRange(size_t view) const { return {m_views[view].offset, size_t(m_views[view].camera.width) * m_views[view].camera.height}; }
-    /// Unknown elements: voxels of the unknown grid, times 2 for emission + albedo.
-    /// Unknowns per block: the unknown grid's voxels, or a sparse volume's stored voxels (its own grid).
-    size_t cellCount() const { return m_volume.isSparse() ? m_volume.storedVoxels() : size_t(m_unknownDims.volume()); }
+    /// Unknowns per block: the unknown grid's voxels, or a sparse grid's stored voxels.
+    size_t cellCount() const { return m_sparseUnknowns ? m_sparseUnknowns->cells : size_t(m_unknownDims.volume()); }
+    /// Unknown elements: cellCount(), times 2 for emission + albedo.
     size_t elementCount() const { return cellCount() * (m_unknown == Unknown::EmissionAlbedo ? 2 : 1); }
     Int3 unknownDims() const { return m_unknownDims; }
     Unknown unknown() const { return m_unknown; }
@@ -111,6 +116,7 @@ private:
     Unknown m_unknown;
     BasisType m_basis;
     Int3 m_unknownDims;
+    std::shared_ptr<const SparseCells> m_sparseUnknowns;  ///< a sparse volume's unknown grid (else null)
     double m_step;
     bool m_exactTraversal;
     std::vector<View> m_views;

@@ -46,38 +46,40 @@ void Solver::State::markHullFromExtinction() {
     // Unknowns whose basis support overlaps non-zero extinction (TVCG Sec. 5.2, visual hulls): the
     // rest have no influence on any pixel.
     const Int3 n = volume.dims();
-    if (volume.isSparse()) {  // the unknowns are the stored voxels: the same ±1 neighbourhood, through the bricks
-        const size_t blocks = elements / cells;
+    const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
+    const size_t blocks = elements / cells;
+    // Marks the unknowns whose support holds voxel (i, j, k)'s neighbourhood.
+    auto markAround = [&](int i, int j, int k) {
+        int lo[3], hi[3];
+        for (int a = 0; a < 3; ++a) {
+            int v = a == 0 ? i : (a == 1 ? j : k);
+            double qlo = (v - 1 + 0.5) * scale[a] - 0.5, qhi = (v + 1 + 0.5) * scale[a] - 0.5;
+            lo[a] = std::clamp(int(std::floor(qlo)), 0, udims[a] - 1);
+            hi[a] = std::clamp(int(std::ceil(qhi)), 0, udims[a] - 1);
+        }
+        for (int z = lo[2]; z <= hi[2]; ++z)
+            for (int y = lo[1]; y <= hi[1]; ++y)
+                for (int x = lo[0]; x <= hi[0]; ++x) {
+                    if (!volume.isSparse()) {
+                        markCell(hullHost, cells, blocks, udims, x, y, z);
+                        continue;
+                    }
+                    const size_t cell = unknownBricks.storageIndex({x, y, z});
+                    if (cell < size_t(kBrickVoxels)) continue;  // the background brick: not an unknown
+                    for (size_t b = 0; b < blocks; ++b) std::fill_n(&hullHost[4 * (b * cells + cell)], 3, 1.0f);
+                }
+    };
+    if (volume.isSparse()) {  // the medium is in the active bricks
         const std::vector<float>& ext = volume.extinction();
         forEachActiveVoxel(volume, [&](Int3 p, size_t s) {
-            if (std::max({ext[3 * s], ext[3 * s + 1], ext[3 * s + 2]}) <= 0) return;
-            for (int z = std::max(p.z - 1, 0); z <= std::min(p.z + 1, n.z - 1); ++z)
-                for (int y = std::max(p.y - 1, 0); y <= std::min(p.y + 1, n.y - 1); ++y)
-                    for (int x = std::max(p.x - 1, 0); x <= std::min(p.x + 1, n.x - 1); ++x) {
-                        const size_t cell = volume.index(x, y, z);
-                        if (cell < size_t(kBrickVoxels)) continue;  // the background brick: not an unknown
-                        for (size_t b = 0; b < blocks; ++b)
-                            hullHost[4 * (b * cells + cell)] = hullHost[4 * (b * cells + cell) + 1] = hullHost[4 * (b * cells + cell) + 2] = 1.0f;
-                    }
+            if (std::max({ext[3 * s], ext[3 * s + 1], ext[3 * s + 2]}) > 0) markAround(p.x, p.y, p.z);
         });
         return;
     }
-    const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
     for (int k = 0; k < n.z; ++k)
         for (int j = 0; j < n.y; ++j)
-            for (int i = 0; i < n.x; ++i) {
-                if (maxComponent(volume.extinctionAt(i, j, k)) <= 0) continue;
-                int lo[3], hi[3];
-                for (int a = 0; a < 3; ++a) {
-                    int v = a == 0 ? i : (a == 1 ? j : k);
-                    double qlo = (v - 1 + 0.5) * scale[a] - 0.5, qhi = (v + 1 + 0.5) * scale[a] - 0.5;
-                    lo[a] = std::clamp(int(std::floor(qlo)), 0, udims[a] - 1);
-                    hi[a] = std::clamp(int(std::ceil(qhi)), 0, udims[a] - 1);
-                }
-                for (int z = lo[2]; z <= hi[2]; ++z)
-                    for (int y = lo[1]; y <= hi[1]; ++y)
-                        for (int x = lo[0]; x <= hi[0]; ++x) markCell(hullHost, cells, elements / cells, udims, x, y, z);
-            }
+            for (int i = 0; i < n.x; ++i)
+                if (maxComponent(volume.extinctionAt(i, j, k)) > 0) markAround(i, j, k);
 }
 
 void Solver::State::markHullFromMasks(const std::vector<float>& o, const std::vector<float>& w) {
@@ -98,11 +100,19 @@ void Solver::State::markHullFromMasks(const std::vector<float>& o, const std::ve
         }
         return false;
     };
-    if (volume.isSparse()) {  // the unknowns are the stored voxels
-        forEachActiveVoxel(volume, [&](Int3 p, size_t cell) {
-            if (!carved(volume.worldFromIndex().applyPoint(Vec3d(p.x, p.y, p.z))))
-                hullHost[4 * cell] = hullHost[4 * cell + 1] = hullHost[4 * cell + 2] = 1.0f;
-        });
+    if (volume.isSparse()) {  // the unknowns are the stored voxels of their bricks
+        for (size_t slot = 1; slot < unknownBricks.slots(); ++slot) {
+            const Int3 f = unknownBricks.firstVoxel(unknownBricks.brickOfSlot(slot));
+            size_t cell = slot * size_t(kBrickVoxels);
+            for (int z = 0; z < kBrickSide; ++z)
+                for (int y = 0; y < kBrickSide; ++y)
+                    for (int x = 0; x < kBrickSide; ++x, ++cell) {
+                        const Vec3d c(f.x + x, f.y + y, f.z + z);
+                        if (c.x < 0 || c.y < 0 || c.z < 0 || c.x >= udims.x || c.y >= udims.y || c.z >= udims.z) continue;
+                        if (!carved(volume.worldFromIndex().applyPoint((c + Vec3d(0.5)) / scale - Vec3d(0.5))))
+                            std::fill_n(&hullHost[4 * cell], 3, 1.0f);
+                    }
+        }
         return;
     }
     for (int k = 0; k < udims.z; ++k)

@@ -53,16 +53,21 @@ Solver::Solver(GpuDevice& device, const Volume& volume, const Lighting& lighting
     State& st = *m_state;
     st.cache = cache;
     st.validateInputs();
-    if (st.volume.isSparse()) st.growApron();
     st.udims = st.opt.resolution.value_or(st.volume.dims());
-    if (st.volume.isSparse() && !(st.udims == st.volume.dims()))
-        throw InvalidArgument("a sparse volume is solved on its own voxels: leave out the solve resolution");
-    st.cells = st.volume.isSparse() ? st.volume.storedVoxels() : size_t(st.udims.volume());
+    if (st.volume.isSparse()) {
+        st.growApron();
+        st.chooseSparseUnknowns();
+    }
+    st.cells = st.volume.isSparse() ? st.unknownBricks.storedVoxels() : size_t(st.udims.volume());
     st.elements = st.cells * (st.opt.unknown == Unknown::EmissionAlbedo ? 2 : 1);
+    st.checkVectorsFit();
     st.gpu = std::make_unique<GpuVolume>(st.volume);
-    if (st.volume.isSparse()) st.sparseCells = std::make_unique<SparseCells>(*st.volume.bricks());
     st.W = std::make_unique<Projector>(device, *st.gpu, st.lighting, st.opt.unknown, st.opt.basis, st.udims,
                                        st.opt.stepVoxels, st.opt.exactTraversal);
+    if (st.volume.isSparse()) {
+        st.sparseCells = std::make_unique<SparseCells>(st.unknownBricks);
+        st.W->useSparseUnknowns(st.unknownBricks);
+    }
     for (const auto& v : st.views) st.W->addView(v.camera);
     st.allocate();
     st.buildObservations();
@@ -216,29 +221,12 @@ void Solver::State::useSupports(std::shared_ptr<const Support> pixels, std::shar
     W->setSupports(std::move(pixels), std::move(voxels));
 }
 
-void Solver::State::growApron() {
-    // Paint can grow glow or medium into empty space next to the medium: the bricks around each
-    // active one become unknowns too (one brick of apron, zero until the solve moves them).
-    const BrickLayout active = *volume.bricks();
-    const Int3 nb = active.brickDims();
-    for (size_t slot = 1; slot < active.slots(); ++slot) {
-        const Int3 b = active.brickOfSlot(slot);
-        for (int z = std::max(b.z - 1, 0); z <= std::min(b.z + 1, nb.z - 1); ++z)
-            for (int y = std::max(b.y - 1, 0); y <= std::min(b.y + 1, nb.y - 1); ++y)
-                for (int x = std::max(b.x - 1, 0); x <= std::min(b.x + 1, nb.x - 1); ++x) volume.activateBrick({x, y, z});
-    }
-}
-
 void Solver::State::initialUnknowns() {
     // Warm start from the volume's current values, resampled onto the unknown grid.
     const Int3 n = volume.dims();
     std::vector<float> init(elements * 4, 0.0f);
     auto put = [&](const std::vector<float>& grid, size_t block) {
-        if (volume.isSparse()) {  // the unknowns are the stored voxels themselves
-            for (size_t c = 0; c < cells; ++c)
-                std::copy_n(grid.begin() + std::ptrdiff_t(3 * c), 3, init.begin() + std::ptrdiff_t(4 * (block * cells + c)));
-            return;
-        }
+        if (volume.isSparse()) return sparseUnknownsFrom(grid, init, block);
         auto r = resample(GridView{grid, n}, udims, opt.basis, 4);
         std::copy(r.begin(), r.end(), init.begin() + std::ptrdiff_t(4 * block * cells));
     };
@@ -395,10 +383,7 @@ Volume Solver::State::result() {
     Volume out = volume;
     const Int3 n = volume.dims();
     auto take = [&](size_t block) {
-        if (!volume.isSparse()) return resample(GridView{av, udims, 4, 4 * block * cells}, n, opt.basis, 3);
-        std::vector<float> g(3 * cells);
-        for (size_t c = 0; c < cells; ++c) std::copy_n(av.begin() + std::ptrdiff_t(4 * (block * cells + c)), 3, g.begin() + std::ptrdiff_t(3 * c));
-        return g;
+        return volume.isSparse() ? sparseGridFrom(av, block) : resample(GridView{av, udims, 4, 4 * block * cells}, n, opt.basis, 3);
     };
     switch (opt.unknown) {
         case Unknown::Emission: out.emission() = take(0); break;

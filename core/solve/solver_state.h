@@ -44,7 +44,8 @@ struct Solver::State final : BoundedLeastSquares {
     size_t cells = 0, elements = 0;
     std::unique_ptr<GpuVolume> gpu;
     std::unique_ptr<Projector> W;
-    std::unique_ptr<SparseCells> sparseCells;  ///< a sparse volume's cells, for the Laplacian (else null)
+    std::unique_ptr<SparseCells> sparseCells;  ///< a sparse volume's unknown cells, for the Laplacian (else null)
+    BrickLayout unknownBricks;  ///< a sparse volume's unknown grid (udims): stored voxels are the unknowns
     VectorOps ops;
     // The unknowns a, the previous iterate, gradient s and direction p; the image rows' data
     // (observations, √weights) and residual/work vectors; the Laplacian rows' residual and work.
@@ -79,8 +80,20 @@ struct Solver::State final : BoundedLeastSquares {
 
     // Set-up (solver_setup.cpp).
     void validateInputs();
-    /// A sparse volume: activates the bricks next to its active ones (the unknowns' apron).
+    // Sparse volumes (solver_sparse.cpp).
+    /// Activates the bricks the unknowns may reach beyond the volume's active ones: all 26 around
+    /// each for extinction (the paint can grow the medium), those the hull reaches for emission
+    /// and albedo (they act only inside the medium).
     void growApron();
+    /// unknownBricks: the volume's own bricks at its resolution, else coarser ones over the
+    /// active region; without a resolution, the finest whose vectors fit the GPU's storage blocks.
+    void chooseSparseUnknowns();
+    /// The unknowns' start values (4 floats each, block `block` of `init`) from a grid of the volume.
+    void sparseUnknownsFrom(const std::vector<float>& grid, std::vector<float>& init, size_t block) const;
+    /// A grid of the volume (3 floats per stored voxel) from block `block` of the unknowns.
+    std::vector<float> sparseGridFrom(const std::vector<float>& unknowns, size_t block) const;
+    /// Throws LimitExceeded when a vector of the unknowns or pixels is over the GPU's storage-block size.
+    void checkVectorsFit() const;
     void allocate();
     void buildObservations();
     void buildHull();

@@ -1,0 +1,194 @@
+// The solver on sparse volumes (issue #39): the unknowns are the stored voxels of a sparse grid —
+// the volume's own bricks (and an apron where the unknowns can reach), or coarser bricks over the
+// same region when a resolution is asked for or the finest would not fit the GPU's storage blocks.
+// W/Wᵀ index them through that grid's brick table (project.comp), the Laplacian finds neighbours
+// through it (vector_ops.comp), and the result is written into the volume's bricks.
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/base/errors.h"
+#include "core/solve/solver_state.h"
+
+namespace volstyle::core {
+namespace {
+
+/// Trilinear weights of point q (index space of a grid of n cells) over its 8 corners, clamped.
+struct Corners8 {
+    Int3 lo, hi;
+    Vec3d f;
+};
+
+Corners8 cornersAt(const Vec3d& q, Int3 n) {
+    Corners8 c;
+    for (int a = 0; a < 3; ++a) {
+        const double x = std::clamp(q[a], 0.0, double(n[a] - 1));
+        const int i = std::min(int(std::floor(x)), n[a] - 1);
+        (a == 0 ? c.lo.x : a == 1 ? c.lo.y : c.lo.z) = i;
+        (a == 0 ? c.hi.x : a == 1 ? c.hi.y : c.hi.z) = std::min(i + 1, n[a] - 1);
+        c.f[a] = x - i;
+    }
+    return c;
+}
+
+/// Σ over the 8 corners of weight · value(corner), RGB; value(Int3) gives a pointer to 3 floats.
+template <typename Value>
+Vec3d interpolate(const Corners8& c, Value value) {
+    Vec3d sum(0.0);
+    for (int k = 0; k < 8; ++k) {
+        const Int3 p{(k & 1) ? c.hi.x : c.lo.x, (k & 2) ? c.hi.y : c.lo.y, (k & 4) ? c.hi.z : c.lo.z};
+        const double w = ((k & 1) ? c.f.x : 1 - c.f.x) * ((k & 2) ? c.f.y : 1 - c.f.y) * ((k & 4) ? c.f.z : 1 - c.f.z);
+        if (w == 0) continue;
+        const float* v = value(p);
+        for (int ch = 0; ch < 3; ++ch) sum[ch] += w * double(v[ch]);
+    }
+    return sum;
+}
+
+/// The bricks of a grid of `coarse` cells over the same box as `fine`'s that hold every unknown a
+/// sample in an active fine brick reaches (both trilinear corners along each axis).
+BrickLayout coarseBricks(const BrickLayout& fine, Int3 coarse) {
+    BrickLayout out(coarse, {0, 0, 0});
+    const Int3 n = fine.dims();
+    const Vec3d scale(double(coarse.x) / n.x, double(coarse.y) / n.y, double(coarse.z) / n.z);
+    for (size_t slot = 1; slot < fine.slots(); ++slot) {
+        const Int3 f = fine.firstVoxel(fine.brickOfSlot(slot));
+        Int3 lo, hi;
+        for (int a = 0; a < 3; ++a) {
+            const int v0 = std::max(f[a], 0), v1 = std::min(f[a] + kBrickSide - 1, n[a] - 1);
+            const int c0 = std::clamp(int(std::floor((v0 + 0.5) * scale[a] - 0.5)), 0, coarse[a] - 1);
+            const int c1 = std::clamp(int(std::floor((v1 + 0.5) * scale[a] - 0.5)) + 1, 0, coarse[a] - 1);
+            (a == 0 ? lo.x : a == 1 ? lo.y : lo.z) = c0;
+            (a == 0 ? hi.x : a == 1 ? hi.y : hi.z) = c1;
+        }
+        const Int3 b0 = out.brickOf(lo), b1 = out.brickOf(hi);
+        for (int z = b0.z; z <= b1.z; ++z)
+            for (int y = b0.y; y <= b1.y; ++y)
+                for (int x = b0.x; x <= b1.x; ++x) out.activate({x, y, z});
+    }
+    return out;
+}
+
+Int3 halved(Int3 d) { return {std::max(1, (d.x + 1) / 2), std::max(1, (d.y + 1) / 2), std::max(1, (d.z + 1) / 2)}; }
+
+}  // namespace
+
+void Solver::State::growApron() {
+    const BrickLayout active = *volume.bricks();
+    const Int3 nb = active.brickDims(), n = volume.dims();
+    std::vector<Int3> more;
+    if (opt.unknown == Unknown::Extinction) {
+        for (size_t slot = 1; slot < active.slots(); ++slot) {
+            const Int3 b = active.brickOfSlot(slot);
+            for (int z = std::max(b.z - 1, 0); z <= std::min(b.z + 1, nb.z - 1); ++z)
+                for (int y = std::max(b.y - 1, 0); y <= std::min(b.y + 1, nb.y - 1); ++y)
+                    for (int x = std::max(b.x - 1, 0); x <= std::min(b.x + 1, nb.x - 1); ++x) more.push_back({x, y, z});
+        }
+    } else {
+        // The hull is the medium and a voxel around it (solver_hull.cpp): only voxels on a brick's
+        // faces reach into another brick.
+        const std::vector<float>& ext = volume.extinction();
+        const Int3 o = active.offset();
+        forEachActiveVoxel(volume, [&](Int3 p, size_t s) {
+            if (std::max({ext[3 * s], ext[3 * s + 1], ext[3 * s + 2]}) <= 0) return;
+            const Int3 l{(p.x + o.x) % kBrickSide, (p.y + o.y) % kBrickSide, (p.z + o.z) % kBrickSide};
+            const auto inner = [](int v) { return v > 0 && v < kBrickSide - 1; };
+            if (inner(l.x) && inner(l.y) && inner(l.z)) return;
+            for (int z = std::max(p.z - 1, 0); z <= std::min(p.z + 1, n.z - 1); ++z)
+                for (int y = std::max(p.y - 1, 0); y <= std::min(p.y + 1, n.y - 1); ++y)
+                    for (int x = std::max(p.x - 1, 0); x <= std::min(p.x + 1, n.x - 1); ++x) {
+                        const Int3 b = active.brickOf({x, y, z});
+                        if (!active.isActive(b)) more.push_back(b);
+                    }
+        });
+    }
+    for (const Int3& b : more) volume.activateBrick(b);
+}
+
+void Solver::State::chooseSparseUnknowns() {
+    const Int3 n = volume.dims();
+    if (udims.x > n.x || udims.y > n.y || udims.z > n.z)
+        throw InvalidArgument("a sparse volume is solved at its own resolution or coarser, not finer");
+    const BrickLayout& fine = *volume.bricks();
+    unknownBricks = udims == n ? fine : coarseBricks(fine, udims);
+    if (opt.resolution) return;
+    // No resolution asked for: the finest grid whose vectors fit one storage block (llvmpipe:
+    // 128 MiB, 8 M unknowns; a GPU's are larger), halving the resolution until they do.
+    const size_t blocks = opt.unknown == Unknown::EmissionAlbedo ? 2 : 1;
+    const double limit = double(device.capabilities().maxStorageBlockBytes);
+    while (double(unknownBricks.storedVoxels() * blocks) * 16 > limit && (udims.x > 1 || udims.y > 1 || udims.z > 1)) {
+        udims = halved(udims);
+        unknownBricks = coarseBricks(fine, udims);
+    }
+    if (!(udims == n))
+        spdlog::info("solve: {} sparse unknowns at {}x{}x{} ({} per side of the volume's), so that a vector fits this GPU's storage blocks",
+                     unknownBricks.storedVoxels() * blocks, udims.x, udims.y, udims.z, double(n.x) / udims.x);
+}
+
+void Solver::State::sparseUnknownsFrom(const std::vector<float>& grid, std::vector<float>& init, size_t block) const {
+    const Int3 n = volume.dims();
+    const bool own = udims == n;
+    const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
+    for (size_t slot = 1; slot < unknownBricks.slots(); ++slot) {
+        const Int3 f = unknownBricks.firstVoxel(unknownBricks.brickOfSlot(slot));
+        size_t cell = slot * size_t(kBrickVoxels);
+        for (int z = 0; z < kBrickSide; ++z)
+            for (int y = 0; y < kBrickSide; ++y)
+                for (int x = 0; x < kBrickSide; ++x, ++cell) {
+                    float* out = &init[4 * (block * cells + cell)];
+                    if (own) {  // the unknowns are the stored voxels themselves
+                        std::copy_n(&grid[3 * cell], 3, out);
+                        continue;
+                    }
+                    const Int3 c{f.x + x, f.y + y, f.z + z};
+                    if (c.x < 0 || c.y < 0 || c.z < 0 || c.x >= udims.x || c.y >= udims.y || c.z >= udims.z) continue;
+                    // The volume at the unknown's centre (trilinear between the volume's voxels).
+                    const Vec3d q((c.x + 0.5) / scale.x - 0.5, (c.y + 0.5) / scale.y - 0.5, (c.z + 0.5) / scale.z - 0.5);
+                    const Vec3d v = interpolate(cornersAt(q, n), [&](Int3 p) { return &grid[3 * volume.index(p.x, p.y, p.z)]; });
+                    for (int ch = 0; ch < 3; ++ch) out[ch] = float(v[ch]);
+                }
+    }
+}
+
+std::vector<float> Solver::State::sparseGridFrom(const std::vector<float>& unknowns, size_t block) const {
+    const Int3 n = volume.dims();
+    std::vector<float> grid(3 * volume.storedVoxels(), 0.0f);
+    if (udims == n) {
+        for (size_t c = 0; c < cells; ++c) std::copy_n(&unknowns[4 * (block * cells + c)], 3, &grid[3 * c]);
+        return grid;
+    }
+    // Coarser unknowns: the basis functions evaluated at every stored voxel (trilinear, or the
+    // box's nearest unknown), as the projector weighs them.
+    const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
+    auto unknownAt = [&](Int3 c) { return &unknowns[4 * (block * cells + unknownBricks.storageIndex(c))]; };
+    forEachActiveVoxel(volume, [&](Int3 p, size_t s) {
+        const Vec3d q((p.x + 0.5) * scale.x - 0.5, (p.y + 0.5) * scale.y - 0.5, (p.z + 0.5) * scale.z - 0.5);
+        Vec3d v;
+        if (opt.basis == BasisType::Box) {
+            const Int3 c{std::clamp(int(std::floor(q.x + 0.5)), 0, udims.x - 1), std::clamp(int(std::floor(q.y + 0.5)), 0, udims.y - 1),
+                         std::clamp(int(std::floor(q.z + 0.5)), 0, udims.z - 1)};
+            const float* u = unknownAt(c);
+            v = {u[0], u[1], u[2]};
+        } else {
+            v = interpolate(cornersAt(q, udims), unknownAt);
+        }
+        for (int ch = 0; ch < 3; ++ch) grid[3 * s + size_t(ch)] = float(v[ch]);
+    });
+    return grid;
+}
+
+void Solver::State::checkVectorsFit() const {
+    size_t pixels = 0;
+    for (const auto& v : views) pixels += size_t(v.camera.width) * size_t(v.camera.height);
+    const double limit = double(device.capabilities().maxStorageBlockBytes);
+    const double unknownBytes = double(elements) * 16, pixelBytes = double(pixels) * 16;
+    if (unknownBytes <= limit && pixelBytes <= limit) return;
+    const bool unknownsOver = unknownBytes > limit;
+    throw LimitExceeded(fmt::format(
+        "the solve needs vectors of {} {} ({:.0f} MiB each), over the {:.0f} MiB this GPU's storage blocks hold; {}",
+        unknownsOver ? elements : pixels, unknownsOver ? "unknowns" : "pixels", (unknownsOver ? unknownBytes : pixelBytes) / (1 << 20),
+        limit / (1 << 20), unknownsOver ? "solve at a coarser resolution" : "use smaller or fewer views"));
+}
+
+}  // namespace volstyle::core
