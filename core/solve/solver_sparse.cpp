@@ -75,6 +75,7 @@ Int3 halved(Int3 d) { return {std::max(1, (d.x + 1) / 2), std::max(1, (d.y + 1) 
 }  // namespace
 
 void Solver::State::growApron() {
+    volume.unshareTiles();  // every unknown a voxel of its own
     const BrickLayout active = *volume.bricks();
     const Int3 nb = active.brickDims(), n = volume.dims();
     std::vector<Int3> more;

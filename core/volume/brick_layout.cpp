@@ -9,6 +9,7 @@ BrickLayout::BrickLayout(Int3 dims, Int3 offset) : m_dims(dims), m_offset(offset
                    (dims.z + offset.z + kBrickSide - 1) / kBrickSide};
     m_slotOfBrick.assign(size_t(m_brickDims.volume()), 0u);
     m_brickOfSlot.push_back({-1, -1, -1});  // slot 0: the background brick
+    m_shared.push_back(0);
 }
 
 BrickLayout BrickLayout::full(Int3 dims, Int3 offset) {
@@ -22,21 +23,36 @@ BrickLayout BrickLayout::full(Int3 dims, Int3 offset) {
 
 uint32_t BrickLayout::activate(Int3 b) {
     uint32_t& slot = m_slotOfBrick[brickIndex(b)];
-    if (slot == 0) {
+    if (slot == 0 || m_shared[slot]) {
+        if (slot == 0) ++m_activeBricks;
         slot = uint32_t(m_brickOfSlot.size());
         m_brickOfSlot.push_back(b);
+        m_shared.push_back(0);
     }
     return slot;
 }
 
+uint32_t BrickLayout::addSharedSlot(Int3 representative) {
+    m_brickOfSlot.push_back(representative);
+    m_shared.push_back(1);
+    ++m_sharedCount;
+    return uint32_t(m_brickOfSlot.size() - 1);
+}
+
+void BrickLayout::share(Int3 b, uint32_t slot) {
+    uint32_t& s = m_slotOfBrick[brickIndex(b)];
+    if (s == 0) ++m_activeBricks;
+    s = slot;
+}
+
 std::pair<Int3, Int3> BrickLayout::activeVoxelBox() const {
     Int3 lo{m_dims.x, m_dims.y, m_dims.z}, hi{-1, -1, -1};
-    for (size_t s = 1; s < m_brickOfSlot.size(); ++s) {
-        const Int3 f = firstVoxel(m_brickOfSlot[s]);
+    forEachActiveBrick([&](Int3 b, uint32_t) {
+        const Int3 f = firstVoxel(b);
         lo = {std::min(lo.x, std::max(f.x, 0)), std::min(lo.y, std::max(f.y, 0)), std::min(lo.z, std::max(f.z, 0))};
         hi = {std::max(hi.x, std::min(f.x + kBrickSide - 1, m_dims.x - 1)), std::max(hi.y, std::min(f.y + kBrickSide - 1, m_dims.y - 1)),
               std::max(hi.z, std::min(f.z + kBrickSide - 1, m_dims.z - 1))};
-    }
+    });
     return {lo, hi};
 }
 

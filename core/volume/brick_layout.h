@@ -10,6 +10,10 @@
 /// Bricks line up with the file's OpenVDB leaf nodes (8³ at multiples of 8 in file index space):
 /// the volume's voxel (i,j,k) lies in brick ((i,j,k) + offset) / kBrickSide, with `offset` the
 /// position of voxel 0 inside its brick. A leaf is then one brick, read without densifying.
+///
+/// Tiles stay tiles: the bricks inside an OpenVDB tile (a constant region of 128³ or more) hold one
+/// value, so every such brick with the same values reads one shared slot. A shared slot is
+/// read-only; activate() gives a brick a slot of its own (Volume::activateBrick copies the values).
 
 #include <cstdint>
 #include <vector>
@@ -36,8 +40,11 @@ public:
     Int3 brickDims() const { return m_brickDims; }
     /// Stored bricks, the background slot 0 included.
     size_t slots() const { return m_brickOfSlot.size(); }
-    /// Active bricks (slots() − 1).
-    size_t activeBricks() const { return m_brickOfSlot.size() - 1; }
+    /// Bricks that hold data (their own slot or a shared one).
+    size_t activeBricks() const { return m_activeBricks; }
+    /// Whether a slot is shared by the bricks of a tile (its brickOfSlot is one of them).
+    bool isShared(size_t slot) const { return m_shared[slot] != 0; }
+    bool hasSharedSlots() const { return m_sharedCount > 0; }
     /// Voxels stored, the background brick included (what the grids hold).
     size_t storedVoxels() const { return slots() * size_t(kBrickVoxels); }
 
@@ -60,8 +67,22 @@ public:
         return size_t(slotOf(b)) * kBrickVoxels + size_t((lz * kBrickSide + ly) * kBrickSide + lx);
     }
     bool isActive(Int3 b) const { return slotOf(b) != 0; }
-    /// Activates brick b (no-op when active); returns its slot. Grids grow with Volume::activate.
+    /// Gives brick b a slot of its own (no-op when it has one): a new slot when it was inactive or
+    /// read a shared one. Returns its slot. Grids grow with Volume::activateBrick.
     uint32_t activate(Int3 b);
+    /// A new shared slot, standing for `representative` (a brick of the tile; no slot of its own yet).
+    uint32_t addSharedSlot(Int3 representative);
+    /// Inactive brick b reads shared slot `slot`.
+    void share(Int3 b, uint32_t slot);
+    /// Calls f(Int3 brick, uint32_t slot) for every active brick, x fastest.
+    template <typename F>
+    void forEachActiveBrick(F&& f) const {
+        size_t i = 0;
+        for (int z = 0; z < m_brickDims.z; ++z)
+            for (int y = 0; y < m_brickDims.y; ++y)
+                for (int x = 0; x < m_brickDims.x; ++x, ++i)
+                    if (m_slotOfBrick[i] != 0) f(Int3{x, y, z}, m_slotOfBrick[i]);
+    }
     /// The table from brick to slot (x fastest), as the GPU's indirection texture holds it.
     const std::vector<uint32_t>& slotTable() const { return m_slotOfBrick; }
 
@@ -69,7 +90,7 @@ public:
     std::pair<Int3, Int3> activeVoxelBox() const;
 
     /// Bytes of the table and bookkeeping (not the grids).
-    size_t tableBytes() const { return m_slotOfBrick.size() * sizeof(uint32_t) + m_brickOfSlot.size() * sizeof(Int3); }
+    size_t tableBytes() const { return m_slotOfBrick.size() * sizeof(uint32_t) + m_brickOfSlot.size() * (sizeof(Int3) + 1); }
 
     bool operator==(const BrickLayout& o) const {
         return m_dims == o.m_dims && m_offset == o.m_offset && m_slotOfBrick == o.m_slotOfBrick;
@@ -78,7 +99,9 @@ public:
 private:
     Int3 m_dims, m_offset, m_brickDims;
     std::vector<uint32_t> m_slotOfBrick;  ///< per brick of the box: its slot, 0 when inactive
-    std::vector<Int3> m_brickOfSlot;      ///< per slot: its brick (slot 0: unused)
+    std::vector<Int3> m_brickOfSlot;      ///< per slot: its brick (slot 0: unused; shared: one of them)
+    std::vector<uint8_t> m_shared;        ///< per slot: 1 when shared by a tile's bricks
+    size_t m_activeBricks = 0, m_sharedCount = 0;
 };
 
 }  // namespace volstyle::core

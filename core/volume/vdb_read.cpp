@@ -22,6 +22,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <sstream>
 
@@ -117,29 +118,36 @@ void readBricks(const GridT& grid, const openvdb::Coord& origin, const Volume& s
     }
 }
 
-/// Activates the bricks of `layout` that hold a leaf or an active tile of `grid` inside its box.
-template <typename GridT>
-void activateBricksOf(const GridT& grid, const openvdb::Coord& origin, BrickLayout& layout) {
+/// Calls f(Int3 brick) for every brick of `layout` that box `bb` (file index space) overlaps.
+template <typename F>
+void forBricksIn(openvdb::CoordBBox bb, const openvdb::Coord& origin, const BrickLayout& layout, F&& f) {
     const Int3 d = layout.dims();
-    const openvdb::CoordBBox box(origin, origin + openvdb::Coord(d.x - 1, d.y - 1, d.z - 1));
-    auto activateBox = [&](openvdb::CoordBBox bb) {
-        bb.intersect(box);
-        if (bb.empty()) return;
-        const Int3 lo = layout.brickOf({bb.min().x() - origin.x(), bb.min().y() - origin.y(), bb.min().z() - origin.z()});
-        const Int3 hi = layout.brickOf({bb.max().x() - origin.x(), bb.max().y() - origin.y(), bb.max().z() - origin.z()});
-        for (int z = lo.z; z <= hi.z; ++z)
-            for (int y = lo.y; y <= hi.y; ++y)
-                for (int x = lo.x; x <= hi.x; ++x) layout.activate({x, y, z});
-    };
+    bb.intersect(openvdb::CoordBBox(origin, origin + openvdb::Coord(d.x - 1, d.y - 1, d.z - 1)));
+    if (bb.empty()) return;
+    const Int3 lo = layout.brickOf({bb.min().x() - origin.x(), bb.min().y() - origin.y(), bb.min().z() - origin.z()});
+    const Int3 hi = layout.brickOf({bb.max().x() - origin.x(), bb.max().y() - origin.y(), bb.max().z() - origin.z()});
+    for (int z = lo.z; z <= hi.z; ++z)
+        for (int y = lo.y; y <= hi.y; ++y)
+            for (int x = lo.x; x <= hi.x; ++x) f(Int3{x, y, z});
+}
+
+/// Gives the bricks of `layout` that hold a leaf of `grid` inside its box a slot of their own.
+template <typename GridT>
+void activateLeafBricks(const GridT& grid, const openvdb::Coord& origin, BrickLayout& layout) {
     for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf)
-        if (!leaf->isEmpty()) activateBox(leaf->getNodeBoundingBox());
-    // Active tiles above the leaves (the iterator stops before the leaves' voxels).
+        if (!leaf->isEmpty()) forBricksIn(leaf->getNodeBoundingBox(), origin, layout, [&](Int3 b) { layout.activate(b); });
+}
+
+/// Calls f(Int3 brick) for the bricks inside an active tile of `grid` (tiles sit above the leaves,
+/// 8³-aligned: a brick is inside one tile or none).
+template <typename GridT, typename F>
+void forTileBricks(const GridT& grid, const openvdb::Coord& origin, const BrickLayout& layout, F&& f) {
     auto tile = grid.tree().cbeginValueOn();
-    tile.setMaxDepth(GridT::TreeType::ValueOnCIter::LEAF_DEPTH - 1);
+    tile.setMaxDepth(GridT::TreeType::ValueOnCIter::LEAF_DEPTH - 1);  // stops before the leaves' voxels
     for (; tile; ++tile) {
         openvdb::CoordBBox bb;
         tile.getBoundingBox(bb);
-        activateBox(bb);
+        forBricksIn(bb, origin, layout, f);
     }
 }
 
@@ -264,15 +272,39 @@ Volume sparseShape(const VdbSource& source, const VolumeLimits& limits, const st
     BrickLayout layout(source.dims, {mod8(o.x()), mod8(o.y()), mod8(o.z())});
     const auto& reference = *source.roles[kExtinction];
     int rgbGrids = 0;
+    std::vector<openvdb::GridBase::ConstPtr> grids;  // the role grids read brick by brick
     for (int r = 0; r < kRoleCount; ++r) {
         const auto& grid = source.roles[r];
         if (!grid) continue;
         rgbGrids += r != kRefractiveIndex;
-        if (grid->transform() == reference.transform())
-            withTypedGrid(grid, path, [&](const auto& typed) { activateBricksOf(typed, o, layout); });
+        if (grid->transform() == reference.transform()) grids.push_back(grid);
     }
+    // Leaves first, a slot each; then the bricks inside tiles (and no leaf of any grid), which
+    // share one slot per combination of the grids' values there.
+    for (const auto& grid : grids) withTypedGrid(grid, path, [&](const auto& typed) { activateLeafBricks(typed, o, layout); });
+    std::map<std::string, uint32_t> sharedSlots;
+    auto valuesAt = [&](Int3 b) {
+        const Int3 f = layout.firstVoxel(b);
+        const openvdb::Coord base = o + openvdb::Coord(f.x, f.y, f.z);
+        std::string key;
+        for (const auto& grid : grids)
+            withTypedGrid(grid, path, [&](const auto& typed) {
+                const auto v = typed.tree().getValue(base);
+                key.append(reinterpret_cast<const char*>(&v), sizeof(v));
+            });
+        return key;
+    };
+    for (const auto& grid : grids)
+        withTypedGrid(grid, path, [&](const auto& typed) {
+            forTileBricks(typed, o, layout, [&](Int3 b) {
+                if (layout.isActive(b)) return;
+                const auto [it, added] = sharedSlots.try_emplace(valuesAt(b), 0u);
+                if (added) it->second = layout.addSharedSlot(b);
+                layout.share(b, it->second);
+            });
+        });
     try {
-        checkSparseLimits(source.dims, layout.activeBricks(), rgbGrids, limits);
+        checkSparseLimits(source.dims, layout.activeBricks(), layout.slots(), rgbGrids, limits);
     } catch (const LimitExceeded& e) {
         throw LimitExceeded(std::string(e.what()) + " (in " + quoted(path) + ")");
     }

@@ -54,29 +54,40 @@ std::vector<float>& Volume::ensureEmission() {
 size_t Volume::activeVoxels() const {
     if (!m_bricks) return voxelCount();
     size_t n = 0;
-    for (size_t s = 1; s < m_bricks->slots(); ++s) {
-        const Int3 f = m_bricks->firstVoxel(m_bricks->brickOfSlot(s));
+    m_bricks->forEachActiveBrick([&](Int3 b, uint32_t) {
+        const Int3 f = m_bricks->firstVoxel(b);
         size_t c = 1;
         for (int a = 0; a < 3; ++a) c *= size_t(std::min(f[a] + kBrickSide, m_dims[a]) - std::max(f[a], 0));
         n += c;
-    }
+    });
     return n;
 }
 
 uint32_t Volume::activateBrick(Int3 b) {
     if (!m_bricks) throw InternalError("activateBrick on a dense volume");
-    const size_t before = m_bricks->slots();
+    const uint32_t before = m_bricks->slotOf(b);
     const uint32_t slot = m_bricks->activate(b);
-    if (m_bricks->slots() != before) {
-        // The new brick starts as a copy of the background brick.
-        auto grow = [](std::vector<float>& g, size_t channels) {
+    if (slot != before) {
+        // The new slot starts as a copy of what the brick read: the background or its tile.
+        auto grow = [&](std::vector<float>& g, size_t channels) {
             if (g.empty()) return;
-            g.insert(g.end(), g.begin(), g.begin() + ptrdiff_t(channels * kBrickVoxels));
+            const size_t n = channels * kBrickVoxels, end = g.size();
+            g.resize(end + n);
+            std::copy_n(g.begin() + ptrdiff_t(before * n), n, g.begin() + ptrdiff_t(end));
         };
         grow(m_extinction, 3), grow(m_albedo, 3), grow(m_emission, 3);
         if (m_refractiveIndex) grow(*m_refractiveIndex, 1);
     }
     return slot;
+}
+
+void Volume::unshareTiles() {
+    if (!m_bricks || !m_bricks->hasSharedSlots()) return;
+    std::vector<Int3> tiled;
+    m_bricks->forEachActiveBrick([&](Int3 b, uint32_t slot) {
+        if (m_bricks->isShared(slot)) tiled.push_back(b);
+    });
+    for (const Int3& b : tiled) activateBrick(b);
 }
 
 Int3 Volume::voxelOfStored(size_t stored) const {
@@ -231,9 +242,9 @@ void checkGrid(const Volume& v, const std::vector<float>& g, int channels, const
 
 }  // namespace
 
-void checkSparseLimits(Int3 dims, size_t activeBricks, int rgbGrids, const VolumeLimits& limits) {
+void checkSparseLimits(Int3 dims, size_t activeBricks, size_t storedSlots, int rgbGrids, const VolumeLimits& limits) {
     const int64_t voxels = int64_t(activeBricks) * kBrickVoxels;
-    const int64_t bytes = (voxels + kBrickVoxels) * 3 * int64_t(sizeof(float)) * rgbGrids;
+    const int64_t bytes = int64_t(storedSlots) * kBrickVoxels * 3 * int64_t(sizeof(float)) * rgbGrids;
     std::ostringstream s;
     if (std::max({dims.x, dims.y, dims.z}) > limits.maxSparseSide) {
         s << "the " << dims << " box is over the limit of " << limits.maxSparseSide << " voxels on a side";
@@ -254,7 +265,7 @@ void Volume::validate(const VolumeLimits& limits) const {
         throw InvalidArgument(s.str());
     }
     if (m_bricks) {
-        checkSparseLimits(m_dims, m_bricks->activeBricks(), 1 + int(hasAlbedo()) + int(hasEmission()), limits);
+        checkSparseLimits(m_dims, m_bricks->activeBricks(), m_bricks->slots(), 1 + int(hasAlbedo()) + int(hasEmission()), limits);
         if (!(m_bricks->dims() == m_dims)) throw InternalError("a sparse volume's bricks cover another box");
         // Empty-space skipping takes an inactive brick to be empty.
         auto zeroBackground = [&](const std::vector<float>& g, const char* name) {

@@ -66,9 +66,11 @@ public:
     size_t storedVoxels() const { return m_bricks ? m_bricks->storedVoxels() : voxelCount(); }
     /// Voxels that hold data: the box's, or the active bricks' (clipped to the box, background excluded).
     size_t activeVoxels() const;
-    /// Activates brick b of a sparse volume: its voxels read the background's values until written.
-    /// Returns its slot.
+    /// Gives brick b of a sparse volume a slot of its own, holding what it read before (the
+    /// background's values, or its tile's). Returns its slot.
     uint32_t activateBrick(Int3 b);
+    /// Gives every brick of a tile a slot of its own (before writing voxel by voxel: a solve).
+    void unshareTiles();
     /// The voxel of the box a stored voxel belongs to (the inverse of index(); background: none).
     Int3 voxelOfStored(size_t stored) const;
     /// The same volume stored densely (throws LimitExceeded over `limits`).
@@ -153,13 +155,14 @@ private:
 };
 
 /// Calls f(Int3 voxel, size_t stored) for every voxel of the box that holds data: each voxel of a
-/// dense volume; each voxel of a sparse one's active bricks that lies inside the box.
+/// dense volume; each voxel of a sparse one's active bricks that lies inside the box (the bricks
+/// of a tile all give their shared slot's stored voxels).
 template <typename F>
 void forEachActiveVoxel(const Volume& v, F&& f) {
     const Int3 d = v.dims();
     if (const BrickLayout* bricks = v.bricks()) {
-        for (size_t slot = 1; slot < bricks->slots(); ++slot) {
-            const Int3 first = bricks->firstVoxel(bricks->brickOfSlot(slot));
+        bricks->forEachActiveBrick([&](Int3 brick, uint32_t slot) {
+            const Int3 first = bricks->firstVoxel(brick);
             size_t stored = slot * size_t(kBrickVoxels);
             for (int z = 0; z < kBrickSide; ++z)
                 for (int y = 0; y < kBrickSide; ++y)
@@ -167,7 +170,7 @@ void forEachActiveVoxel(const Volume& v, F&& f) {
                         const Int3 p{first.x + x, first.y + y, first.z + z};
                         if (p.x >= 0 && p.y >= 0 && p.z >= 0 && p.x < d.x && p.y < d.y && p.z < d.z) f(p, stored);
                     }
-        }
+        });
         return;
     }
     size_t n = 0;
@@ -176,9 +179,10 @@ void forEachActiveVoxel(const Volume& v, F&& f) {
             for (int i = 0; i < d.x; ++i, ++n) f(Int3{i, j, k}, n);
 }
 
-/// Throws LimitExceeded when a sparse volume of `dims` with `activeBricks` and `rgbGrids` grids is
-/// over `limits` (checked before its grids are allocated, and by validate()).
-void checkSparseLimits(Int3 dims, size_t activeBricks, int rgbGrids, const VolumeLimits& limits);
+/// Throws LimitExceeded when a sparse volume of `dims` with `activeBricks` (stored in `storedSlots`
+/// slots, tiles sharing theirs) and `rgbGrids` grids is over `limits` (checked before its grids
+/// are allocated, and by validate()).
+void checkSparseLimits(Int3 dims, size_t activeBricks, size_t storedSlots, int rgbGrids, const VolumeLimits& limits);
 
 /// Throws InvalidArgument naming `what` when `volume` is sparse (code that walks the dense box).
 void requireDense(const Volume& volume, const char* what);

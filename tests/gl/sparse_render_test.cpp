@@ -75,3 +75,47 @@ TEST(SparseRender, BricksRenderTheDenseImageUnderSunSkyAndGlow) {
         }
     }
 }
+
+TEST(SparseRender, TileBricksSharingOneSlotRenderAsTheirVoxels) {
+    VOLSTYLE_REQUIRE_GL();
+    // A cloud with a constant cube inside (a tile in a VDB): the cube's 8 bricks share one slot.
+    Volume dense = glowingCloud(48);
+    for (int k = 16; k < 32; ++k)
+        for (int j = 16; j < 32; ++j)
+            for (int i = 16; i < 32; ++i) {
+                const size_t n = 3 * dense.index(i, j, k);
+                for (int c = 0; c < 3; ++c) dense.extinction()[n + size_t(c)] = 5.0f, dense.emission()[n + size_t(c)] = 0.0f;
+                dense.albedo()[n] = dense.albedo()[n + 2] = 1.0f, dense.albedo()[n + 1] = 0.7f;
+            }
+    const BrickLayout own = *dense.toSparse().bricks();
+    BrickLayout shared(dense.dims(), {0, 0, 0});
+    uint32_t tile = 0;
+    own.forEachActiveBrick([&](Int3 b, uint32_t) {
+        const bool inCube = b.x >= 2 && b.x < 4 && b.y >= 2 && b.y < 4 && b.z >= 2 && b.z < 4;
+        if (!inCube) return void(shared.activate(b));
+        if (tile == 0) tile = shared.addSharedSlot(b);
+        shared.share(b, tile);
+    });
+    Volume sparse(shared, dense.worldFromIndex());
+    sparse.ensureAlbedo(), sparse.ensureEmission();
+    forEachActiveVoxel(sparse, [&](Int3 p, size_t s) {
+        const size_t n = 3 * dense.index(p.x, p.y, p.z);
+        for (int c = 0; c < 3; ++c) {
+            sparse.extinction()[3 * s + size_t(c)] = dense.extinction()[n + size_t(c)];
+            sparse.albedo()[3 * s + size_t(c)] = dense.albedo()[n + size_t(c)];
+            sparse.emission()[3 * s + size_t(c)] = dense.emission()[n + size_t(c)];
+        }
+    });
+    EXPECT_EQ(sparse.bricks()->slots(), own.slots() - 7);  // 8 bricks in one slot
+    EXPECT_EQ(sparse.toDense().extinction(), dense.extinction());
+    Camera cam = framingCamera(dense.worldBounds());
+    cam.width = cam.height = 40;
+    Lighting sun;
+    sun.lights[0].direction = {0.3, 0.8, -0.5};
+    GpuVolume a(dense), b(sparse);
+    Renderer renderer(test::device());
+    const Image ia = renderer.render(a, cam, sun), ib = renderer.render(b, cam, sun);
+    ASSERT_GT(maxValue(ia), 0.05);
+    // The same voxel values; the light grid covers the active bricks only (float rounding of its rows).
+    EXPECT_LE(maxDifference(ia, ib), 1e-6 * maxValue(ia));
+}

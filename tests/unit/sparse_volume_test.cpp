@@ -188,7 +188,51 @@ TEST(SparseVolume, LimitsCountActiveVoxelsBeforeAllocating) {
     }
     const Volume v = loadVdb(path);  // 2 M voxels: within the default
     EXPECT_EQ(v.bricks()->activeBricks(), size_t(4096));
+    EXPECT_EQ(v.bricks()->slots(), size_t(2));  // the background and the tile's one shared brick
     EXPECT_EQ(v.extinction()[3 * v.index(127, 127, 127)], 1.0f);
     EXPECT_EQ(v.extinction()[3 * v.index(128, 0, 0)], 0.0f);
     EXPECT_EQ(v.activeVoxels(), size_t(128 * 128 * 128));
+}
+
+TEST(SparseVolume, TilesStayTilesWhenReadAndWritten) {
+    // A 128³ tile of density 2 beside a ball of leaves: the tile's 4096 bricks share one stored
+    // brick, read the tile's value, and a solve-style edit elsewhere writes the tile back as a tile.
+    const auto dir = test::scratchDir();
+    const std::string path = (dir / "tiled.vdb").string(), same = (dir / "same.vdb").string(), edited = (dir / "edited.vdb").string();
+    openvdb::initialize();
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setName("density");
+    density->tree().addTile(2, openvdb::Coord(128, 0, 0), 2.0f, true);
+    for (int z = 0; z < 20; ++z)
+        for (int y = 0; y < 20; ++y)
+            for (int x = 0; x < 20; ++x) density->tree().setValue(openvdb::Coord(40 + x, 50 + y, 60 + z), 0.5f + 0.01f * float(x));
+    openvdb::io::File(path).write({density});
+    Volume v = loadVdb(path, sparseStorage());
+    const BrickLayout& b = *v.bricks();
+    const size_t leafBricks = 3 * 3 * 3;  // 20 voxels from 40, 50 and 60 span 3 leaves on each axis
+    EXPECT_EQ(b.activeBricks(), 4096 + leafBricks);
+    EXPECT_EQ(b.slots(), 1 + leafBricks + 1);
+    EXPECT_TRUE(b.hasSharedSlots());
+    // The box starts at file index (40, 0, 0): the ball's low x, the tile's low y and z.
+    EXPECT_EQ(v.dims(), (Int3{216, 128, 128}));
+    EXPECT_EQ(v.extinction()[3 * v.index(128 + 77 - 40, 5, 100)], 2.0f);
+    EXPECT_EQ(v.activeVoxels(), size_t(4096 + leafBricks) * kBrickVoxels);
+    // The dense copy agrees voxel for voxel.
+    const Volume dense = loadVdb(path);
+    EXPECT_EQ(v.toDense().extinction(), dense.extinction());
+    saveVdb(same, v);
+    EXPECT_EQ(vdbDifferences(path, same), std::vector<std::string>{});
+    // An edit in the ball: the tile is written back as it was (one tile, no leaves under it).
+    v.extinction()[3 * v.index(45 - 40, 55, 65)] = 0.75f;
+    saveVdb(edited, v);
+    openvdb::io::File f(edited);
+    f.open();
+    auto back = openvdb::gridPtrCast<openvdb::FloatGrid>(f.readGrid("density"));
+    EXPECT_EQ(back->tree().leafCount(), density->tree().leafCount());
+    EXPECT_EQ(back->tree().getValue(openvdb::Coord(200, 100, 100)), 2.0f);
+    // Giving every tile brick its own slot (as a solve does) keeps every value.
+    Volume unshared = v;
+    unshared.unshareTiles();
+    EXPECT_FALSE(unshared.bricks()->hasSharedSlots());
+    EXPECT_EQ(unshared.toDense().extinction(), v.toDense().extinction());
 }
