@@ -261,6 +261,7 @@ struct TranslucentParams {
     VS_IVEC4 options;         /* x: has emission; y: has albedo */
     VS_VEC4 perturb;          /* x: displacement amplitude (voxels); y: extinction modulation; z: noise texels per voxel (octave 0); w: octaves */
     VS_VEC4 perturbTime;      /* x: animation time */
+    VS_IVEC4 sparseOffset;    /* VOLSTYLE_SPARSE: xyz where voxel 0 lies in its brick (common/sparse_grid.glsl) */
 };
 
 #ifndef VOLSTYLE_GLSL

@@ -171,7 +171,6 @@ Image TranslucentRenderer::render(GpuVolume& volume, const Camera& cam, const Li
                                   const TranslucentSettings& settings, TranslucentStats* statsOut, Image* medium,
                                   const WorkBudget& budget) {
     VOLSTYLE_CHECK(m_device.isOwnedByThisThread(), ==, true);
-    if (volume.isSparse()) throw InvalidArgument("the translucent preview works on dense volumes only, and this volume is sparse");
     cam.validate();
     lighting.validate();
     settings.validate();
@@ -246,6 +245,7 @@ Image TranslucentRenderer::render(GpuVolume& volume, const Camera& cam, const Li
     p.lightUvFromWorld = toGl(frame.uvFromWorld());
     p.indexFromWorld = toGl(volume.worldFromIndex().inverseAffine());
     p.dims = {volume.dims().x, volume.dims().y, volume.dims().z, side};
+    p.sparseOffset = i4(volume.sparseOffset());
     p.eye = f4(cam.eye);
     p.sliceAxis = f4(s, spacing);
     p.lightDirection = f4(towardLight, spacing / dot(travel, s));
@@ -284,14 +284,22 @@ Image TranslucentRenderer::render(GpuVolume& volume, const Camera& cam, const Li
         glClearNamedFramebufferfv(t.lightFb[k].id(), GL_COLOR, 1, one);
     }
     glBindTextureUnit(layout::kUnitExtinction, volume.extinctionTexture());
+    if (volume.isSparse()) glBindTextureUnit(layout::kUnitBrickTable, volume.brickTableTexture());
     if (volume.hasAlbedo()) glBindTextureUnit(layout::kUnitAlbedo, volume.albedoTexture());
     if (volume.hasEmission()) glBindTextureUnit(layout::kUnitEmission, volume.emissionTexture());
     glBindTextureUnit(layout::kUnitPhaseTable, t.phase.id());
     glBindVertexArray(t.vao.id());
     glDisable(GL_DEPTH_TEST);
     glDisable(GL_CULL_FACE);
-    const gl::Program& eyeProgram = m_device.program(gl::ShaderBuilder("translucent.raster").define("VOLSTYLE_PASS_EYE", 1));
-    const gl::Program& lightProgram = m_device.program(gl::ShaderBuilder("translucent.raster").define("VOLSTYLE_PASS_LIGHT", 1));
+    // A sparse volume's kernels read through its brick table (a dense volume's source is unchanged).
+    auto variant = [&](const char* pass) {
+        gl::ShaderBuilder b("translucent.raster");
+        b.define(pass, 1);
+        if (volume.isSparse()) b.define("VOLSTYLE_SPARSE", 1);
+        return b;
+    };
+    const gl::Program& eyeProgram = m_device.program(variant("VOLSTYLE_PASS_EYE"));
+    const gl::Program& lightProgram = m_device.program(variant("VOLSTYLE_PASS_LIGHT"));
     auto draw = [&](const std::vector<Vec3d>& polygon) {
         std::vector<float> xyz;
         for (const Vec3d& v : polygon) xyz.insert(xyz.end(), {float(v.x), float(v.y), float(v.z)});

@@ -2,7 +2,7 @@
 // the Houdini-sized sim, about 3% active), a column rising from the ground and bending
 // downwind, widening as it rises, its edge broken up by noise; float `density` (fog volume) and
 // `temperature` (falls with height) and Vec3f `vel` (along the column), leaf voxels on background 0.
-// Usage: make_plume_vdb OUT.vdb [NX NY NZ]
+// Usage: make_plume_vdb OUT.vdb [NX NY NZ [WIDTH]]   (WIDTH scales the column's radius: activity ∝ WIDTH²)
 #include <openvdb/openvdb.h>
 
 #include <cmath>
@@ -15,11 +15,12 @@ using namespace volstyle;
 using namespace volstyle::core;
 
 int main(int argc, char** argv) {
-    if (argc != 2 && argc != 5) {
-        std::fprintf(stderr, "usage: make_plume_vdb OUT.vdb [NX NY NZ]\n");
+    if (argc != 2 && argc != 5 && argc != 6) {
+        std::fprintf(stderr, "usage: make_plume_vdb OUT.vdb [NX NY NZ [WIDTH]]\n");
         return 2;
     }
-    const int nx = argc == 5 ? std::atoi(argv[2]) : 1024, ny = argc == 5 ? std::atoi(argv[3]) : 512, nz = argc == 5 ? std::atoi(argv[4]) : 1024;
+    const int nx = argc >= 5 ? std::atoi(argv[2]) : 1024, ny = argc >= 5 ? std::atoi(argv[3]) : 512, nz = argc >= 5 ? std::atoi(argv[4]) : 1024;
+    const double width = argc == 6 ? std::atof(argv[5]) : 1.0;
     openvdb::initialize();
     auto density = openvdb::FloatGrid::create(0.0f);
     density->setName("density");
@@ -38,7 +39,7 @@ int main(int argc, char** argv) {
     // In units of the 1024×512×1024 box, scaled to this one: the column's centre at height h and its radius.
     const double sx = nx / 1024.0, sy = ny / 512.0, sz = nz / 1024.0;
     auto centre = [&](double h) { return Vec3d(sx * (200 + 600 * std::pow(h / 512, 2.0)), sy * h, sz * (512 + 60 * std::sin(h / 90))); };
-    auto radius = [&](double h) { return sx * (42 + 105 * h / 512); };
+    auto radius = [&](double h) { return width * sx * (42 + 105 * h / 512); };
     for (int y = 0; y < ny; ++y) {
         const double h = y / sy;
         const Vec3d c = centre(h);

@@ -18,20 +18,7 @@ layout(binding = kUnitExtinction) uniform sampler3D s_extinction;
 layout(binding = kUnitOccupancy) uniform sampler3D s_occupancy;
 
 #if VOLSTYLE_SPARSE
-layout(binding = kUnitBrickTable) uniform usampler3D s_brickTable;
-
-// The atlas brick of brick b (r32ui: x | y << kAtlasBits | z << 2 kAtlasBits).
-ivec3 atlasBrick(ivec3 b) {
-    uint e = texelFetch(s_brickTable, b, 0).r;
-    uint mask = (1u << kAtlasBits) - 1u;
-    return ivec3(e & mask, (e >> kAtlasBits) & mask, e >> (2 * kAtlasBits));
-}
-
-// Where voxel v of the box is stored.
-ivec3 storedTexel(ivec3 v) {
-    ivec3 q = v + u.sparseOffset.xyz;
-    return atlasBrick(q / kBrickSize) * kBrickSize + q % kBrickSize;
-}
+#include "common/sparse_grid.glsl"
 #else
 ivec3 storedTexel(ivec3 v) { return v; }
 #endif
