@@ -25,6 +25,7 @@ uint32_t BrickLayout::activate(Int3 b) {
     uint32_t& slot = m_slotOfBrick[brickIndex(b)];
     if (slot == 0 || m_shared[slot]) {
         if (slot == 0) ++m_activeBricks;
+        else --m_sharingBricks;
         slot = uint32_t(m_brickOfSlot.size());
         m_brickOfSlot.push_back(b);
         m_shared.push_back(0);
@@ -35,13 +36,14 @@ uint32_t BrickLayout::activate(Int3 b) {
 uint32_t BrickLayout::addSharedSlot(Int3 representative) {
     m_brickOfSlot.push_back(representative);
     m_shared.push_back(1);
-    ++m_sharedCount;
     return uint32_t(m_brickOfSlot.size() - 1);
 }
 
 void BrickLayout::share(Int3 b, uint32_t slot) {
     uint32_t& s = m_slotOfBrick[brickIndex(b)];
     if (s == 0) ++m_activeBricks;
+    if (s != 0 && m_shared[s]) --m_sharingBricks;
+    if (m_shared[slot]) ++m_sharingBricks;
     s = slot;
 }
 

@@ -44,7 +44,8 @@ public:
     size_t activeBricks() const { return m_activeBricks; }
     /// Whether a slot is shared by the bricks of a tile (its brickOfSlot is one of them).
     bool isShared(size_t slot) const { return m_shared[slot] != 0; }
-    bool hasSharedSlots() const { return m_sharedCount > 0; }
+    /// Whether any brick reads a shared slot.
+    bool hasSharedSlots() const { return m_sharingBricks > 0; }
     /// Voxels stored, the background brick included (what the grids hold).
     size_t storedVoxels() const { return slots() * size_t(kBrickVoxels); }
 
@@ -101,7 +102,7 @@ private:
     std::vector<uint32_t> m_slotOfBrick;  ///< per brick of the box: its slot, 0 when inactive
     std::vector<Int3> m_brickOfSlot;      ///< per slot: its brick (slot 0: unused; shared: one of them)
     std::vector<uint8_t> m_shared;        ///< per slot: 1 when shared by a tile's bricks
-    size_t m_activeBricks = 0, m_sharedCount = 0;
+    size_t m_activeBricks = 0, m_sharingBricks = 0;  ///< bricks with data; those of them reading a shared slot
 };
 
 }  // namespace volstyle::core

@@ -208,6 +208,7 @@ TEST(SparseVolume, TilesStayTilesWhenReadAndWritten) {
             for (int x = 0; x < 20; ++x) density->tree().setValue(openvdb::Coord(40 + x, 50 + y, 60 + z), 0.5f + 0.01f * float(x));
     openvdb::io::File(path).write({density});
     Volume v = loadVdb(path, sparseStorage());
+    ASSERT_TRUE(v.isSparse());
     const BrickLayout& b = *v.bricks();
     const size_t leafBricks = 3 * 3 * 3;  // 20 voxels from 40, 50 and 60 span 3 leaves on each axis
     EXPECT_EQ(b.activeBricks(), 4096 + leafBricks);
@@ -223,11 +224,12 @@ TEST(SparseVolume, TilesStayTilesWhenReadAndWritten) {
     saveVdb(same, v);
     EXPECT_EQ(vdbDifferences(path, same), std::vector<std::string>{});
     // An edit in the ball: the tile is written back as it was (one tile, no leaves under it).
-    v.extinction()[3 * v.index(45 - 40, 55, 65)] = 0.75f;
+    for (int c = 0; c < 3; ++c) v.extinction()[3 * v.index(45 - 40, 55, 65) + size_t(c)] = 0.75f;  // grey: stays a float grid
     saveVdb(edited, v);
     openvdb::io::File f(edited);
     f.open();
     auto back = openvdb::gridPtrCast<openvdb::FloatGrid>(f.readGrid("density"));
+    ASSERT_TRUE(back);
     EXPECT_EQ(back->tree().leafCount(), density->tree().leafCount());
     EXPECT_EQ(back->tree().getValue(openvdb::Coord(200, 100, 100)), 2.0f);
     // Giving every tile brick its own slot (as a solve does) keeps every value.
