@@ -134,26 +134,22 @@ void GpuVolume::upload(const Volume& volume) {
     const size_t hash = std::hash<std::string_view>()(
         std::string_view(reinterpret_cast<const char*>(ext.data()), ext.size() * sizeof(float)));
     Textures& t = *m_textures;
-    const bool sameLayout = bricks ? (m_sparse && bricks->slotTable().size() == m_tableSize && m_tableHash == tableHash(*bricks) &&
-                                       bricks->offset() == m_sparseOffset)
-                                    : !m_sparse;
+    const size_t layoutHash = bricks ? tableHash(*bricks) : 0;
+    const bool sameLayout = bricks ? (m_sparse && layoutHash == m_tableHash && bricks->offset() == m_sparseOffset) : !m_sparse;
     const bool sameExtinction = t.extinction && d == m_dims && hash == m_extinctionHash && sameLayout;
     m_dims = d;
     m_sparse = bricks != nullptr;
     std::optional<Atlas> atlas;
     m_storedVoxels = volume.storedVoxels();
-    m_atlasBricks = {};
     if (bricks) {
         atlas = Atlas::forSlots(bricks->slots(), maxSize);
-        m_atlasBricks = atlas->bricks;
         m_sparseOffset = bricks->offset();
         const auto [lo, hi] = bricks->activeVoxelBox();
         m_activeBox = {{std::max(lo.x - 1, 0), std::max(lo.y - 1, 0), std::max(lo.z - 1, 0)},
                        {std::min(hi.x + 1, d.x - 1), std::min(hi.y + 1, d.y - 1), std::min(hi.z + 1, d.z - 1)}};
         if (!sameLayout) {
             t.brickTable = uploadBrickTable(*bricks, *atlas);
-            m_tableSize = bricks->slotTable().size();
-            m_tableHash = tableHash(*bricks);
+            m_tableHash = layoutHash;
         }
     } else {
         m_sparseOffset = {0, 0, 0};

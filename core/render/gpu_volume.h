@@ -52,8 +52,6 @@ public:
     std::pair<Int3, Int3> activeBox() const { return m_activeBox; }
     /// Voxels each grid stores (a sparse volume's slots × 8³, the background brick included).
     size_t storedVoxels() const { return m_storedVoxels; }
-    /// A sparse volume's atlas, in bricks (slot s at (s mod x, s / x mod y, s / (x y))).
-    Int3 atlasBricks() const { return m_atlasBricks; }
     /// Bytes the textures take (grids, table, occupancy).
     size_t deviceBytes() const { return m_deviceBytes; }
 
@@ -71,11 +69,11 @@ public:
 private:
     struct Textures;
     std::unique_ptr<Textures> m_textures;
-    Int3 m_dims, m_brickDims, m_sparseOffset, m_atlasBricks;
+    Int3 m_dims, m_brickDims, m_sparseOffset;
     size_t m_storedVoxels = 0;
     std::pair<Int3, Int3> m_activeBox;
     bool m_sparse = false;
-    size_t m_tableSize = 0, m_tableHash = 0;  // to detect an unchanged brick layout on re-upload
+    size_t m_tableHash = 0;  // to detect an unchanged brick layout on re-upload
     size_t m_deviceBytes = 0;
     Mat4 m_worldFromIndex;
     std::shared_ptr<const RefractiveGrid> m_refraction;

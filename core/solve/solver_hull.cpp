@@ -101,18 +101,10 @@ void Solver::State::markHullFromMasks(const std::vector<float>& o, const std::ve
         return false;
     };
     if (volume.isSparse()) {  // the unknowns are the stored voxels of their bricks
-        for (size_t slot = 1; slot < unknownBricks.slots(); ++slot) {
-            const Int3 f = unknownBricks.firstVoxel(unknownBricks.brickOfSlot(slot));
-            size_t cell = slot * size_t(kBrickVoxels);
-            for (int z = 0; z < kBrickSide; ++z)
-                for (int y = 0; y < kBrickSide; ++y)
-                    for (int x = 0; x < kBrickSide; ++x, ++cell) {
-                        const Vec3d c(f.x + x, f.y + y, f.z + z);
-                        if (c.x < 0 || c.y < 0 || c.z < 0 || c.x >= udims.x || c.y >= udims.y || c.z >= udims.z) continue;
-                        if (!carved(volume.worldFromIndex().applyPoint((c + Vec3d(0.5)) / scale - Vec3d(0.5))))
-                            std::fill_n(&hullHost[4 * cell], 3, 1.0f);
-                    }
-        }
+        unknownBricks.forEachStoredVoxel([&](Int3 c, size_t cell) {
+            if (!carved(volume.worldFromIndex().applyPoint((Vec3d(c.x, c.y, c.z) + Vec3d(0.5)) / scale - Vec3d(0.5))))
+                std::fill_n(&hullHost[4 * cell], 3, 1.0f);
+        });
         return;
     }
     for (int k = 0; k < udims.z; ++k)

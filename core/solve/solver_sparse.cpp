@@ -129,27 +129,17 @@ void Solver::State::chooseSparseUnknowns() {
 
 void Solver::State::sparseUnknownsFrom(const std::vector<float>& grid, std::vector<float>& init, size_t block) const {
     const Int3 n = volume.dims();
-    const bool own = udims == n;
-    const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
-    for (size_t slot = 1; slot < unknownBricks.slots(); ++slot) {
-        const Int3 f = unknownBricks.firstVoxel(unknownBricks.brickOfSlot(slot));
-        size_t cell = slot * size_t(kBrickVoxels);
-        for (int z = 0; z < kBrickSide; ++z)
-            for (int y = 0; y < kBrickSide; ++y)
-                for (int x = 0; x < kBrickSide; ++x, ++cell) {
-                    float* out = &init[4 * (block * cells + cell)];
-                    if (own) {  // the unknowns are the stored voxels themselves
-                        std::copy_n(&grid[3 * cell], 3, out);
-                        continue;
-                    }
-                    const Int3 c{f.x + x, f.y + y, f.z + z};
-                    if (c.x < 0 || c.y < 0 || c.z < 0 || c.x >= udims.x || c.y >= udims.y || c.z >= udims.z) continue;
-                    // The volume at the unknown's centre (trilinear between the volume's voxels).
-                    const Vec3d q((c.x + 0.5) / scale.x - 0.5, (c.y + 0.5) / scale.y - 0.5, (c.z + 0.5) / scale.z - 0.5);
-                    const Vec3d v = interpolate(cornersAt(q, n), [&](Int3 p) { return &grid[3 * volume.index(p.x, p.y, p.z)]; });
-                    for (int ch = 0; ch < 3; ++ch) out[ch] = float(v[ch]);
-                }
+    if (udims == n) {  // the unknowns are the stored voxels themselves
+        for (size_t c = 0; c < cells; ++c) std::copy_n(&grid[3 * c], 3, &init[4 * (block * cells + c)]);
+        return;
     }
+    // The volume at each unknown's centre (trilinear between the volume's voxels).
+    const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
+    unknownBricks.forEachStoredVoxel([&](Int3 c, size_t cell) {
+        const Vec3d q((c.x + 0.5) / scale.x - 0.5, (c.y + 0.5) / scale.y - 0.5, (c.z + 0.5) / scale.z - 0.5);
+        const Vec3d v = interpolate(cornersAt(q, n), [&](Int3 p) { return &grid[3 * volume.index(p.x, p.y, p.z)]; });
+        for (int ch = 0; ch < 3; ++ch) init[4 * (block * cells + cell) + size_t(ch)] = float(v[ch]);
+    });
 }
 
 std::vector<float> Solver::State::sparseGridFrom(const std::vector<float>& unknowns, size_t block) const {

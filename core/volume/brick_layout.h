@@ -87,6 +87,22 @@ public:
     /// The table from brick to slot (x fastest), as the GPU's indirection texture holds it.
     const std::vector<uint32_t>& slotTable() const { return m_slotOfBrick; }
 
+    /// Calls f(Int3 voxel, size_t stored) for every voxel of the active bricks inside the box
+    /// (the bricks of a tile all give their shared slot's stored voxels).
+    template <typename F>
+    void forEachStoredVoxel(F&& f) const {
+        forEachActiveBrick([&](Int3 brick, uint32_t slot) {
+            const Int3 first = firstVoxel(brick);
+            size_t stored = slot * size_t(kBrickVoxels);
+            for (int z = 0; z < kBrickSide; ++z)
+                for (int y = 0; y < kBrickSide; ++y)
+                    for (int x = 0; x < kBrickSide; ++x, ++stored) {
+                        const Int3 p{first.x + x, first.y + y, first.z + z};
+                        if (p.x >= 0 && p.y >= 0 && p.z >= 0 && p.x < m_dims.x && p.y < m_dims.y && p.z < m_dims.z) f(p, stored);
+                    }
+        });
+    }
+
     /// The inclusive voxel box covered by active bricks, clipped to the volume (lo > hi: none).
     std::pair<Int3, Int3> activeVoxelBox() const;
 

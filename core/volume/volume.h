@@ -159,20 +159,8 @@ private:
 /// of a tile all give their shared slot's stored voxels).
 template <typename F>
 void forEachActiveVoxel(const Volume& v, F&& f) {
+    if (const BrickLayout* bricks = v.bricks()) return bricks->forEachStoredVoxel(f);
     const Int3 d = v.dims();
-    if (const BrickLayout* bricks = v.bricks()) {
-        bricks->forEachActiveBrick([&](Int3 brick, uint32_t slot) {
-            const Int3 first = bricks->firstVoxel(brick);
-            size_t stored = slot * size_t(kBrickVoxels);
-            for (int z = 0; z < kBrickSide; ++z)
-                for (int y = 0; y < kBrickSide; ++y)
-                    for (int x = 0; x < kBrickSide; ++x, ++stored) {
-                        const Int3 p{first.x + x, first.y + y, first.z + z};
-                        if (p.x >= 0 && p.y >= 0 && p.z >= 0 && p.x < d.x && p.y < d.y && p.z < d.z) f(p, stored);
-                    }
-        });
-        return;
-    }
     size_t n = 0;
     for (int k = 0; k < d.z; ++k)
         for (int j = 0; j < d.y; ++j)
