@@ -252,7 +252,8 @@ void checkSparseLimits(Int3 dims, size_t activeBricks, size_t storedSlots, int r
     }
     if (voxels > limits.maxActiveVoxels || bytes > limits.maxSparseBytes) {
         s << "the " << dims << " volume has " << activeBricks << " active bricks of " << kBrickSide << "^3 (" << voxels
-          << " voxels, " << (bytes >> 20) << " MiB for " << rgbGrids << " RGB grid(s)), over the limit of " << limits.maxActiveVoxels
+          << " voxels, stored in " << storedSlots << " bricks: " << (bytes >> 20) << " MiB for " << rgbGrids
+          << " RGB grid(s)), over the limit of " << limits.maxActiveVoxels
           << " active voxels and " << (limits.maxSparseBytes >> 20) << " MiB";
         throw LimitExceeded(s.str());
     }
