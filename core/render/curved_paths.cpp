@@ -45,14 +45,33 @@ std::shared_ptr<const RefractiveGrid> RefractiveGrid::of(const Volume& volume) {
 
 RefractiveGrid::RefractiveGrid(const Volume& volume)
     : m_values(std::make_shared<const std::vector<float>>(*volume.refractiveIndex())),
+      m_layout(volume.bricks() ? std::make_shared<const BrickLayout>(*volume.bricks()) : nullptr),
       m_dims(volume.dims()),
       m_worldFromIndex(volume.worldFromIndex()),
       m_indexFromWorld(volume.worldFromIndex().inverseAffine()),
-      m_field(indexFieldOf(m_values, m_dims, m_worldFromIndex)) {
+      m_field(indexFieldOf(m_values, m_dims, m_worldFromIndex, m_layout)) {
     const std::vector<float>& g = *m_values;
     m_hash = std::hash<std::string_view>()(std::string_view(reinterpret_cast<const char*>(g.data()), g.size() * sizeof(float)));
     for (int k = 0; k < 16; ++k) m_hash = combine(m_hash, std::hash<double>()(m_worldFromIndex.m[size_t(k)]));
     m_hash = combine(m_hash, size_t(m_dims.x) * 73856093u ^ size_t(m_dims.y) * 19349663u ^ size_t(m_dims.z) * 83492791u);
+    if (m_layout) {  // where the stored values lie
+        const Int3 o = m_layout->offset();
+        m_hash = combine(m_hash, size_t(o.x) * 73856093u ^ size_t(o.y) * 19349663u ^ size_t(o.z) * 83492791u);
+        m_layout->forEachActiveBrick([&](Int3 b, uint32_t slot) { m_hash = combine(m_hash, m_layout->brickIndex(b) * 2654435761u ^ slot); });
+    }
+    auto at = [&](int i, int j, int k) {
+        return g[m_layout ? m_layout->storageIndex({i, j, k}) : (size_t(k) * m_dims.y + j) * m_dims.x + i];
+    };
+    // Whether a sparse volume's voxels [lo, hi] all lie in inactive bricks (all the background).
+    auto allBackground = [&](Int3 lo, Int3 hi) {
+        if (!m_layout) return false;
+        const Int3 bLo = m_layout->brickOf(lo), bHi = m_layout->brickOf(hi);
+        for (int z = bLo.z; z <= bHi.z; ++z)
+            for (int y = bLo.y; y <= bHi.y; ++y)
+                for (int x = bLo.x; x <= bHi.x; ++x)
+                    if (m_layout->isActive({x, y, z})) return false;
+        return true;
+    };
 
     // A brick is flat when its voxels and their one-voxel apron (the corners a trilinear lookup
     // inside the brick can reach) hold one value.
@@ -64,12 +83,13 @@ RefractiveGrid::RefractiveGrid(const Volume& volume)
                 const Int3 lo{std::max(bx * kBrick - 1, 0), std::max(by * kBrick - 1, 0), std::max(bz * kBrick - 1, 0)};
                 const Int3 hi{std::min(bx * kBrick + kBrick, m_dims.x - 1), std::min(by * kBrick + kBrick, m_dims.y - 1),
                               std::min(bz * kBrick + kBrick, m_dims.z - 1)};
-                const float first = g[(size_t(lo.z) * m_dims.y + lo.y) * m_dims.x + lo.x];
+                if (allBackground(lo, hi)) continue;
+                const float first = at(lo.x, lo.y, lo.z);
                 bool flat = true;
                 for (int k = lo.z; k <= hi.z && flat; ++k)
                     for (int j = lo.y; j <= hi.y && flat; ++j)
                         for (int i = lo.x; i <= hi.x; ++i)
-                            if (g[(size_t(k) * m_dims.y + j) * m_dims.x + i] != first) {
+                            if (at(i, j, k) != first) {
                                 flat = false;
                                 break;
                             }

@@ -26,7 +26,8 @@
 
 namespace volstyle::core {
 
-/// A volume's refractive-index grid, kept for tracing, with its flat bricks.
+/// A volume's refractive-index grid, kept for tracing, with its flat bricks. A sparse volume's grid
+/// is kept as it is stored (issue #39): its inactive bricks read the background and are flat.
 class RefractiveGrid {
 public:
     /// The volume's grid, or null when it has none or it is constant (rays stay straight: the
@@ -47,6 +48,7 @@ public:
 private:
     explicit RefractiveGrid(const Volume& volume);
     std::shared_ptr<const std::vector<float>> m_values;
+    std::shared_ptr<const BrickLayout> m_layout;  // a sparse volume's (issue #39: m_values are its stored voxels), else null
     Int3 m_dims;
     Mat4 m_worldFromIndex, m_indexFromWorld;
     IndexField m_field;

@@ -70,16 +70,19 @@ IndexField smoothSphere(double R, double inside, double width) {
 
 IndexField indexFieldOf(const Volume& volume) {
     if (!volume.refractiveIndex()) throw InvalidArgument("the volume has no refractive_index grid");
-    // The volume outlives the field (documented): share its grid without copying.
+    // The volume outlives the field (documented): share its grid and layout without copying.
     return indexFieldOf(std::shared_ptr<const std::vector<float>>(std::shared_ptr<void>(), &*volume.refractiveIndex()), volume.dims(),
-                        volume.worldFromIndex());
+                        volume.worldFromIndex(), std::shared_ptr<const BrickLayout>(std::shared_ptr<void>(), volume.bricks()));
 }
 
-IndexField indexFieldOf(std::shared_ptr<const std::vector<float>> values, Int3 n, const Mat4& worldFromIndex) {
-    if (!values || values->size() != size_t(n.volume())) throw InvalidArgument("indexFieldOf: the grid does not match its dims");
+IndexField indexFieldOf(std::shared_ptr<const std::vector<float>> values, Int3 n, const Mat4& worldFromIndex,
+                        std::shared_ptr<const BrickLayout> bricks) {
+    const size_t stored = bricks ? bricks->storedVoxels() : size_t(n.volume());
+    if (!values || values->size() != stored || (bricks && !(bricks->dims() == n)))
+        throw InvalidArgument("indexFieldOf: the grid does not match its dims");
     const Mat4 indexFromWorld = worldFromIndex.inverseAffine();
     // n and its index-space gradient at index-space point p (inside the voxels' box).
-    auto sample = [grid = std::move(values), n](const Vec3d& p, Vec3d* gradient) {
+    auto sample = [grid = std::move(values), bricks = std::move(bricks), n](const Vec3d& p, Vec3d* gradient) {
         int i0[3], i1[3];
         double f[3];
         bool clampedLow[3], clampedHigh[3];
@@ -89,7 +92,9 @@ IndexField indexFieldOf(std::shared_ptr<const std::vector<float>> values, Int3 n
             const double cc = std::clamp(c, 0.0, double(n[a] - 1));
             i0[a] = std::min(int(cc), n[a] - 1), i1[a] = std::min(i0[a] + 1, n[a] - 1), f[a] = cc - i0[a];
         }
-        auto at = [&](int i, int j, int k) { return double((*grid)[(size_t(k) * size_t(n.y) + size_t(j)) * size_t(n.x) + size_t(i)]); };
+        auto at = [&](int i, int j, int k) {
+            return double((*grid)[bricks ? bricks->storageIndex({i, j, k}) : (size_t(k) * size_t(n.y) + size_t(j)) * size_t(n.x) + size_t(i)]);
+        };
         double value = 0;
         Vec3d g(0, 0, 0);
         for (int c = 0; c < 8; ++c) {

@@ -53,8 +53,10 @@ IndexField smoothSphere(double radius, double inside, double width);
 /// gradient of that interpolant (per cell, carried to world space). Throws InvalidArgument when
 /// the volume has no refractive index. The volume must outlive the field.
 IndexField indexFieldOf(const Volume& volume);
-/// The same over a grid of n.x·n.y·n.z values (x fastest) placed by `worldFromIndex`; the field
-/// shares the grid.
-IndexField indexFieldOf(std::shared_ptr<const std::vector<float>> grid, Int3 n, const Mat4& worldFromIndex);
+/// The same over a grid of n.x·n.y·n.z values (x fastest) placed by `worldFromIndex`, or a sparse
+/// volume's stored voxels when `bricks` is given (issue #39: its layout says where each voxel is);
+/// the field shares both.
+IndexField indexFieldOf(std::shared_ptr<const std::vector<float>> grid, Int3 n, const Mat4& worldFromIndex,
+                        std::shared_ptr<const BrickLayout> bricks = nullptr);
 
 }  // namespace volstyle::core

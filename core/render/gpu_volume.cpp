@@ -123,8 +123,6 @@ void GpuVolume::upload(const Volume& volume) {
     glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &maxSize);
     const Int3 d = volume.dims();
     const BrickLayout* bricks = volume.bricks();
-    if (bricks && volume.refractiveIndex())
-        throw InvalidArgument("refraction works on dense volumes only, and this volume is sparse with a refractive_index grid");
     const Int3 bd = bricks ? bricks->brickDims() : Int3{};
     if (bricks ? (bd.x > maxSize || bd.y > maxSize || bd.z > maxSize) : (d.x > maxSize || d.y > maxSize || d.z > maxSize)) {
         throw GpuError("GpuVolume: " + std::to_string(d.x) + "x" + std::to_string(d.y) + "x" +

@@ -169,6 +169,13 @@ struct StylizeParams {
     VS_VEC4 volumeScale;      /* x: extinction_scale (σt = x × the mean of the volume's RGB extinction) */
     VS_IVEC4 pixelOrigin;     /* xy: the first pixel this dispatch shades (a pick shades its one pixel) */
 };
+/* A sparse volume's stylizer medium (issue #39; stylize_extinction_mean.comp with VOLSTYLE_SPARSE,
+ * stylize_medium_occupancy.comp): the mean of its RGB σt over blocks of w³ voxels, and the bricks
+ * of that grid for empty-space skipping. */
+struct StylizeMediumParams {
+    VS_IVEC4 dims;          /* xyz: the volume's voxels; w: the block side (voxels per medium voxel a side) */
+    VS_IVEC4 sparseOffset;  /* xyz: where voxel 0 lies in its brick */
+};
 VS_CONSTANT(int, kVisibilityNaive, 0);   /* N midpoint lookups of the manipulated map per view ray */
 VS_CONSTANT(int, kVisibilityMinMax, 1);  /* exact traversal of its min-max mipmap (stylize.comp) */
 VS_CONSTANT(int, kStylizerLightDirectional, 0);

@@ -10,41 +10,10 @@
 
 #include "core/base/errors.h"
 #include "core/solve/solver_state.h"
+#include "core/volume/resample.h"
 
 namespace volstyle::core {
 namespace {
-
-/// Trilinear weights of point q (index space of a grid of n cells) over its 8 corners, clamped.
-struct Corners8 {
-    Int3 lo, hi;
-    Vec3d f;
-};
-
-Corners8 cornersAt(const Vec3d& q, Int3 n) {
-    Corners8 c;
-    for (int a = 0; a < 3; ++a) {
-        const double x = std::clamp(q[a], 0.0, double(n[a] - 1));
-        const int i = std::min(int(std::floor(x)), n[a] - 1);
-        (a == 0 ? c.lo.x : a == 1 ? c.lo.y : c.lo.z) = i;
-        (a == 0 ? c.hi.x : a == 1 ? c.hi.y : c.hi.z) = std::min(i + 1, n[a] - 1);
-        c.f[a] = x - i;
-    }
-    return c;
-}
-
-/// Σ over the 8 corners of weight · value(corner), RGB; value(Int3) gives a pointer to 3 floats.
-template <typename Value>
-Vec3d interpolate(const Corners8& c, Value value) {
-    Vec3d sum(0.0);
-    for (int k = 0; k < 8; ++k) {
-        const Int3 p{(k & 1) ? c.hi.x : c.lo.x, (k & 2) ? c.hi.y : c.lo.y, (k & 4) ? c.hi.z : c.lo.z};
-        const double w = ((k & 1) ? c.f.x : 1 - c.f.x) * ((k & 2) ? c.f.y : 1 - c.f.y) * ((k & 4) ? c.f.z : 1 - c.f.z);
-        if (w == 0) continue;
-        const float* v = value(p);
-        for (int ch = 0; ch < 3; ++ch) sum[ch] += w * double(v[ch]);
-    }
-    return sum;
-}
 
 /// The bricks of a grid of `coarse` cells over the same box as `fine`'s that hold every unknown a
 /// sample in an active fine brick reaches (both trilinear corners along each axis).
@@ -76,34 +45,29 @@ Int3 halved(Int3 d) { return {std::max(1, (d.x + 1) / 2), std::max(1, (d.y + 1) 
 
 void Solver::State::growApron() {
     volume.unshareTiles();  // every unknown a voxel of its own
-    const BrickLayout active = *volume.bricks();
-    const Int3 nb = active.brickDims(), n = volume.dims();
-    std::vector<Int3> more;
-    if (opt.unknown == Unknown::Extinction) {
-        for (size_t slot = 1; slot < active.slots(); ++slot) {
-            const Int3 b = active.brickOfSlot(slot);
-            for (int z = std::max(b.z - 1, 0); z <= std::min(b.z + 1, nb.z - 1); ++z)
-                for (int y = std::max(b.y - 1, 0); y <= std::min(b.y + 1, nb.y - 1); ++y)
-                    for (int x = std::max(b.x - 1, 0); x <= std::min(b.x + 1, nb.x - 1); ++x) more.push_back({x, y, z});
-        }
-    } else {
-        // The hull is the medium and a voxel around it (solver_hull.cpp): only voxels on a brick's
-        // faces reach into another brick.
-        const std::vector<float>& ext = volume.extinction();
-        const Int3 o = active.offset();
-        forEachActiveVoxel(volume, [&](Int3 p, size_t s) {
-            if (std::max({ext[3 * s], ext[3 * s + 1], ext[3 * s + 2]}) <= 0) return;
-            const Int3 l{(p.x + o.x) % kBrickSide, (p.y + o.y) % kBrickSide, (p.z + o.z) % kBrickSide};
-            const auto inner = [](int v) { return v > 0 && v < kBrickSide - 1; };
-            if (inner(l.x) && inner(l.y) && inner(l.z)) return;
-            for (int z = std::max(p.z - 1, 0); z <= std::min(p.z + 1, n.z - 1); ++z)
-                for (int y = std::max(p.y - 1, 0); y <= std::min(p.y + 1, n.y - 1); ++y)
-                    for (int x = std::max(p.x - 1, 0); x <= std::min(p.x + 1, n.x - 1); ++x) {
-                        const Int3 b = active.brickOf({x, y, z});
-                        if (!active.isActive(b)) more.push_back(b);
-                    }
-        });
+    if (opt.unknown == Unknown::Extinction) {  // the medium can grow anywhere next to it
+        volume.activateBricksAround(1);
+        return;
     }
+    // Emission and albedo: the hull is the medium and a voxel around it (solver_hull.cpp):
+    // only voxels on a brick's faces reach into another brick.
+    const BrickLayout active = *volume.bricks();
+    const Int3 n = volume.dims();
+    std::vector<Int3> more;
+    const std::vector<float>& ext = volume.extinction();
+    const Int3 o = active.offset();
+    forEachActiveVoxel(volume, [&](Int3 p, size_t s) {
+        if (std::max({ext[3 * s], ext[3 * s + 1], ext[3 * s + 2]}) <= 0) return;
+        const Int3 l{(p.x + o.x) % kBrickSide, (p.y + o.y) % kBrickSide, (p.z + o.z) % kBrickSide};
+        const auto inner = [](int v) { return v > 0 && v < kBrickSide - 1; };
+        if (inner(l.x) && inner(l.y) && inner(l.z)) return;
+        for (int z = std::max(p.z - 1, 0); z <= std::min(p.z + 1, n.z - 1); ++z)
+            for (int y = std::max(p.y - 1, 0); y <= std::min(p.y + 1, n.y - 1); ++y)
+                for (int x = std::max(p.x - 1, 0); x <= std::min(p.x + 1, n.x - 1); ++x) {
+                    const Int3 b = active.brickOf({x, y, z});
+                    if (!active.isActive(b)) more.push_back(b);
+                }
+    });
     for (const Int3& b : more) volume.activateBrick(b);
 }
 
@@ -137,7 +101,7 @@ void Solver::State::sparseUnknownsFrom(const std::vector<float>& grid, std::vect
     const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
     unknownBricks.forEachStoredVoxel([&](Int3 c, size_t cell) {
         const Vec3d q((c.x + 0.5) / scale.x - 0.5, (c.y + 0.5) / scale.y - 0.5, (c.z + 0.5) / scale.z - 0.5);
-        const Vec3d v = interpolate(cornersAt(q, n), [&](Int3 p) { return &grid[3 * volume.index(p.x, p.y, p.z)]; });
+        const Vec3d v = sampleGrid(GridView{grid, n, 3, 0, volume.bricks()}, q, BasisType::Trilinear);
         for (int ch = 0; ch < 3; ++ch) init[4 * (block * cells + cell) + size_t(ch)] = float(v[ch]);
     });
 }
@@ -152,18 +116,10 @@ std::vector<float> Solver::State::sparseGridFrom(const std::vector<float>& unkno
     // Coarser unknowns: the basis functions evaluated at every stored voxel (trilinear, or the
     // box's nearest unknown), as the projector weighs them.
     const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
-    auto unknownAt = [&](Int3 c) { return &unknowns[4 * (block * cells + unknownBricks.storageIndex(c))]; };
+    const GridView from{unknowns, udims, 4, 4 * block * cells, &unknownBricks};
     forEachActiveVoxel(volume, [&](Int3 p, size_t s) {
         const Vec3d q((p.x + 0.5) * scale.x - 0.5, (p.y + 0.5) * scale.y - 0.5, (p.z + 0.5) * scale.z - 0.5);
-        Vec3d v;
-        if (opt.basis == BasisType::Box) {
-            const Int3 c{std::clamp(int(std::floor(q.x + 0.5)), 0, udims.x - 1), std::clamp(int(std::floor(q.y + 0.5)), 0, udims.y - 1),
-                         std::clamp(int(std::floor(q.z + 0.5)), 0, udims.z - 1)};
-            const float* u = unknownAt(c);
-            v = {u[0], u[1], u[2]};
-        } else {
-            v = interpolate(cornersAt(q, udims), unknownAt);
-        }
+        const Vec3d v = sampleGrid(from, q, opt.basis);
         for (int ch = 0; ch < 3; ++ch) grid[3 * s + size_t(ch)] = float(v[ch]);
     });
     return grid;

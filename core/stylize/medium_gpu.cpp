@@ -38,6 +38,7 @@ std::string exact(double v) {
 /// A one-channel grid the stylizer derives from the volume on the GPU, in the device's cache.
 struct DerivedGrid {
     gl::Texture texture;
+    gl::Texture occupancy;  ///< the σt grid's own bricks (a sparse volume's block means); else none: the volume's
 };
 
 void dispatchOver(Int3 n) {
@@ -46,32 +47,56 @@ void dispatchOver(Int3 n) {
     gl::barrierAfterComputeWrites();
 }
 
+Int3 ceilDiv(Int3 n, int f) { return {(n.x + f - 1) / f, (n.y + f - 1) / f, (n.z + f - 1) / f}; }
+
+/// The block-mean σt grid of a sparse volume and its bricks (stylize_extinction_mean.comp with
+/// VOLSTYLE_SPARSE, stylize_medium_occupancy.comp), blocks of `block`³ voxels.
+DerivedGrid blockMeanExtinction(GpuDevice& device, const GpuVolume& gpu, int block) {
+    const Int3 d = gpu.dims(), n = ceilDiv(d, block), o = gpu.sparseOffset();
+    DerivedGrid made{texture3D(n, nullptr, "stylizer-extinction-mean"), texture3D(ceilDiv(n, layout::kBrickSize), nullptr, "stylizer-medium-occupancy")};
+    layout::StylizeMediumParams mp;
+    mp.dims = {d.x, d.y, d.z, block};
+    mp.sparseOffset = {o.x, o.y, o.z, 0};
+    device.setParams(mp);
+    glBindTextureUnit(layout::kUnitStylizeDensity, gpu.extinctionTexture());
+    glBindTextureUnit(layout::kUnitBrickTable, gpu.brickTableTexture());
+    glUseProgram(device.program(gl::ShaderBuilder("stylize_extinction_mean.comp").define("VOLSTYLE_SPARSE", 1)).id());
+    glBindImageTexture(layout::kImageUnitOut, made.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R32F);
+    dispatchOver(n);
+    glBindTextureUnit(layout::kUnitStylizeDensity, made.texture.id());
+    glUseProgram(device.program(gl::ShaderBuilder("stylize_medium_occupancy.comp")).id());
+    glBindImageTexture(layout::kImageUnitOut, made.occupancy.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R32F);
+    dispatchOver(ceilDiv(n, layout::kBrickSize));
+    return made;
+}
+
 /// The mean of the volume's RGB extinction per voxel (stylize_extinction_mean.comp), once per
-/// extinction version; `built` when it was made.
-std::shared_ptr<const DerivedGrid> meanExtinction(GpuDevice& device, const GpuVolume& gpu, bool& built) {
-    if (gpu.isSparse()) throw InvalidArgument("the stylizer's heterogeneous medium works on dense volumes only, and this volume is sparse");
-    const std::string key = "stylizer-extinction-mean/" + std::to_string(gpu.extinctionVersion());
+/// extinction version; `built` when it was made. A sparse volume's is its mean over blocks of
+/// stylizerMediumBlock() voxels a side, with bricks of its own.
+std::shared_ptr<const DerivedGrid> meanExtinction(GpuDevice& device, const StylizerVolume& v, const GpuVolume& gpu, bool& built) {
+    const int block = gpu.isSparse() ? stylizerMediumBlock(gpu.dims(), v.maxSparseMediumVoxels) : 1;
+    const std::string key = "stylizer-extinction-mean/" + std::to_string(gpu.extinctionVersion()) + "/" + std::to_string(block);
     if (auto cached = device.cache().find<DerivedGrid>(key)) return cached;
-    DerivedGrid made{texture3D(gpu.dims(), nullptr, "stylizer-extinction-mean")};
+    built = true;
+    if (gpu.isSparse()) return device.cache().insert(key, std::make_shared<const DerivedGrid>(blockMeanExtinction(device, gpu, block)));
+    DerivedGrid made{texture3D(gpu.dims(), nullptr, "stylizer-extinction-mean"), {}};
     glBindTextureUnit(layout::kUnitStylizeDensity, gpu.extinctionTexture());
     glUseProgram(device.program(gl::ShaderBuilder("stylize_extinction_mean.comp")).id());
     glBindImageTexture(layout::kImageUnitOut, made.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R32F);
     dispatchOver(gpu.dims());
-    built = true;
     return device.cache().insert(key, std::make_shared<const DerivedGrid>(std::move(made)));
 }
 
 /// The optical depth toward the light per voxel (stylize_transmittance.comp), from the device's
 /// cache when the grid, its scale, box and the light are the same; `built` when it was made.
-std::shared_ptr<const DerivedGrid> lightOpticalDepth(GpuDevice& device, const StylizerVolume& v, const GpuVolume& gpu,
+std::shared_ptr<const DerivedGrid> lightOpticalDepth(GpuDevice& device, const StylizerVolume& v, const GpuVolume& gpu, Int3 n,
                                                      layout::StylizeParams& p, bool& built) {
-    std::string key = "stylizer-light/" + std::to_string(gpu.extinctionVersion());
+    std::string key = "stylizer-light/" + std::to_string(gpu.extinctionVersion()) + "/" + std::to_string(n.x) + "x" + std::to_string(n.y) + "x" + std::to_string(n.z);
     for (double x : {v.extinctionScale, v.lo.x, v.lo.y, v.lo.z, v.hi.x, v.hi.y, v.hi.z, double(p.options.z), double(p.lightDirection.x), double(p.lightDirection.y),
                      double(p.lightDirection.z), double(p.spot.x), double(p.spot.y), double(p.spot.z)})
         key += "/" + exact(x);
     if (auto cached = device.cache().find<DerivedGrid>(key)) return cached;
-    const Int3 n = gpu.dims();
-    DerivedGrid made{texture3D(n, nullptr, "stylizer-light-optical-depth")};
+    DerivedGrid made{texture3D(n, nullptr, "stylizer-light-optical-depth"), {}};
     device.setParams(p);
     glUseProgram(device.program(gl::ShaderBuilder("stylize_transmittance.comp")).id());
     glBindImageTexture(layout::kImageUnitOut, made.texture.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R32F);
@@ -81,6 +106,12 @@ std::shared_ptr<const DerivedGrid> lightOpticalDepth(GpuDevice& device, const St
 }
 
 }  // namespace
+
+int stylizerMediumBlock(Int3 dims, int64_t maxVoxels) {
+    int block = 1;
+    while (int64_t(ceilDiv(dims, block).volume()) > std::max<int64_t>(maxVoxels, 1)) ++block;
+    return block;
+}
 
 double bindStylizerMedium(GpuDevice& device, const std::optional<StylizerVolume>& volume, GpuVolume* gpu, layout::StylizeParams& p) {
     p.volumeLo = {0, 0, 0, 0};
@@ -108,10 +139,11 @@ double bindStylizerMedium(GpuDevice& device, const std::optional<StylizerVolume>
     RenderStats stats;
     updateOccupancy(device, *gpu, stats);
     bool built = stats.occupancyMs > 0;
-    glBindTextureUnit(layout::kUnitStylizeDensity, meanExtinction(device, *gpu, built)->texture.id());
-    glBindTextureUnit(layout::kUnitStylizeOccupancy, gpu->occupancyTexture());
+    const std::shared_ptr<const DerivedGrid> sigma = meanExtinction(device, v, *gpu, built);
+    glBindTextureUnit(layout::kUnitStylizeDensity, sigma->texture.id());
+    glBindTextureUnit(layout::kUnitStylizeOccupancy, sigma->occupancy ? sigma->occupancy.id() : gpu->occupancyTexture());
     std::shared_ptr<const DerivedGrid> depth;
-    if (v.lightTransmittance) depth = lightOpticalDepth(device, v, *gpu, p, built);
+    if (v.lightTransmittance) depth = lightOpticalDepth(device, v, *gpu, ceilDiv(gpu->dims(), gpu->isSparse() ? stylizerMediumBlock(gpu->dims(), v.maxSparseMediumVoxels) : 1), p, built);
     glBindTextureUnit(layout::kUnitStylizeTransmittance, depth ? depth->texture.id() : gpu->extinctionTexture());  // off: unread
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory for the stylizer's volume");
     if (!built) return 0;

@@ -103,6 +103,10 @@ struct StylizerVolume {
     double extinctionScale = 1;
     bool lightTransmittance = true;  ///< off: the medium does not dim the light (as the homogeneous model)
     int steps = 128;                 ///< samples along a view ray's part in the box, 1–4096
+    /// A sparse volume (issue #39) is averaged over blocks of voxels until its medium grid has at
+    /// most this many voxels (a dense volume is used voxel for voxel). Not in the API: a bound on
+    /// the stylizer's memory and light pass (docs/STYLIZER.md).
+    int64_t maxSparseMediumVoxels = int64_t(256) * 256 * 256;
     bool operator==(const StylizerVolume&) const = default;
 };
 

@@ -92,29 +92,36 @@ double PerturbationField::extinctionScale(const Vec3d& p) const {
 }
 
 Volume perturbVolume(const Volume& volume, const Perturbation& p) {
-    requireDense(volume, "the perturbation");
     Volume out = volume;
     if (!p.active()) return out;
     const PerturbationField field(p, volume.dims());
     const Int3 n = volume.dims();
-    const GridView sigma{volume.extinction(), n};
-    for (int k = 0; k < n.z; ++k)
-        for (int j = 0; j < n.y; ++j)
-            for (int i = 0; i < n.x; ++i) {
-                const Vec3d at(i, j, k);
-                const Vec3d q = at + field.displacement(at);
-                const size_t idx = 3 * volume.index(i, j, k);
-                const Vec3d s = sampleGrid(sigma, q, BasisType::Trilinear) * field.extinctionScale(at);
-                for (int c = 0; c < 3; ++c) out.extinction()[idx + size_t(c)] = float(s[c]);
-                if (volume.hasAlbedo()) {
-                    const Vec3d a = sampleGrid({volume.albedo(), n}, q, BasisType::Trilinear);
-                    for (int c = 0; c < 3; ++c) out.albedo()[idx + size_t(c)] = float(a[c]);
-                }
-                if (volume.hasEmission()) {
-                    const Vec3d e = sampleGrid({volume.emission(), n}, q, BasisType::Trilinear);
-                    for (int c = 0; c < 3; ++c) out.emission()[idx + size_t(c)] = float(e[c]);
-                }
-            }
+    const BrickLayout* bricks = volume.bricks();
+    if (bricks) {
+        // A sparse volume (issue #39): a voxel reads the medium up to `amplitude` voxels away along
+        // each axis (and the trilinear corner past it), so the bricks within that reach of the
+        // active ones can gain medium; the rest keep the background. Every voxel is written on its
+        // own: tiles lose their shared slot.
+        out.unshareTiles();
+        out.activateBricksAround(int(std::ceil((p.amplitude + 1) / kBrickSide)));
+    }
+    const GridView sigma{volume.extinction(), n, 3, 0, bricks}, albedo{volume.albedo(), n, 3, 0, bricks},
+        emission{volume.emission(), n, 3, 0, bricks};
+    forEachActiveVoxel(out, [&](Int3 v, size_t stored) {
+        const Vec3d at(v.x, v.y, v.z);
+        const Vec3d q = at + field.displacement(at);
+        const size_t idx = 3 * stored;
+        const Vec3d s = sampleGrid(sigma, q, BasisType::Trilinear) * field.extinctionScale(at);
+        for (int c = 0; c < 3; ++c) out.extinction()[idx + size_t(c)] = float(s[c]);
+        if (volume.hasAlbedo()) {
+            const Vec3d a = sampleGrid(albedo, q, BasisType::Trilinear);
+            for (int c = 0; c < 3; ++c) out.albedo()[idx + size_t(c)] = float(a[c]);
+        }
+        if (volume.hasEmission()) {
+            const Vec3d e = sampleGrid(emission, q, BasisType::Trilinear);
+            for (int c = 0; c < 3; ++c) out.emission()[idx + size_t(c)] = float(e[c]);
+        }
+    });
     return out;
 }
 

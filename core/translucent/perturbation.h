@@ -58,7 +58,8 @@ private:
 };
 
 /// `volume` with the perturbation baked in: every grid read where the field displaces it
-/// (trilinear), the extinction scaled. The result has the volume's dims and transform.
+/// (trilinear), the extinction scaled. The result has the volume's dims and transform; a sparse
+/// volume stays sparse, its bricks grown by the displacement's reach (issue #39).
 Volume perturbVolume(const Volume& volume, const Perturbation& p);
 
 }  // namespace volstyle::core

@@ -8,7 +8,8 @@ namespace volstyle::core {
 Vec3d sampleGrid(const GridView& g, const Vec3d& q, BasisType basis) {
     const Int3 n = g.dims;
     auto at = [&](int x, int y, int z) {
-        size_t i = g.offset + size_t(g.stride) * ((size_t(z) * n.y + size_t(y)) * n.x + size_t(x));
+        const size_t voxel = g.bricks ? g.bricks->storageIndex({x, y, z}) : (size_t(z) * n.y + size_t(y)) * n.x + size_t(x);
+        const size_t i = g.offset + size_t(g.stride) * voxel;
         return Vec3d(g.data[i], g.data[i + 1], g.data[i + 2]);
     };
     if (basis == BasisType::Box) {

@@ -9,16 +9,18 @@
 
 #include "core/math/vec.h"
 #include "core/volume/basis.h"
+#include "core/volume/brick_layout.h"
 
 namespace volstyle::core {
 
 /// A grid of RGB values stored with `stride` floats per voxel (3: a Volume grid, 4: a solver
-/// vector), x fastest, starting `offset` floats into `data`.
+/// vector), x fastest — or through a sparse grid's bricks — starting `offset` floats into `data`.
 struct GridView {
     const std::vector<float>& data;
     Int3 dims;
     int stride = 3;
     size_t offset = 0;
+    const BrickLayout* bricks = nullptr;  ///< a sparse grid's layout (issue #39): where each voxel is stored; null: dense, x fastest
 };
 
 /// The value at index point q (voxel centres at integers; clamped to the grid).

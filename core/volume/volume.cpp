@@ -90,6 +90,18 @@ void Volume::unshareTiles() {
     for (const Int3& b : tiled) activateBrick(b);
 }
 
+void Volume::activateBricksAround(int radius) {
+    if (!m_bricks || radius <= 0) return;
+    const BrickLayout active = *m_bricks;
+    const Int3 nb = active.brickDims();
+    active.forEachActiveBrick([&](Int3 b, uint32_t) {
+        for (int z = std::max(b.z - radius, 0); z <= std::min(b.z + radius, nb.z - 1); ++z)
+            for (int y = std::max(b.y - radius, 0); y <= std::min(b.y + radius, nb.y - 1); ++y)
+                for (int x = std::max(b.x - radius, 0); x <= std::min(b.x + radius, nb.x - 1); ++x)
+                    if (!m_bricks->isActive({x, y, z})) activateBrick({x, y, z});
+    });
+}
+
 Int3 Volume::voxelOfStored(size_t stored) const {
     if (!m_bricks) {
         const size_t nx = size_t(m_dims.x), ny = size_t(m_dims.y);

@@ -71,6 +71,9 @@ public:
     uint32_t activateBrick(Int3 b);
     /// Gives every brick of a tile a slot of its own (before writing voxel by voxel: a solve).
     void unshareTiles();
+    /// Activates every brick within `radius` bricks (along each axis) of an active one: where an
+    /// edit that moves or spreads the medium by up to 8·radius voxels can write.
+    void activateBricksAround(int radius);
     /// The voxel of the box a stored voxel belongs to (the inverse of index(); background: none).
     Int3 voxelOfStored(size_t stored) const;
     /// The same volume stored densely (throws LimitExceeded over `limits`).
