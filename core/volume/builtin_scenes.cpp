@@ -162,16 +162,36 @@ void addGlassSphere(Volume& volume, const GlassSphere& g) {
     const double edge = std::max(g.edgeVoxels, 1e-3) * std::min({voxel.x, voxel.y, voxel.z});
     const PerlinNoise noise(g.seed);
     const Int3 n = volume.dims();
+    auto indexAt = [&](Int3 v) {
+        const Vec3d x = volume.worldFromIndex().applyPoint({double(v.x), double(v.y), double(v.z)});
+        // 1 − smoothstep across [R − edge/2, R + edge/2]: the glass's share of the voxel.
+        const double inside = 1 - smoothstep(g.radius - 0.5 * edge, g.radius + 0.5 * edge, length(x - centre));
+        const double glass = std::max(1.0, g.index + g.noise * noise(x * g.noiseFrequency));
+        return float(1 + (glass - 1) * inside);
+    };
+    if (volume.isSparse()) {
+        // Issue #39: the bricks the glass can reach (a brick's centre within the sphere, its edge
+        // and the brick's half-diagonal) become active; the rest keep index 1, the background.
+        volume.unshareTiles();
+        const BrickLayout layout = *volume.bricks();
+        const Vec3d half = voxel * (0.5 * kBrickSide);
+        const double reach = g.radius + 0.5 * edge + length(half);
+        for (int z = 0; z < layout.brickDims().z; ++z)
+            for (int y = 0; y < layout.brickDims().y; ++y)
+                for (int x = 0; x < layout.brickDims().x; ++x) {
+                    const Int3 f = layout.firstVoxel({x, y, z});
+                    const Vec3d mid(f.x + 0.5 * (kBrickSide - 1), f.y + 0.5 * (kBrickSide - 1), f.z + 0.5 * (kBrickSide - 1));
+                    if (length(volume.worldFromIndex().applyPoint(mid) - centre) <= reach && !layout.isActive({x, y, z})) volume.activateBrick({x, y, z});
+                }
+        std::vector<float> index(volume.storedVoxels(), 1.0f);
+        forEachActiveVoxel(volume, [&](Int3 v, size_t stored) { index[stored] = indexAt(v); });
+        volume.refractiveIndex() = std::move(index);
+        return;
+    }
     std::vector<float> index(volume.voxelCount());
     forEachSlice(n.z, [&](int k) {
         for (int j = 0; j < n.y; ++j)
-            for (int i = 0; i < n.x; ++i) {
-                const Vec3d x = volume.worldFromIndex().applyPoint({double(i), double(j), double(k)});
-                // 1 − smoothstep across [R − edge/2, R + edge/2]: the glass's share of the voxel.
-                const double inside = 1 - smoothstep(g.radius - 0.5 * edge, g.radius + 0.5 * edge, length(x - centre));
-                const double glass = std::max(1.0, g.index + g.noise * noise(x * g.noiseFrequency));
-                index[volume.index(i, j, k)] = float(1 + (glass - 1) * inside);
-            }
+            for (int i = 0; i < n.x; ++i) index[volume.index(i, j, k)] = indexAt({i, j, k});
     });
     volume.refractiveIndex() = std::move(index);
 }

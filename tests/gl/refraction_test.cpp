@@ -237,13 +237,16 @@ TEST(Refraction, ASparseVolumeBendsRaysAsTheDenseOneInRendersAndSolves) {
     // ones read the background index, 1) — the same paths, so the same pictures and the same solve.
     const int res = 32;
     Volume dense = makeBuiltinScene("cloud", res);
-    addGlassSphere(dense, {1.3, 0.7, 2, 0.04, 3, 7});
     auto& e = dense.ensureEmission();  // glowing where the smoke is: empty corners stay background
     for (size_t i = 0; i < dense.voxelCount(); ++i)
         if (dense.extinction()[3 * i] > 0) e[3 * i] = 1.0f, e[3 * i + 1] = 0.9f, e[3 * i + 2] = 0.8f;
-    const Volume sparse = dense.toSparse({3, 5, 1});
+    Volume sparse = dense.toSparse({3, 5, 1});
+    const GlassSphere glass{1.3, 0.7, 2, 0.04, 3, 7};
+    addGlassSphere(dense, glass);
+    addGlassSphere(sparse, glass);  // into the bricks the glass reaches
     ASSERT_TRUE(sparse.isSparse());
     ASSERT_LT(sparse.bricks()->activeBricks(), size_t(sparse.bricks()->brickDims().volume())) << "the corners are empty";
+    EXPECT_EQ(*sparse.toDense().refractiveIndex(), *dense.refractiveIndex());
     GpuVolume gd(dense), gs(sparse);
     ASSERT_TRUE(gs.refraction());
     const Lighting l = sunAndSky();
