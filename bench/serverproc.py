@@ -3,6 +3,7 @@ it with the standard library only, and make small test images and volumes."""
 import json
 import http.client
 import os
+import re
 import struct
 import subprocess
 import time
@@ -23,7 +24,7 @@ class Server:
         line = self.proc.stdout.readline()
         if "serving http://" not in line:
             raise RuntimeError("the server did not start: " + line)
-        self.port = int(line.rsplit(":", 1)[1].strip().strip("/"))
+        self.port = int(re.search(r"serving http://[^:]+:([0-9]+)", line).group(1))
         self.startup_ms = (time.monotonic() - t0) * 1000
 
     @property

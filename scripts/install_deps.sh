@@ -9,6 +9,7 @@ packages=(
   libopenvdb-dev libboost-iostreams-dev libtbb-dev         # OpenVDB (FindOpenVDB needs boost-iostreams)
   libnanovdb-dev                                           # NanoVDB and PNanoVDB.h (bench/sparse_sampling, issue #39)
   libopenimageio-dev                                       # images (found with pkg-config)
+  libturbojpeg0-dev                                        # live frames as JPEG without a file round trip (issue #40)
   libassimp-dev                                            # occluder meshes: OBJ, PLY, glTF (pkg-config)
   libspdlog-dev libfmt-dev nlohmann-json3-dev libcpp-httplib-dev
   libgtest-dev libgmock-dev libbenchmark-dev

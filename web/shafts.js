@@ -1,12 +1,12 @@
 // volstyle "Light shafts" mode: the session's light-shaft stylizer (docs/STYLIZER.md, docs/API.md).
 // Every control edits the scene, which is PUT to …/stylizer (one request in flight, the newest
-// state sent next); the server's live stream (…/stylizer/events) announces each new frame's URL.
+// state sent next); the server's live stream (…/stylizer/stream, MJPEG) brings each new frame.
 // Uses app.js's globals ($, api, call, guard, status). No build step.
 'use strict';
 
 (() => {
   const sh = {
-    sid: null, scene: null, forest: null, events: null, shown: false,
+    sid: null, scene: null, forest: null, stream: null, arrivals: [], shown: false,
     orbit: { azimuth: 0.2, elevation: 0.1, distance: 11 }, target: [-0.5, 3.2, -2],
     light: { azimuth: -2.56, elevation: 0.58 }, playing: null,
     irradiance: [3.2, 2.9, 2.3], putBusy: false, waiters: [], putPending: false, tfUploaded: false, tfEnabled: false, revision: 0, lastFrameUrl: null,
@@ -89,30 +89,100 @@
     }
   }
 
-  async function showFrame(event) {
+  // Frames per second over the last two seconds of the stream.
+  function frameRate() {
+    const now = performance.now();
+    sh.arrivals.push(now);
+    while (sh.arrivals.length > 1 && now - sh.arrivals[0] > 2000) sh.arrivals.shift();
+    return sh.arrivals.length > 1 ? (sh.arrivals.length - 1) * 1000 / (now - sh.arrivals[0]) : 0;
+  }
+
+  // `blob`: the frame's JPEG as the stream brought it (shown without another request).
+  async function showFrame(event, blob) {
     sh.revision = event.revision;
     sh.lastFrameUrl = event.url;
     const aov = $('shafts-aov').value;
     let src = event.url;
     if (aov !== 'frame') src = URL.createObjectURL(await call('POST', base() + '/frame', { aov, format: 'png' }, { raw: true }));
+    else if (blob) src = URL.createObjectURL(blob);
     const img = $('shafts-frame');
-    img.onload = () => { img.dataset.revision = String(event.revision); };
+    const shown = img.src;
+    img.onload = () => {
+      img.dataset.revision = String(event.revision);
+      if (shown.startsWith('blob:')) URL.revokeObjectURL(shown);
+    };
     img.src = src;
-    $('shafts-download').href = src;
+    $('shafts-download').href = event.url;
     if (window.volstyleTf) window.volstyleTf.frameShown();
-    $('shafts-info').textContent = `revision ${event.revision} · ${event.width}×${event.height} · ${event.render_ms.toFixed(0)} ms`;
+    const fps = blob ? ` · ${frameRate().toFixed(1)} fps` : '';
+    $('shafts-info').textContent = `revision ${event.revision} · ${event.width}×${event.height} · ${event.render_ms.toFixed(0)} ms${fps}`;
     if (!sh.putBusy) $('shafts-busy').style.display = 'none';
   }
 
+  // The live stream (…/stylizer/stream): multipart/x-mixed-replace, a JPEG part per frame with its
+  // revision and times in the part's headers, a JSON part for a revision that failed or the end.
+  // The server sends the newest revision each time, so a slow page skips frames, never lags.
+  function onPart(headers, body) {
+    const type = headers['content-type'] || '';
+    if (type === 'image/jpeg') {
+      const revision = Number(headers['x-revision']);
+      const event = { revision, url: `${api}${base()}/frames/${revision}.jpeg`, width: Number(headers['x-width']),
+                      height: Number(headers['x-height']), render_ms: Number(headers['x-render-ms']) };
+      showFrame(event, new Blob([body], { type })).catch((err) => status(err.message, 'error'));
+    } else if (type === 'application/json') {
+      const d = JSON.parse(new TextDecoder().decode(body));
+      if (d.event === 'failed') {
+        status(`revision ${d.revision} could not render: ${d.error.message}`, 'error');
+        $('shafts-busy').style.display = 'none';
+      }
+    }  // text/plain: a keep-alive
+  }
+
+  async function readStream(controller) {
+    const res = await fetch(`${api}${base()}/stream`, { signal: controller.signal });
+    if (!res.ok) throw new Error(`the live stream answered ${res.status}`);
+    const reader = res.body.getReader();
+    let buf = new Uint8Array(0);
+    const more = async () => {
+      const { value, done } = await reader.read();
+      if (done) return false;
+      const b = new Uint8Array(buf.length + value.length);
+      b.set(buf);
+      b.set(value, buf.length);
+      buf = b;
+      return true;
+    };
+    const headEnd = () => {
+      for (let i = 0; i + 3 < buf.length; ++i) if (buf[i] === 13 && buf[i + 1] === 10 && buf[i + 2] === 13 && buf[i + 3] === 10) return i;
+      return -1;
+    };
+    for (;;) {
+      let end;
+      while ((end = headEnd()) < 0) if (!(await more())) return;
+      const headers = {};
+      for (const line of new TextDecoder().decode(buf.subarray(0, end)).split('\r\n')) {
+        const colon = line.indexOf(':');
+        if (colon > 0) headers[line.slice(0, colon).trim().toLowerCase()] = line.slice(colon + 1).trim();
+      }
+      const start = end + 4, length = Number(headers['content-length'] || 0);
+      while (buf.length < start + length + 2) if (!(await more())) return;
+      const body = buf.slice(start, start + length);
+      buf = buf.slice(start + length + 2);  // the part's closing CRLF
+      if (controller.signal.aborted) return;
+      onPart(headers, body);
+    }
+  }
+
+  function disconnect() {
+    if (sh.stream) sh.stream.abort();
+    sh.stream = null;
+  }
   function connect() {
-    if (sh.events) sh.events.close();
-    sh.events = new EventSource(`${api}${base()}/events`);
-    sh.events.addEventListener('frame', (e) => showFrame(JSON.parse(e.data)).catch((err) => status(err.message, 'error')));
-    sh.events.addEventListener('failed', (e) => {
-      const d = JSON.parse(e.data);
-      status(`revision ${d.revision} could not render: ${d.error.message}`, 'error');
-      $('shafts-busy').style.display = 'none';
-    });
+    disconnect();
+    const controller = new AbortController();
+    sh.stream = controller;
+    sh.arrivals = [];
+    readStream(controller).catch((err) => { if (!controller.signal.aborted) status(`the live stream stopped: ${err.message}`, 'error'); });
   }
 
   function controlsFromScene(s) {
@@ -159,10 +229,7 @@
       pushScene();
       status('light shafts: drag the camera or the light, edit the medium and the shadows, drop a transfer function', 'ok');
     } else {
-      if (sh.events) {
-        sh.events.close();
-        sh.events = null;
-      }
+      disconnect();
       if (!shafts) status('painting: orbit the view, add views, paint them, solve', 'ok');
     }
   }

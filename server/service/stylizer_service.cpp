@@ -7,6 +7,7 @@
 
 #include "core/base/errors.h"
 #include "core/image/image_io.h"
+#include "core/image/jpeg_encoder.h"
 #include "core/stylize/mesh_io.h"
 #include "core/stylize/keyframes.h"
 #include "core/stylize/stylizer.h"
@@ -253,8 +254,10 @@ std::optional<LiveFrame> StylizerService::nextLiveFrame(Session& s, uint64_t aft
     core::readBackOnly(settings, core::StylizerOutput::Frame);  // the stream sends the frame alone
     const auto t0 = Clock::now();
     const core::StylizedFrame f = stylizeOnGl(s, core::sceneAtTime(snapshot.scene, snapshot.scene.time), settings);
-    LiveFrame live{snapshot.revision, core::encodeImage(f.frame, "jpeg"), f.frame.width, f.frame.height,
-                   std::chrono::duration<double, std::milli>(Clock::now() - t0).count()};
+    const double renderMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    const auto e0 = Clock::now();
+    LiveFrame live{snapshot.revision, core::encodeJpeg(f.frame, kLiveJpegQuality), f.frame.width, f.frame.height, renderMs,
+                   std::chrono::duration<double, std::milli>(Clock::now() - e0).count()};
     std::lock_guard lock(s.mutex);
     if (live.revision > s.stylizer.live.revision) s.stylizer.live = live;
     return live;

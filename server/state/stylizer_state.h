@@ -25,11 +25,16 @@ struct UploadedMesh {
 };
 
 /// A frame of the live stream, encoded, with the revision it shows.
+/// The live stream's JPEG quality: on a small forest frame, mean 3.2 and largest 20 levels from the
+/// PNG (85: 4.3 and 33), at about 1 ms a 960×540 frame.
+constexpr int kLiveJpegQuality = 90;
+
 struct LiveFrame {
     uint64_t revision = 0;
     std::string bytes;  ///< JPEG
     int width = 0, height = 0;
-    double renderMs = 0;
+    double renderMs = 0;  ///< the frame on the GL thread: render and read-back
+    double encodeMs = 0;  ///< its JPEG
 };
 
 /// A scene kept for undo or redo: the core value (its meshes and images shared, not copied), the

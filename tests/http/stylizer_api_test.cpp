@@ -2,8 +2,12 @@
 // uploads with their limits, frames as PNG/JPEG/EXR, the live stream, and frames served while
 // another session solves. Frames are small (the fixture's image limit is 64 a side).
 #include <atomic>
+#include <map>
+#include <mutex>
+#include <sstream>
 #include <cmath>
 
+#include "server/state/stylizer_state.h"
 #include "stylizer_fixture.h"
 
 namespace volstyle::test {
@@ -228,6 +232,87 @@ TEST_F(StylizerApi, TheLiveStreamFollowsChangesAndEndsWithTheSession) {
     ASSERT_EQ(client().Delete(base.substr(0, base.size() - 9).c_str())->status, 204);
     reader.join();
     EXPECT_EQ(events.back(), "closed");
+}
+
+TEST_F(StylizerApi, TheMjpegStreamSendsEachRevisionsFrameAndEndsWithTheSession) {
+    // Issue #40: the frames themselves over one response (multipart/x-mixed-replace), each a JPEG
+    // part naming its revision; the JPEG shows the PNG frame of that revision to the codec's error.
+    json s = smallForest();
+    ASSERT_EQ(putScene(s)->status, 200);
+    struct Part {
+        std::map<std::string, std::string> headers;
+        std::string body;
+    };
+    std::vector<Part> parts;
+    std::mutex m;
+    std::string contentType;
+    std::thread reader([&] {
+        httplib::Client c("127.0.0.1", m_port);
+        c.set_read_timeout(120, 0);
+        std::string buffer;
+        c.Get((base + "/stream").c_str(), [&](const httplib::Response& r) { contentType = r.get_header_value("Content-Type"); return true; },
+              [&](const char* data, size_t n) {
+                  buffer.append(data, n);
+                  for (;;) {  // --boundary CRLF, headers, CRLF CRLF, Content-Length bytes, CRLF
+                      const size_t head = buffer.find("\r\n\r\n");
+                      if (head == std::string::npos) return true;
+                      Part p;
+                      std::istringstream lines(buffer.substr(0, head));
+                      for (std::string line; std::getline(lines, line);) {
+                          const size_t colon = line.find(':');
+                          if (!line.empty() && line.back() == '\r') line.pop_back();
+                          if (colon != std::string::npos) p.headers[line.substr(0, colon)] = line.substr(colon + 2);
+                      }
+                      const size_t length = std::stoul(p.headers["Content-Length"]);
+                      if (buffer.size() < head + 4 + length + 2) return true;
+                      p.body = buffer.substr(head + 4, length);
+                      buffer.erase(0, head + 4 + length + 2);
+                      std::lock_guard lock(m);
+                      parts.push_back(std::move(p));
+                  }
+              });
+    });
+    auto jpegs = [&] {
+        std::lock_guard lock(m);
+        size_t n = 0;
+        for (const auto& p : parts) n += p.headers.at("Content-Type") == "image/jpeg";
+        return n;
+    };
+    auto waitFor = [&](size_t count) {
+        for (int i = 0; i < 600 && jpegs() < count; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        return jpegs() >= count;
+    };
+    ASSERT_TRUE(waitFor(1)) << "the stream opens with the current frame";
+    EXPECT_EQ(contentType, "multipart/x-mixed-replace; boundary=volstyle-frame");
+    const Part first = parts[0];
+    EXPECT_EQ(first.headers.at("X-Width"), "64");
+    EXPECT_EQ(first.headers.at("X-Height"), "36");
+    // The PNG of the same scene against the streamed JPEG, in 8-bit display levels.
+    auto r = client().Post((base + "/frame").c_str(), R"({"format": "png"})", "application/json");
+    ASSERT_EQ(r->status, 200);
+    const core::Image png = core::loadImageFromMemory(r->body.data(), r->body.size(), "png").image;
+    const core::Image jpeg = core::loadImageFromMemory(first.body.data(), first.body.size(), "jpeg").image;
+    ASSERT_EQ(jpeg.width, png.width);
+    ASSERT_EQ(jpeg.height, png.height);
+    double sum = 0, worst = 0;
+    for (size_t i = 0; i < png.pixelCount(); ++i)
+        for (int c = 0; c < 3; ++c) {
+            const double d = 255.0 * std::abs(core::linearToSrgb(jpeg.rgba[4 * i + size_t(c)]) - core::linearToSrgb(png.rgba[4 * i + size_t(c)]));
+            sum += d, worst = std::max(worst, d);
+        }
+    const double mean = sum / double(3 * png.pixelCount());
+    std::printf("[ measured ] streamed JPEG (quality %d) vs the PNG frame: mean %.2f, largest %.0f levels of 255\n", server::kLiveJpegQuality, mean, worst);
+    // JPEG's error on a 64×36 forest (foliage at a pixel a leaf, the worst case for a DCT):
+    // measured mean 3.2, largest 20 levels at quality 90 (quality 85: 4.3 and 33).
+    EXPECT_LE(mean, 4.0);
+    EXPECT_LE(worst, 40.0);
+    s["time"] = 1.5;
+    ASSERT_EQ(putScene(s)->status, 200);
+    ASSERT_TRUE(waitFor(2)) << "a change streams a new frame";
+    EXPECT_GT(std::stoull(parts.back().headers.at("X-Revision")), std::stoull(first.headers.at("X-Revision")));
+    ASSERT_EQ(client().Delete(base.substr(0, base.size() - 9).c_str())->status, 204);
+    reader.join();
+    EXPECT_NE(parts.back().body.find("\"closed\""), std::string::npos) << "the stream ends with the session";
 }
 
 TEST_F(StylizerApi, FramesAreServedWhileAnotherSessionSolves) {

@@ -2,7 +2,7 @@
 // headless by playwright-core. Opens the mode on the built-in forest, moves the medium and
 // manipulation sliders, drags the camera and the light, plays time, drops a red transfer function
 // on the drop zone and uploads a mesh — each change must bring a new live frame (a higher
-// revision), and the TF must redden the frame. Saves a screenshot.
+// revision, streamed as MJPEG with the frame rate shown), and the TF must redden the frame. Saves a screenshot.
 // Usage: NODE_PATH=…/node_modules node e2e_shafts.cjs URL OUT.png
 'use strict';
 const { openBrowser, openShafts } = require('./browser.cjs');
@@ -64,6 +64,11 @@ try {
   // Play time for a moment: the holes drift, frames keep coming.
   await page.click('#play');
   await page.waitForFunction(() => Number(document.getElementById('time').value) >= 0.5, null, { timeout: 30000 });
+  // The frames come over the MJPEG stream (issue #40): shown from the stream's bytes, with the rate.
+  const streamed = await page.evaluate(() => ({ src: document.getElementById('shafts-frame').src, info: document.getElementById('shafts-info').textContent }));
+  console.log(`[ measured ] while playing: ${streamed.info}`);
+  await check(streamed.src.startsWith('blob:'), `the frame should come from the stream (src ${streamed.src.slice(0, 40)})`);
+  await check(/[0-9.]+ fps/.test(streamed.info), `the page should show the frame rate (${streamed.info})`);
   await page.click('#play');
   r = await newFrame(r, 'playing time');
   await page.waitForFunction(() => document.getElementById('shafts-busy').style.display === 'none', null, { timeout: 30000 });

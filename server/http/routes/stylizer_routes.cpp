@@ -5,8 +5,11 @@
 // and …/redo, POST …/stylizer/pick (a pixel's TF position) and …/constraints (a TF constraint
 // clicked into the scene), POST …/stylizer/sequence (a job rendering the camera path), POST …/stylizer/frame
 // (a frame or AOV), GET …/stylizer/events (the live stream: SSE `frame` events whose URLs,
-// GET …/stylizer/frames/{revision}.jpeg, hold each new revision's frame).
+// GET …/stylizer/frames/{revision}.jpeg, hold each new revision's frame) and GET …/stylizer/stream
+// (the same frames themselves, MJPEG: multipart/x-mixed-replace).
 #include <fmt/format.h>
+
+#include <functional>
 
 #include "core/image/image_io.h"
 #include "core/stylize/stylizer.h"
@@ -43,40 +46,90 @@ std::string sseEvent(const char* event, const nlohmann::json& data) {
     return std::string("event: ") + event + "\ndata: " + protocol::toText(data) + "\n\n";
 }
 
-/// The live stream: a `frame` event for the stylizer's revision now and for each later one (a
-/// burst of changes renders only the newest), `failed` for a revision that could not render, and
-/// the stream ends when the session is deleted.
-void streamLiveFrames(RouteContext& c, httplib::Response& res, std::shared_ptr<Session> s, const std::string& client) {
+/// How a live stream writes what happens: each new frame, a revision that could not render, the
+/// session's end, and a keep-alive while nothing changes.
+struct LiveStreamFormat {
+    const char* contentType;
+    std::function<std::string(const Session&, const LiveFrame&)> frame;
+    std::function<std::string(uint64_t revision, const nlohmann::json& error)> failed;
+    std::function<std::string(const std::string& reason)> closed;
+    std::string keepAlive;
+};
+
+/// The live stream: the stylizer's revision now and each later one (a burst of changes renders
+/// only the newest: a slow client gets the newest frame next, never a backlog), a failure for a
+/// revision that could not render, and the end when the session is deleted.
+void streamLive(RouteContext& c, httplib::Response& res, std::shared_ptr<Session> s, const std::string& client, LiveStreamFormat format) {
     c.streams.acquire(client);
     res.set_header("Cache-Control", "no-cache");
+    const std::string contentType = format.contentType;
     res.set_chunked_content_provider(
-        "text/event-stream",
-        [&c, s, sent = uint64_t(0), idle = 0](size_t, httplib::DataSink& sink) mutable {
+        contentType,
+        [&c, s, format = std::move(format), sent = uint64_t(0), idle = 0](size_t, httplib::DataSink& sink) mutable {
             std::string message;
             try {
                 if (auto f = c.services.stylizer.nextLiveFrame(*s, sent, kLivePoll)) {
                     sent = f->revision;
                     idle = 0;
-                    message = sseEvent("frame", {{"revision", f->revision}, {"url", frameUrl(s->id, f->revision)},
-                                                 {"width", f->width}, {"height", f->height}, {"render_ms", f->renderMs}});
+                    message = format.frame(*s, *f);
                 } else if (++idle % kPollsPerKeepAlive == 0) {
-                    message = ": still here\n\n";
+                    message = format.keepAlive;
                 }
             } catch (...) {
                 const protocol::ErrorReport e = protocol::describeException(std::current_exception());
                 if (e.code == ErrorCode::NotFound) {  // the session was deleted
-                    const std::string end = sseEvent("closed", {{"reason", e.message}});
+                    const std::string end = format.closed(e.message);
                     sink.write(end.data(), end.size());
                     sink.done();
                     return true;
                 }
                 sent = c.services.stylizer.stylizer(*s).revision;  // wait for the next change
-                message = sseEvent("failed", {{"revision", sent}, {"error", protocol::errorBody(e.code, e.message, e.details, "")["error"]}});
+                message = format.failed(sent, protocol::errorBody(e.code, e.message, e.details, "")["error"]);
             }
             if (!message.empty() && !sink.write(message.data(), message.size())) return false;  // the client left
             return sink.is_writable();
         },
         [&c, client](bool) { c.streams.release(client); });
+}
+
+/// Server-sent events: `frame` with the frame's URL (…/frames/{revision}.jpeg), `failed`, `closed`.
+LiveStreamFormat sseFormat() {
+    return {"text/event-stream",
+            [](const Session& s, const LiveFrame& f) {
+                return sseEvent("frame", {{"revision", f.revision}, {"url", frameUrl(s.id, f.revision)}, {"width", f.width},
+                                          {"height", f.height}, {"render_ms", f.renderMs}, {"encode_ms", f.encodeMs}});
+            },
+            [](uint64_t revision, const nlohmann::json& error) { return sseEvent("failed", {{"revision", revision}, {"error", error}}); },
+            [](const std::string& reason) { return sseEvent("closed", {{"reason", reason}}); }, ": still here\n\n"};
+}
+
+/// The frames themselves in one response (issue #40): multipart/x-mixed-replace, a JPEG part per
+/// frame (its revision and times in the part's headers; an <img> shows the stream as it comes), a
+/// JSON part for a failed revision or the end, and an empty part as keep-alive.
+constexpr const char* kMjpegBoundary = "volstyle-frame";
+
+std::string mjpegPart(const std::string& contentType, const std::string& headers, const std::string& body) {
+    return fmt::format("--{}\r\nContent-Type: {}\r\nContent-Length: {}\r\n{}\r\n", kMjpegBoundary, contentType, body.size(), headers) + body +
+           "\r\n";
+}
+
+LiveStreamFormat mjpegFormat() {
+    return {"multipart/x-mixed-replace; boundary=volstyle-frame",
+            [](const Session&, const LiveFrame& f) {
+                return mjpegPart("image/jpeg",
+                                 fmt::format("X-Revision: {}\r\nX-Width: {}\r\nX-Height: {}\r\nX-Render-Ms: {:.1f}\r\nX-Encode-Ms: {:.1f}\r\n",
+                                             f.revision, f.width, f.height, f.renderMs, f.encodeMs),
+                                 f.bytes);
+            },
+            [](uint64_t revision, const nlohmann::json& error) {
+                return mjpegPart("application/json", fmt::format("X-Revision: {}\r\n", revision),
+                                 protocol::toText({{"event", "failed"}, {"revision", revision}, {"error", error}}));
+            },
+            [](const std::string& reason) {
+                return mjpegPart("application/json", "", protocol::toText({{"event", "closed"}, {"reason", reason}})) +
+                       fmt::format("--{}--\r\n", kMjpegBoundary);
+            },
+            mjpegPart("text/plain", "", "")};
 }
 
 }  // namespace
@@ -167,7 +220,10 @@ void addStylizerFrameRoutes(RouteContext& c) {
                         protocol::imageMimeType(request.format));
     });
     c.get(kStylizerPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
-        streamLiveFrames(c, res, c.services.sessions.find(req.matches[1]), req.remote_addr);
+        streamLive(c, res, c.services.sessions.find(req.matches[1]), req.remote_addr, sseFormat());
+    });
+    c.get(kStylizerPath + "/stream", [&c](const httplib::Request& req, httplib::Response& res) {
+        streamLive(c, res, c.services.sessions.find(req.matches[1]), req.remote_addr, mjpegFormat());
     });
     c.get(kStylizerPath + R"(/frames/([0-9]+)\.jpeg)", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
