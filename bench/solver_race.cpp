@@ -50,6 +50,7 @@ struct Race {
     std::vector<double> seconds, objective;  // after each iteration ([0]: the start, after the set-up)
     double setupSeconds = 0;
     double rowsSeconds = 0;  // of the set-up: writing the rows of W
+    std::string phases;      // the set-up phase by phase (SolveReport::setupPhases)
     double forwardMs = 0, adjointMs = 0, vectorMs = 0;
     int iterations = 0;
     /// Seconds of solving until the objective is at most `fraction` of `start` (−1: never).
@@ -118,6 +119,7 @@ Race solveRace(GpuDevice& device, const Volume& start, const std::vector<SolveVi
     r.setupSeconds = r.seconds.empty() ? msSince(t0) / 1000.0 : r.seconds.front() - firstIterationMs / 1000.0;
     r.seconds.insert(r.seconds.begin(), r.setupSeconds);
     r.rowsSeconds = out.report.rowCacheMs / 1000.0;
+    for (const auto& [name, ms] : out.report.setupPhases) r.phases += (r.phases.empty() ? "" : ", ") + name + " " + std::to_string(int(std::lround(ms)));
     r.objective = out.report.objectiveHistory;
     r.iterations = out.report.iterations;
     r.seconds.resize(r.objective.size(), r.seconds.back());
@@ -327,6 +329,7 @@ void paperRace(GpuDevice& device, Renderer& renderer, const Problem& p, int iter
                     r.rowsSeconds, seconds(r.timeTo(0.1, f0)).c_str(), seconds(r.timeTo(0.01, f0)).c_str(),
                     seconds(r.timeTo(0.001, f0)).c_str(), seconds(r.timeTo(1e-4, f0)).c_str(),
                     (r.seconds.back() - r.setupSeconds) / std::max(1, r.iterations), r.objective.back() / f0);
+        std::fprintf(stderr, "%s: set-up (ms) %s\n", name.c_str(), r.phases.c_str());
         std::fflush(stdout);
     }
     writePlot(outDir + "/solver_race_" + tag + ".png", rows, f0);
@@ -394,6 +397,7 @@ int main(int argc, char** argv) {
                         seconds(r.timeTo(0.1, start)).c_str(),
                         seconds(r.timeTo(0.01, start)).c_str(), seconds(r.timeTo(0.001, start)).c_str(), r.forwardMs / n, r.adjointMs / n,
                         r.vectorMs / n);
+            std::fprintf(stderr, "%s: set-up (ms) %s\n", name.c_str(), r.phases.c_str());
             std::fflush(stdout);
             std::string j = "{\"bench\":\"solver_race\",\"problem\":\"" + name + "\",\"history\":[";
             for (size_t i = 0; i < r.objective.size(); ++i)

@@ -4,9 +4,10 @@
 
 #include <unistd.h>
 
-#include <cstdio>
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+
+#include <cstdio>
 
 #include <algorithm>
 #include <cmath>
@@ -353,6 +354,15 @@ int runSolve(const std::vector<std::string>& argv) {
                  core::unknownName(opt.unknown), rep.iterations, core::stopReasonName(rep.stopReason), meanOf(rep.initialRms),
                  meanOf(rep.finalRms), rep.totalMs / 1000, rep.forwardMs / 1000, rep.adjointMs / 1000, rep.vectorMs / 1000,
                  output.c_str());
+    // What the wait was made of (issue #40): the set-up phase by phase, then one iteration.
+    std::string phases;
+    for (const auto& [name, ms] : rep.setupPhases) phases += fmt::format("{}{} {:.0f}", phases.empty() ? "" : ", ", name, ms);
+    const int n = std::max(rep.iterations, 1);
+    std::fprintf(stderr, "  set-up %.2f s (%s ms); per iteration %.1f ms: forward %.1f, back-projection %.1f, vectors %.1f; "
+                 "%zu unknowns, %zu in the hull, %zu constrained pixels, %zu of %zu views from cached rows\n",
+                 rep.setupMs() / 1000, phases.c_str(), (rep.forwardMs + rep.adjointMs + rep.vectorMs) / n, rep.forwardMs / n,
+                 rep.adjointMs / n, rep.vectorMs / n, rep.unknownCount, rep.hullCount, rep.constraintPixels, rep.cachedViews,
+                 rep.initialRms.size());
     for (size_t v = 0; v < rep.reach.unreachableRms.size() && v < rep.finalRms.size(); ++v)
         std::fprintf(stderr, "  view %zu: RMS %.4g, of which %.4g is out of reach of %s\n", v + 1, rep.finalRms[v],
                      rep.reach.unreachableRms[v], core::unknownName(opt.unknown));

@@ -26,14 +26,14 @@ Image Renderer::render(GpuVolume& volume, const Camera& camera, const Lighting& 
 }
 
 RenderLayers Renderer::renderLayers(GpuVolume& volume, const Camera& camera, const Lighting& lighting,
-                                    const RenderSettings& settings, RenderStats* statsOut, const WorkBudget& budget) {
+                                    const RenderSettings& settings, RenderStats* statsOut, const WorkBudget& budget, bool withAlbedoOne) {
     RenderLayers layers;
-    layers.beauty = march(volume, camera, lighting, settings, statsOut, budget, &layers);
+    layers.beauty = march(volume, camera, lighting, settings, statsOut, budget, &layers, withAlbedoOne);
     return layers;
 }
 
 Image Renderer::march(GpuVolume& volume, const Camera& camera, const Lighting& lighting, const RenderSettings& settings,
-                      RenderStats* statsOut, const WorkBudget& budget, RenderLayers* layers) {
+                      RenderStats* statsOut, const WorkBudget& budget, RenderLayers* layers, bool withAlbedoOne) {
     VOLSTYLE_CHECK(m_device.isOwnedByThisThread(), ==, true);
     camera.validate();
     lighting.validate();
@@ -54,7 +54,8 @@ Image Renderer::march(GpuVolume& volume, const Camera& camera, const Lighting& l
         .define("VOLSTYLE_SKIP_EMPTY", settings.skipEmptySpace ? 1 : 0)
         .define("VOLSTYLE_HW_FILTER", settings.hardwareFilter ? 1 : 0)
         .define("VOLSTYLE_EXACT_TRAVERSAL", settings.exactTraversal ? 1 : 0)
-        .define("VOLSTYLE_LAYERS", layers ? 1 : 0);
+        .define("VOLSTYLE_LAYERS", layers ? 1 : 0)
+        .define("VOLSTYLE_ALBEDO_ONE_LAYER", layers && withAlbedoOne ? 1 : 0);
     if (setup.paths) builder.define("VOLSTYLE_CURVED", 1);  // refracted rays (straight rays: the kernel unchanged)
     glUseProgram(m_device.program(forStorage(builder, volume)).id());
     bindMarch(m_device, volume, setup);  // dispatchChunked re-uploads the block per chunk
@@ -68,10 +69,11 @@ Image Renderer::march(GpuVolume& volume, const Camera& camera, const Lighting& l
         b.pixelBytes = bytes;
     }
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingImageOut, b.pixels.id());
+    const int planeCount = withAlbedoOne ? layout::kRenderLayersWithAlbedoOne : layout::kRenderLayers;
     if (layers) {
-        if (bytes * layout::kRenderLayers > b.layerBytes) {
-            b.layers = gl::createBuffer(bytes * layout::kRenderLayers, nullptr, GL_DYNAMIC_STORAGE_BIT, "render-layers");
-            b.layerBytes = bytes * layout::kRenderLayers;
+        if (bytes * size_t(planeCount) > b.layerBytes) {
+            b.layers = gl::createBuffer(bytes * size_t(planeCount), nullptr, GL_DYNAMIC_STORAGE_BIT, "render-layers");
+            b.layerBytes = bytes * size_t(planeCount);
         }
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingLayersOut, b.layers.id());
     }
@@ -89,9 +91,10 @@ Image Renderer::march(GpuVolume& volume, const Camera& camera, const Lighting& l
     Image image(camera.width, camera.height);
     glGetNamedBufferSubData(b.pixels.id(), 0, GLsizeiptr(bytes), image.rgba.data());
     if (layers) {
-        Image* planes[layout::kRenderLayers] = {&layers->medium, &layers->emission, &layers->scattering,
-                                                &layers->transmittance, &layers->background};  // render.comp's order
-        for (int k = 0; k < layout::kRenderLayers; ++k) {
+        Image* planes[layout::kRenderLayersWithAlbedoOne] = {&layers->medium, &layers->emission, &layers->scattering,
+                                                             &layers->transmittance, &layers->background,
+                                                             &layers->scatteringAtAlbedoOne};  // render.comp's order
+        for (int k = 0; k < planeCount; ++k) {
             *planes[k] = Image(camera.width, camera.height);
             glGetNamedBufferSubData(b.layers.id(), GLintptr(bytes * size_t(k)), GLsizeiptr(bytes), planes[k]->rgba.data());
         }

@@ -27,6 +27,9 @@ struct RenderLayers {
     Image scattering;     ///< the part of `medium` scattered from the lights
     Image transmittance;  ///< RGB transmittance along each ray (alpha 1)
     Image background;     ///< the background's radiance, unattenuated (alpha 1)
+    /// The scattering the same rays give at albedo 1 (renderLayers' withAlbedoOne), else empty:
+    /// what an albedo solve could reach, with no second render of a white volume.
+    Image scatteringAtAlbedoOne;
 };
 
 class Renderer {
@@ -44,11 +47,11 @@ public:
     /// The same render, with its compositing layers.
     RenderLayers renderLayers(GpuVolume& volume, const Camera& camera, const Lighting& lighting,
                               const RenderSettings& settings = {}, RenderStats* stats = nullptr,
-                              const WorkBudget& budget = WorkBudget());
+                              const WorkBudget& budget = WorkBudget(), bool withAlbedoOne = false);
 
 private:
     Image march(GpuVolume& volume, const Camera& camera, const Lighting& lighting, const RenderSettings& settings,
-                RenderStats* stats, const WorkBudget& budget, RenderLayers* layers);
+                RenderStats* stats, const WorkBudget& budget, RenderLayers* layers, bool withAlbedoOne = false);
 
     struct Buffers;
     GpuDevice& m_device;

@@ -188,6 +188,14 @@ struct SolveReport {
     int coarseIterations = 0;  ///< the coarse start's iterations (SolveOptions::coarseIterations)
     double coarseMs = 0;       ///< its whole time, set-up included
     double rowCacheMs = 0;     ///< writing the views' cached rows of W (SolveOptions::rowCacheBytes)
+    /// The set-up before the first iteration, phase by phase (name, ms) in the order they ran: what
+    /// a person waits for before the solve moves (issue #40).
+    std::vector<std::pair<std::string, double>> setupPhases;
+    double setupMs() const {
+        double ms = 0;
+        for (const auto& [name, t] : setupPhases) ms += t;
+        return ms;
+    }
     size_t rowCacheBytes = 0;  ///< the GPU memory they take
     size_t cachedViews = 0;    ///< views whose W and Wᵀ gather from them (the rest: matrix-free)
     /// A re-solve after a stroke (SolveOptions::localResolve): what changed and what moved.

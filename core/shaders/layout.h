@@ -61,6 +61,7 @@ VS_CONSTANT(int, kBindingParams, 0);       /* UBO MarchParams */
 VS_CONSTANT(int, kBindingImageOut, 0);     /* SSBO vec4 pixels[] */
 VS_CONSTANT(int, kBindingLayersOut, 1);    /* SSBO vec4 layers[kRenderLayers][pixels] (render.comp, VOLSTYLE_LAYERS) */
 VS_CONSTANT(int, kRenderLayers, 5);        /* medium (premultiplied), emission, scattering, transmittance, background */
+VS_CONSTANT(int, kRenderLayersWithAlbedoOne, 6);  /* and the scattering at albedo 1 (VOLSTYLE_ALBEDO_ONE_LAYER: the solver's reach analysis) */
 VS_CONSTANT(int, kUnitExtinction, 0);
 VS_CONSTANT(int, kUnitAlbedo, 1);
 VS_CONSTANT(int, kUnitEmission, 2);

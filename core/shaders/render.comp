@@ -8,7 +8,9 @@
 // VOLSTYLE_BACKGROUND_PLATE: it is the view's plate),
 // VOLSTYLE_SKIP_EMPTY, VOLSTYLE_HW_FILTER, VOLSTYLE_EXACT_TRAVERSAL, VOLSTYLE_LAYERS (also write
 // the compositing layers: the medium's light alone, premultiplied, and its emitted and scattered
-// parts, the transmittance and the background, planar in b_Layers).
+// parts, the transmittance and the background, planar in b_Layers), VOLSTYLE_ALBEDO_ONE_LAYER (with
+// LAYERS: a sixth, the scattering the same march gives at albedo 1 — the reach analysis asks what
+// an albedo solve could reach without a second render of a white volume).
 #include "common/march.glsl"
 #include "common/lighting.glsl"
 #include "common/camera.glsl"
@@ -41,6 +43,7 @@ void main() {
     vec3 radiance = vec3(0.0);
     vec3 transmittance = vec3(1.0);
     vec3 emitted = vec3(0.0), scattered = vec3(0.0);  // the parts of radiance (VOLSTYLE_LAYERS)
+    vec3 scatteredAtAlbedoOne = vec3(0.0);             // VOLSTYLE_ALBEDO_ONE_LAYER
     RayMarch m;
     if (beginViewMarch(pix, dir, m)) {
         float tMid, dt;
@@ -60,7 +63,8 @@ void main() {
 #else
             vec3 albedo = vec3(1.0);
 #endif
-            Ls = albedo * inScattering(st.p, marchDirection(m, dir));
+            vec3 Lin = inScattering(st.p, marchDirection(m, dir));
+            Ls = albedo * Lin;
 #endif
             // Segment of optical depth τ = σ dt: opacity 1 - e^{-τ}, then attenuate.
             vec3 tau = sigma * dt;
@@ -69,6 +73,9 @@ void main() {
 #if VOLSTYLE_LAYERS
             emitted += w * Le;
             scattered += w * Ls;
+#if VOLSTYLE_ALBEDO_ONE_LAYER && VOLSTYLE_LIT
+            scatteredAtAlbedoOne += w * Lin;
+#endif
 #endif
             transmittance *= exp(-tau);
             // Early ray termination: what is left to gather is at most T·L_max (march.z).
@@ -89,5 +96,8 @@ void main() {
     layers[2 * n + p] = vec4(scattered, alpha);
     layers[3 * n + p] = vec4(transmittance, 1.0);
     layers[4 * n + p] = vec4(background, 1.0);
+#if VOLSTYLE_ALBEDO_ONE_LAYER
+    layers[5 * n + p] = vec4(scatteredAtAlbedoOne, alpha);
+#endif
 #endif
 }

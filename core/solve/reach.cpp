@@ -97,38 +97,29 @@ Image combine(const Image& a, const Image& b, float sign = -1.0f) {
 
 }  // namespace
 
-std::vector<std::shared_ptr<const ViewRenders>> renderBounds(GpuDevice& device, const Volume& volume, const Lighting& lighting,
+std::vector<std::shared_ptr<const ViewRenders>> renderBounds(GpuDevice& device, GpuVolume& gpu, const Lighting& lighting,
                                       const std::vector<SolveView>& views, const SolveOptions& options, bool withAlbedoOne) {
     RenderSettings settings;
     settings.stepVoxels = options.stepVoxels;
     settings.exactTraversal = options.exactTraversal;
     Renderer renderer(device);
-    GpuVolume gpu(volume);
     std::vector<ViewRenders> out(views.size());
-    std::vector<std::shared_ptr<const ViewRenders>> shared;
     for (size_t v = 0; v < views.size(); ++v) {
-        const RenderLayers l = renderer.renderLayers(gpu, views[v].camera, views[v].lightingFor(lighting), settings);
+        // One march per view: the scattering at albedo 1 comes from the same rays (issue #40:
+        // a second render of a white volume was half of a first solve's renders).
+        const RenderLayers l = renderer.renderLayers(gpu, views[v].camera, views[v].lightingFor(lighting), settings, nullptr, WorkBudget(),
+                                                     withAlbedoOne);
         ViewRenders& r = out[v];
         r.now = l.beauty;
         r.background = l.background;
         r.noEmission = combine(l.beauty, l.emission);
         r.albedo0 = combine(l.beauty, l.scattering);
         r.neither = combine(r.noEmission, l.scattering);
+        if (withAlbedoOne) r.albedo1 = combine(r.albedo0, l.scatteringAtAlbedoOne, 1.0f);
     }
-    auto share = [&] {
-        for (auto& r : out) shared.push_back(std::make_shared<const ViewRenders>(std::move(r)));
-        return shared;
-    };
-    if (!withAlbedoOne) return share();
-    // The same extinction, so the light-depth volumes come from the device's cache.
-    Volume white = volume;
-    white.ensureAlbedo(1.0f).assign(white.storedVoxels() * 3, 1.0f);
-    gpu.upload(white);
-    for (size_t v = 0; v < views.size(); ++v) {
-        const RenderLayers l = renderer.renderLayers(gpu, views[v].camera, views[v].lightingFor(lighting), settings);
-        out[v].albedo1 = combine(out[v].albedo0, l.scattering, 1.0f);
-    }
-    return share();
+    std::vector<std::shared_ptr<const ViewRenders>> shared;
+    for (auto& r : out) shared.push_back(std::make_shared<const ViewRenders>(std::move(r)));
+    return shared;
 }
 
 /// The unknowns' part of analyzeReach: what the chosen and the other unknowns leave out of reach.
@@ -138,7 +129,8 @@ void analyzeReachOfUnknowns(const std::vector<std::shared_ptr<const ViewRenders>
 void analyzeReach(GpuDevice& device, const Volume& volume, const Lighting& lighting, const std::vector<SolveView>& views,
                   const SolveOptions& options, SolveReport& report) {
     const auto t0 = Clock::now();
-    const auto renders = renderBounds(device, volume, lighting, views, options, true);
+    GpuVolume gpu(volume);
+    const auto renders = renderBounds(device, gpu, lighting, views, options, true);
     analyzeReach(renders, views, options, report);
     report.reach.ms = msSince(t0);
 }

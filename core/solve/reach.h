@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/gpu/gpu_device.h"
+#include "core/render/gpu_volume.h"
 #include "core/scene/camera.h"
 #include "core/scene/lighting.h"
 #include "core/scene/render_settings.h"
@@ -40,8 +41,9 @@ struct ViewRenders {
     Image background;  ///< the background alone (no medium)
 };
 
-/// Two renders per view (one without `withAlbedoOne`), under `options`' step and traversal.
-std::vector<std::shared_ptr<const ViewRenders>> renderBounds(GpuDevice& device, const Volume& volume, const Lighting& lighting,
+/// One render per view (with `withAlbedoOne`, the albedo-1 scattering from the same march), under
+/// `options`' step and traversal, of the volume already on the GPU (the solver's own upload).
+std::vector<std::shared_ptr<const ViewRenders>> renderBounds(GpuDevice& device, GpuVolume& volume, const Lighting& lighting,
                                       const std::vector<SolveView>& views, const SolveOptions& options, bool withAlbedoOne);
 
 /// Fills `report.reach` for solving `options.unknown` toward `views` from renderBounds() (with

@@ -248,7 +248,11 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
         st.viewRenders.clear();
         st.viewRenders.shrink_to_fit();
     }
-    if (st.opt.coarseIterations > 0 && !rep.local.active) st.warmStartFromCoarse(cancel);  // a re-solve starts where it is
+    if (st.opt.coarseIterations > 0 && !rep.local.active) {  // a re-solve starts where it is
+        st.warmStartFromCoarse(cancel);
+        rep.setupPhases.emplace_back("coarse start", msSince(t0));
+    }
+    const auto tStart = Clock::now();
     BoundedCgls cgls(st, st.cglsSettings());
     cgls.start();
     double f = st.totalObjective();
@@ -256,6 +260,7 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
     rep.objectiveHistory.push_back(f);
     rep.initialRms = st.rmsPerView();
     rep.finalRms = rep.initialRms;
+    rep.setupPhases.emplace_back("first residual", msSince(tStart));
     int flat = 0, settled = 0;
 
     for (int it = 1; it <= st.opt.maxIterations && rep.stopReason == StopReason::None; ++it) {

@@ -8,6 +8,7 @@
 
 #include "core/image/image_io.h"
 #include "core/render/exr_layers.h"
+#include "core/base/work_budget.h"
 #include "core/render/gpu_volume.h"
 #include "core/volume/builtin_scenes.h"
 #include "../unit/test_files.h"
@@ -69,6 +70,35 @@ TEST(RenderLayers, MediumOverABlackPlateIsTheRenderWithABlackBackground) {
     double emitted = 0;
     for (float x : layers.emission.rgba) emitted = std::max(emitted, double(x));
     EXPECT_GT(emitted, 0.01) << "the plume emits";
+}
+
+TEST(RenderLayers, TheAlbedoOneLayerIsTheScatteringOfAWhiteVolume) {
+    VOLSTYLE_REQUIRE_GL();
+    // Issue #40: the reach analysis takes the scattering at albedo 1 from the same march as the
+    // observations instead of rendering a white copy of the volume: the two agree, and the other
+    // layers do not change when it is asked for.
+    Volume v = makeBuiltinScene("plume", 20);
+    auto& albedo = v.ensureAlbedo();
+    for (size_t i = 0; i < albedo.size(); ++i) albedo[i] = 0.2f + 0.6f * float((i * 7) % 10) / 10.0f;  // tinted, varying
+    GpuVolume gpu(v);
+    Volume white = v;
+    white.ensureAlbedo().assign(white.storedVoxels() * 3, 1.0f);
+    GpuVolume whiteGpu(white);
+    const Lighting l = sky({0.4, 0.6, 0.9});
+    const RenderLayers plain = test::sharedRenderer().renderLayers(gpu, smallCamera(), l);
+    const RenderLayers both = test::sharedRenderer().renderLayers(gpu, smallCamera(), l, {}, nullptr, WorkBudget(), true);
+    const RenderLayers whiteLayers = test::sharedRenderer().renderLayers(whiteGpu, smallCamera(), l);
+    EXPECT_TRUE(plain.scatteringAtAlbedoOne.empty());
+    ASSERT_EQ(both.scatteringAtAlbedoOne.width, 24);
+    EXPECT_EQ(maxDifference(both.beauty, plain.beauty, true), 0.0);
+    EXPECT_EQ(maxDifference(both.scattering, plain.scattering, true), 0.0);
+    double peak = 0;
+    for (float x : whiteLayers.scattering.rgba) peak = std::max(peak, double(x));
+    const double d = maxDifference(both.scatteringAtAlbedoOne, whiteLayers.scattering, false);
+    std::printf("[ measured ] albedo-1 layer vs a white volume's scattering: %.2e of the peak %.3f\n", d / peak, peak);
+    EXPECT_GT(peak, 0.05);
+    // The two marches stop early at different depths (each by its own radiance): within 1e-3.
+    EXPECT_LE(d, 1e-3 * peak);
 }
 
 TEST(RenderLayers, TheExrHoldsTheLayersUnderNukesNames) {
