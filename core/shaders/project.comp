@@ -41,6 +41,12 @@ layout(local_size_x = kWorkgroup2D, local_size_y = kWorkgroup2D) in;
 #ifndef VOLSTYLE_ROW_MASK
 #define VOLSTYLE_ROW_MASK 0
 #endif
+// The fill pass places each entry in its element's column too (atomics); 0: the rows alone, and
+// the caller transposes them (a CPU rasterizer, where these scattered writes cost more than the
+// march: core/solve/projector.cpp).
+#ifndef VOLSTYLE_ROW_COLUMNS
+#define VOLSTYLE_ROW_COLUMNS 1
+#endif
 #if VOLSTYLE_ROWS
 #if VOLSTYLE_ROW_MASK
 layout(std430, binding = kBindingRowMask) readonly buffer b_RowMask {
@@ -83,16 +89,21 @@ void emitEntry(uint element, vec3 w) {
     // finds more entries than it counted drops the extra ones instead of writing a neighbour's.
     uint k = rowStart[g_pixel] + g_entries;
     if (k >= rowStart[g_pixel + 1u]) return;
+#if VOLSTYLE_ROW_COLUMNS
     uint j = colStart[element] + atomicAdd(colCursor[element], 1u);
     if (j >= colStart[element + 1u]) return;
-    rowIndex[k] = element;
     colIndex[j] = g_pixel;
 #if VOLSTYLE_ROW_CHANNELS == 1
-    rowWeight[k] = w.r;
     colWeight[j] = w.r;
 #else
-    rowWeight[3u * k] = w.r, rowWeight[3u * k + 1u] = w.g, rowWeight[3u * k + 2u] = w.b;
     colWeight[3u * j] = w.r, colWeight[3u * j + 1u] = w.g, colWeight[3u * j + 2u] = w.b;
+#endif
+#endif
+    rowIndex[k] = element;
+#if VOLSTYLE_ROW_CHANNELS == 1
+    rowWeight[k] = w.r;
+#else
+    rowWeight[3u * k] = w.r, rowWeight[3u * k + 1u] = w.g, rowWeight[3u * k + 2u] = w.b;
 #endif
 #endif
     ++g_entries;

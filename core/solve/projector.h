@@ -74,6 +74,11 @@ public:
     /// `pixelMask` (the solver's √weights), pixels whose mask is 0 get empty rows: W from the
     /// cache is then 0 there, which the solver multiplies by 0 anyway.
     void cacheRows(size_t budgetBytes, int channels, const GpuVector* pixelMask = nullptr);
+    /// Where cacheRows() places the columns (Wᵀ's entries): by the fill pass itself with atomics
+    /// (GPUs), or transposed from the rows on the host (the default on a CPU rasterizer, where the
+    /// atomics' scattered writes cost more than a counting sort). Either gives the same columns,
+    /// each in another order.
+    void setColumnsOnHost(bool onHost) { m_columnsOnHost = onHost; }
     bool allCached() const { return m_stats.cachedViews == m_views.size(); }
     /// A view's rows, from an earlier solve (SolveCache) or for one: rows written for this view's
     /// camera, unknowns and pixel mask.
@@ -125,6 +130,7 @@ private:
     bool m_useFloatAtomics = false;
     std::shared_ptr<const Support> m_pixelSupport, m_elementSupport;
     std::shared_ptr<const SparseRows> m_merged;  ///< every view's rows at once (mergeRows); null: per view
+    bool m_columnsOnHost = false;                ///< setColumnsOnHost (constructor: a CPU rasterizer)
 };
 
 }  // namespace volstyle::core

@@ -83,6 +83,7 @@ struct Path {
     bool cached = false;
     size_t budget = size_t(1) << 30;
     int expectCachedViews = -1;  ///< -1: all views
+    int columnsOnHost = -1;      ///< the rows' columns: 1 transposed on the host, 0 by the fill pass's atomics, -1 the device's default
 };
 
 void checkCase(const Case& k, const Path& path) {
@@ -92,6 +93,7 @@ void checkCase(const Case& k, const Path& path) {
     GpuVolume gpu(prob.volume);
     Projector W(test::device(), gpu, prob.lighting, k.unknown, k.basis, udims, 0.5);
     if (!floatAtomics) W.setUseFloatAtomics(false);
+    if (path.columnsOnHost >= 0) W.setColumnsOnHost(path.columnsOnHost == 1);
     for (const auto& c : prob.cameras) W.addView(c);
     if (path.cached) {
         W.cacheRows(path.budget, weightChannels(prob.volume, prob.lighting, k.unknown));
@@ -171,6 +173,19 @@ INSTANTIATE_TEST_SUITE_P(AllUnknownsAndBases, ProjectorAdjoint,
                                            Case{Unknown::Extinction, BasisType::Box, false},
                                            Case{Unknown::Emission, BasisType::Trilinear, true},
                                            Case{Unknown::Albedo, BasisType::Box, true}));
+
+TEST(Projector, ColumnsFromTheHostAndFromTheFillPassBothMatchTheOracle) {
+    VOLSTYLE_REQUIRE_GL();
+    // Issue #40: a CPU rasterizer transposes the rows on the host, a GPU places the columns in the
+    // fill pass with atomics; CI runs on the first, so the second is checked here explicitly.
+    for (int onHost : {0, 1}) {
+        Path path;
+        path.cached = true;
+        path.columnsOnHost = onHost;
+        checkCase({Unknown::EmissionAlbedo, BasisType::Trilinear, false}, path);
+        checkCase({Unknown::Extinction, BasisType::Box, true}, path);
+    }
+}
 
 TEST(Projector, CompareAndSwapFallbackIsExactToo) {
     VOLSTYLE_REQUIRE_GL();
