@@ -8,7 +8,8 @@
 // (SolveOptions::rowCacheBytes = 0: W and Wᵀ march every ray each time instead of gathering from
 // the cached rows). "Seconds" are wall-clock from the solver's construction: everything counts
 // (set-up with the rows' cache and the preconditioner, the reach analysis, a coarse stage).
-// Usage: solver_race [--iterations N] [--only a|b|c|ct|stroke] [--out DIR]. Prints tables, then one
+// Usage: solver_race [--iterations N] [--only a|b|c|ct|stroke] [--out DIR] [--write-problem DIR: (a) as
+// files for volstyle solve, nothing run]. Prints tables, then one
 // JSON line per row of (a); writes DIR/solver_race_{a,ct,b,c}.png (objective / start against
 // seconds, log–log). Without --only: a, ct and stroke ((b) and (c) take minutes each).
 #include <spdlog/spdlog.h>
@@ -34,6 +35,7 @@
 #include "core/solve/solve_cache.h"
 #include "core/solve/solver.h"
 #include "core/volume/builtin_scenes.h"
+#include "core/volume/vdb_io.h"
 
 using namespace volstyle;
 using namespace volstyle::core;
@@ -335,6 +337,39 @@ void paperRace(GpuDevice& device, Renderer& renderer, const Problem& p, int iter
     writePlot(outDir + "/solver_race_" + tag + ".png", rows, f0);
 }
 
+/// Problem (a) as files for `volstyle solve` (the same start volume, float EXR targets, the
+/// weights the race uses — each target's alpha — and the cameras), so the CLI's per-iteration
+/// split can be compared with the race's on the same problem (issue #40).
+void writeProblem(const Setup& setup, const std::string& dir) {
+    std::filesystem::create_directories(dir);
+    saveVdb(dir + "/start.vdb", setup.plain);
+    SaveOptions exr;
+    exr.halfFloat = false;
+    std::string views;
+    for (size_t i = 0; i < setup.views.size(); ++i) {
+        const SolveView& v = setup.views[i];
+        Image weights = v.target;
+        for (size_t p = 0; p < weights.pixelCount(); ++p)
+            for (int c = 0; c < 4; ++c) weights.rgba[4 * p + size_t(c)] = c == 3 ? 1.0f : v.target.rgba[4 * p + 3];
+        saveImage(dir + "/" + v.name + ".exr", v.target, exr);
+        saveImage(dir + "/" + v.name + "_weights.exr", weights, exr);
+        const Camera& c = v.camera;
+        char buf[512];
+        std::snprintf(buf, sizeof buf,
+                      "%s{\"name\": \"%s\", \"target\": \"%s.exr\", \"weights\": \"%s_weights.exr\", \"camera\": {\"eye\": [%.17g, %.17g, %.17g], "
+                      "\"target\": [%.17g, %.17g, %.17g], \"up\": [%.17g, %.17g, %.17g], \"fov_y_deg\": %.17g, \"width\": %d, \"height\": %d}}",
+                      i ? ",\n  " : "", v.name.c_str(), v.name.c_str(), v.name.c_str(), c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y,
+                      c.target.z, c.up.x, c.up.y, c.up.z, c.fovYDeg, c.width, c.height);
+        views += buf;
+    }
+    std::FILE* f = std::fopen((dir + "/views.json").c_str(), "w");
+    std::fprintf(f, "{\"views\": [\n  %s\n]}\n", views.c_str());
+    std::fclose(f);
+    std::printf("wrote problem (a) to %s: volstyle solve --scene %s/start.vdb --views %s/views.json --unknowns emission --iterations 40 "
+                "--tolerance 0 --visible-change 0 --regularization laplacian=0 -o OUT.vdb\n",
+                dir.c_str(), dir.c_str(), dir.c_str());
+}
+
 std::string seconds(double s) {
     char b[32];
     if (s < 0) return "not reached";
@@ -348,12 +383,14 @@ int main(int argc, char** argv) {
     int maxIterations = 40;
     std::string only;  // empty: tables a, ct and stroke (b and c take minutes: only when asked)
     std::string outDir = "bench-results";
+    std::string problemDir;  // --write-problem: problem (a) as files for volstyle solve
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--iterations") && i + 1 < argc) maxIterations = std::max(1, std::atoi(argv[++i]));
         else if (!std::strcmp(argv[i], "--only") && i + 1 < argc) only = argv[++i];
         else if (!std::strcmp(argv[i], "--out") && i + 1 < argc) outDir = argv[++i];
+        else if (!std::strcmp(argv[i], "--write-problem") && i + 1 < argc) problemDir = argv[++i];
         else {
-            std::fprintf(stderr, "usage: solver_race [--iterations N] [--only a|b|c|ct|stroke] [--out DIR]\n");
+            std::fprintf(stderr, "usage: solver_race [--iterations N] [--only a|b|c|ct|stroke] [--out DIR] [--write-problem DIR]\n");
             return 2;
         }
     }
@@ -364,6 +401,10 @@ int main(int argc, char** argv) {
     Renderer renderer(*device);
     std::printf("renderer: %s\n\n", device->capabilities().renderer.c_str());
     const std::vector<Problem> problems = {{"(a) 48³, 6 × 96², emission", 48, 6, 96, 96, 0.5}};
+    if (!problemDir.empty()) {
+        writeProblem(setUp(renderer, problems[0]), problemDir);
+        return 0;
+    }
     std::printf("| problem | iterations | set-up s (rows) | s to 10%% | s to 1%% | s to 0.1%% | ms/iter forward | back-proj | vectors |\n|---|---|---|---|---|---|---|---|---|\n");
     {  // compile every shader variant first: the first solve would otherwise pay for it
         const Setup warm = setUp(renderer, problems[0]);
