@@ -187,7 +187,9 @@ nlohmann::json reachToJson(const core::ReachReport& r) {
 }  // namespace
 
 nlohmann::json solveReportToJson(const core::SolveReport& r) {
-    return {{"iterations", r.iterations}, {"stop_reason", core::stopReasonName(r.stopReason)}, {"initial_objective", r.initialObjective},
+    nlohmann::json setup = nlohmann::json::array();
+    for (const auto& [phase, ms] : r.setupPhases) setup.push_back({{"phase", phase}, {"ms", ms}});
+    return {{"setup_ms", r.setupMs()}, {"setup", setup},{"iterations", r.iterations}, {"stop_reason", core::stopReasonName(r.stopReason)}, {"initial_objective", r.initialObjective},
             {"final_objective", r.finalObjective}, {"initial_rms", r.initialRms}, {"final_rms", r.finalRms},
             {"unknowns", r.unknownCount}, {"hull_unknowns", r.hullCount}, {"constraint_pixels", r.constraintPixels},
             {"ignored_pixels", r.ignoredPixels}, {"clamped_pixels", r.clampedPixels}, {"total_ms", r.totalMs},

@@ -1,9 +1,10 @@
 // A solve reports what it is doing from its first second (issue #37): its event stream names the
 // phases — preparing_views before anything else, iterating, analysing_reach once the first
 // iteration is out (not before it), writing before done — as progress events with a "phase".
-#include "api_fixture.h"
 #include <chrono>
+#include <set>
 
+#include "api_fixture.h"
 #include "core/image/image.h"
 
 namespace volstyle::test {
@@ -59,6 +60,14 @@ TEST_F(SolvePhases, AnEventStreamNamesEachPhaseInTurn) {
     EXPECT_GT(reach, firstIteration) << "the reach analysis runs after the first iteration";
     EXPECT_EQ(events.back().first, "done");
     EXPECT_TRUE(events.back().second["result"]["report"].contains("reach"));
+    // The set-up phase by phase (issue #40): what the wait before the first iteration was made of.
+    const json report = events.back().second["result"]["report"];
+    double sum = 0;
+    std::set<std::string> setup;
+    for (const auto& p : report["setup"]) sum += p["ms"].get<double>(), setup.insert(p["phase"].get<std::string>());
+    EXPECT_TRUE(setup.count("renders and observations") && setup.count("rows") && setup.count("first residual")) << report["setup"];
+    EXPECT_NEAR(sum, report["setup_ms"].get<double>(), 1e-6 * sum + 1e-9);
+    EXPECT_GT(sum, 0.0);
 }
 
 TEST_F(SolvePhases, ClippedTargetPixelsAreLeftOutAndTheReportSaysSo) {
