@@ -51,7 +51,7 @@ void Solver::State::applyLaplacian(const GpuVector& x, GpuVector& lap) {
 void Solver::State::move(const Vec3d& step, const GpuVector& x, const GpuVector& img, const GpuVector& lap) {
     ops.axpy(step, x, a);
     ops.axpy(-step, img, rImg);
-    ops.axpy(-step, lap, rLap);
+    if (rLap.size() > 0) ops.axpy(-step, lap, rLap);
     for (const auto& b : blocks)
         if (b.cId > 0) ops.axpy(-step * b.cId, x, rId, b.range);
 }
@@ -96,8 +96,8 @@ void Solver::State::computeResiduals() {
     ops.copy(obs, rImg);
     ops.axpy(Vec3d(-1.0), qImg, rImg);
     ops.multiply(sqrtW, rImg);
-    rLap.fill(0.0f);
-    rId.fill(0.0f);
+    if (rLap.size() > 0) rLap.fill(0.0f);
+    if (rId.size() > 0) rId.fill(0.0f);
     std::vector<float> av, r;
     for (const auto& b : blocks) {
         if (b.cLap > 0) ops.laplacian(-b.cLap, a, hull, udims, rLap, b.range, sparseCells.get());

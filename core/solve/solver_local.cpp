@@ -99,7 +99,9 @@ void Solver::State::restrictToStroke() {
         computeResiduals();
         perView.clear();
         for (size_t v = 0; v < views.size(); ++v) perView.push_back(ops.dot(rImg, rImg, W->viewRange(v)));
-        regularizers = ops.dot(rLap, rLap) + ops.dot(rId, rId);
+        regularizers = Vec3d(0.0);
+        if (rLap.size() > 0) regularizers += ops.dot(rLap, rLap);
+        if (rId.size() > 0) regularizers += ops.dot(rId, rId);
     };
     const double constantBefore = constant.x + constant.y + constant.z;
     std::vector<Vec3d> wholeViews, localViews;

@@ -117,15 +117,30 @@ void Solver::State::validateInputs() {
     views = std::move(chosen);
 }
 
+bool Solver::State::usesLaplacian() const {
+    for (Unknown u : opt.unknown == Unknown::EmissionAlbedo ? std::vector{Unknown::Emission, Unknown::Albedo} : std::vector{opt.unknown})
+        if (opt.regularizationFor(u).laplacian > 0) return true;
+    return false;
+}
+
+bool Solver::State::usesIdentity() const {
+    if (opt.prior.values && opt.prior.weight > 0) return true;
+    for (Unknown u : opt.unknown == Unknown::EmissionAlbedo ? std::vector{Unknown::Emission, Unknown::Albedo} : std::vector{opt.unknown})
+        if (opt.regularizationFor(u).l2 + opt.regularizationFor(u).towardOne > 0) return true;
+    return false;
+}
+
 void Solver::State::allocate() {
     const size_t P = W->pixelCount(), E = elements;
     for (auto [vector, name] : {std::pair{&obs, "obs"}, {&sqrtW, "sqrt-weights"}, {&rImg, "r-img"}, {&qImg, "q-img"},
                                 {&tmpImg, "tmp-img"}, {&dImg, "d-img"}, {&rPrev, "r-prev"}})
         *vector = GpuVector(P, name);
-    for (auto [vector, name] : {std::pair{&a, "a"}, {&aPrev, "a-prev"}, {&s, "s"}, {&p, "p"}, {&hull, "hull"},
-                                {&rLap, "r-lap"}, {&qLap, "q-lap"}, {&dLap, "d-lap"}, {&tmpU, "tmp-u"}, {&rId, "r-id"},
+    for (auto [vector, name] : {std::pair{&a, "a"}, {&aPrev, "a-prev"}, {&s, "s"}, {&p, "p"}, {&hull, "hull"}, {&tmpU, "tmp-u"},
                                 {&precond, "precond"}, {&z, "z"}, {&movable, "movable"}})
         *vector = GpuVector(E, name);
+    if (usesLaplacian())
+        for (auto [vector, name] : {std::pair{&rLap, "r-lap"}, {&qLap, "q-lap"}, {&dLap, "d-lap"}}) *vector = GpuVector(E, name);
+    if (usesIdentity()) rId = GpuVector(E, "r-id");
 }
 
 void Solver::State::buildObservations() {
@@ -233,7 +248,7 @@ void Solver::State::cacheOperator() {
 void Solver::State::useSupports(std::shared_ptr<const Support> pixels, std::shared_ptr<const Support> voxels) {
     for (GpuVector* v : {&obs, &sqrtW, &rImg, &qImg, &tmpImg, &dImg, &rPrev}) v->setSupport(pixels);
     for (GpuVector* v : {&a, &aPrev, &s, &p, &hull, &rLap, &qLap, &dLap, &tmpU, &rId, &precond, &z, &movable})
-        v->setSupport(voxels);
+        if (v->size() > 0) v->setSupport(voxels);  // (a regularizer's vectors exist only while it is on)
     W->setSupports(std::move(pixels), std::move(voxels));
 }
 

@@ -95,6 +95,10 @@ struct Solver::State final : BoundedLeastSquares {
     /// Throws LimitExceeded when a vector of the unknowns or pixels is over the GPU's storage-block size.
     void checkVectorsFit() const;
     void allocate();
+    /// Whether a block has a Laplacian term, or an identity one (l2, toward one, a prior): the
+    /// vectors of a term that is off are never allocated (issue #40: 4 of 20 full-size vectors).
+    bool usesLaplacian() const;
+    bool usesIdentity() const;
     void buildObservations();
     void buildHull();
     void markHullFromExtinction();
