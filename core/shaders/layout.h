@@ -55,6 +55,7 @@ VS_CONSTANT(float, kLightMarchOpaque, 12.0);
 #define VOLSTYLE_OP_STEP 7
 #define VOLSTYLE_OP_CLAMP 8
 #define VOLSTYLE_OP_MAXCHANGE 9
+#define VOLSTYLE_OP_DOT_SEGMENTS 10
 
 /* Binding points. */
 VS_CONSTANT(int, kBindingParams, 0);       /* UBO MarchParams */
@@ -79,6 +80,7 @@ VS_CONSTANT(int, kBindingVectorZ, 5);
 VS_CONSTANT(int, kBindingPartials, 6);     /* per-workgroup partial sums (dvec4) */
 VS_CONSTANT(int, kWorkgroup1D, 256);
 VS_CONSTANT(int, kBindingIndexList, 7);
+VS_CONSTANT(int, kBindingSegments, 10);    /* VOLSTYLE_OP_DOT_SEGMENTS: uvec2[workgroups], each one's (first position, count) */
 /* Refracted view rays (common/march.glsl, VOLSTYLE_CURVED; core/render/refracted_paths.h). */
 VS_CONSTANT(int, kBindingPathStart, 8);   /* SSBO uint[pixels + 1]: pixel p's vertices are [start[p], start[p+1]) */
 VS_CONSTANT(int, kBindingPathVertex, 9);  /* SSBO vec4[]: index-space position, arc length from the eye (world) */

@@ -14,6 +14,8 @@
 //   VOLSTYLE_OP_CLAMP     y = clamp(y, lower, upper)
 //   VOLSTYLE_OP_MAXCHANGE partial[workgroup] = max over i with z[i] > 0 of |x[i] − y[i]| / z[i]: how much a
 //                pixel changed between two weighted residuals (z = the weights' square roots)
+//   VOLSTYLE_OP_DOT_SEGMENTS partial[g] = Σ x[i]·y[i] over segment g (segments[g]: first position, count):
+//                one workgroup per segment, so the dots of every view's pixels are one dispatch
 // Elements [first, first + count) are processed (VOLSTYLE_INDEXED: list[first .. first + count),
 // the solver's hull voxels or constrained pixels; the others keep their values); element i belongs to block i / blockSize, whose
 // bounds are bounds.xy (block 0) or bounds.zw (block 1).
@@ -82,8 +84,14 @@ uint elementAt(uint k) { return uint(v.count.y) + k; }
 
 // VOLSTYLE_OP_* come from layout.h (core::VectorOps::Op takes the same values).
 
-#if VOLSTYLE_OP == VOLSTYLE_OP_DOT || VOLSTYLE_OP == VOLSTYLE_OP_STEP || VOLSTYLE_OP == VOLSTYLE_OP_MAXCHANGE
+#if VOLSTYLE_OP == VOLSTYLE_OP_DOT || VOLSTYLE_OP == VOLSTYLE_OP_STEP || VOLSTYLE_OP == VOLSTYLE_OP_MAXCHANGE || \
+    VOLSTYLE_OP == VOLSTYLE_OP_DOT_SEGMENTS
 shared dvec4 s_reduce[kWorkgroup1D];
+#endif
+#if VOLSTYLE_OP == VOLSTYLE_OP_DOT_SEGMENTS
+layout(std430, binding = kBindingSegments) readonly buffer b_Segments {
+    uvec2 segments[];
+};
 #endif
 
 vec2 boundsOf(uint i) { return (int(i) / v.count.z) == 0 ? v.bounds.xy : v.bounds.zw; }
@@ -117,6 +125,20 @@ void main() {
     dvec4 acc = dvec4(0.0);
     for (uint e = k; e < uint(v.count.x); e += gl_NumWorkGroups.x * kWorkgroup1D) {
         uint j = elementAt(e);
+        acc.rgb += dvec3(x[j].rgb) * dvec3(y[j].rgb);
+    }
+    s_reduce[local] = acc;
+    barrier();
+    for (uint stride = kWorkgroup1D / 2; stride > 0; stride >>= 1) {
+        if (local < stride) s_reduce[local] += s_reduce[local + stride];
+        barrier();
+    }
+    if (local == 0) partial[gl_WorkGroupID.x] = s_reduce[0];
+#elif VOLSTYLE_OP == VOLSTYLE_OP_DOT_SEGMENTS
+    uvec2 segment = segments[gl_WorkGroupID.x];
+    dvec4 acc = dvec4(0.0);
+    for (uint e = local; e < segment.y; e += kWorkgroup1D) {
+        uint j = elementAt(segment.x + e);
         acc.rgb += dvec3(x[j].rgb) * dvec3(y[j].rgb);
     }
     s_reduce[local] = acc;

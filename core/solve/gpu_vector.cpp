@@ -62,6 +62,7 @@ struct VectorOps::Dispatch {
     Range range;
     Int3 dims;
     const SparseCells* sparse = nullptr;
+    const std::vector<Range>* segments = nullptr;  ///< kDotSegments: one workgroup per range
 };
 
 VectorOps::VectorOps(GpuDevice& device) : m_device(device) {}
@@ -69,26 +70,46 @@ VectorOps::VectorOps(GpuDevice& device) : m_device(device) {}
 std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
     const size_t size = d.y ? d.y->size() : d.x->size();
     const Support* support = d.y && d.y->support() ? d.y->support() : d.x ? d.x->support() : nullptr;
-    size_t first = std::min(d.range.first, size);
-    size_t count = std::min(d.range.count, size - first);
-    if (support) {
-        const auto [lo, hi] = support->positions(first, count);
-        first = lo, count = hi - lo;
+    // A range as positions in the support's list (or the elements themselves).
+    auto positions = [&](const Range& r) {
+        size_t first = std::min(r.first, size), count = std::min(r.count, size - first);
+        if (support) {
+            const auto [lo, hi] = support->positions(first, count);
+            first = lo, count = hi - lo;
+        }
+        return std::pair{first, count};
+    };
+    auto [first, count] = positions(d.range);
+    if (d.segments) {
+        std::vector<uint32_t> segments;
+        for (const Range& r : *d.segments) {
+            const auto [f, c] = positions(r);
+            segments.push_back(uint32_t(f)), segments.push_back(uint32_t(c));
+        }
+        if (d.segments->size() > m_segmentCapacity) {
+            m_segments = gl::createBuffer(d.segments->size() * 8, nullptr, GL_DYNAMIC_STORAGE_BIT, "vector-segments");
+            m_segmentCapacity = d.segments->size();
+        }
+        gl::writeBuffer(m_segments, 0, segments.size() * 4, segments.data());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSegments, m_segments.id());
+        first = 0, count = d.segments->size();  // the workgroups; the elements come from the segments
     }
     layout::VectorParams p;
     p.alpha = {float(d.alpha.x), float(d.alpha.y), float(d.alpha.z), 0};
     p.bounds = {d.bounds.lower[0], d.bounds.upper[0], d.bounds.lower[1], d.bounds.upper[1]};
     p.count = {int(count), int(first), int(std::max<size_t>(d.bounds.blockSize, 1)), 0};
+    if (d.segments) p.count.x = 0;  // no element per invocation: each workgroup walks its segment
     if (op == kLaplacian) p.count.z = int(d.sparse ? d.sparse->cells : size_t(d.dims.volume()));
     p.dims = {d.dims.x, d.dims.y, d.dims.z, 0};
     if (d.sparse) p.sparseOffset = {d.sparse->offset.x, d.sparse->offset.y, d.sparse->offset.z, 1};
     m_device.setParams(p);
 
-    const bool reduces = op == kDot || op == kStep || op == kMaxChange;
+    const bool reduces = op == kDot || op == kStep || op == kMaxChange || op == kDotSegments;
     // Reductions loop over elements within fewer workgroups: fewer barriers and partials.
     constexpr size_t kReduceGroups = 64;
     size_t groups = std::max<size_t>(1, (count + layout::kWorkgroup1D - 1) / layout::kWorkgroup1D);
     if (reduces) groups = std::min(groups, kReduceGroups);
+    if (op == kDotSegments) groups = count;
     if (reduces && groups > m_partialCapacity) {
         m_partials = gl::createBuffer(groups * 32, nullptr, GL_DYNAMIC_STORAGE_BIT, "vector-partials");
         m_partialCapacity = groups;
@@ -133,6 +154,16 @@ void VectorOps::multiply(const GpuVector& x, GpuVector& y, Range range) {
     d.x = &x, d.y = &y;
     d.range = range;
     run(kMul, d);
+}
+
+std::vector<Vec3d> VectorOps::dots(const GpuVector& x, const GpuVector& y, const std::vector<Range>& ranges) {
+    if (ranges.empty()) return {};
+    Dispatch d;
+    d.x = &x, d.y = &y, d.segments = &ranges;
+    const std::vector<double> partials = run(kDotSegments, d);
+    std::vector<Vec3d> out;
+    for (size_t g = 0; g < ranges.size(); ++g) out.emplace_back(partials[4 * g], partials[4 * g + 1], partials[4 * g + 2]);
+    return out;
 }
 
 Vec3d VectorOps::dot(const GpuVector& x, const GpuVector& y, Range range) {

@@ -78,6 +78,9 @@ public:
     void xpby(const GpuVector& x, const Vec3d& beta, GpuVector& y);                     ///< y = x + βy
     void multiply(const GpuVector& x, GpuVector& y, Range range = {});                 ///< y ⊙= x
     Vec3d dot(const GpuVector& x, const GpuVector& y, Range range = {});
+    /// dot(x, y, range) for each range, in one dispatch and one read-back (each view's pixels:
+    /// the per-view RMS of every iteration).
+    std::vector<Vec3d> dots(const GpuVector& x, const GpuVector& y, const std::vector<Range>& ranges);
     /// out = scale · L x over the cells of `hull` (rgb > 0), per block of `dims` cells (or of a
     /// sparse volume's stored voxels, neighbours found through `sparse`).
     void laplacian(double scale, const GpuVector& x, const GpuVector& hull, Int3 dims, GpuVector& out, Range range = {},
@@ -103,6 +106,7 @@ private:
         kStep = VOLSTYLE_OP_STEP,
         kClamp = VOLSTYLE_OP_CLAMP,
         kMaxChange = VOLSTYLE_OP_MAXCHANGE,
+        kDotSegments = VOLSTYLE_OP_DOT_SEGMENTS,
     };
     struct Dispatch;
     std::vector<double> run(Op op, const Dispatch& d);
@@ -110,6 +114,8 @@ private:
     GpuDevice& m_device;
     gl::Buffer m_partials;
     size_t m_partialCapacity = 0;
+    gl::Buffer m_segments;  // kDotSegments: (first position, count) per range
+    size_t m_segmentCapacity = 0;
 };
 
 }  // namespace volstyle::core

@@ -128,9 +128,12 @@ Vec3d Solver::State::objective() {
 double Solver::State::totalObjective() { return sum(objective()); }
 
 std::vector<double> Solver::State::rmsPerView() {
+    std::vector<Range> ranges;
+    for (size_t v = 0; v < views.size(); ++v) ranges.push_back(W->viewRange(v));
+    const std::vector<Vec3d> dots = ops.dots(rImg, rImg, ranges);  // one dispatch for every view (issue #40)
     std::vector<double> out;
     for (size_t v = 0; v < views.size(); ++v) {
-        Vec3d r2 = ops.dot(rImg, rImg, W->viewRange(v));
+        Vec3d r2 = dots[v];
         if (!viewUntouched.empty()) r2 += viewUntouched[v];
         out.push_back(viewRms(r2, weightSum, viewWeightSum[v]));
     }
