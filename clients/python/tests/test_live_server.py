@@ -73,6 +73,21 @@ class LiveServer(unittest.TestCase):
         rms = lambda a: (sum((p - q) ** 2 for p, q in zip(a, painted)) / len(a)) ** 0.5  # noqa: E731
         self.assertLess(rms(vc.picture_of(after)), 0.5 * rms(base))
 
+    def test_the_live_stream_brings_jpeg_frames(self):
+        # Issue #40: …/stylizer/stream as (headers, JPEG) parts, the first one the scene now.
+        sid = self.session(resolution=16)
+        scene = self.vs.get_stylizer(sid)
+        scene["camera"]["width"], scene["camera"]["height"] = 48, 27
+        self.vs.set_stylizer(sid, scene)
+        stream = self.vs.stylizer_stream(sid)
+        headers, jpeg = next(stream)
+        stream.close()
+        self.assertEqual(headers["content-type"], "image/jpeg")
+        self.assertEqual((headers["x-width"], headers["x-height"]), ("48", "27"))
+        self.assertGreaterEqual(int(headers["x-revision"]), 1)
+        self.assertEqual(jpeg[:2], b"\xff\xd8")
+        self.assertEqual(len(jpeg), int(headers["content-length"]))
+
     def test_the_exr_reader_reads_what_the_server_writes(self):
         # Half-float ZIP (the default render.exr) against float: the same picture to half precision.
         sid = self.session(resolution=16)

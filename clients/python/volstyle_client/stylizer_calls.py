@@ -81,6 +81,14 @@ class StylizerCalls(ClientBase):
         """Live frames: a `frame` event per scene revision, until the session closes."""
         return self.http.events(f"/sessions/{_seg(sid)}/stylizer/events")
 
+    @route("get_sessions_sid_stylizer_stream", "GET", "/sessions/{sid}/stylizer/stream")
+    def stylizer_stream(self, sid: str) -> Iterator[tuple[dict[str, str], bytes]]:
+        """Live frames themselves (MJPEG): (headers, JPEG bytes) per scene revision, the headers
+        naming it (`x-revision`, `x-width`, `x-height`, `x-render-ms`, `x-encode-ms`), until the
+        session closes. A failed revision comes as an `application/json` part; stop iterating to
+        close the stream."""
+        return self.http.parts(f"/sessions/{_seg(sid)}/stylizer/stream")
+
     @route("get_sessions_sid_stylizer_frames_rev_jpeg", "GET", "/sessions/{sid}/stylizer/frames/{rev}.jpeg")
     def stylizer_live_frame(self, sid: str, rev: int, path: Any = None) -> bytes:
         return self._bytes("GET", f"/sessions/{_seg(sid)}/stylizer/frames/{int(rev)}.jpeg", path_out=path)

@@ -105,6 +105,43 @@ class Transport:
             except (OSError, http.client.HTTPException) as e:  # a read timeout or reset mid-stream
                 raise ConnectionFailed(f"GET {req.full_url}: the stream broke off ({e})") from None
 
+    def parts(self, path: str, timeout: float | None = None) -> Iterator[tuple[dict[str, str], bytes]]:
+        """Yields (headers, body) of each part of a multipart/x-mixed-replace stream (header names
+        lower-case) until the server ends it."""
+        req = urllib.request.Request(self.url(path), headers=self.headers())
+        try:
+            res = urllib.request.urlopen(req, timeout=timeout or self.timeout)
+        except urllib.error.HTTPError as e:
+            raise _api_error(e, "GET", req.full_url) from None
+        except (urllib.error.URLError, ConnectionError, socket.timeout) as e:
+            raise ConnectionFailed(f"GET {req.full_url}: {getattr(e, 'reason', e)}") from None
+        with res:
+            try:
+                yield from _parse_parts(res)
+            except (OSError, http.client.HTTPException) as e:
+                raise ConnectionFailed(f"GET {req.full_url}: the stream broke off ({e})") from None
+
+
+def _parse_parts(res) -> Iterator[tuple[dict[str, str], bytes]]:
+    """(headers, body) of each part of a multipart/x-mixed-replace stream, until its final boundary."""
+    while True:
+        line = res.readline()
+        if not line:
+            return
+        line = line.strip()
+        if not line.startswith(b"--"):
+            continue  # the CRLF after a part's body
+        if line.endswith(b"--"):
+            return  # the final boundary
+        headers: dict[str, str] = {}
+        while True:
+            h = res.readline().decode("latin-1").strip()
+            if not h:
+                break
+            name, _, value = h.partition(":")
+            headers[name.strip().lower()] = value.strip()
+        yield headers, res.read(int(headers.get("content-length", "0")))
+
 
 def _parse_events(res) -> Iterator[tuple[str, Any]]:
     """(event, data) of a text/event-stream: comment lines (keep-alives) are skipped."""
