@@ -99,7 +99,7 @@ def run(port, sid, scene, size, frames):
     scene["time"] = 0.0
     stream = Stream(port, f"/sessions/{sid}/stylizer/stream")
     rev = put_scene(port, sid, scene)
-    first = stream.wait_revision(rev)
+    stream.wait_revision(rev)  # the scene now, before the timed loop
     # Closed loop: one change in flight.
     latencies, splits = [], []
     t_start = time.monotonic()
@@ -135,7 +135,6 @@ def run(port, sid, scene, size, frames):
           f"JPEG {percentile(encode, 50):.1f} ms, {kib:.0f} KiB a frame); "
           f"open loop (60 changes/s): {open_fps:.1f} fps shown, {dropped} of {len(sent_revisions)} revisions dropped as stale")
     sys.stdout.flush()
-    return first
 
 
 def main():

@@ -66,6 +66,7 @@ layout(std430, binding = kBindingRowIndex) writeonly buffer b_RowIndex {
 layout(std430, binding = kBindingRowWeight) writeonly buffer b_RowWeight {
     float rowWeight[];
 };
+#if VOLSTYLE_ROW_COLUMNS
 layout(std430, binding = kBindingColCursor) buffer b_ColCursor {
     uint colCursor[];
 };
@@ -75,6 +76,7 @@ layout(std430, binding = kBindingColIndex) writeonly buffer b_ColIndex {
 layout(std430, binding = kBindingColWeight) writeonly buffer b_ColWeight {
     float colWeight[];
 };
+#endif
 #endif
 uint g_pixel = 0u;    // this invocation's pixel within its view
 uint g_entries = 0u;  // entries of its row so far

@@ -188,7 +188,8 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
     // writes and atomics made the fill pass 2.3× slower than the rows alone (1,450 against 630 ms
     // for 10 M entries, bench/solver_race (b)), and a counting sort on the host costs less.
     const bool hostColumns = m_columnsOnHost;
-    const gl::Buffer cursor = zeroedBuffer(hostColumns ? 4 : 4 * r->columns, "columns-cursor");
+    gl::Buffer cursor;  // where each column's next entry goes (the fill pass's atomics)
+    if (!hostColumns) cursor = zeroedBuffer(4 * r->columns, "columns-cursor");
     gl::ShaderBuilder fill("project.comp");
     fill.define("VOLSTYLE_ROWS", VOLSTYLE_ROWS_FILL).define("VOLSTYLE_ROW_CHANNELS", channels).define("VOLSTYLE_ROW_MASK", masked);
     fill.define("VOLSTYLE_ROW_COLUMNS", hostColumns ? 0 : 1);
@@ -196,9 +197,11 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
     bindStarts();
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowIndex, r->rowIndex.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowWeight, r->rowWeight.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColCursor, cursor.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColIndex, r->colIndex.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColWeight, r->colWeight.id());
+    if (!hostColumns) {
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColCursor, cursor.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColIndex, r->colIndex.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColWeight, r->colWeight.id());
+    }
     dispatchView(v);
     gl::barrierAfterComputeWrites();
     if (hostColumns) transposeOnHost(*r, rowStart, colStart);

@@ -72,9 +72,8 @@ DerivedGrid blockMeanExtinction(GpuDevice& device, const GpuVolume& gpu, int blo
 
 /// The mean of the volume's RGB extinction per voxel (stylize_extinction_mean.comp), once per
 /// extinction version; `built` when it was made. A sparse volume's is its mean over blocks of
-/// stylizerMediumBlock() voxels a side, with bricks of its own.
-std::shared_ptr<const DerivedGrid> meanExtinction(GpuDevice& device, const StylizerVolume& v, const GpuVolume& gpu, bool& built) {
-    const int block = gpu.isSparse() ? stylizerMediumBlock(gpu.dims(), v.maxSparseMediumVoxels) : 1;
+/// `block` voxels a side (stylizerMediumBlock()), with bricks of its own.
+std::shared_ptr<const DerivedGrid> meanExtinction(GpuDevice& device, const GpuVolume& gpu, int block, bool& built) {
     const std::string key = "stylizer-extinction-mean/" + std::to_string(gpu.extinctionVersion()) + "/" + std::to_string(block);
     if (auto cached = device.cache().find<DerivedGrid>(key)) return cached;
     built = true;
@@ -139,11 +138,12 @@ double bindStylizerMedium(GpuDevice& device, const std::optional<StylizerVolume>
     RenderStats stats;
     updateOccupancy(device, *gpu, stats);
     bool built = stats.occupancyMs > 0;
-    const std::shared_ptr<const DerivedGrid> sigma = meanExtinction(device, v, *gpu, built);
+    const int block = gpu->isSparse() ? stylizerMediumBlock(gpu->dims(), v.maxSparseMediumVoxels) : 1;
+    const std::shared_ptr<const DerivedGrid> sigma = meanExtinction(device, *gpu, block, built);
     glBindTextureUnit(layout::kUnitStylizeDensity, sigma->texture.id());
     glBindTextureUnit(layout::kUnitStylizeOccupancy, sigma->occupancy ? sigma->occupancy.id() : gpu->occupancyTexture());
     std::shared_ptr<const DerivedGrid> depth;
-    if (v.lightTransmittance) depth = lightOpticalDepth(device, v, *gpu, ceilDiv(gpu->dims(), gpu->isSparse() ? stylizerMediumBlock(gpu->dims(), v.maxSparseMediumVoxels) : 1), p, built);
+    if (v.lightTransmittance) depth = lightOpticalDepth(device, v, *gpu, ceilDiv(gpu->dims(), block), p, built);
     glBindTextureUnit(layout::kUnitStylizeTransmittance, depth ? depth->texture.id() : gpu->extinctionTexture());  // off: unread
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory for the stylizer's volume");
     if (!built) return 0;

@@ -46,6 +46,13 @@ Volume glowingCloud(int n) {
     return v;
 }
 
+/// The default lighting with its sun high and to the side.
+Lighting sunFromAbove() {
+    Lighting sun;
+    sun.lights[0].direction = {0.3, 0.8, -0.5};
+    return sun;
+}
+
 }  // namespace
 
 TEST(SparseRender, BricksRenderTheDenseImageUnderSunSkyAndGlow) {
@@ -53,8 +60,7 @@ TEST(SparseRender, BricksRenderTheDenseImageUnderSunSkyAndGlow) {
     const Volume dense = glowingCloud(40);
     Camera cam = framingCamera(dense.worldBounds());
     cam.width = cam.height = 48;
-    Lighting sun;
-    sun.lights[0].direction = {0.3, 0.8, -0.5};
+    Lighting sun = sunFromAbove();
     Lighting sky = sun;
     sky.environment.lobes = 6;  // environment lobes too (light volumes through the bricks)
     sky.environment.radiance.assign(6, Vec3d(0.2, 0.3, 0.5));
@@ -113,8 +119,7 @@ TEST(SparseRender, TileBricksSharingOneSlotRenderAsTheirVoxels) {
     EXPECT_EQ(sparse.toDense().extinction(), dense.extinction());
     Camera cam = framingCamera(dense.worldBounds());
     cam.width = cam.height = 40;
-    Lighting sun;
-    sun.lights[0].direction = {0.3, 0.8, -0.5};
+    const Lighting sun = sunFromAbove();
     GpuVolume a(dense), b(sparse);
     Renderer renderer(test::device());
     const Image ia = renderer.render(a, cam, sun), ib = renderer.render(b, cam, sun);
@@ -129,8 +134,7 @@ TEST(SparseRender, TheTranslucentPreviewReadsBricksAsTheDenseTextures) {
     const Volume sparse = dense.toSparse({5, 0, 3});
     Camera cam = framingCamera(dense.worldBounds());
     cam.width = cam.height = 48;
-    Lighting sun;
-    sun.lights[0].direction = {0.3, 0.8, -0.5};
+    const Lighting sun = sunFromAbove();
     GpuVolume a(dense), b(sparse);
     TranslucentRenderer preview(test::device());
     const Image ia = preview.render(a, cam, sun, {}), ib = preview.render(b, cam, sun, {});

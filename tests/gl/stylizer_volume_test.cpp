@@ -58,6 +58,16 @@ double blob(int i, int j, int k, int n) {
     return std::max(0.0, 1 - 30 * (x * x + y * y + z * z));
 }
 
+/// The small forest with a volume medium in a box among the trees (σt × 1.5).
+StylizerScene forestWithBlobBox() {
+    StylizerScene scene = test::smallForest();
+    StylizerVolume v;
+    v.lo = {-7, 0, -8}, v.hi = {5, 7, 2};
+    v.extinctionScale = 1.5;
+    scene.volume = v;
+    return scene;
+}
+
 }  // namespace
 
 TEST(StylizerVolume, AHomogeneousVdbFillingTheSceneIsTheHomogeneousMedium) {
@@ -166,11 +176,7 @@ TEST(StylizerVolume, SkippingEmptyBricksChangesNothing) {
     VOLSTYLE_REQUIRE_GL();
     // A blob in a 40³ grid (5³ bricks, most empty) against the same blob over a floor of 1e-30
     // (no brick empty: every midpoint sampled): the frames and V̄ agree.
-    StylizerScene scene = test::smallForest();
-    StylizerVolume v;
-    v.lo = {-7, 0, -8}, v.hi = {5, 7, 2};
-    v.extinctionScale = 1.5;
-    scene.volume = v;
+    StylizerScene scene = forestWithBlobBox();
     Stylizer stylizer(test::device());
     GpuVolume blobOnly(grid(40, blob)), blobOverAFloor(grid(40, [](int i, int j, int k, int n) { return 1e-30 + blob(i, j, k, n); }));
     const StylizedFrame sparse = stylizer.render(scene, {}, &blobOnly);
@@ -193,11 +199,7 @@ TEST(StylizerVolume, ASparseVolumeIsItsMeanOverBlocksWhoseSideTheBudgetSets) {
     EXPECT_EQ(stylizerMediumBlock({32, 32, 32}, 32 * 32 * 32), 1);
     EXPECT_EQ(stylizerMediumBlock({32, 32, 32}, 16 * 16 * 16), 2);
     EXPECT_EQ(stylizerMediumBlock({33, 32, 32}, 16 * 16 * 16), 3);  // 17 × 16 × 16 is over: blocks of 3
-    StylizerScene scene = test::smallForest();
-    StylizerVolume v;
-    v.lo = {-7, 0, -8}, v.hi = {5, 7, 2};
-    v.extinctionScale = 1.5;
-    scene.volume = v;
+    StylizerScene scene = forestWithBlobBox();
     Stylizer stylizer(test::device());
     const Volume dense = grid(32, blob);
     const Volume sparse = dense.toSparse({3, 5, 1});  // bricks not aligned with the blocks

@@ -92,23 +92,17 @@ class Transport:
     def events(self, path: str, query: Mapping[str, Any] | None = None, timeout: float | None = None) -> Iterator[tuple[str, Any]]:
         """Yields (event, data) from a text/event-stream until the server closes it. `data` is
         parsed as JSON when it is JSON."""
-        req = urllib.request.Request(self.url(path, query), headers={**self.headers(), "Accept": "text/event-stream"})
-        try:
-            res = urllib.request.urlopen(req, timeout=timeout or self.timeout)
-        except urllib.error.HTTPError as e:
-            raise _api_error(e, "GET", req.full_url) from None
-        except (urllib.error.URLError, ConnectionError, socket.timeout) as e:
-            raise ConnectionFailed(f"GET {req.full_url}: {getattr(e, 'reason', e)}") from None
-        with res:
-            try:
-                yield from _parse_events(res)
-            except (OSError, http.client.HTTPException) as e:  # a read timeout or reset mid-stream
-                raise ConnectionFailed(f"GET {req.full_url}: the stream broke off ({e})") from None
+        yield from self._stream(self.url(path, query), {"Accept": "text/event-stream"}, timeout, _parse_events)
 
     def parts(self, path: str, timeout: float | None = None) -> Iterator[tuple[dict[str, str], bytes]]:
         """Yields (headers, body) of each part of a multipart/x-mixed-replace stream (header names
         lower-case) until the server ends it."""
-        req = urllib.request.Request(self.url(path), headers=self.headers())
+        yield from self._stream(self.url(path), {}, timeout, _parse_parts)
+
+    def _stream(self, url: str, headers: Mapping[str, str], timeout: float | None, parse) -> Iterator[Any]:
+        """GET `url` and yield what `parse` reads from the open response until the server ends it;
+        errors as ApiError, a broken connection as ConnectionFailed."""
+        req = urllib.request.Request(url, headers={**self.headers(), **headers})
         try:
             res = urllib.request.urlopen(req, timeout=timeout or self.timeout)
         except urllib.error.HTTPError as e:
@@ -117,8 +111,8 @@ class Transport:
             raise ConnectionFailed(f"GET {req.full_url}: {getattr(e, 'reason', e)}") from None
         with res:
             try:
-                yield from _parse_parts(res)
-            except (OSError, http.client.HTTPException) as e:
+                yield from parse(res)
+            except (OSError, http.client.HTTPException) as e:  # a read timeout or reset mid-stream
                 raise ConnectionFailed(f"GET {req.full_url}: the stream broke off ({e})") from None
 
 
