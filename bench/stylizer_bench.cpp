@@ -8,11 +8,15 @@
 //   Time against error — the naive V̄ at 64–4096 steps against the accelerated one (exact
 //             against the map) on the 2048² map.
 //   Table 2 — the closing of a 2048² map per kernel radius (box and disc).
-// Usage: stylizer_bench [--quick] [--accelerated-only] [--reps N] [--table1-only SM]. Prints tables,
+// --live: the live stream's read-back alone (issue #40) at 960×540 and 1920×1080: the frame as
+// floats then converted and encoded on the CPU, against display bytes packed on the GPU into a
+// read-back slot (core::gl::ReadbackRing) and encoded from there.
+// Usage: stylizer_bench [--quick] [--accelerated-only] [--reps N] [--table1-only SM] [--live]. Prints tables,
 // then one JSON line per row (--accelerated-only: Table 1's accelerated columns alone, for
 // profiling; --table1-only: Table 1 for one map size and nothing else, for repeated runs).
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -22,7 +26,9 @@
 
 #include "bench_util.h"
 #include "core/base/stopwatch.h"
+#include "core/gl/readback_ring.h"
 #include "core/gpu/gpu_device.h"
+#include "core/image/jpeg_encoder.h"
 #include "core/stylize/morphology.h"
 #include "core/stylize/stylizer.h"
 
@@ -116,22 +122,59 @@ std::shared_ptr<const Image> warmTransferFunction() {
 
 }  // namespace
 
+/// The live stream's read-back (see the file's comment): median of 5 frames each way.
+void liveReadback(GpuDevice& device, Stylizer& stylizer) {
+    StylizerScene scene = builtinForest();
+    StylizeSettings lean;
+    readBackOnly(lean, StylizerOutput::Frame);
+    gl::ReadbackRing ring(2);
+    std::cout << "Live read-back: forest, frame only; ms, median of 5 (read-back is the frame's, encode is the JPEG q90's)\n"
+              << "  size        floats: read-back  convert+encode  | display bytes: pack+fence  encode\n";
+    for (auto [w, h] : {std::pair{960, 540}, std::pair{1920, 1080}}) {
+        scene.camera.width = w, scene.camera.height = h;
+        std::vector<double> fr, fe, dr, de;
+        for (int i = 0; i < 6; ++i) {
+            const StylizedFrame a = stylizer.render(scene, lean);
+            auto t = Clock::now();
+            (void)encodeJpeg(a.frame, 90);
+            const double aEncode = msSince(t);
+            const DisplayReadback display{&ring, 0};
+            const StylizedFrame b = stylizer.render(scene, lean, nullptr, &display);
+            t = Clock::now();
+            (void)encodeJpegRgbx(b.displayBytes, w, h, 90);
+            const double bEncode = msSince(t);
+            ring.release(b.displaySlot);
+            if (i == 0) continue;  // compiles the variants
+            fr.push_back(a.readbackMs), fe.push_back(aEncode), dr.push_back(b.readbackMs), de.push_back(bEncode);
+        }
+        auto median = [](std::vector<double> v) { std::sort(v.begin(), v.end()); return v[v.size() / 2]; };
+        std::printf("  %4dx%-4d   %17.1f  %14.1f  | %25.1f  %6.1f\n", w, h, median(fr), median(fe), median(dr), median(de));
+    }
+    (void)device;
+}
+
 int main(int argc, char** argv) {
-    bool quick = false, acceleratedOnly = false;
+    bool quick = false, acceleratedOnly = false, live = false;
     int reps = 2, onlySize = 0;
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--quick")) quick = true;
         else if (!std::strcmp(argv[i], "--accelerated-only")) acceleratedOnly = true;
         else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::max(1, std::atoi(argv[++i]));
         else if (!std::strcmp(argv[i], "--table1-only") && i + 1 < argc) onlySize = std::clamp(std::atoi(argv[++i]), 512, 4096);
+        else if (!std::strcmp(argv[i], "--live")) live = true;
         else {
-            std::cerr << "usage: stylizer_bench [--quick] [--accelerated-only] [--reps N] [--table1-only SM]\n";
+            std::cerr << "usage: stylizer_bench [--quick] [--accelerated-only] [--reps N] [--table1-only SM] [--live]\n";
             return 2;
         }
     }
     spdlog::set_level(spdlog::level::warn);
     auto device = GpuDevice::create();
     Stylizer stylizer(*device);
+    if (live) {
+        std::cout << "device: " << device->capabilities().renderer << "\n";
+        liveReadback(*device, stylizer);
+        return 0;
+    }
     StylizerScene scene = builtinForest();
     scene.camera.width = quick ? 960 : 1920;
     scene.camera.height = quick ? 540 : 1080;

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Packs what a check on a GPU machine needs into .device-bundle/ (git-ignored, about 9 MB): the GL
 # tests that need no file libraries (gl_tests_device) and the GL benchmarks, the three small
-# libraries they link beside libc and libstdc++ (spdlog, fmt, epoxy), glvnd's EGL/GL loaders as
+# libraries they link beside libc and libstdc++ (spdlog, fmt, epoxy; turbojpeg for live frames), glvnd's EGL/GL loaders as
 # Debian packages (for a machine that has the NVIDIA driver but no libEGL.so.1), and
 # device_check.sh, which runs it all there. Build first (scripts/build.sh).
 set -euo pipefail
@@ -20,8 +20,8 @@ for b in "${binaries[@]}"; do
   ldd "$out/bin/$b" | awk '/=> \//{print $1, $3}' | while read -r name path; do
     case "$name" in
       libc.so*|libm.so*|libdl.so*|libpthread.so*|librt.so*|libgcc_s.so*|libstdc++.so*|ld-linux*) ;;
-      libspdlog.so*|libfmt.so*|libepoxy.so*) cp -Lu "$path" "$out/lib/$name" ;;
-      *) echo "device_bundle: $b needs $name, which does not travel; only spdlog, fmt and epoxy may" >&2; exit 1 ;;
+      libspdlog.so*|libfmt.so*|libepoxy.so*|libturbojpeg.so*) cp -Lu "$path" "$out/lib/$name" ;;
+      *) echo "device_bundle: $b needs $name, which does not travel; only spdlog, fmt, epoxy and turbojpeg may" >&2; exit 1 ;;
     esac
   done
 done

@@ -34,5 +34,8 @@ if grep -qE "^\[ renderer \].*(llvmpipe|softpipe)" "$out/gl_tests.log"; then ech
 [ "${1:-}" = "--tests-only" ] && exit $status
 timeout 180 "$bundle/bin/stylizer_bench" --reps 5 > "$out/stylizer_bench.txt" 2>&1 || echo "stylizer_bench failed ($?)"
 grep -v '^{' "$out/stylizer_bench.txt" | head -12
+# The live stream's read-back (issue #40): floats and a CPU conversion against GPU-packed bytes.
+timeout 60 "$bundle/bin/stylizer_bench" --live > "$out/stylizer_live.txt" 2>&1 || echo "stylizer_bench --live failed ($?)"
+cat "$out/stylizer_live.txt"
 timeout 120 "$bundle/bin/render_bench" > "$out/render_bench.txt" 2>&1 || echo "render_bench failed ($?)"
 exit $status

@@ -40,16 +40,18 @@ std::vector<uint8_t> displayBytes(const Image& image, double exposure) {
     return rgb;
 }
 
-std::string encodeJpeg(const Image& image, int quality, double exposure) {
+namespace {
+
+/// Baseline, 4:4:4, the fast DCT; `format` a TJPF_* pixel layout of `pixels`.
+std::string compress(const uint8_t* pixels, int width, int height, int format, int quality) {
     if (quality < 1 || quality > 100) throw InvalidArgument("JPEG quality must be 1–100, got " + std::to_string(quality));
-    const std::vector<uint8_t> rgb = displayBytes(image, exposure);
+    if (width <= 0 || height <= 0) throw InvalidArgument("the image is empty");
     // One compressor per thread: tjInitCompress allocates, and frames come one after another.
     thread_local std::unique_ptr<void, int (*)(tjhandle)> compressor(tjInitCompress(), tjDestroy);
     if (!compressor) throw IoError("libjpeg-turbo: no compressor");
     unsigned char* out = nullptr;
     unsigned long size = 0;
-    const int subsampling = TJSAMP_444;
-    if (tjCompress2(compressor.get(), rgb.data(), image.width, 0, image.height, TJPF_RGB, &out, &size, subsampling, quality, TJFLAG_FASTDCT) != 0) {
+    if (tjCompress2(compressor.get(), pixels, width, 0, height, format, &out, &size, TJSAMP_444, quality, TJFLAG_FASTDCT) != 0) {
         const std::string why = tjGetErrorStr2(compressor.get());
         tjFree(out);
         throw IoError("libjpeg-turbo could not encode the frame: " + why);
@@ -57,6 +59,18 @@ std::string encodeJpeg(const Image& image, int quality, double exposure) {
     std::string bytes(reinterpret_cast<const char*>(out), size);
     tjFree(out);
     return bytes;
+}
+
+}  // namespace
+
+std::string encodeJpeg(const Image& image, int quality, double exposure) {
+    if (quality < 1 || quality > 100) throw InvalidArgument("JPEG quality must be 1–100, got " + std::to_string(quality));
+    const std::vector<uint8_t> rgb = displayBytes(image, exposure);
+    return compress(rgb.data(), image.width, image.height, TJPF_RGB, quality);
+}
+
+std::string encodeJpegRgbx(const uint8_t* rgbx, int width, int height, int quality) {
+    return compress(rgbx, width, height, TJPF_RGBX, quality);
 }
 
 }  // namespace volstyle::core

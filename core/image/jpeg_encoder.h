@@ -21,4 +21,8 @@ std::vector<uint8_t> displayBytes(const Image& image, double exposure = 0);
 /// Throws InvalidArgument for an empty image or a quality out of range, IoError if the encoder fails.
 std::string encodeJpeg(const Image& image, int quality = 85, double exposure = 0);
 
+/// The same from display bytes already made (a live frame's, display_pack.comp): R, G, B and a
+/// byte that is ignored per pixel, rows top to bottom, `width` × `height`.
+std::string encodeJpegRgbx(const uint8_t* rgbx, int width, int height, int quality = 85);
+
 }  // namespace volstyle::core

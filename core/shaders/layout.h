@@ -147,6 +147,15 @@ VS_CONSTANT(int, kUnitStylizeTransmittance, 1); /* its optical depth τ_l toward
 VS_CONSTANT(int, kUnitStylizeOccupancy, 2);     /* its bricks: the largest σt a trilinear lookup inside each can return (r32f 3D, 0: skip it) */
 VS_CONSTANT(int, kBindingScatterDepth, 2);  /* SSBO float[n*n]: the manipulated shadow map V̄ reads (row 0 at the bottom) */       /* AOV planes of stylize.comp: (scattering rgb, V̄), (distance, hit, 0, 0) */
 
+/* A frame's display bytes for a live stream (display_pack.comp, issue #40): linear RGBA floats in
+ * b_Image (kBindingImageOut) become sRGB bytes R, G, B, 255 per pixel in b_Display, as a PNG of
+ * the frame shows them (exposure, clamp to [0, 1], sRGB, rounded). */
+struct DisplayPackParams {
+    VS_IVEC4 count;  /* x: pixels */
+    VS_VEC4 scale;   /* x: 2^exposure */
+};
+VS_CONSTANT(int, kBindingDisplayOut, 1);  /* SSBO uint[pixels]: packed RGBX bytes (a read-back slot) */
+
 struct StylizeParams {
     VS_MAT4 lightFromWorld;   /* world -> the light's clip space, [-1,1]³ over the occluders (orthographic) */
     VS_MAT4 clipFromWorld;    /* raster passes: world -> clip of the pass's camera (the light's or the view's) */

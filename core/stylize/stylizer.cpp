@@ -92,7 +92,8 @@ double Stylizer::measureLookupsPerSecond() {
     return estimatedLookups(probe, settings) / std::max(best, 1e-6);
 }
 
-StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings& settings, GpuVolume* medium) {
+StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings& settings, GpuVolume* medium,
+                               const DisplayReadback* display) {
     scene.validate();
     // The TFs to blend, weighted: the two keys' around the scene's time on a path, else its own.
     std::vector<std::pair<TransferFunction, double>> tfs;
@@ -118,7 +119,7 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     s.transferFunction.reset();
     if (!anchored) {
         if (!tfs.empty()) s.transferFunction = blended();
-        StylizedFrame f = renderPass(s, settings, medium);
+        StylizedFrame f = renderPass(s, settings, medium, display);
         f.transferFunction = s.transferFunction;
         return f;
     }
@@ -143,7 +144,8 @@ StylizedFrame Stylizer::render(const StylizerScene& scene, const StylizeSettings
     return f;
 }
 
-StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSettings& settings, GpuVolume* medium) {
+StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSettings& settings, GpuVolume* medium,
+                                   const DisplayReadback* display) {
     VOLSTYLE_CHECK(m_device.isOwnedByThisThread(), ==, true);  // the scene: validated by render()
     settings.validate();
     if (settings.pick && !(settings.pick->x >= 0 && settings.pick->y >= 0 && settings.pick->x < scene.camera.width &&
@@ -179,7 +181,8 @@ StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSett
     out.shadeMs = msSince(t);
     // 6. What was asked for, back to the CPU.
     t = Clock::now();
-    stylize::readBack(f, out);
+    if (display && display->ring) stylize::readBackDisplay(f, *display, out);
+    else stylize::readBack(f, out);
     out.readbackMs = msSince(t);
     out.totalMs = msSince(t0);
     if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory while stylizing");

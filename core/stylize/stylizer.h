@@ -18,6 +18,16 @@
 namespace volstyle::core {
 
 class GpuVolume;
+namespace gl {
+class ReadbackRing;
+}
+
+/// Where a live frame goes instead of `StylizedFrame::frame` (issue #40): its display bytes
+/// (display_pack.comp) in a slot of `ring`, which the caller reads on its own thread and releases.
+struct DisplayReadback {
+    gl::ReadbackRing* ring = nullptr;
+    double exposure = 0;
+};
 
 /// A frame and its AOVs (SPEC §7 "Outputs"), all linear.
 struct StylizedFrame {
@@ -27,6 +37,12 @@ struct StylizedFrame {
     Image linearDepth;        ///< s: distance to the first surface (or the camera's far), rgb
     Image shadowMap;          ///< the light's depth in [0, 1] (1: nothing), side shadow_map_size
     Image modifiedShadowMap;  ///< the same after the occluders' manipulations (what V̄ reads)
+    /// With a DisplayReadback (and no anchored TF constraints, which are applied on the CPU): the
+    /// frame as display bytes — R, G, B, 255 per pixel, rows top to bottom, as a PNG of `frame`
+    /// shows them — in slot `displaySlot` of the ring, which the caller releases; `frame` is then
+    /// empty. Null otherwise: `frame` holds the picture.
+    const uint8_t* displayBytes = nullptr;
+    int displaySlot = -1;
     int pickedOccluder = -1;  ///< StylizeSettings::pick: the index of the occluder seen there, −1: none
     /// The transfer function the frame used, its anchored constraints moved to where they are
     /// now and compiled (empty without a TF).
@@ -67,7 +83,9 @@ public:
     /// is rendered without the TF, the anchors are found in its AOVs and the TF applied on the CPU.
     /// `medium`: the volume whose extinction is the scene's heterogeneous medium (`scene.volume`;
     /// the server passes the session's own GPU copy, never a second one); required with it.
-    StylizedFrame render(const StylizerScene& scene, const StylizeSettings& settings = {}, GpuVolume* medium = nullptr);
+    /// `display`: the frame comes back as display bytes in a read-back slot (a live stream).
+    StylizedFrame render(const StylizerScene& scene, const StylizeSettings& settings = {}, GpuVolume* medium = nullptr,
+                         const DisplayReadback* display = nullptr);
 
     /// About how many shadow-map lookups (or texel operations) a frame costs: the per-pixel pass
     /// and each manipulated occluder's edits (a dilation costs its kernel per texel). For a
@@ -83,7 +101,8 @@ public:
     double measureLookupsPerSecond();
 
 private:
-    StylizedFrame renderPass(const StylizerScene& scene, const StylizeSettings& settings, GpuVolume* medium);
+    StylizedFrame renderPass(const StylizerScene& scene, const StylizeSettings& settings, GpuVolume* medium,
+                             const DisplayReadback* display = nullptr);
     GpuDevice& m_device;
 };
 

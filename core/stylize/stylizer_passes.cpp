@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "core/base/errors.h"
+#include "core/gl/readback_ring.h"
 #include "core/render/gl_convert.h"
 #include "core/stylize/morphology_gpu.h"
 
@@ -316,6 +317,34 @@ void shade(Frame& f, const std::function<void(layout::StylizeParams&)>& bindMedi
     gl::barrierAfterComputeWrites();
     f.device.finish();
     out.shadeGpuMs = timer.elapsedMs();
+}
+
+void readBackDisplay(Frame& f, const DisplayReadback& display, StylizedFrame& out) {
+    const StylizerTargets& t = f.targets;
+    const size_t pixels = size_t(f.scene.camera.width) * size_t(f.scene.camera.height);
+    const int slot = display.ring->acquire(pixels * sizeof(uint32_t));
+    try {
+        layout::DisplayPackParams p;
+        p.count.x = int32_t(pixels);
+        p.scale.x = float(std::exp2(display.exposure));
+        f.device.setParams(p);
+        glUseProgram(f.device.program(gl::ShaderBuilder("display_pack.comp")).id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingImageOut, t.pixels.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingDisplayOut, display.ring->buffer(slot).id());
+        glDispatchCompute(GLuint((pixels + layout::kWorkgroup1D - 1) / layout::kWorkgroup1D), 1, 1);
+        out.displayBytes = display.ring->complete(slot);
+        out.displaySlot = slot;
+    } catch (...) {
+        display.ring->release(slot);
+        throw;
+    }
+    StylizeSettings rest = f.settings;  // the AOVs and maps as asked; the frame is in the slot
+    rest.pick.reset();
+    if (rest.readAovs || rest.readShadowMaps) {
+        Frame others{f.device, f.scene, rest, f.map, f.targets, {}, f.p};
+        readBack(others, out);
+        out.frame = Image();
+    }
 }
 
 void readBack(Frame& f, StylizedFrame& out) {

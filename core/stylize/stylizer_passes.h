@@ -83,5 +83,8 @@ void gBuffer(Frame& f, StylizedFrame& out);
 /// `bindMedium(p)` binds the heterogeneous medium's textures (or placeholders) and fills its fields.
 void shade(Frame& f, const std::function<void(layout::StylizeParams&)>& bindMedium, StylizedFrame& out);
 void readBack(Frame& f, StylizedFrame& out);
+/// The frame as display bytes in a slot of `display.ring` (display_pack.comp), fenced and waited
+/// for: StylizedFrame::displayBytes and displaySlot; then the AOVs and maps `f.settings` asks for.
+void readBackDisplay(Frame& f, const DisplayReadback& display, StylizedFrame& out);
 
 }  // namespace volstyle::core::stylize

@@ -23,12 +23,20 @@ public:
     /// result (or rethrows its exception). Short tasks also run between a long task's iterations.
     template <typename F>
     auto run(F&& task) -> decltype(task(std::declval<core::GpuDevice&>())) {
+        return start(std::forward<F>(task)).get();
+    }
+
+    /// Queues a short task as run() does and returns at once: its result (or exception) comes
+    /// through the future, so the caller can work while the GL thread does (a live stream encodes
+    /// one frame while the next renders).
+    template <typename F>
+    auto start(F&& task) -> std::future<decltype(task(std::declval<core::GpuDevice&>()))> {
         using R = decltype(task(std::declval<core::GpuDevice&>()));
         auto job = std::make_shared<std::packaged_task<R(core::GpuDevice&)>>(std::forward<F>(task));
         auto result = job->get_future();
         m_used = true;
         post([job](core::GpuDevice& r) { (*job)(r); }, /*isLong=*/false);
-        return result.get();
+        return result;
     }
 
     /// Queues a long task (a solve) and returns at once; long tasks run one after another.

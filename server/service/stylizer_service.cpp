@@ -116,7 +116,7 @@ StylizerSnapshot StylizerService::undoStylizer(Session& s, bool redo) {
 }
 
 
-core::StylizedFrame StylizerService::stylizeOnGl(Session& s, const core::StylizerScene& scene, const core::StylizeSettings& settings) {
+void StylizerService::checkRenderBudget(const core::StylizerScene& scene, const core::StylizeSettings& settings) {
     // Other sessions' frames and a solve's next iteration wait behind this one: estimate it first.
     const double seconds = stylizerSeconds(scene, settings);
     if (m_ctx.limits.renderBudgetSeconds > 0 && seconds > m_ctx.limits.renderBudgetSeconds)
@@ -125,6 +125,10 @@ core::StylizedFrame StylizerService::stylizeOnGl(Session& s, const core::Stylize
                                    "use fewer pixels, {}a smaller shadow map or shorter dilations",
                                    seconds, m_ctx.limits.renderBudgetSeconds,
                                    settings.method == core::VisibilityMethod::Naive ? "fewer steps or the accelerated method, " : ""));
+}
+
+core::StylizedFrame StylizerService::stylizeOnGl(Session& s, const core::StylizerScene& scene, const core::StylizeSettings& settings) {
+    checkRenderBudget(scene, settings);
     return m_ctx.gl->run([&](core::GpuDevice& device) {
         // A heterogeneous medium is the session's volume as the renderer holds it (no copy).
         const std::shared_ptr<core::GpuVolume> medium = scene.volume ? m_ctx.lockedSessionGpu(s) : nullptr;
@@ -241,23 +245,67 @@ AddedTfConstraint StylizerService::addTfConstraint(Session& s, const protocol::S
     return out;
 }
 
-std::optional<LiveFrame> StylizerService::nextLiveFrame(Session& s, uint64_t after, std::chrono::milliseconds wait) {
-    StylizerSnapshot snapshot;
-    {
-        std::unique_lock lock(s.mutex);
-        if (!s.stylizerChanged.wait_for(lock, wait, [&] { return s.removed || s.stylizer.revision > after; })) return std::nullopt;
-        if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
-        if (s.stylizer.live.revision == s.stylizer.revision) return s.stylizer.live;  // another stream rendered it
-        snapshot = snapshotOf(s);
-    }
+std::unique_ptr<LiveStreamPipeline> StylizerService::liveStreamPipeline(std::shared_ptr<Session> s) const {
+    return std::make_unique<LiveStreamPipeline>(*m_ctx.gl, std::move(s));
+}
+
+std::future<RenderedLiveFrame> StylizerService::startLiveFrame(LiveStreamPipeline& pipeline, const StylizerSnapshot& snapshot) {
     core::StylizeSettings settings;
     core::readBackOnly(settings, core::StylizerOutput::Frame);  // the stream sends the frame alone
-    const auto t0 = Clock::now();
-    const core::StylizedFrame f = stylizeOnGl(s, core::sceneAtTime(snapshot.scene, snapshot.scene.time), settings);
-    const double renderMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    core::StylizerScene scene = core::sceneAtTime(snapshot.scene, snapshot.scene.time);
+    checkRenderBudget(scene, settings);
+    return m_ctx.gl->start([this, &pipeline, session = pipeline.sessionPtr(), scene = std::move(scene), settings,
+                            revision = snapshot.revision](core::GpuDevice& device) {
+        const auto t0 = Clock::now();
+        const std::shared_ptr<core::GpuVolume> medium = scene.volume ? m_ctx.lockedSessionGpu(*session) : nullptr;
+        const core::DisplayReadback display{&pipeline.ring(), 0.0};
+        RenderedLiveFrame r{revision, m_ctx.stylizerEngine(device).render(scene, settings, medium.get(), &display), scene.camera.width,
+                            scene.camera.height, 0};
+        r.renderMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+        return r;
+    });
+}
+
+std::optional<LiveFrame> StylizerService::nextLiveFrame(LiveStreamPipeline& pipeline, uint64_t after, std::chrono::milliseconds wait) {
+    Session& s = pipeline.session();
+    RenderedLiveFrame r;
+    if (pipeline.next.valid()) {
+        r = pipeline.next.get();  // rendered while the last frame was encoded and sent
+    } else {
+        StylizerSnapshot snapshot;
+        {
+            std::unique_lock lock(s.mutex);
+            if (!s.stylizerChanged.wait_for(lock, wait, [&] { return s.removed || s.stylizer.revision > after; })) return std::nullopt;
+            if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
+            if (s.stylizer.live.revision == s.stylizer.revision) return s.stylizer.live;  // another stream rendered it
+            snapshot = snapshotOf(s);
+        }
+        r = startLiveFrame(pipeline, snapshot).get();
+    }
+    // The newest revision renders on the GL thread while this frame is encoded and sent (a
+    // burst of changes renders only its last: a slow client gets the newest frame, no backlog).
+    try {
+        std::unique_lock lock(s.mutex);
+        if (!s.removed && s.stylizer.revision > r.revision && s.stylizer.live.revision < s.stylizer.revision) {
+            const StylizerSnapshot snapshot = snapshotOf(s);
+            lock.unlock();
+            pipeline.next = startLiveFrame(pipeline, snapshot);
+        }
+    } catch (...) {  // e.g. over the budget: the next call renders it again and reports that
+    }
     const auto e0 = Clock::now();
-    LiveFrame live{snapshot.revision, core::encodeJpeg(f.frame, kLiveJpegQuality), f.frame.width, f.frame.height, renderMs,
-                   std::chrono::duration<double, std::milli>(Clock::now() - e0).count()};
+    LiveFrame live;
+    try {
+        live = {r.revision,
+                r.frame.displayBytes ? core::encodeJpegRgbx(r.frame.displayBytes, r.width, r.height, kLiveJpegQuality)
+                                     : core::encodeJpeg(r.frame.frame, kLiveJpegQuality),
+                r.width, r.height, r.renderMs, 0};
+    } catch (...) {
+        pipeline.release(r);
+        throw;
+    }
+    pipeline.release(r);
+    live.encodeMs = std::chrono::duration<double, std::milli>(Clock::now() - e0).count();
     std::lock_guard lock(s.mutex);
     if (live.revision > s.stylizer.live.revision) s.stylizer.live = live;
     return live;

@@ -5,6 +5,7 @@
 /// sequences. Every change moves the stylizer's revision, is on disk before the method returns,
 /// and wakes its live streams.
 
+#include "server/service/live_stream_pipeline.h"
 #include "server/service/service_context.h"
 
 namespace volstyle::server {
@@ -40,9 +41,13 @@ public:
     /// A frame (or AOV) of the session's stylizer on the GL thread; over_budget (422) when its
     /// estimated time is over the render budget.
     core::StylizedFrame stylize(Session& s, const protocol::StylizerFrameRequest& request);
-    /// The live stream's next frame: waits up to `wait` for a revision newer than `after`, then
-    /// answers the newest revision's frame (rendered once, then kept); nullopt on time-out.
-    std::optional<LiveFrame> nextLiveFrame(Session& s, uint64_t after, std::chrono::milliseconds wait);
+    /// The live stream's next frame: the one `pipeline` rendered while the last was sent, else,
+    /// after waiting up to `wait` for a revision newer than `after`, the newest revision's frame
+    /// (rendered once, then kept; nullopt on time-out). Before encoding it, the render of a newer
+    /// revision starts (issue #40: encoding overlaps the next frame's render and read-back).
+    std::optional<LiveFrame> nextLiveFrame(LiveStreamPipeline& pipeline, uint64_t after, std::chrono::milliseconds wait);
+    /// A stream's pipeline for `s`: frames come back through its read-back slots.
+    std::unique_ptr<LiveStreamPipeline> liveStreamPipeline(std::shared_ptr<Session> s) const;
     /// The kept live frame if it shows `revision` (frames are replaced by newer ones).
     std::optional<LiveFrame> liveFrame(Session& s, uint64_t revision) const;
     /// Renders the stylizer's camera path (or a span of its scene time) as PNG frames, and an MP4
@@ -59,6 +64,10 @@ private:
     /// The pixel `q` names in `scene` (the session's, before the request's camera and time).
     StylizerPick pickIn(Session& s, const core::StylizerScene& scene, const protocol::StylizerPickRequest& q);
     core::StylizedFrame stylizeOnGl(Session& s, const core::StylizerScene& scene, const core::StylizeSettings& settings);
+    /// Checks the frame's budget, then queues the live frame of `snapshot` on the GL thread.
+    std::future<RenderedLiveFrame> startLiveFrame(LiveStreamPipeline& pipeline, const StylizerSnapshot& snapshot);
+    /// Throws over_budget when a frame of `scene` is estimated over the render budget.
+    void checkRenderBudget(const core::StylizerScene& scene, const core::StylizeSettings& settings);
     /// This device's stylizer speed (lookups per second) for frame estimates: measured on the GL
     /// thread when the stylizer first starts, never below kMinStylizerLookupsPerSecond.
     double stylizerLookupsPerSecond();

@@ -310,6 +310,27 @@ TEST_F(StylizerApi, TheMjpegStreamSendsEachRevisionsFrameAndEndsWithTheSession) 
     ASSERT_EQ(putScene(s)->status, 200);
     ASSERT_TRUE(waitFor(2)) << "a change streams a new frame";
     EXPECT_GT(std::stoull(parts.back().headers.at("X-Revision")), std::stoull(first.headers.at("X-Revision")));
+    // A burst of changes while frames render and encode (the next revision renders while the last
+    // frame is encoded and sent): frames come in revision order, none twice, and the last change's
+    // frame arrives; the ones in between may be skipped as stale.
+    uint64_t last = 0;
+    for (int k = 0; k < 6; ++k) {
+        s["time"] = 2.0 + 0.25 * k;
+        auto put = putScene(s);
+        ASSERT_EQ(put->status, 200);
+        last = std::stoull(put->get_header_value("ETag").substr(2));
+    }
+    auto newest = [&] {
+        std::lock_guard lock(m);
+        return parts.empty() || !parts.back().headers.count("X-Revision") ? uint64_t(0) : std::stoull(parts.back().headers.at("X-Revision"));
+    };
+    for (int i = 0; i < 1200 && newest() < last; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    {
+        std::lock_guard lock(m);
+        EXPECT_EQ(std::stoull(parts.back().headers.at("X-Revision")), last) << "the burst's last change is shown";
+        for (size_t i = 1; i < parts.size(); ++i)
+            EXPECT_LT(std::stoull(parts[i - 1].headers.at("X-Revision")), std::stoull(parts[i].headers.at("X-Revision"))) << "part " << i;
+    }
     ASSERT_EQ(client().Delete(base.substr(0, base.size() - 9).c_str())->status, 204);
     reader.join();
     EXPECT_NE(parts.back().body.find("\"closed\""), std::string::npos) << "the stream ends with the session";

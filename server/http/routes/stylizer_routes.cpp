@@ -65,10 +65,11 @@ void streamLive(RouteContext& c, httplib::Response& res, std::shared_ptr<Session
     const std::string contentType = format.contentType;
     res.set_chunked_content_provider(
         contentType,
-        [&c, s, format = std::move(format), sent = uint64_t(0), idle = 0](size_t, httplib::DataSink& sink) mutable {
+        [&c, s, pipeline = std::shared_ptr<LiveStreamPipeline>(c.services.stylizer.liveStreamPipeline(s)), format = std::move(format),
+         sent = uint64_t(0), idle = 0](size_t, httplib::DataSink& sink) mutable {
             std::string message;
             try {
-                if (auto f = c.services.stylizer.nextLiveFrame(*s, sent, kLivePoll)) {
+                if (auto f = c.services.stylizer.nextLiveFrame(*pipeline, sent, kLivePoll)) {
                     sent = f->revision;
                     idle = 0;
                     message = format.frame(*s, *f);
