@@ -243,6 +243,8 @@ VS_CONSTANT(int, kBindingSparseList, 6);  /* SSBO uint[]: the pixels (W) or elem
 struct SparseParams {
     VS_IVEC4 count;  /* x: rows (W) or columns (Wᵀ) of this dispatch; y: offset of the input's first entry; z: of the output's;
                         w: -1, or where this dispatch's part of the list starts (then row/column k is list[w + k], output index included) */
+    VS_IVEC4 range;  /* x: the cache's row for output index z (one view's rows within merged rows: its first pixel; else 0);
+                        y, z: Wᵀ reads only input pixels in [y, z) (one view of merged columns; else all) */
 };
 
 /* Parameters of the vector kernels (vector_ops.comp). Vectors are arrays of vec4 (rgb used). */

@@ -87,7 +87,7 @@ void main() {
     if (k >= uint(sp.count.x)) return;
     // Row or column i of this view's cache, written at output o.
     uint o = sp.count.w >= 0 ? list[uint(sp.count.w) + k] : uint(sp.count.z) + k;
-    uint i = o - uint(sp.count.z);
+    uint i = o - uint(sp.count.z) + uint(sp.range.x);  // merged rows: a view's row is its pixel
     uint first = start[i], last = start[i + 1u];
     uint inputOffset = uint(sp.count.y);
 #if VOLSTYLE_SCATTER
@@ -107,7 +107,14 @@ void main() {
         if (any(notEqual(weightOf(e), vec3(0.0)))) outputs[inputOffset + index[e]] = vec4(1.0);
 #else
     vec3 sum = vec3(0.0);
+#if VOLSTYLE_ADJOINT
+    // One view of merged columns: its pixels' entries alone (every view's lie in the same list).
+    uint lo = uint(sp.range.y), hi = uint(sp.range.z);
+    for (uint e = first; e < last; ++e)
+        if (index[e] >= lo && index[e] < hi) sum += weightOf(e) * inputs[inputOffset + index[e]].rgb;
+#else
     for (uint e = first; e < last; ++e) sum += weightOf(e) * inputs[inputOffset + index[e]].rgb;
+#endif
 #if VOLSTYLE_ADJOINT
     if (first != last) outputs[o] += vec4(sum, 0.0);  // the views' columns add up, one dispatch each
 #else

@@ -269,6 +269,16 @@ void Projector::mergeRows(size_t budgetBytes) {
     }
     m_stats.cacheBytes += bytes;
     m_merged = std::move(m);
+    if (m_stats.cacheBytes > m_keepViewRowsBytes) dropViewRows();
+}
+
+void Projector::dropViewRows() {
+    // The merged rows are every view's (a view is a range of them): the per-view rows hold the
+    // same entries twice.
+    for (View& v : m_views) {
+        if (v.rows) m_stats.cacheBytes -= sparseRowsBytes(v.rows->rows, v.rows->columns, v.rows->entries, v.rows->channels);
+        v.rows.reset();
+    }
 }
 
 void Projector::adoptMergedRows(std::shared_ptr<const SparseRows> rows) {
@@ -277,16 +287,16 @@ void Projector::adoptMergedRows(std::shared_ptr<const SparseRows> rows) {
     if (m_merged) m_stats.cacheBytes -= sparseRowsBytes(m_merged->rows, m_merged->columns, m_merged->entries, m_merged->channels);
     m_stats.cacheBytes += sparseRowsBytes(rows->rows, rows->columns, rows->entries, rows->channels);
     m_merged = std::move(rows);
+    dropViewRows();  // adopted before any view's own (Solver: the merged rows are looked up first)
+    m_stats.cachedViews = m_views.size();
+    m_stats.cachedEntries = m_merged->entries;
 }
 
 void Projector::adoptRows(size_t view, std::shared_ptr<const SparseRows> rows) {
     View& v = m_views.at(view);
     VOLSTYLE_CHECK(rows->rows, ==, size_t(v.camera.width) * v.camera.height);
     VOLSTYLE_CHECK(rows->columns, ==, elementCount());
-    if (m_merged) {  // built from the rows this replaces
-        m_stats.cacheBytes -= sparseRowsBytes(m_merged->rows, m_merged->columns, m_merged->entries, m_merged->channels);
-        m_merged.reset();
-    }
+    VOLSTYLE_CHECK(m_merged == nullptr, ==, true);  // merged rows are every view's: adopt them whole
     if (!v.rows) m_stats.cachedViews++;
     else m_stats.cacheBytes -= sparseRowsBytes(v.rows->rows, v.rows->columns, v.rows->entries, v.rows->channels);
     m_stats.cacheBytes += sparseRowsBytes(rows->rows, rows->columns, rows->entries, rows->channels);
@@ -297,7 +307,7 @@ void Projector::cacheRows(size_t budgetBytes, int channels, const GpuVector* pix
     if (pixelMask) VOLSTYLE_CHECK(pixelMask->size(), ==, m_pixelCount);
     const auto t0 = Clock::now();
     for (View& v : m_views) {
-        if (v.rows) continue;
+        if (v.rows || m_merged) continue;
         const size_t left = budgetBytes > m_stats.cacheBytes ? budgetBytes - m_stats.cacheBytes : 0;
         v.rows = buildRows(v, left, channels, pixelMask);
         if (!v.rows) {
@@ -372,6 +382,7 @@ void Projector::forwardView(size_t view, const GpuVector& a, GpuVector& pixels) 
     const View& v = m_views.at(view);
     timed(false, [&] {
         if (v.rows) sparseForward(m_device, *v.rows, a, pixels, v.offset, allCached() ? m_pixelSupport.get() : nullptr);
+        else if (m_merged) sparseForwardRange(m_device, *m_merged, viewRange(view), a, pixels, m_pixelSupport.get());
         else dispatch(false, a, pixels, &v);
         gl::barrierAfterComputeWrites();
     });
@@ -382,9 +393,19 @@ void Projector::adjointView(size_t view, const GpuVector& pixels, GpuVector& a) 
     timed(true, [&] {
         a.fill(0.0f);
         if (v.rows) sparseAdjointAdd(m_device, *v.rows, pixels, v.offset, a, allCached() ? m_elementSupport.get() : nullptr);
+        else if (m_merged) sparseAdjointAddRange(m_device, *m_merged, viewRange(view), pixels, a, m_elementSupport.get());
         else dispatch(true, a, pixels, &v);
         gl::barrierAfterComputeWrites();
     });
+}
+
+void Projector::markThroughRows(bool columns, const Support& list, GpuVector& marks) const {
+    VOLSTYLE_CHECK(allCached(), ==, true);
+    if (m_merged) {
+        sparseMark(m_device, *m_merged, columns, list, 0, marks);  // rows and columns over every view's pixels
+        return;
+    }
+    for (const View& v : m_views) sparseMark(m_device, *v.rows, columns, list, v.offset, marks);
 }
 
 }  // namespace volstyle::core

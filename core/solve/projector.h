@@ -79,17 +79,27 @@ public:
     /// atomics' scattered writes cost more than a counting sort). Either gives the same columns,
     /// each in another order.
     void setColumnsOnHost(bool onHost) { m_columnsOnHost = onHost; }
+    /// Once rows are merged, each view's own rows stay beside them only while both together take
+    /// at most `bytes` (default 0: never). Kept, a later solve whose one view changed (a stroke)
+    /// rebuilds that view's rows alone; dropped, memory is halved and the solver's cache holds a
+    /// problem twice as large (issue #40: 10 views at 640×360 overflowed the 1 GiB cache).
+    void keepViewRowsWithin(size_t bytes) { m_keepViewRowsBytes = bytes; }
     bool allCached() const { return m_stats.cachedViews == m_views.size(); }
     /// A view's rows, from an earlier solve (SolveCache) or for one: rows written for this view's
-    /// camera, unknowns and pixel mask.
+    /// camera, unknowns and pixel mask. Not once rows are merged.
     void adoptRows(size_t view, std::shared_ptr<const SparseRows> rows);
+    /// A view's own rows; null once merged (the merged rows hold them: mergedRows(), viewRange()).
     std::shared_ptr<const SparseRows> rowsOf(size_t view) const { return m_views[view].rows; }
     /// Whether W and Wᵀ run as one gather over every view's rows at once (mergeRows).
     bool merged() const { return m_merged != nullptr; }
     /// Those rows, to keep for a later solve (SolveCache), and to take from one: rows merged from
-    /// exactly this projector's views' rows, in order.
+    /// exactly this projector's views' rows, in order. A view is the range viewRange() of them;
+    /// its own rows are dropped once merged unless keepViewRowsWithin() allows both.
     std::shared_ptr<const SparseRows> mergedRows() const { return m_merged; }
     void adoptMergedRows(std::shared_ptr<const SparseRows> rows);
+    /// Marks (sparseMark) through the cached rows of every view: the unknowns the rows of `list`'s
+    /// pixels reach (columns = false), or the pixels the columns of `list`'s elements reach.
+    void markThroughRows(bool columns, const Support& list, GpuVector& marks) const;
     /// With every view cached: W computes only these pixels (others keep their values) and Wᵀ
     /// only these elements (others are 0). Null: all.
     void setSupports(std::shared_ptr<const Support> pixels, std::shared_ptr<const Support> elements);
@@ -114,6 +124,8 @@ private:
     /// dispatch each instead of one per view. Skipped (per-view gathers stay) past `budgetBytes`
     /// or one storage block.
     void mergeRows(size_t budgetBytes);
+    /// Frees each view's own rows once merged rows hold them.
+    void dropViewRows();
 
     GpuDevice& m_device;
     GpuVolume& m_volume;
@@ -131,6 +143,7 @@ private:
     std::shared_ptr<const Support> m_pixelSupport, m_elementSupport;
     std::shared_ptr<const SparseRows> m_merged;  ///< every view's rows at once (mergeRows); null: per view
     bool m_columnsOnHost = false;                ///< setColumnsOnHost (constructor: a CPU rasterizer)
+    size_t m_keepViewRowsBytes = 0;              ///< keepViewRowsWithin
 };
 
 }  // namespace volstyle::core

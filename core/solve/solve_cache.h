@@ -44,6 +44,7 @@ public:
     void putLastSolve(const std::string& key, std::shared_ptr<const LastSolve> last);
 
     size_t bytes() const { return m_bytes; }
+    size_t budget() const { return m_budget; }
     size_t entries() const { return m_entries.size(); }
     size_t hits() const { return m_hits; }
     size_t misses() const { return m_misses; }

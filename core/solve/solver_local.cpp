@@ -74,7 +74,7 @@ void Solver::State::restrictToStroke() {
     // The unknowns the changed pixels see (their rows' entries) ...
     const Support changedList(changed);
     GpuVector marks(elements, "stroke-unknowns");
-    for (size_t v = 0; v < views.size(); ++v) sparseMark(device, *W->rowsOf(v), false, changedList, W->viewRange(v).first, marks);
+    W->markThroughRows(false, changedList, marks);
     const std::vector<float> unknownMarks = marks.download();
     std::vector<uint32_t> moving;
     std::vector<float> movableHost(elements * 4, 0.0f);
@@ -87,7 +87,7 @@ void Solver::State::restrictToStroke() {
     // ... and the pixels that see those (their columns' entries).
     const Support movingList(moving);
     GpuVector pixelMarks(W->pixelCount(), "stroke-pixels");
-    for (size_t v = 0; v < views.size(); ++v) sparseMark(device, *W->rowsOf(v), true, movingList, W->viewRange(v).first, pixelMarks);
+    W->markThroughRows(true, movingList, pixelMarks);
     const std::vector<float> seen = pixelMarks.download();
     std::vector<uint32_t> pixels;
     for (size_t i = 0; i < W->pixelCount(); ++i)

@@ -216,15 +216,18 @@ void Solver::State::cacheOperator() {
     if (opt.rowCacheBytes == 0) return;
     const int channels = weightChannels(volume, lighting, opt.unknown);
     std::vector<std::string> keys(views.size());
-    for (size_t v = 0; v < views.size() && cache; ++v) {
+    for (size_t v = 0; v < views.size() && cache; ++v)
         keys[v] = rowsKey(volume, lighting, opt, udims, views[v].camera, channels, sqrtWHost, W->viewRange(v).first);
-        if (auto rows = cache->findRows(keys[v])) W->adoptRows(v, std::move(rows));
-    }
-    // All views' rows as one (Projector::mergeRows), kept under the key of the rows it was made of.
+    // All views' rows as one (Projector::mergeRows), kept under the key of the rows it was made
+    // of; only they are kept (each view is a range of them), else each view's own.
     std::string mergedKey = "merged";
     for (const auto& k : keys) mergedKey += "|" + k;
-    if (cache && W->allCached())
-        if (auto merged = cache->findRows(mergedKey)) W->adoptMergedRows(std::move(merged));
+    if (auto merged = cache && views.size() > 1 ? cache->findRows(mergedKey) : nullptr) W->adoptMergedRows(std::move(merged));
+    for (size_t v = 0; v < views.size() && cache && !W->merged(); ++v)
+        if (auto rows = cache->findRows(keys[v])) W->adoptRows(v, std::move(rows));
+    // Each view's own rows stay beside the merged ones (a stroke's re-solve then rebuilds one
+    // view's) while both fit in half the cache; past that, the merged rows alone.
+    W->keepViewRowsWithin(cache ? cache->budget() / 2 : 0);
     // Rows only for the pixels that count (a weight > 0): the others' rows would be multiplied by 0.
     W->cacheRows(opt.rowCacheBytes, channels, &sqrtW);
     for (size_t v = 0; v < views.size() && cache; ++v)

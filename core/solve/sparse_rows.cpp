@@ -1,5 +1,8 @@
 #include "core/solve/sparse_rows.h"
 
+#include <algorithm>
+#include <cstdint>
+
 #include "core/base/errors.h"
 #include "core/gl/shader_builder.h"
 #include "core/shaders/layout.h"
@@ -30,10 +33,18 @@ int weightChannels(const Volume& volume, const Lighting& lighting, Unknown unkno
 
 namespace {
 
+/// Which rows of a cache a dispatch covers: all of a view's own, or one view's range of merged rows.
+struct Part {
+    size_t firstRow = 0;     ///< the cache's row of the view's first pixel
+    size_t rows = SIZE_MAX;  ///< the view's pixels (SIZE_MAX: the cache's rows)
+    size_t pixelsFrom = 0, pixelsTo = 0x7fffffff;  ///< Wᵀ: the input pixels read
+};
+
 /// W (rows) or Wᵀ (columns) over `only`'s part of this view, or with `mark` their entries' marks.
 void apply(GpuDevice& device, const SparseRows& rows, bool adjoint, const GpuVector& in, GpuVector& out,
-           size_t pixelOffset, const Support* only, bool mark = false, bool scatter = false, bool floatAtomics = false) {
-    size_t count = adjoint ? rows.columns : rows.rows;
+           size_t pixelOffset, const Support* only, bool mark = false, bool scatter = false, bool floatAtomics = false,
+           Part part = {}) {
+    size_t count = adjoint ? rows.columns : std::min(rows.rows, part.rows);
     const size_t outputOffset = adjoint ? 0 : pixelOffset;
     int listFirst = -1;
     if (only) {  // this view's part of the list: its pixels (W), every listed element (Wᵀ)
@@ -45,6 +56,7 @@ void apply(GpuDevice& device, const SparseRows& rows, bool adjoint, const GpuVec
     layout::SparseParams p;
     // Gathers read the input at count.y; a scatter (columns, unknowns in) writes pixels from there.
     p.count = {int(count), adjoint ? int(pixelOffset) : 0, int(outputOffset), listFirst};
+    p.range = {adjoint ? 0 : int(part.firstRow), int(part.pixelsFrom), int(part.pixelsTo), 0};
     device.setParams(p);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSparseIn, in.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingSparseOut, out.id());
@@ -83,6 +95,18 @@ void sparseForward(GpuDevice& device, const SparseRows& rows, const GpuVector& a
 void sparseAdjointAdd(GpuDevice& device, const SparseRows& rows, const GpuVector& pixels, size_t pixelOffset, GpuVector& a,
                       const Support* only) {
     apply(device, rows, true, pixels, a, pixelOffset, only);
+}
+
+void sparseForwardRange(GpuDevice& device, const SparseRows& merged, Range view, const GpuVector& a, GpuVector& pixels,
+                        const Support* only) {
+    VOLSTYLE_CHECK(view.first + view.count, <=, merged.rows);
+    apply(device, merged, false, a, pixels, view.first, only, false, false, false, Part{view.first, view.count});
+}
+
+void sparseAdjointAddRange(GpuDevice& device, const SparseRows& merged, Range view, const GpuVector& pixels, GpuVector& a,
+                           const Support* only) {
+    VOLSTYLE_CHECK(view.first + view.count, <=, merged.rows);
+    apply(device, merged, true, pixels, a, 0, only, false, false, false, Part{0, SIZE_MAX, view.first, view.first + view.count});
 }
 
 }  // namespace volstyle::core

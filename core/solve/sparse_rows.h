@@ -41,6 +41,16 @@ void sparseForward(GpuDevice& device, const SparseRows& rows, const GpuVector& a
 void sparseAdjointAdd(GpuDevice& device, const SparseRows& rows, const GpuVector& pixels, size_t pixelOffset, GpuVector& a,
                       const Support* only = nullptr);
 
+/// One view within rows merged over every view (Projector::mergeRows, issue #40): its rows are
+/// the merged rows [view.first, view.first + view.count), which are its pixels, and its columns
+/// are the merged columns' entries for those pixels.
+/// pixels[p] = (W a)_p for the range's pixels p (with `only`: those in it).
+void sparseForwardRange(GpuDevice& device, const SparseRows& merged, Range view, const GpuVector& a, GpuVector& pixels,
+                        const Support* only = nullptr);
+/// a += W_vᵀ r: the merged columns' entries of the range's pixels of r = pixels (with `only`: for its elements).
+void sparseAdjointAddRange(GpuDevice& device, const SparseRows& merged, Range view, const GpuVector& pixels, GpuVector& a,
+                           const Support* only = nullptr);
+
 /// pixels[pixelOffset + p] += (W c)_p by the view's columns (with `only`: those elements'), reading
 /// only the columns of elements where c ≠ 0 and adding atomically: cheap when c is 0 almost
 /// everywhere (the unknowns a bound clamped), where a row gather would read every entry. With

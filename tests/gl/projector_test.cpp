@@ -140,6 +140,26 @@ void checkCase(const Case& k, const Path& path) {
         return worst / peak;
     };
     double errF = compare(refWa, Wa, "forward"), errA = compare(refWtr, Wtr, "adjoint");
+    if (path.cached && W.merged()) {
+        // Only the merged rows are kept (issue #40); each view is a range of them: W_v and W_vᵀ
+        // from that range against the oracle over the view's pixels alone.
+        const auto m = W.mergedRows();
+        EXPECT_EQ(W.rowsOf(0), nullptr);
+        EXPECT_EQ(W.stats().cacheBytes, sparseRowsBytes(m->rows, m->columns, m->entries, m->channels));
+        for (size_t v = 0; v < W.viewCount(); ++v) {
+            const Range px = W.viewRange(v);
+            std::vector<double> rv(r.size(), 0.0);
+            std::copy_n(r.begin() + std::ptrdiff_t(4 * px.first), 4 * px.count, rv.begin() + std::ptrdiff_t(4 * px.first));
+            GpuVector viewWa(W.pixelCount(), "Wv a"), viewWtr(W.elementCount(), "Wvt r");
+            viewWa.fill(0.0f);
+            W.forwardView(v, ga, viewWa);
+            W.adjointView(v, gr, viewWtr);
+            std::vector<double> refView(refWa.size(), 0.0);
+            std::copy_n(refWa.begin() + std::ptrdiff_t(4 * px.first), 4 * px.count, refView.begin() + std::ptrdiff_t(4 * px.first));
+            compare(refView, viewWa.download(), "one view's forward from merged rows");
+            compare(ref.adjoint(rv), viewWtr.download(), "one view's adjoint from merged rows");
+        }
+    }
     std::cout << "[ measured ] unknown " << int(k.unknown) << " basis " << int(k.basis) << (k.coarse ? " coarse" : "")
               << (path.cached ? " cached rows (" + std::to_string(W.stats().cachedViews) + " views)"
                               : floatAtomics ? " atomics" : " CAS")
@@ -199,6 +219,7 @@ TEST(Projector, ViewsPastTheCacheBudgetStayMatrixFree) {
     GpuVolume gpu(prob.volume);
     Projector all(test::device(), gpu, prob.lighting, Unknown::Albedo, BasisType::Trilinear, prob.volume.dims(), 0.5);
     for (const auto& c : prob.cameras) all.addView(c);
+    all.keepViewRowsWithin(SIZE_MAX);  // each view's own rows kept beside the merged ones, to measure them
     all.cacheRows(size_t(1) << 30, 3);
     ASSERT_EQ(all.stats().cachedViews, 2u);
     EXPECT_TRUE(all.merged());  // both views' rows as one, within the budget
