@@ -122,6 +122,10 @@ Race solveRace(GpuDevice& device, const Volume& start, const std::vector<SolveVi
     r.seconds.insert(r.seconds.begin(), r.setupSeconds);
     r.rowsSeconds = out.report.rowCacheMs / 1000.0;
     for (const auto& [name, ms] : out.report.setupPhases) r.phases += (r.phases.empty() ? "" : ", ") + name + " " + std::to_string(int(std::lround(ms)));
+    r.phases += "; rows kept " + std::to_string(out.report.rowCacheBytes >> 20) + " MiB";
+    if (cache)
+        r.phases += ", solve cache " + std::to_string(cache->bytes() >> 20) + " MiB in " + std::to_string(cache->entries()) + " entries, " +
+                    std::to_string(cache->hits()) + " hits so far";
     r.objective = out.report.objectiveHistory;
     r.iterations = out.report.iterations;
     r.seconds.resize(r.objective.size(), r.seconds.back());

@@ -66,31 +66,38 @@ std::string marchKey(const SolveOptions& o) { return fmt::format("step{}:{}", o.
 
 }  // namespace
 
-void SolveCache::putRows(const std::string& key, std::shared_ptr<const SparseRows> rows) {
+void SolveCache::putRows(const std::string& key, std::shared_ptr<const SparseRows> rows, double costMs) {
     const size_t bytes = sparseRowsBytes(rows->rows, rows->columns, rows->entries, rows->channels);
-    put(key, std::move(rows), bytes);
+    put(key, std::move(rows), bytes, costMs);
 }
 
-void SolveCache::putRenders(const std::string& key, std::shared_ptr<const ViewRenders> r) {
+void SolveCache::putRenders(const std::string& key, std::shared_ptr<const ViewRenders> r, double costMs) {
     const size_t bytes = imageBytes(r->now) + imageBytes(r->noEmission) + imageBytes(r->albedo0) + imageBytes(r->albedo1) +
                          imageBytes(r->neither) + imageBytes(r->background);
-    put(key, std::move(r), bytes);
+    put(key, std::move(r), bytes, costMs);
 }
 
-void SolveCache::putLastSolve(const std::string& key, std::shared_ptr<const LastSolve> last) {
+void SolveCache::putLastSolve(const std::string& key, std::shared_ptr<const LastSolve> last, double costMs) {
     const size_t bytes = (last->observations.size() + last->weights.size()) * sizeof(float);
-    put(key, std::move(last), bytes);
+    put(key, std::move(last), bytes, costMs);
 }
 
-void SolveCache::put(const std::string& key, std::shared_ptr<const void> value, size_t bytes) {
-    if (auto it = m_entries.find(key); it != m_entries.end()) m_bytes -= it->second.bytes;
-    m_entries[key] = Entry{std::move(value), bytes, ++m_clock};
+void SolveCache::put(const std::string& key, std::shared_ptr<const void> value, size_t bytes, double costMs) {
+    if (auto it = m_entries.find(key); it != m_entries.end()) {
+        m_bytes -= it->second.bytes;
+        costMs = std::max(costMs, it->second.costMs);
+    }
+    Entry& e = m_entries[key] = Entry{std::move(value), bytes, std::max(costMs, 0.0), 0};
+    e.priority = priorityOf(e);
     m_bytes += bytes;
+    // The entry of least priority goes (the one just put too, when it is worth the least per
+    // byte), until the rest fit; one entry always stays.
     while (m_bytes > m_budget && m_entries.size() > 1) {
-        auto oldest = std::min_element(m_entries.begin(), m_entries.end(),
-                                       [](const auto& a, const auto& b) { return a.second.lastUsed < b.second.lastUsed; });
-        m_bytes -= oldest->second.bytes;
-        m_entries.erase(oldest);
+        auto lowest = std::min_element(m_entries.begin(), m_entries.end(),
+                                       [](const auto& a, const auto& b) { return a.second.priority < b.second.priority; });
+        m_inflation = lowest->second.priority;
+        m_bytes -= lowest->second.bytes;
+        m_entries.erase(lowest);
     }
 }
 

@@ -5,9 +5,17 @@
 /// the volume the unknowns are not, the lighting and the solve settings — a stroke changes one
 /// view's target and a solve changes only the unknowns, so the next solve finds all the other
 /// views' parts here. Entries are kept under keys that name everything they depend on (the
-/// *Key functions), bounded by bytes, least recently used dropped first; a solve holds what it
-/// uses, so dropping never frees an entry in use. GL thread only (the rows are GL buffers).
+/// *Key functions), bounded by bytes; a solve holds what it uses, so dropping never frees an entry
+/// in use. GL thread only (the rows are GL buffers).
+///
+/// What goes first when the bytes are over the budget weighs what an entry saves against what it
+/// holds (GreedyDual-Size, Cao & Irani 1997): each entry's priority is the clock L plus the
+/// milliseconds it took to make per byte it holds; the lowest goes and L becomes its priority, a
+/// hit raises an entry to L + its cost per byte again. Recency still counts (L only grows), but a
+/// view's renders (7 MiB that took 0.9 s) outlive rows of 946 MiB that took 6.5 s (issue #40: the
+/// 10-view problem (c) rendered every view again after plain least-recently-used dropped them).
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -36,12 +44,14 @@ class SolveCache {
 public:
     explicit SolveCache(size_t budgetBytes = size_t(1) << 30) : m_budget(budgetBytes) {}
 
+    /// `costMs`: what making the entry took (what a miss would cost again). Put again under its
+    /// key, an entry keeps the larger of its costs (a hit's put costs nothing to make).
     std::shared_ptr<const SparseRows> findRows(const std::string& key) { return find<SparseRows>(key); }
-    void putRows(const std::string& key, std::shared_ptr<const SparseRows> rows);
+    void putRows(const std::string& key, std::shared_ptr<const SparseRows> rows, double costMs);
     std::shared_ptr<const ViewRenders> findRenders(const std::string& key) { return find<ViewRenders>(key); }
-    void putRenders(const std::string& key, std::shared_ptr<const ViewRenders> renders);
+    void putRenders(const std::string& key, std::shared_ptr<const ViewRenders> renders, double costMs);
     std::shared_ptr<const LastSolve> findLastSolve(const std::string& key) { return find<LastSolve>(key); }
-    void putLastSolve(const std::string& key, std::shared_ptr<const LastSolve> last);
+    void putLastSolve(const std::string& key, std::shared_ptr<const LastSolve> last, double costMs);
 
     size_t bytes() const { return m_bytes; }
     size_t budget() const { return m_budget; }
@@ -54,7 +64,8 @@ private:
     struct Entry {
         std::shared_ptr<const void> value;
         size_t bytes = 0;
-        uint64_t lastUsed = 0;
+        double costMs = 0;
+        double priority = 0;  ///< GreedyDual-Size: m_inflation when last made or hit + costMs per byte
     };
     template <typename T>
     std::shared_ptr<const T> find(const std::string& key) {
@@ -64,13 +75,14 @@ private:
             return nullptr;
         }
         ++m_hits;
-        it->second.lastUsed = ++m_clock;
+        it->second.priority = priorityOf(it->second);
         return std::static_pointer_cast<const T>(it->second.value);
     }
-    void put(const std::string& key, std::shared_ptr<const void> value, size_t bytes);
+    double priorityOf(const Entry& e) const { return m_inflation + e.costMs / double(std::max<size_t>(e.bytes, 1)); }
+    void put(const std::string& key, std::shared_ptr<const void> value, size_t bytes, double costMs);
 
     size_t m_budget, m_bytes = 0, m_hits = 0, m_misses = 0;
-    uint64_t m_clock = 0;
+    double m_inflation = 0;  ///< GreedyDual-Size's L: the priority of the entry dropped last
     std::unordered_map<std::string, Entry> m_entries;
 };
 

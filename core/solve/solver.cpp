@@ -313,7 +313,7 @@ SolveResult Solver::run(const ProgressCallback& progress, const std::atomic<bool
     if (rep.stopReason == StopReason::None) rep.stopReason = StopReason::MaxIterations;
     rep.finalObjective = rep.objectiveHistory.back();
     Volume out = st.result();
-    st.rememberSolve(out);
+    st.rememberSolve(out, msSince(t0));
     rep.totalMs = msSince(t0);
     return {std::move(out), rep};
 }

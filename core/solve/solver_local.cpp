@@ -125,13 +125,13 @@ void Solver::State::restrictToStroke() {
                  changed.size(), moving.size(), report.hullCount, pixelCount, report.constraintPixels);
 }
 
-void Solver::State::rememberSolve(const Volume& result) {
+void Solver::State::rememberSolve(const Volume& result, double solveMs) {
     if (!cache || lastKey.empty()) return;
     auto last = std::make_shared<LastSolve>();
     last->observations = std::move(obsHost);  // the solve is over: nothing reads them again
     last->weights = std::move(rawWeightHost);
     last->resultHash = unknownsHash(result, opt.unknown);
-    cache->putLastSolve(lastKey, std::move(last));
+    cache->putLastSolve(lastKey, std::move(last), solveMs);  // what a re-solve of a stroke saves, at most
 }
 
 }  // namespace volstyle::core

@@ -160,12 +160,14 @@ void Solver::State::buildObservations() {
     if (!missing.empty()) {
         // A GpuVolume of their own: rendering through the solver's made the rows that follow 1.3 s
         // slower at 128³ (bench/solver_race (b); measured, cause not found), and this costs ~50 ms.
+        const auto t0 = Clock::now();
         GpuVolume own(volume);
         auto fresh = renderBounds(device, own, lighting, missing, opt, opt.analyzeReach);
+        const double perViewMs = msSince(t0) / double(missing.size());
         for (size_t v = 0, k = 0; v < views.size(); ++v) {
             if (viewRenders[v]) continue;
             viewRenders[v] = fresh[k++];
-            if (cache) cache->putRenders(keys[v], viewRenders[v]);
+            if (cache) cache->putRenders(keys[v], viewRenders[v], perViewMs);
         }
     }
     auto fixedPart = [&](const ViewRenders& r) -> const Image& {
@@ -230,10 +232,13 @@ void Solver::State::cacheOperator() {
     W->keepViewRowsWithin(cache ? cache->budget() / 2 : 0);
     // Rows only for the pixels that count (a weight > 0): the others' rows would be multiplied by 0.
     W->cacheRows(opt.rowCacheBytes, channels, &sqrtW);
-    for (size_t v = 0; v < views.size() && cache; ++v)
-        if (auto rows = W->rowsOf(v)) cache->putRows(keys[v], std::move(rows));
-    if (cache && W->merged()) cache->putRows(mergedKey, W->mergedRows());
+    // What a miss would cost again: this solve's time writing rows (all of it for the merged
+    // ones, a view's share by its entries for its own; a hit's put keeps the cost it was made at).
     const ProjectorStats& w = W->stats();
+    for (size_t v = 0; v < views.size() && cache; ++v)
+        if (auto rows = W->rowsOf(v))
+            cache->putRows(keys[v], rows, w.cacheMs * double(rows->entries) / double(std::max<size_t>(w.cachedEntries, 1)));
+    if (cache && W->merged()) cache->putRows(mergedKey, W->mergedRows(), w.cacheMs);
     report.rowCacheMs = w.cacheMs, report.rowCacheBytes = w.cacheBytes, report.cachedViews = w.cachedViews;
     if (!W->allCached()) return;
     // Every view gathers from its rows, which touch only constrained pixels and (for Wᵀ) the hull:

@@ -116,7 +116,8 @@ struct Solver::State final : BoundedLeastSquares {
     /// unknowns those pixels see and the pixels that see them.
     void restrictToStroke();
     /// Leaves this solve's observations (moved out: the solve is over) and result in the cache for the next one.
-    void rememberSolve(const Volume& result);
+    /// `solveMs`: the solve's time, what the kept state can save a re-solve (SolveCache cost).
+    void rememberSolve(const Volume& result, double solveMs);
     /// Coarse to fine: solves opt.coarseIterations on half the resolution and starts from it.
     void warmStartFromCoarse(const std::atomic<bool>* cancel);
     Volume result();
