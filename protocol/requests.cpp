@@ -65,8 +65,9 @@ RenderRequest RenderRequest::fromJson(const nlohmann::json& j, const RequestLimi
         if (j.contains("format")) {
             auto f = r.string(j["format"], "/format");
             if (f == "png") q.format = ImageFormat::Png;
+            else if (f == "jpeg" || f == "jpg") q.format = ImageFormat::Jpeg;  // previews: a few ms to encode, a fifth of the bytes
             else if (f == "exr") q.format = ImageFormat::Exr;
-            else if (f) r.fail("/format", "must be 'png' or 'exr'");
+            else if (f) r.fail("/format", "must be 'png', 'jpeg' or 'exr', got '" + *f + "'");
         }
         if (j.contains("exposure")) q.exposure = r.number(j["exposure"], "/exposure").value_or(0);
         if (auto why = exposureProblem(q.exposure); !why.empty()) r.fail("/exposure", why);

@@ -58,6 +58,20 @@ TEST_F(Api, RendersPngAndExr) {
     auto png = core::loadImageFromMemory(r->body.data(), r->body.size(), "render");
     EXPECT_EQ(png.image.width, 40);
     EXPECT_EQ(png.image.height, 30);
+    // JPEG for previews (the page's viewport, issue #40): the PNG's picture to the codec's error.
+    body["format"] = "jpeg";
+    auto jr = client().Post(("/api/v1/sessions/" + id + "/render").c_str(), body.dump(), "application/json");
+    ASSERT_EQ(jr->status, 200) << jr->body;
+    EXPECT_EQ(jr->get_header_value("Content-Type"), "image/jpeg");
+    const core::Image jpeg = core::loadImageFromMemory(jr->body.data(), jr->body.size(), "jpeg").image;
+    ASSERT_EQ(jpeg.pixelCount(), png.image.pixelCount());
+    double sum = 0;
+    for (size_t i = 0; i < jpeg.pixelCount(); ++i)
+        for (size_t c = 0; c < 3; ++c)
+            sum += 255.0 * std::abs(core::linearToSrgb(jpeg.rgba[4 * i + c]) - core::linearToSrgb(png.image.rgba[4 * i + c]));
+    EXPECT_LE(sum / double(3 * jpeg.pixelCount()), 2.0) << "mean levels of 255 (a smooth cloud: JPEG's error is small)";
+    body["format"] = "gif";
+    expectError(client().Post(("/api/v1/sessions/" + id + "/render").c_str(), body.dump(), "application/json"), 400, "invalid_argument");
     body["format"] = "exr";
     r = client().Post(("/api/v1/sessions/" + id + "/render").c_str(), body.dump(), "application/json");
     auto exr = core::loadImageFromMemory(r->body.data(), r->body.size(), "render");

@@ -5,8 +5,10 @@
 #include <algorithm>
 
 #include "core/image/image_io.h"
+#include "core/image/jpeg_encoder.h"
 #include "core/render/exr_layers.h"
 #include "core/base/content_hash.h"
+#include "server/state/stylizer_state.h"
 
 namespace volstyle::server {
 
@@ -150,6 +152,10 @@ void replyDownload(const httplib::Request& req, httplib::Response& res, std::str
 }
 
 void replyImage(httplib::Response& res, const core::Image& image, protocol::ImageFormat format, double exposure) {
+    if (format == protocol::ImageFormat::Jpeg) {  // libjpeg-turbo in memory: 4× OpenImageIO's path through a file
+        res.set_content(core::encodeJpeg(image, kLiveJpegQuality, exposure), protocol::imageMimeType(format));
+        return;
+    }
     core::SaveOptions save;
     save.exposure = format != protocol::ImageFormat::Exr ? exposure : 0;  // EXR stays linear
     res.set_content(core::encodeImage(image, protocol::imageFormatName(format), save), protocol::imageMimeType(format));
