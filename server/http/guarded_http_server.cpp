@@ -65,7 +65,7 @@ short pollSliced(socket_t sock, short events, double seconds, StillWanted stillW
 /// One request's stream: reads stop at the request's deadline, which moves with the bytes read.
 class DeadlineStream final : public httplib::Stream {
 public:
-    DeadlineStream(socket_t sock, const ConnectionLimits& limits, const httplib::Server& server)
+    DeadlineStream(socket_t sock, const ConnectionLimits& limits, const GuardedHttpServer& server)
         : m_sock(sock), m_limits(limits), m_server(server), m_start(SteadyClock::now()) {}
 
     bool is_readable() const override { return waitFor(POLLIN, allowanceLeft()); }
@@ -96,13 +96,13 @@ private:
         return allowance - secondsSince(m_start);
     }
     bool waitFor(short events, double seconds) const {
-        const short r = pollSliced(m_sock, events, seconds, [this] { return m_server.is_running(); });
+        const short r = pollSliced(m_sock, events, seconds, [this] { return m_server.serving(); });
         return (r & events) != 0;
     }
 
     socket_t m_sock;
     const ConnectionLimits& m_limits;
-    const httplib::Server& m_server;
+    const GuardedHttpServer& m_server;
     SteadyClock::time_point m_start;
     size_t m_received = 0;
 };
@@ -136,7 +136,7 @@ int statusOf(Refusal why) {
 /// Reads ahead (without consuming) until the request's head ends, `maxBytes` are waiting, the
 /// client closes or `seconds` pass. `complete`: the blank line was seen (the head is returned
 /// with it); else the bytes seen so far (empty: nothing came).
-std::string peekHead(socket_t sock, size_t maxBytes, double seconds, const httplib::Server& server, bool& complete) {
+std::string peekHead(socket_t sock, size_t maxBytes, double seconds, const GuardedHttpServer& server, bool& complete) {
     complete = false;
     std::string buf(maxBytes + 1, '\0');
     const auto start = SteadyClock::now();
@@ -158,12 +158,12 @@ std::string peekHead(socket_t sock, size_t maxBytes, double seconds, const httpl
                 return buf;
             }
         }
-        if (secondsSince(start) > seconds || !server.is_running()) {
+        if (secondsSince(start) > seconds || !server.serving()) {
             buf.resize(size_t(std::max<ssize_t>(n, 0)));
             return buf;
         }
         if (n == seen) std::this_thread::sleep_for(std::chrono::milliseconds(2));  // more bytes are on their way
-        else pollSliced(sock, POLLIN, 0.05, [&server] { return server.is_running(); });
+        else pollSliced(sock, POLLIN, 0.05, [&server] { return server.serving(); });
         seen = n;
     }
 }
@@ -189,6 +189,11 @@ int GuardedHttpServer::bindWithBacklog(const std::string& host, int port) {
     // The library listens with a backlog of 5; listening again on the bound socket raises it.
     if (bound > 0 && m_listenSocket != INVALID_SOCKET) ::listen(m_listenSocket, m_limits.listenBacklog);
     return bound;
+}
+
+void GuardedHttpServer::stopServing() {
+    m_stopping = true;
+    stop();
 }
 
 bool GuardedHttpServer::admit(const std::string& client) {
@@ -220,7 +225,7 @@ void GuardedHttpServer::refuse(socket_t sock, const std::string& client, Refusal
 }
 
 bool GuardedHttpServer::awaitRequest(socket_t sock) const {
-    const short r = pollSliced(sock, POLLIN, m_limits.idleSeconds, [this] { return is_running(); });
+    const short r = pollSliced(sock, POLLIN, m_limits.idleSeconds, [this] { return serving(); });
     return (r & POLLIN) != 0;
 }
 
@@ -267,7 +272,7 @@ bool GuardedHttpServer::process_and_close_socket(socket_t sock) {
         }
         DeadlineStream stream(sock, m_limits, *this);
         bool closed = false;
-        const bool last = served + 1 == m_limits.maxRequestsPerConnection || !is_running();
+        const bool last = served + 1 == m_limits.maxRequestsPerConnection || !serving();
         ok = process_request(stream, last, closed, nullptr) && !closed;
     }
     if (!refused) closeSocket(sock);

@@ -9,8 +9,9 @@
 ///    from its first byte; a client that falls behind is disconnected;
 ///  - one client address holds at most `maxConnectionsPerClient` connections (the next one is
 ///    answered 429 with the body `refusal()` returns, and closed);
-///  - an idle keep-alive connection is closed after `idleSeconds`, and stop() is noticed within
-///    kPollSliceMs;
+///  - an idle keep-alive connection is closed after `idleSeconds`, and stopServing() is noticed
+///    within kPollSliceMs (the library's is_running() stays true until every worker has returned,
+///    so a connection waiting on it held a stopping server for the whole idle time: 5 s);
 ///  - connections get TCP_NODELAY (small answers otherwise wait for a delayed ACK);
 ///  - (issue #35) the listen backlog is `listenBacklog`, not the library's 5 (a burst of 100 new
 ///    connections was reset by the kernel, unanswered and unlogged); connections beyond
@@ -24,6 +25,7 @@
 
 #include <httplib.h>
 
+#include <atomic>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -50,6 +52,11 @@ public:
 
     static constexpr int kPollSliceMs = 100;
 
+    /// stop(), and every connection's wait ends within kPollSliceMs (use it rather than stop()).
+    void stopServing();
+    /// Running and not stopping: what waits on a connection check.
+    bool serving() const { return is_running() && !m_stopping; }
+
 private:
     bool process_and_close_socket(socket_t sock) override;
     /// Counts a connection of `client`; false if it holds its limit already.
@@ -64,6 +71,7 @@ private:
     std::mutex m_mutex;
     std::map<std::string, int> m_open;  ///< connections by client address
     socket_t m_listenSocket = INVALID_SOCKET;
+    std::atomic<bool> m_stopping{false};
 };
 
 }  // namespace volstyle::server

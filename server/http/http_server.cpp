@@ -117,7 +117,7 @@ int HttpServer::bind() {
 }
 
 void HttpServer::listen() { m->http.listen_after_bind(); }
-void HttpServer::stop() { m->http.stop(); }
+void HttpServer::stop() { m->http.stopServing(); }
 
 std::vector<RouteEntry> HttpServer::routes() const { return m->table.entries(); }
 

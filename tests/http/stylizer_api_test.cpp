@@ -336,6 +336,31 @@ TEST_F(StylizerApi, TheMjpegStreamSendsEachRevisionsFrameAndEndsWithTheSession) 
     EXPECT_NE(parts.back().body.find("\"closed\""), std::string::npos) << "the stream ends with the session";
 }
 
+TEST_F(StylizerApi, AServerWithOpenStreamsAndIdleConnectionsStopsAtOnce) {
+    // A stopping server used to wait out each idle keep-alive connection (5 s): the library's
+    // is_running() stays true until every worker has returned. Now stop() is noticed within a
+    // poll slice (100 ms) by every wait on a connection.
+    ASSERT_EQ(putScene(smallForest())->status, 200);
+    std::atomic<size_t> received{0};
+    std::thread reader([&] {
+        httplib::Client c("127.0.0.1", m_port);
+        c.set_read_timeout(60, 0);
+        c.Get((base + "/stream").c_str(), [&](const char*, size_t n) { received += n; return true; });
+    });
+    httplib::Client idle("127.0.0.1", m_port);  // a kept-alive connection, idle after its request
+    idle.set_keep_alive(true);
+    ASSERT_EQ(idle.Get("/api/v1/health")->status, 200);
+    for (int i = 0; i < 600 && received == 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    ASSERT_GT(received.load(), 0u) << "the stream sent its first frame";
+    const auto t0 = std::chrono::steady_clock::now();
+    m_server->stop();
+    m_thread.join();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    reader.join();
+    std::printf("[ measured ] stopped with an open stream and an idle connection in %.2f s\n", seconds);
+    EXPECT_LT(seconds, 2.0) << "the idle wait is 5 s; a poll slice is 0.1 s";
+}
+
 TEST_F(StylizerApi, FramesAreServedWhileAnotherSessionSolves) {
     ASSERT_EQ(putScene(smallForest())->status, 200);
     auto r = client().Post("/api/v1/sessions", R"({"scene": "builtin:cloud", "resolution": 24})", "application/json");
