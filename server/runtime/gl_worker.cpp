@@ -4,6 +4,8 @@
 
 #include <chrono>
 
+#include "core/base/errors.h"
+
 namespace volstyle::server {
 namespace {
 constexpr auto kTrimInterval = std::chrono::seconds(5);
@@ -33,6 +35,9 @@ GlWorker::~GlWorker() {
 void GlWorker::post(std::function<void(core::GpuDevice&)> task, bool isLong) {
     {
         std::lock_guard lock(m_mutex);
+        // A task queued after the thread drained its queues would never run, and whoever waits
+        // for it (a live stream freeing its read-back slots as the server stops) would wait for ever.
+        if (m_stopping) throw GpuError("the GL thread is stopping");
         (isLong ? m_long : m_short).push_back(std::move(task));
     }
     m_wake.notify_one();
