@@ -24,13 +24,16 @@ int ReadbackRing::acquire(size_t bytes) {
         if (!s.held.compare_exchange_strong(expected, true)) continue;
         if (s.bytes < bytes) {
             s.buffer.reset();
-            s.buffer = createBuffer(bytes, nullptr, kMapping | GL_CLIENT_STORAGE_BIT, "readback-slot-" + std::to_string(i));
-            s.mapped = static_cast<const uint8_t*>(glMapNamedBufferRange(s.buffer.id(), 0, GLsizeiptr(bytes), kMapping));
-            if (!s.mapped) {
+            s.bytes = 0;
+            s.mapped = nullptr;
+            try {
+                s.buffer = createBuffer(bytes, nullptr, kMapping | GL_CLIENT_STORAGE_BIT, "readback-slot-" + std::to_string(i));
+                s.mapped = static_cast<const uint8_t*>(glMapNamedBufferRange(s.buffer.id(), 0, GLsizeiptr(bytes), kMapping));
+                if (!s.mapped) throw GpuError("a read-back buffer of " + std::to_string(bytes) + " bytes could not be mapped");
+            } catch (...) {
                 s.buffer.reset();
-                s.bytes = 0;
                 s.held = false;
-                throw GpuError("a read-back buffer of " + std::to_string(bytes) + " bytes could not be mapped");
+                throw;
             }
             s.bytes = bytes;
         }

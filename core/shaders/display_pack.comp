@@ -3,7 +3,7 @@
 // PNG): linear × 2^exposure, clamped to [0, 1] (NaN: black), sRGB-encoded, rounded to 8 bits.
 #include "layout.h"
 
-layout(local_size_x = kWorkgroup1D) in;
+layout(local_size_x = kWorkgroup2D, local_size_y = kWorkgroup2D) in;
 
 layout(std140, binding = kBindingParams) uniform DisplayPackBlock { DisplayPackParams u; };
 layout(std430, binding = kBindingImageOut) readonly buffer b_Image { vec4 pixels[]; };
@@ -15,8 +15,9 @@ float srgb(float v) {
 }
 
 void main() {
-    int i = int(gl_GlobalInvocationID.x);
-    if (i >= u.count.x) return;
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (px.x >= u.size.x || px.y >= u.size.y) return;
+    uint i = uint(px.y) * uint(u.size.x) + uint(px.x);  // rows as the frame's: top first
     vec4 c = pixels[i];
     display[i] = packUnorm4x8(vec4(srgb(c.r), srgb(c.g), srgb(c.b), 1.0));  // R in the lowest byte: R, G, B, 255 in memory
 }

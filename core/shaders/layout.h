@@ -151,8 +151,8 @@ VS_CONSTANT(int, kBindingScatterDepth, 2);  /* SSBO float[n*n]: the manipulated 
  * b_Image (kBindingImageOut) become sRGB bytes R, G, B, 255 per pixel in b_Display, as a PNG of
  * the frame shows them (exposure, clamp to [0, 1], sRGB, rounded). */
 struct DisplayPackParams {
-    VS_IVEC4 count;  /* x: pixels */
-    VS_VEC4 scale;   /* x: 2^exposure */
+    VS_IVEC4 size;  /* x, y: the frame's width and height */
+    VS_VEC4 scale;  /* x: 2^exposure */
 };
 VS_CONSTANT(int, kBindingDisplayOut, 1);  /* SSBO uint[pixels]: packed RGBX bytes (a read-back slot) */
 

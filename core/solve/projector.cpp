@@ -298,8 +298,12 @@ void Projector::adoptRows(size_t view, std::shared_ptr<const SparseRows> rows) {
     VOLSTYLE_CHECK(rows->columns, ==, elementCount());
     VOLSTYLE_CHECK(m_merged == nullptr, ==, true);  // merged rows are every view's: adopt them whole
     if (!v.rows) m_stats.cachedViews++;
-    else m_stats.cacheBytes -= sparseRowsBytes(v.rows->rows, v.rows->columns, v.rows->entries, v.rows->channels);
+    else {
+        m_stats.cacheBytes -= sparseRowsBytes(v.rows->rows, v.rows->columns, v.rows->entries, v.rows->channels);
+        m_stats.cachedEntries -= v.rows->entries;
+    }
     m_stats.cacheBytes += sparseRowsBytes(rows->rows, rows->columns, rows->entries, rows->channels);
+    m_stats.cachedEntries += rows->entries;
     v.rows = std::move(rows);
 }
 

@@ -225,19 +225,27 @@ void Solver::State::cacheOperator() {
     std::string mergedKey = "merged";
     for (const auto& k : keys) mergedKey += "|" + k;
     if (auto merged = cache && views.size() > 1 ? cache->findRows(mergedKey) : nullptr) W->adoptMergedRows(std::move(merged));
+    std::vector<bool> adopted(views.size(), false);
+    size_t adoptedEntries = 0;
     for (size_t v = 0; v < views.size() && cache && !W->merged(); ++v)
-        if (auto rows = cache->findRows(keys[v])) W->adoptRows(v, std::move(rows));
+        if (auto rows = cache->findRows(keys[v])) {
+            adoptedEntries += rows->entries;
+            adopted[v] = true;
+            W->adoptRows(v, std::move(rows));
+        }
     // Each view's own rows stay beside the merged ones (a stroke's re-solve then rebuilds one
     // view's) while both fit in half the cache; past that, the merged rows alone.
     W->keepViewRowsWithin(cache ? cache->budget() / 2 : 0);
     // Rows only for the pixels that count (a weight > 0): the others' rows would be multiplied by 0.
     W->cacheRows(opt.rowCacheBytes, channels, &sqrtW);
     // What a miss would cost again: this solve's time writing rows (all of it for the merged
-    // ones, a view's share by its entries for its own; a hit's put keeps the cost it was made at).
+    // ones; a view built here, its share by entries of the views built here; a view taken from the
+    // cache keeps the cost it was made at).
     const ProjectorStats& w = W->stats();
+    const size_t builtEntries = w.cachedEntries > adoptedEntries ? w.cachedEntries - adoptedEntries : 0;
     for (size_t v = 0; v < views.size() && cache; ++v)
         if (auto rows = W->rowsOf(v))
-            cache->putRows(keys[v], rows, w.cacheMs * double(rows->entries) / double(std::max<size_t>(w.cachedEntries, 1)));
+            cache->putRows(keys[v], rows, adopted[v] ? 0.0 : w.cacheMs * double(rows->entries) / double(std::max<size_t>(builtEntries, 1)));
     if (cache && W->merged()) cache->putRows(mergedKey, W->mergedRows(), w.cacheMs);
     report.rowCacheMs = w.cacheMs, report.rowCacheBytes = w.cacheBytes, report.cachedViews = w.cachedViews;
     if (!W->allCached()) return;

@@ -9,6 +9,7 @@
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
 #include "core/gl/object.h"
+#include "core/gl/readback_ring.h"
 #include "core/gl/shader_builder.h"
 #include "core/render/gl_convert.h"
 #include "core/shaders/layout.h"
@@ -185,7 +186,10 @@ StylizedFrame Stylizer::renderPass(const StylizerScene& scene, const StylizeSett
     else stylize::readBack(f, out);
     out.readbackMs = msSince(t);
     out.totalMs = msSince(t0);
-    if (glGetError() == GL_OUT_OF_MEMORY) throw OutOfMemory("out of GPU memory while stylizing");
+    if (glGetError() == GL_OUT_OF_MEMORY) {
+        if (out.displaySlot >= 0) display->ring->release(out.displaySlot);  // nobody will read it
+        throw OutOfMemory("out of GPU memory while stylizing");
+    }
     return out;
 }
 

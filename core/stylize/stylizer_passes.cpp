@@ -321,29 +321,33 @@ void shade(Frame& f, const std::function<void(layout::StylizeParams&)>& bindMedi
 
 void readBackDisplay(Frame& f, const DisplayReadback& display, StylizedFrame& out) {
     const StylizerTargets& t = f.targets;
-    const size_t pixels = size_t(f.scene.camera.width) * size_t(f.scene.camera.height);
-    const int slot = display.ring->acquire(pixels * sizeof(uint32_t));
+    const Camera& cam = f.scene.camera;
+    const int slot = display.ring->acquire(size_t(cam.width) * size_t(cam.height) * sizeof(uint32_t));
     try {
         layout::DisplayPackParams p;
-        p.count.x = int32_t(pixels);
+        p.size = {cam.width, cam.height, 0, 0};
         p.scale.x = float(std::exp2(display.exposure));
         f.device.setParams(p);
         glUseProgram(f.device.program(gl::ShaderBuilder("display_pack.comp")).id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingImageOut, t.pixels.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingDisplayOut, display.ring->buffer(slot).id());
-        glDispatchCompute(GLuint((pixels + layout::kWorkgroup1D - 1) / layout::kWorkgroup1D), 1, 1);
+        // 2D: a 4096² frame is 65,536 workgroups of 256 in one dimension, past GL's guaranteed 65,535.
+        const int g = layout::kWorkgroup2D;
+        glDispatchCompute(GLuint((cam.width + g - 1) / g), GLuint((cam.height + g - 1) / g), 1);
         out.displayBytes = display.ring->complete(slot);
         out.displaySlot = slot;
+        StylizeSettings rest = f.settings;  // the AOVs and maps as asked; the frame is in the slot
+        rest.pick.reset();
+        if (rest.readAovs || rest.readShadowMaps) {
+            Frame others{f.device, f.scene, rest, f.map, f.targets, {}, f.p};
+            readBack(others, out);
+            out.frame = Image();
+        }
     } catch (...) {
         display.ring->release(slot);
+        out.displayBytes = nullptr;
+        out.displaySlot = -1;
         throw;
-    }
-    StylizeSettings rest = f.settings;  // the AOVs and maps as asked; the frame is in the slot
-    rest.pick.reset();
-    if (rest.readAovs || rest.readShadowMaps) {
-        Frame others{f.device, f.scene, rest, f.map, f.targets, {}, f.p};
-        readBack(others, out);
-        out.frame = Image();
     }
 }
 

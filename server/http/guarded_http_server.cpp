@@ -96,7 +96,8 @@ private:
         return allowance - secondsSince(m_start);
     }
     bool waitFor(short events, double seconds) const {
-        const short r = pollSliced(m_sock, events, seconds, [this] { return m_server.serving(); });
+        // is_running(), not serving(): a reply already being written finishes as the server stops.
+        const short r = pollSliced(m_sock, events, seconds, [this] { return m_server.is_running(); });
         return (r & events) != 0;
     }
 

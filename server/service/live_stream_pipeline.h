@@ -47,8 +47,13 @@ public:
     /// Hands a rendered frame's slot back (any thread; nothing when it holds none).
     void release(const RenderedLiveFrame& f);
 
-    /// The render started while the previous frame was encoded; valid() when there is one.
+    /// The render started while the previous frame was encoded (valid() when there is one), and
+    /// the revision it renders.
     std::future<RenderedLiveFrame> next;
+    uint64_t nextRevision = 0;
+    /// The revision whose render failed last (0: none): what the stream reports as failed, and the
+    /// one it waits past (a newer revision is rendered, not skipped).
+    uint64_t failedRevision = 0;
 
 private:
     GlExecutor& m_gl;

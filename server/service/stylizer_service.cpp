@@ -270,7 +270,12 @@ std::optional<LiveFrame> StylizerService::nextLiveFrame(LiveStreamPipeline& pipe
     Session& s = pipeline.session();
     RenderedLiveFrame r;
     if (pipeline.next.valid()) {
-        r = pipeline.next.get();  // rendered while the last frame was encoded and sent
+        try {
+            r = pipeline.next.get();  // rendered while the last frame was encoded and sent
+        } catch (...) {
+            pipeline.failedRevision = pipeline.nextRevision;
+            throw;
+        }
     } else {
         StylizerSnapshot snapshot;
         {
@@ -280,7 +285,12 @@ std::optional<LiveFrame> StylizerService::nextLiveFrame(LiveStreamPipeline& pipe
             if (s.stylizer.live.revision == s.stylizer.revision) return s.stylizer.live;  // another stream rendered it
             snapshot = snapshotOf(s);
         }
-        r = startLiveFrame(pipeline, snapshot).get();
+        try {
+            r = startLiveFrame(pipeline, snapshot).get();
+        } catch (...) {
+            pipeline.failedRevision = snapshot.revision;
+            throw;
+        }
     }
     // The newest revision renders on the GL thread while this frame is encoded and sent (a
     // burst of changes renders only its last: a slow client gets the newest frame, no backlog).
@@ -290,6 +300,7 @@ std::optional<LiveFrame> StylizerService::nextLiveFrame(LiveStreamPipeline& pipe
             const StylizerSnapshot snapshot = snapshotOf(s);
             lock.unlock();
             pipeline.next = startLiveFrame(pipeline, snapshot);
+            pipeline.nextRevision = snapshot.revision;
         }
     } catch (...) {  // e.g. over the budget: the next call renders it again and reports that
     }

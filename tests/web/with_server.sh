@@ -11,7 +11,7 @@ out=$(mktemp)
 "$binary" serve --port 0 --data-dir "$data" --web-dir "$root/web" ${VOLSTYLE_SERVE_ARGS:-} > "$out" 2>&1 &
 server=$!
 # On a failure the server's own log is printed: what it was doing is the first clue.
-trap 'rc=$?; kill $server 2>/dev/null; wait $server 2>/dev/null; [ $rc -eq 0 ] || [ $rc -eq 77 ] || { echo "--- the server log (last 40 lines):"; tail -n 40 "$out"; }; rm -rf "$data" "$out"' EXIT
+trap 'rc=$?; set +e; kill $server 2>/dev/null; wait $server 2>/dev/null; [ $rc -eq 0 ] || [ $rc -eq 77 ] || { echo "--- the server log (last 40 lines):"; tail -n 40 "$out"; }; rm -rf "$data" "$out"' EXIT
 port=
 for _ in $(seq 100); do
   port=$(sed -n 's|^volstyle: serving http://127.0.0.1:\([0-9]*\)/.*|\1|p' "$out")

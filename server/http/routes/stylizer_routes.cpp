@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include <functional>
+#include <utility>
 
 #include "core/image/image_io.h"
 #include "core/stylize/stylizer.h"
@@ -84,7 +85,9 @@ void streamLive(RouteContext& c, httplib::Response& res, std::shared_ptr<Session
                     sink.done();
                     return true;
                 }
-                sent = c.services.stylizer.stylizer(*s).revision;  // wait for the next change
+                // The revision that failed (a pipelined render's may be older than the newest,
+                // which then renders next); else the newest: wait for the next change.
+                sent = pipeline->failedRevision ? std::exchange(pipeline->failedRevision, 0) : c.services.stylizer.stylizer(*s).revision;
                 message = format.failed(sent, protocol::errorBody(e.code, e.message, e.details, "")["error"]);
             }
             if (!message.empty() && !sink.write(message.data(), message.size())) return false;  // the client left
