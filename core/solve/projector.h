@@ -82,7 +82,7 @@ public:
     /// Once rows are merged, each view's own rows stay beside them only while both together take
     /// at most `bytes` (default 0: never). Kept, a later solve whose one view changed (a stroke)
     /// rebuilds that view's rows alone; dropped, memory is halved and the solver's cache holds a
-    /// problem twice as large (issue #40: 10 views at 640×360 overflowed the 1 GiB cache).
+    /// problem twice as large (issue #40).
     void keepViewRowsWithin(size_t bytes) { m_keepViewRowsBytes = bytes; }
     bool allCached() const { return m_stats.cachedViews == m_views.size(); }
     /// A view's rows, from an earlier solve (SolveCache) or for one: rows written for this view's

@@ -106,7 +106,9 @@ void SolveCache::clear() {
     m_bytes = 0;
 }
 
-std::string rowsKey(const Volume& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,
+VolumeKey volumeKeyOf(const Volume& volume, Unknown unknown) { return {boxKey(volume), gridKey(volume), otherPropertiesKey(volume, unknown)}; }
+
+std::string rowsKey(const VolumeKey& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,
                     const Camera& camera, int channels, const std::vector<float>& sqrtWeights, size_t firstPixel) {
     const bool lit = options.unknown == Unknown::Albedo || options.unknown == Unknown::EmissionAlbedo;
     std::vector<uint8_t> mask(size_t(camera.width) * camera.height);
@@ -117,16 +119,16 @@ std::string rowsKey(const Volume& volume, const Lighting& lighting, const SolveO
     return fmt::format("rows:{}:{}:{}x{}x{}:{}:{}:{}:{}:{}:mask{:x}", int(options.unknown), int(options.basis), unknownDims.x,
                        unknownDims.y, unknownDims.z, channels, marchKey(options),
                        // extinction solves' rows are segment lengths: the grid's box, not its values
-                       options.unknown == Unknown::Extinction ? boxKey(volume) : gridKey(volume),
+                       options.unknown == Unknown::Extinction ? volume.box : volume.grid,
                        lit ? lightingKey(lighting) : "", cameraKey(camera), hashOf(mask.data(), mask.size()));
 }
 
-std::string rendersKey(const Volume& volume, const Lighting& lighting, const SolveOptions& options, const Camera& camera,
+std::string rendersKey(const VolumeKey& volume, const Lighting& lighting, const SolveOptions& options, const Camera& camera,
                        bool withAlbedoOne) {
     const Unknown u = options.unknown;
-    return fmt::format("renders:{}:{}:{}:{}:{}", int(u), withAlbedoOne ? 1 : 0, marchKey(options), gridKey(volume),
+    return fmt::format("renders:{}:{}:{}:{}:{}", int(u), withAlbedoOne ? 1 : 0, marchKey(options), volume.grid,
                        lightingKey(lighting)) +
-           otherPropertiesKey(volume, u) + ":" + cameraKey(camera);
+           volume.others + ":" + cameraKey(camera);
 }
 
 std::string lastSolveKey(const Volume& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,

@@ -12,8 +12,8 @@
 /// holds (GreedyDual-Size, Cao & Irani 1997): each entry's priority is the clock L plus the
 /// milliseconds it took to make per byte it holds; the lowest goes and L becomes its priority, a
 /// hit raises an entry to L + its cost per byte again. Recency still counts (L only grows), but a
-/// view's renders (7 MiB that took 0.9 s) outlive rows of 946 MiB that took 6.5 s (issue #40: the
-/// 10-view problem (c) rendered every view again after plain least-recently-used dropped them).
+/// view's renders (7 MiB that took 0.9 s) outlive a view's rows (95 MiB that took 0.65 s) (issue
+/// #40: the 10-view problem (c) rendered every view again after least-recently-used dropped them).
 
 #include <algorithm>
 #include <cstdint>
@@ -86,13 +86,21 @@ private:
     std::unordered_map<std::string, Entry> m_entries;
 };
 
+/// What the keys below take from a volume: its box, its extinction (and brick layout), and the
+/// grids `unknown` does not solve for. Hashed once per solve, not once per view: (c)'s ten views
+/// hashed a 128³ volume's 25 MB grids twenty times, most of its next solve's 1.8 s of "rows".
+struct VolumeKey {
+    std::string box, grid, others;
+};
+VolumeKey volumeKeyOf(const Volume& volume, Unknown unknown);
+
 /// The key of one view's rows: the extinction (and, for albedo, the lighting), the camera, the
 /// unknowns' grid and basis, the march, and which of the view's pixels have weight.
-std::string rowsKey(const Volume& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,
+std::string rowsKey(const VolumeKey& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,
                     const Camera& camera, int channels, const std::vector<float>& sqrtWeights, size_t firstPixel);
 /// The key of one view's bound renders: every grid but the unknowns' own (a solve changes only
 /// those, and the fixed part it needs excludes them), the lighting, the camera, the march.
-std::string rendersKey(const Volume& volume, const Lighting& lighting, const SolveOptions& options, const Camera& camera,
+std::string rendersKey(const VolumeKey& volume, const Lighting& lighting, const SolveOptions& options, const Camera& camera,
                        bool withAlbedoOne);
 
 /// The key of the last solve over these views: everything a solve's optimum depends on but the

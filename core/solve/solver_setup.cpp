@@ -150,9 +150,10 @@ void Solver::State::buildObservations() {
     viewRenders.assign(views.size(), nullptr);
     std::vector<std::string> keys(views.size());
     std::vector<SolveView> missing;
+    const VolumeKey volumeKey = cache ? volumeKeyOf(volume, u) : VolumeKey{};
     for (size_t v = 0; v < views.size(); ++v) {
         if (!cache) break;
-        keys[v] = rendersKey(volume, views[v].lightingFor(lighting), opt, views[v].camera, opt.analyzeReach);
+        keys[v] = rendersKey(volumeKey, views[v].lightingFor(lighting), opt, views[v].camera, opt.analyzeReach);
         viewRenders[v] = cache->findRenders(keys[v]);
     }
     for (size_t v = 0; v < views.size(); ++v)
@@ -215,11 +216,13 @@ void Solver::State::buildObservations() {
 }
 
 void Solver::State::cacheOperator() {
+
     if (opt.rowCacheBytes == 0) return;
     const int channels = weightChannels(volume, lighting, opt.unknown);
     std::vector<std::string> keys(views.size());
+    const VolumeKey volumeKey = cache ? volumeKeyOf(volume, opt.unknown) : VolumeKey{};
     for (size_t v = 0; v < views.size() && cache; ++v)
-        keys[v] = rowsKey(volume, lighting, opt, udims, views[v].camera, channels, sqrtWHost, W->viewRange(v).first);
+        keys[v] = rowsKey(volumeKey, lighting, opt, udims, views[v].camera, channels, sqrtWHost, W->viewRange(v).first);
     // All views' rows as one (Projector::mergeRows), kept under the key of the rows it was made
     // of; only they are kept (each view is a range of them), else each view's own.
     std::string mergedKey = "merged";
