@@ -14,12 +14,11 @@
 #include "core/solve/gpu_vector.h"
 #include "core/solve/projector.h"
 #include "core/solve/reach.h"
+#include "core/solve/solve_cache.h"
 #include "core/scene/solve_options.h"
 #include "core/solve/solver.h"
 
 namespace volstyle::core {
-
-class SolveCache;
 
 /// Regularizer rows of one block of unknowns (emission, albedo or extinction): √(λ_lap/M) L and
 /// √((λ0+λ1)/M) (a − t) with t = λ1/(λ0+λ1), M the block's hull unknowns (SPEC §2).
@@ -68,6 +67,8 @@ struct Solver::State final : BoundedLeastSquares {
     /// comparison (SolveCache::LastSolve), under this key.
     std::vector<float> obsHost, rawWeightHost;
     std::string lastKey;
+    /// What the cache's keys take from the volume, hashed once per solve (buildObservations; with a cache).
+    VolumeKey volumeKey;
     /// Per view, the squared residual of the pixels a re-solve after a stroke leaves untouched
     /// (they see no unknown that moves); added to each view's RMS. Empty: none.
     std::vector<Vec3d> viewUntouched;
