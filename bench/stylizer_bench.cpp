@@ -123,7 +123,7 @@ std::shared_ptr<const Image> warmTransferFunction() {
 }  // namespace
 
 /// The live stream's read-back (see the file's comment): median of 5 frames each way.
-void liveReadback(GpuDevice& device, Stylizer& stylizer) {
+void liveReadback(Stylizer& stylizer) {
     StylizerScene scene = builtinForest();
     StylizeSettings lean;
     readBackOnly(lean, StylizerOutput::Frame);
@@ -150,7 +150,6 @@ void liveReadback(GpuDevice& device, Stylizer& stylizer) {
         auto median = [](std::vector<double> v) { std::sort(v.begin(), v.end()); return v[v.size() / 2]; };
         std::printf("  %4dx%-4d   %17.1f  %14.1f  | %25.1f  %6.1f\n", w, h, median(fr), median(fe), median(dr), median(de));
     }
-    (void)device;
 }
 
 int main(int argc, char** argv) {
@@ -172,7 +171,7 @@ int main(int argc, char** argv) {
     Stylizer stylizer(*device);
     if (live) {
         std::cout << "device: " << device->capabilities().renderer << "\n";
-        liveReadback(*device, stylizer);
+        liveReadback(stylizer);
         return 0;
     }
     StylizerScene scene = builtinForest();

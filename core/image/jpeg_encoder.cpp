@@ -64,7 +64,6 @@ std::string compress(const uint8_t* pixels, int width, int height, int format, i
 }  // namespace
 
 std::string encodeJpeg(const Image& image, int quality, double exposure) {
-    if (quality < 1 || quality > 100) throw InvalidArgument("JPEG quality must be 1–100, got " + std::to_string(quality));
     const std::vector<uint8_t> rgb = displayBytes(image, exposure);
     return compress(rgb.data(), image.width, image.height, TJPF_RGB, quality);
 }
