@@ -7,13 +7,17 @@ const state = {
   sid: null, version: 1,
   orbit: { azimuth: 0, elevation: 0.06, distance: 3.4 }, target: [0, -0.05, 0],
   views: [], selected: null, job: null, events: null, objectives: [], maxIterations: 30,
-  renderBusy: false, renderPending: false,
 };
 
+// The status line, and its recent history with the requests still in flight: what a bug report
+// (or a browser test that waited in vain) needs to say what the page last did and awaits.
+const pageLog = { statuses: [], inflight: new Map(), next: 0 };
 function status(message, kind = '') {
   const s = $('status');
   s.textContent = message;
   s.className = kind;
+  pageLog.statuses.push({ at: Math.round(performance.now()), message, kind });
+  if (pageLog.statuses.length > 50) pageLog.statuses.shift();
 }
 
 // fetch wrapper: JSON in, JSON or Blob out; API errors become exceptions with the server's words.
@@ -23,6 +27,16 @@ async function call(method, path, body, { raw = false, type = 'application/json'
     init.body = type === 'application/json' ? JSON.stringify(body) : body;
     init.headers['Content-Type'] = type;
   }
+  const id = ++pageLog.next;
+  pageLog.inflight.set(id, `${method} ${path} since ${Math.round(performance.now())} ms`);
+  try {
+    return await fetchCall(method, path, init, raw);
+  } finally {
+    pageLog.inflight.delete(id);
+  }
+}
+
+async function fetchCall(method, path, init, raw) {
   const res = await fetch(api + path, init);
   if (!res.ok) {
     let message = `${res.status} ${res.statusText}`;
@@ -67,25 +81,6 @@ function camera(size) {
     target: t, up: [0, 1, 0], fov_y_deg: kFovYDeg, width: size, height: size,
     near: Math.max(0, distance - 1.5 * r), far: distance + 1.5 * r,
   };
-}
-
-async function renderViewport() {
-  if (!state.sid) return;
-  if (state.renderBusy) { state.renderPending = true; return; }
-  state.renderBusy = true;
-  $('viewport-busy').style.display = 'block';
-  try {
-    const body = { camera: camera(320), format: 'jpeg' };  // a preview: JPEG encodes in ~1 ms where PNG takes ~10
-    if ($('translucent').checked) Object.assign(body, { mode: 'translucent', translucent: translucentOptions() });
-    const blob = await call('POST', `/sessions/${state.sid}/render`, body, { raw: true });
-    $('viewport').src = URL.createObjectURL(blob);
-  } catch (e) {
-    status(e.message, 'error');
-  } finally {
-    state.renderBusy = false;
-    $('viewport-busy').style.display = 'none';
-    if (state.renderPending) { state.renderPending = false; renderViewport(); }
-  }
 }
 
 // The translucent preview's parameters from the sliders (docs/TRANSLUCENT.md).

@@ -89,14 +89,6 @@
     }
   }
 
-  // Frames per second over the last two seconds of the stream.
-  function frameRate() {
-    const now = performance.now();
-    sh.arrivals.push(now);
-    while (sh.arrivals.length > 1 && now - sh.arrivals[0] > 2000) sh.arrivals.shift();
-    return sh.arrivals.length > 1 ? (sh.arrivals.length - 1) * 1000 / (now - sh.arrivals[0]) : 0;
-  }
-
   // `blob`: the frame's JPEG as the stream brought it (shown without another request).
   async function showFrame(event, blob) {
     sh.revision = event.revision;
@@ -114,7 +106,7 @@
     img.src = src;
     $('shafts-download').href = event.url;
     if (window.volstyleTf) window.volstyleTf.frameShown();
-    const fps = blob ? ` · ${frameRate().toFixed(1)} fps` : '';
+    const fps = blob ? ` · ${streamFrameRate(sh.arrivals).toFixed(1)} fps` : '';
     $('shafts-info').textContent = `revision ${event.revision} · ${event.width}×${event.height} · ${event.render_ms.toFixed(0)} ms${fps}`;
     if (!sh.putBusy) $('shafts-busy').style.display = 'none';
   }
@@ -138,41 +130,6 @@
     }  // text/plain: a keep-alive
   }
 
-  async function readStream(controller) {
-    const res = await fetch(`${api}${base()}/stream`, { signal: controller.signal });
-    if (!res.ok) throw new Error(`the live stream answered ${res.status}`);
-    const reader = res.body.getReader();
-    let buf = new Uint8Array(0);
-    const more = async () => {
-      const { value, done } = await reader.read();
-      if (done) return false;
-      const b = new Uint8Array(buf.length + value.length);
-      b.set(buf);
-      b.set(value, buf.length);
-      buf = b;
-      return true;
-    };
-    const headEnd = () => {
-      for (let i = 0; i + 3 < buf.length; ++i) if (buf[i] === 13 && buf[i + 1] === 10 && buf[i + 2] === 13 && buf[i + 3] === 10) return i;
-      return -1;
-    };
-    for (;;) {
-      let end;
-      while ((end = headEnd()) < 0) if (!(await more())) return;
-      const headers = {};
-      for (const line of new TextDecoder().decode(buf.subarray(0, end)).split('\r\n')) {
-        const colon = line.indexOf(':');
-        if (colon > 0) headers[line.slice(0, colon).trim().toLowerCase()] = line.slice(colon + 1).trim();
-      }
-      const start = end + 4, length = Number(headers['content-length'] || 0);
-      while (buf.length < start + length + 2) if (!(await more())) return;
-      const body = buf.slice(start, start + length);
-      buf = buf.slice(start + length + 2);  // the part's closing CRLF
-      if (controller.signal.aborted) return;
-      onPart(headers, body);
-    }
-  }
-
   function disconnect() {
     if (sh.stream) sh.stream.abort();
     sh.stream = null;
@@ -182,7 +139,7 @@
     const controller = new AbortController();
     sh.stream = controller;
     sh.arrivals = [];
-    readStream(controller).catch((err) => { if (!controller.signal.aborted) status(`the live stream stopped: ${err.message}`, 'error'); });
+    readMultipartStream(`${api}${base()}/stream`, controller.signal, onPart).catch((err) => { if (!controller.signal.aborted) status(`the live stream stopped: ${err.message}`, 'error'); });
   }
 
   function controlsFromScene(s) {

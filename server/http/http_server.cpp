@@ -105,6 +105,7 @@ HttpServer::HttpServer(ServerOptions options) {
     addViewRoutes(m->routes);
     addJobRoutes(m->routes);
     addStylizerRoutes(m->routes);
+    addViewportRoutes(m->routes);
     if (!m->opt.webDir.empty()) m->http.set_mount_point("/", m->opt.webDir);  // httplib refuses '..' paths
 }
 

@@ -183,6 +183,7 @@ std::shared_ptr<core::GpuVolume> ServiceContext::commitStep(Session& s, core::Vo
     s.volume.shows = shows > 0 ? shows : n;
     s.volume.versions.add(n);
     saved(s);
+    shownChanged(s);
     if (s.stylizer.scene.volume) stylizerChanged(s);  // its medium is the session's volume: live frames follow
     return std::move(s.volume.gpu);
 }
@@ -210,6 +211,11 @@ std::shared_ptr<core::GpuVolume> ServiceContext::lockedSessionGpu(Session& s) {
     return sessionGpu(s);
 }
 
+void ServiceContext::shownChanged(Session& s) {
+    ++s.shownRevision;
+    s.changed.notify_all();
+}
+
 void ServiceContext::stylizerChanged(Session& s, bool history) {
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
     if (persist) {
@@ -217,7 +223,7 @@ void ServiceContext::stylizerChanged(Session& s, bool history) {
         persist->saveStylizerScene(s.id, s.stylizer.scene, s.stylizer.meshRefs, s.stylizer.revision + 1);
     }
     ++s.stylizer.revision;
-    s.stylizerChanged.notify_all();
+    s.changed.notify_all();
 }
 
 core::Stylizer& ServiceContext::stylizerEngine(core::GpuDevice& device) {

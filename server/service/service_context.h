@@ -49,6 +49,9 @@ struct ServiceContext {
     /// caller's (an edit's bookkeeping is skipped).
     std::shared_ptr<core::GpuVolume> commitStep(Session& s, core::Volume volume, int shows);
     void release(std::shared_ptr<core::GpuVolume> gpu);
+    /// What a render of `s` shows changed (a version, the lighting, the environment map): moves
+    /// its shownRevision and wakes its streams (the lock held).
+    void shownChanged(Session& s);
     /// Writes the stylizer's scene, moves its revision and wakes its streams (the lock held).
     /// `history`: the undo/redo stacks changed too (written apart from the scene).
     void stylizerChanged(Session& s, bool history = false);

@@ -10,6 +10,7 @@
 #include "server/service/job_service.h"
 #include "server/service/sessions_service.h"
 #include "server/service/stylizer_service.h"
+#include "server/service/viewport_service.h"
 #include "server/service/volume_service.h"
 
 namespace volstyle::server {
@@ -27,6 +28,7 @@ struct Services {
     ServiceContext context;
     SessionsService sessions{context};
     VolumeService volumes{context};
+    ViewportService viewport{context, volumes};
     StylizerService stylizer{context};
     JobService jobs{context};
 };

@@ -52,6 +52,7 @@ EnvironmentMapInfo SessionsService::setEnvironmentMap(Session& s, const std::str
     if (s.light.environmentMap && l.environment.map == s.light.environmentMap) l.environment.map = map;
     s.light.environmentMap = map;
     m_ctx.saved(s);
+    m_ctx.shownChanged(s);
     return *environmentMapInfo(s);
 }
 

@@ -47,7 +47,7 @@ void SessionsService::remove(const std::string& id) {
         jobs = s->jobs;
         if (m_ctx.persist) m_ctx.persist->removeSession(s->id);
     }
-    s->stylizerChanged.notify_all();  // its live streams end
+    s->changed.notify_all();  // its live streams end
     bool holdsGpu = false;
     {
         std::lock_guard lock(s->mutex);
@@ -71,6 +71,7 @@ core::Lighting SessionsService::setLighting(Session& s, const protocol::Lighting
     std::lock_guard lock(s.mutex);
     s.light.lighting = request.resolve(s.light.environmentMap);
     m_ctx.saved(s);
+    m_ctx.shownChanged(s);
     return s.light.lighting;
 }
 

@@ -280,7 +280,7 @@ std::optional<LiveFrame> StylizerService::nextLiveFrame(LiveStreamPipeline& pipe
         StylizerSnapshot snapshot;
         {
             std::unique_lock lock(s.mutex);
-            if (!s.stylizerChanged.wait_for(lock, wait, [&] { return s.removed || s.stylizer.revision > after; })) return std::nullopt;
+            if (!s.changed.wait_for(lock, wait, [&] { return s.removed || s.stylizer.revision > after; })) return std::nullopt;
             if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
             if (s.stylizer.live.revision == s.stylizer.revision) return s.stylizer.live;  // another stream rendered it
             snapshot = snapshotOf(s);

@@ -17,6 +17,7 @@
 #include "core/scene/render_settings.h"
 #include "core/volume/volume.h"
 #include "protocol/error_code.h"
+#include "protocol/requests.h"
 #include "protocol/response_values.h"
 #include "server/state/stylizer_state.h"
 #include "server/state/version_history.h"
@@ -81,6 +82,12 @@ struct LightingState {
     std::shared_ptr<const core::Image> environmentMap;
 };
 
+/// The painting page's viewport (PUT …/viewport, issue #40): the render its live stream shows.
+struct ViewportState {
+    protocol::RenderRequest request;
+    uint64_t revision = 0;  ///< moves with each PUT; 0: never set (the stream waits for one)
+};
+
 struct Session {
     std::string id;
     std::string created;  ///< ISO 8601, UTC
@@ -92,7 +99,13 @@ struct Session {
     StylizerState stylizer = defaultStylizer();
     std::vector<std::string> jobs;
     std::vector<DamagedFile> damaged;      ///< files of the session found unreadable (quarantined)
-    std::condition_variable stylizerChanged;  ///< notified (with `mutex`) when its revision moves
+    ViewportState viewport;
+    /// Moves (with `mutex`) when what a render of the session shows changes: a new version, the
+    /// lighting, the environment map. The viewport's stream renders again when it moves.
+    uint64_t shownRevision = 0;
+    /// Notified (with `mutex`) when the stylizer's revision, the viewport or shownRevision moves,
+    /// and when the session is deleted: what live streams wait on.
+    std::condition_variable changed;
     /// Set by DELETE: work still queued for the session neither caches GPU copies nor writes it
     /// back to disk (it answers not_found instead).
     bool removed = false;

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "server/state/stylizer_state.h"
+#include "multipart_stream.h"
 #include "stylizer_fixture.h"
 
 namespace volstyle::test {
@@ -239,52 +240,11 @@ TEST_F(StylizerApi, TheMjpegStreamSendsEachRevisionsFrameAndEndsWithTheSession) 
     // part naming its revision; the JPEG shows the PNG frame of that revision to the codec's error.
     json s = smallForest();
     ASSERT_EQ(putScene(s)->status, 200);
-    struct Part {
-        std::map<std::string, std::string> headers;
-        std::string body;
-    };
-    std::vector<Part> parts;
-    std::mutex m;
-    std::string contentType;
-    std::thread reader([&] {
-        httplib::Client c("127.0.0.1", m_port);
-        c.set_read_timeout(120, 0);
-        std::string buffer;
-        c.Get((base + "/stream").c_str(), [&](const httplib::Response& r) { contentType = r.get_header_value("Content-Type"); return true; },
-              [&](const char* data, size_t n) {
-                  buffer.append(data, n);
-                  for (;;) {  // --boundary CRLF, headers, CRLF CRLF, Content-Length bytes, CRLF
-                      const size_t head = buffer.find("\r\n\r\n");
-                      if (head == std::string::npos) return true;
-                      Part p;
-                      std::istringstream lines(buffer.substr(0, head));
-                      for (std::string line; std::getline(lines, line);) {
-                          const size_t colon = line.find(':');
-                          if (!line.empty() && line.back() == '\r') line.pop_back();
-                          if (colon != std::string::npos) p.headers[line.substr(0, colon)] = line.substr(colon + 2);
-                      }
-                      const size_t length = std::stoul(p.headers["Content-Length"]);
-                      if (buffer.size() < head + 4 + length + 2) return true;
-                      p.body = buffer.substr(head + 4, length);
-                      buffer.erase(0, head + 4 + length + 2);
-                      std::lock_guard lock(m);
-                      parts.push_back(std::move(p));
-                  }
-              });
-    });
-    auto jpegs = [&] {
-        std::lock_guard lock(m);
-        size_t n = 0;
-        for (const auto& p : parts) n += p.headers.at("Content-Type") == "image/jpeg";
-        return n;
-    };
-    auto waitFor = [&](size_t count) {
-        for (int i = 0; i < 600 && jpegs() < count; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
-        return jpegs() >= count;
-    };
+    MultipartStream stream(m_port, base + "/stream");
+    auto waitFor = [&](size_t count) { return stream.waitForJpegs(count, 30); };
     ASSERT_TRUE(waitFor(1)) << "the stream opens with the current frame";
-    EXPECT_EQ(contentType, "multipart/x-mixed-replace; boundary=volstyle-frame");
-    const Part first = parts[0];
+    EXPECT_EQ(stream.contentType(), "multipart/x-mixed-replace; boundary=volstyle-frame");
+    const StreamPart first = stream.parts()[0];
     EXPECT_EQ(first.headers.at("X-Width"), "64");
     EXPECT_EQ(first.headers.at("X-Height"), "36");
     // The PNG of the same scene against the streamed JPEG, in 8-bit display levels.
@@ -309,7 +269,7 @@ TEST_F(StylizerApi, TheMjpegStreamSendsEachRevisionsFrameAndEndsWithTheSession) 
     s["time"] = 1.5;
     ASSERT_EQ(putScene(s)->status, 200);
     ASSERT_TRUE(waitFor(2)) << "a change streams a new frame";
-    EXPECT_GT(std::stoull(parts.back().headers.at("X-Revision")), std::stoull(first.headers.at("X-Revision")));
+    EXPECT_GT(stream.parts().back().number("X-Revision"), first.number("X-Revision"));
     // A burst of changes while frames render and encode (the next revision renders while the last
     // frame is encoded and sent): frames come in revision order, none twice, and the last change's
     // frame arrives; the ones in between may be skipped as stale.
@@ -320,20 +280,13 @@ TEST_F(StylizerApi, TheMjpegStreamSendsEachRevisionsFrameAndEndsWithTheSession) 
         ASSERT_EQ(put->status, 200);
         last = std::stoull(put->get_header_value("ETag").substr(2));
     }
-    auto newest = [&] {
-        std::lock_guard lock(m);
-        return parts.empty() || !parts.back().headers.count("X-Revision") ? uint64_t(0) : std::stoull(parts.back().headers.at("X-Revision"));
-    };
-    for (int i = 0; i < 1200 && newest() < last; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    {
-        std::lock_guard lock(m);
-        EXPECT_EQ(std::stoull(parts.back().headers.at("X-Revision")), last) << "the burst's last change is shown";
-        for (size_t i = 1; i < parts.size(); ++i)
-            EXPECT_LT(std::stoull(parts[i - 1].headers.at("X-Revision")), std::stoull(parts[i].headers.at("X-Revision"))) << "part " << i;
-    }
+    stream.waitUntil([&](const std::vector<StreamPart>& parts) { return parts.back().number("X-Revision") >= last; });
+    const std::vector<StreamPart> parts = stream.parts();
+    EXPECT_EQ(parts.back().number("X-Revision"), last) << "the burst's last change is shown";
+    for (size_t i = 1; i < parts.size(); ++i) EXPECT_LT(parts[i - 1].number("X-Revision"), parts[i].number("X-Revision")) << "part " << i;
     ASSERT_EQ(client().Delete(base.substr(0, base.size() - 9).c_str())->status, 204);
-    reader.join();
-    EXPECT_NE(parts.back().body.find("\"closed\""), std::string::npos) << "the stream ends with the session";
+    stream.join();
+    EXPECT_NE(stream.parts().back().body.find("\"closed\""), std::string::npos) << "the stream ends with the session";
 }
 
 TEST_F(StylizerApi, AServerWithOpenStreamsAndIdleConnectionsStopsAtOnce) {

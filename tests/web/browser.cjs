@@ -50,6 +50,29 @@ async function openShafts(browser, url, fail, viewport) {
   return { page, revision, newFrame, settle };
 }
 
+// What the page last said and still awaits (app.js's pageLog): the clue a failed wait reports.
+async function pageReport(page) {
+  return page.evaluate(() => {
+    const at = Math.round(performance.now());
+    const said = pageLog.statuses.slice(-8).map((s) => `  ${s.at} ms: ${s.kind ? s.kind + ': ' : ''}${s.message}`).join('\n');
+    const waiting = [...pageLog.inflight.values()].join('; ') || 'none';
+    return `the page at ${at} ms; its last statuses:\n${said}\nrequests in flight: ${waiting}`;
+  }).catch((e) => `(no report: ${e.message})`);
+}
+
+// Waits until the page has said a status starting with `prefix`, the one on screen or any said
+// since the wait began (a status can be replaced within one frame, before a poll sees it). On
+// timeout it throws with pageReport's clue.
+async function waitStatus(page, prefix, timeout = 180000) {
+  const since = await page.evaluate(() => pageLog.statuses.length - 1);
+  try {
+    await page.waitForFunction(([p, k]) => pageLog.statuses.slice(Math.max(0, k)).some((s) => s.message.startsWith(p)) ||
+                                           document.getElementById('status').textContent.startsWith(p), [prefix, since], { timeout });
+  } catch (e) {
+    throw new Error(`no status "${prefix}…" within ${timeout / 1000} s; ${await pageReport(page)}`);
+  }
+}
+
 // Opens the painting page once its session is ready (console errors logged). The waits are long:
 // CTest runs a browser test beside the heaviest GL tests under -j2 (a first render took over 60 s).
 // One CI run saw a page whose first session never became ready in 180 s, with no clue left: the
@@ -67,7 +90,7 @@ async function openPainting(browser, url, viewport = { width: 1280, height: 800 
       await page.waitForFunction(ready, null, { timeout: 80000 });
       break;
     } catch (e) {
-      const where = `the session was not ready ${(Date.now() - started) / 1000} s after the page opened (status: ${await page.textContent('#status')})`;
+      const where = `the session was not ready ${(Date.now() - started) / 1000} s after the page opened; ${await pageReport(page)}`;
       if (attempt === 2) throw new Error(where);
       console.error(where + '; loading the page again');
     }
@@ -98,4 +121,4 @@ async function browserTest(name, body) {
   await browser.close();
 }
 
-module.exports = { openBrowser, openShafts, openPainting, checker, browserTest };
+module.exports = { openBrowser, openShafts, openPainting, waitStatus, pageReport, checker, browserTest };

@@ -4,15 +4,12 @@
 // toward the target; then one more stroke and solve, which must be a re-solve of that stroke alone.
 // Saves a screenshot. Usage: NODE_PATH=…/node_modules node e2e.cjs URL OUT.png
 'use strict';
-const { openBrowser } = require('./browser.cjs');
+const { openBrowser, openPainting, waitStatus } = require('./browser.cjs');
 
 (async () => {
 const { url, screenshot, browser, fail } = await openBrowser();
 try {
-  const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
-  page.on('pageerror', (e) => console.error('page error:', e.message));
-  await page.goto(url);
-  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('session ready'), null, { timeout: 60000 });
+  const page = await openPainting(browser, url, { width: 1280, height: 720 });
 
   await page.click('#add-view');
   await page.waitForFunction(() => document.querySelectorAll('#views button').length === 1, null, { timeout: 30000 });
@@ -28,7 +25,7 @@ try {
     await page.mouse.up();
   }
   await page.click('#upload-target');
-  await page.waitForFunction(() => document.getElementById('status').textContent.includes('target of v1 uploaded'), null, { timeout: 30000 });
+  await waitStatus(page, 'target of v1 uploaded', 60000);
 
   // RMS of the view's rendering to its target, computed in the page from the PNGs.
   const rmsToTarget = () => page.evaluate(async () => {
@@ -48,7 +45,7 @@ try {
 
   await page.fill('#iterations', '15');
   await page.click('#solve');
-  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('solved'), null, { timeout: 300000 });
+  await waitStatus(page, 'solved', 300000);
   const progress = await page.evaluate(() => document.getElementById('progress').value);
   if (progress !== 1) await fail(`progress bar at ${progress}, expected 1`);
   const after = await rmsToTarget();
@@ -65,9 +62,9 @@ try {
   await page.mouse.move(box.x + box.width * 0.55, box.y + box.height * 0.3, { steps: 4 });
   await page.mouse.up();
   await page.click('#upload-target');
-  await page.waitForFunction(() => document.getElementById('status').textContent.includes('target of v1 uploaded'), null, { timeout: 30000 });
+  await waitStatus(page, 'target of v1 uploaded', 60000);
   await page.click('#solve');
-  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('solved'), null, { timeout: 300000 });
+  await waitStatus(page, 'solved', 300000);
   const second = await page.evaluate(() => document.getElementById('status').textContent);
   console.log(`[ measured ] after one more stroke: ${second}`);
   if (!second.includes('re-solved the stroke')) await fail(`the second solve was not a re-solve of the stroke: ${second}`);
@@ -77,7 +74,7 @@ try {
   await page.selectOption('#unknowns', 'lights');
   await page.fill('#iterations', '5');
   await page.click('#solve');
-  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('lit:'), null, { timeout: 300000 });
+  await waitStatus(page, 'lit:', 300000);
   const lit = await page.evaluate(() => document.getElementById('status').textContent);
   console.log(`[ measured ] lighting solve: ${lit}`);
   await page.waitForFunction(() => { const i = document.getElementById('environment'); return i.complete && i.naturalWidth === 128; }, null, { timeout: 30000 });
@@ -150,7 +147,7 @@ try {
   if ((await versionOf()) !== beforeGlass + 1) await fail(`adding glass made version ${await versionOf()}, not ${beforeGlass + 1}`);
   await page.screenshot({ path: screenshot.replace(/\.png$/, '_glass.png') });
   await page.click('#glass-remove');
-  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('glass removed'), null, { timeout: 60000 });
+  await waitStatus(page, 'glass removed', 60000);
   console.log('[ measured ] glass added (a new version, the viewport re-rendered through it) and removed');
   console.log('1 passed, 0 failed');
 } catch (e) {

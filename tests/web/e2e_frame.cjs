@@ -7,7 +7,7 @@
 'use strict';
 const { execFileSync } = require('child_process');
 const path = require('path');
-const { browserTest, openPainting } = require('./browser.cjs');
+const { browserTest, openPainting, waitStatus } = require('./browser.cjs');
 
 browserTest('frame', async ({ url, screenshot, browser, check }) => {
   const page = await openPainting(browser, url);
@@ -17,7 +17,7 @@ browserTest('frame', async ({ url, screenshot, browser, check }) => {
     const file = path.join(path.dirname(screenshot), a.name);
     execFileSync(process.env.MAKE_FRAMED_VDB, [file, String(a.size), ...a.centre.map(String)]);
     await page.setInputFiles('#vdb-file', file);
-    await page.waitForFunction((n) => document.getElementById('status').textContent === `${n} loaded`, a.name, { timeout: 180000 });
+    await waitStatus(page, `${a.name} loaded`);
     await page.waitForFunction(() => !state.renderBusy && !state.renderPending, null, { timeout: 180000 });
     // The share of the viewport's pixels that differ from its corner (the background), and how
     // many of them lie on its outermost 3 pixels.

@@ -7,7 +7,7 @@
 // solve's reach report suggests no other unknowns and gives no advice.
 // Usage: NODE_PATH=…/node_modules node e2e_paint.cjs URL OUT.png
 'use strict';
-const { browserTest, openPainting } = require('./browser.cjs');
+const { browserTest, openPainting, waitStatus } = require('./browser.cjs');
 
 browserTest('paint', async ({ screenshot, url, browser, check }) => {
   const page = await openPainting(browser, url);
@@ -59,7 +59,7 @@ browserTest('paint', async ({ screenshot, url, browser, check }) => {
   await page.mouse.click(box.x + box.width * 0.1, box.y + box.height * 0.1);
   await page.uncheck('#eraser');
   await page.click('#upload-target');
-  await page.waitForFunction(() => document.getElementById('status').textContent.includes('target of v1 uploaded'), null, { timeout: 60000 });
+  await waitStatus(page, 'target of v1 uploaded', 60000);
   const { view, weights } = await page.evaluate(async (c0) => {
     const sid = document.getElementById('download-vdb').href.split('/sessions/')[1].split('/')[0];
     const bmp = await createImageBitmap(await (await fetch(`/api/v1/sessions/${sid}/views/v1/target.png`)).blob(),

@@ -5,7 +5,7 @@
 // revision, streamed as MJPEG with the frame rate shown), and the TF must redden the frame. Saves a screenshot.
 // Usage: NODE_PATH=…/node_modules node e2e_shafts.cjs URL OUT.png
 'use strict';
-const { openBrowser, openShafts } = require('./browser.cjs');
+const { openBrowser, openShafts, waitStatus } = require('./browser.cjs');
 
 (async () => {
 const { url, screenshot, browser, fail } = await openBrowser();
@@ -86,7 +86,7 @@ try {
     document.getElementById('tf-drop').dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
   });
   await page.waitForFunction(() => document.getElementById('tf-preview').complete && document.getElementById('tf-preview').naturalWidth === 16, null, { timeout: 30000 });
-  await page.waitForFunction(() => document.getElementById('status').textContent.includes('in use'), null, { timeout: 30000 });
+  await waitStatus(page, 'transfer function', 30000);
   // (A PUT may still be in flight: the TF's scene follows it. Wait for frames until one is red.)
   const reddened = (c) => c[1] / Math.max(c[0], 1) < 0.8 * (before[1] / Math.max(before[0], 1));
   let red = await meanColour();
@@ -104,7 +104,7 @@ try {
     obj += `v ${x0} 6 -4\nv ${x1} 6 -4\nv ${x1} 6 4\nv ${x0} 6 4\nf ${v + 1} ${v + 2} ${v + 3}\nf ${v + 1} ${v + 3} ${v + 4}\n`;
   }
   await page.setInputFiles('#mesh-file', { name: 'slats.obj', mimeType: 'text/plain', buffer: Buffer.from(obj) });
-  await page.waitForFunction(() => document.getElementById('status').textContent.includes('slats.obj uploaded'), null, { timeout: 30000 });
+  await waitStatus(page, 'slats.obj uploaded', 30000);
   r = await newFrame(r, 'uploading a mesh');
   await check((await page.textContent('#status')).includes('32 vertices'), 'the mesh upload reports its vertices');
   await page.selectOption('#shafts-scene', 'builtin:forest/trees');

@@ -4,7 +4,7 @@
 // constraint's colour; then two key frames make a camera path that the slider scrubs. Saves a
 // screenshot. Usage: NODE_PATH=…/node_modules node e2e_tf.cjs URL OUT.png
 'use strict';
-const { openBrowser, openShafts } = require('./browser.cjs');
+const { openBrowser, openShafts, waitStatus } = require('./browser.cjs');
 
 (async () => {
 const { url, screenshot, browser, fail } = await openBrowser();
@@ -43,7 +43,7 @@ try {
   await page.check('input[name=drag][value=constrain]');
   const box = await page.locator('#shafts-frame').boundingBox();
   await page.mouse.click(box.x + box.width * fx, box.y + box.height * fy);
-  await page.waitForFunction(() => document.getElementById('status').textContent.startsWith('TF constraint added'), null, { timeout: 60000 });
+  await waitStatus(page, 'TF constraint added', 60000);
   await check((await page.textContent('#tf-picked')).includes('V̄'), 'the pick is reported');
   const ratio = (c) => c[1] / Math.max(c[0], 1);
   let after = await pixel(fx, fy);

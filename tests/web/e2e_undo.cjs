@@ -1,10 +1,11 @@
 // Browser test of Undo and Redo (issue #37): three edits on the page (a glass sphere, a bigger
 // one, none), then Undo three times: each press shows the version before, by content — the
 // session's refractive index as that version had it, its VDB the size of that version's — and
-// the status names the new version and the one it shows; Redo steps forward again.
+// the status names the new version and the one it shows, and the viewport's live stream shows the
+// new version's frame; Redo steps forward again.
 // Usage: NODE_PATH=…/node_modules node e2e_undo.cjs URL OUT.png
 'use strict';
-const { browserTest, openPainting } = require('./browser.cjs');
+const { browserTest, openPainting, waitStatus: waitFor } = require('./browser.cjs');
 
 browserTest('undo', async ({ url, screenshot, browser, check }) => {
   const page = await openPainting(browser, url);
@@ -16,7 +17,7 @@ browserTest('undo', async ({ url, screenshot, browser, check }) => {
     const href = document.getElementById('download-vdb').href;
     return (await (await fetch(v ? `${href}?version=${v}` : href)).arrayBuffer()).byteLength;
   }, version);
-  const waitStatus = (prefix) => page.waitForFunction((p) => document.getElementById('status').textContent.startsWith(p), prefix, { timeout: 180000 });
+  const waitStatus = (prefix) => waitFor(page, prefix);
   await check(await page.$eval('#undo', (b) => b.disabled), 'Undo is off before any edit');
 
   // Three edits: versions 2 (glass r 0.3), 3 (glass r 0.6), 4 (no glass).
@@ -43,6 +44,9 @@ browserTest('undo', async ({ url, screenshot, browser, check }) => {
     await check(s.volume.grids.includes('refractive_index') === hasGlass[shows], `undo ${press}: the glass of version ${shows}`);
     await check(await vdbSize() === sizes[shows], `undo ${press}: the VDB is version ${shows}'s`);
     await check((await page.$eval('#session-info', (e) => e.textContent)).includes(`version ${4 + press} (shows ${shows})`), 'the header names both');
+    // The viewport is a live stream (issue #40): its frame on screen is this version's.
+    const info = await page.$eval('#viewport-info', (e) => e.textContent);
+    await check(info.startsWith(`version ${4 + press} ·`) && info.includes('fps'), `undo ${press}: the streamed viewport shows "${info}"`);
   }
   await check(await page.$eval('#undo', (b) => b.disabled), 'Undo is off at the first version');
   await page.click('#redo');

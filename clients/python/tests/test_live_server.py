@@ -88,6 +88,19 @@ class LiveServer(unittest.TestCase):
         self.assertEqual(jpeg[:2], b"\xff\xd8")
         self.assertEqual(len(jpeg), int(headers["content-length"]))
 
+    def test_the_viewport_streams_what_it_was_set_to(self):
+        # Issue #40: PUT …/viewport, then …/viewport/stream brings that camera's frame as a JPEG.
+        sid = self.session(resolution=16)
+        self.assertEqual(self.vs.get_viewport(sid)["revision"], 0)
+        camera = dict(CAMERA, width=40, height=30)
+        self.assertEqual(self.vs.set_viewport(sid, camera)["revision"], 1)
+        stream = self.vs.viewport_stream(sid)
+        headers, jpeg = next(stream)
+        stream.close()
+        self.assertEqual(headers["content-type"], "image/jpeg")
+        self.assertEqual((headers["x-width"], headers["x-height"], headers["x-revision"]), ("40", "30", "1"))
+        self.assertEqual(jpeg[:2], b"\xff\xd8")
+
     def test_the_exr_reader_reads_what_the_server_writes(self):
         # Half-float ZIP (the default render.exr) against float: the same picture to half precision.
         sid = self.session(resolution=16)

@@ -69,6 +69,26 @@ class SessionCalls(ClientBase):
         body = _fields(None, camera=camera, format=format, exposure=exposure, mode=mode, translucent=translucent, exr_type=exr_type)
         return self._bytes("POST", f"/sessions/{_seg(sid)}/render", body, path)
 
+    # ---- the viewport's live stream (issue #40) ------------------------------------------------
+    @route("put_sessions_sid_viewport", "PUT", "/sessions/{sid}/viewport")
+    def set_viewport(self, sid: str, camera: dict, *, exposure: float | None = None, mode: str | None = None,
+                     translucent: dict | None = None) -> Json:
+        """Sets what the viewport stream shows (render's options; frames are JPEG): {"revision", "shown"}."""
+        body = _fields(None, camera=camera, exposure=exposure, mode=mode, translucent=translucent)
+        return self._json("PUT", f"/sessions/{_seg(sid)}/viewport", body)
+
+    @route("get_sessions_sid_viewport", "GET", "/sessions/{sid}/viewport")
+    def get_viewport(self, sid: str) -> Json:
+        """Where the viewport stands: {"revision": PUTs so far, "shown": edits of what renders show}."""
+        return self._json("GET", f"/sessions/{_seg(sid)}/viewport")
+
+    @route("get_sessions_sid_viewport_stream", "GET", "/sessions/{sid}/viewport/stream")
+    def viewport_stream(self, sid: str) -> Iterator[tuple[dict[str, str], bytes]]:
+        """The viewport's frames as they come: (part headers, body) per part — a JPEG per change of
+        the viewport or of what the session shows (X-Revision, X-Shown, X-Version), JSON for a
+        failed frame or the end. Close the iterator to close the stream."""
+        return self.http.parts(f"/sessions/{_seg(sid)}/viewport/stream")
+
     # ---- lighting ------------------------------------------------------------------------------
     @route("get_sessions_sid_lighting", "GET", "/sessions/{sid}/lighting")
     def get_lighting(self, sid: str) -> Json:

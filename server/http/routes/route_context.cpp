@@ -151,6 +151,11 @@ void replyDownload(const httplib::Request& req, httplib::Response& res, std::str
     res.set_content(std::move(bytes), mime);
 }
 
+std::string mjpegPart(const std::string& contentType, const std::string& headers, const std::string& body) {
+    return fmt::format("--volstyle-frame\r\nContent-Type: {}\r\nContent-Length: {}\r\n{}\r\n", contentType, body.size(), headers) + body +
+           "\r\n";
+}
+
 void replyImage(httplib::Response& res, const core::Image& image, protocol::ImageFormat format, double exposure) {
     if (format == protocol::ImageFormat::Jpeg) {  // libjpeg-turbo in memory: 4× OpenImageIO's path through a file
         res.set_content(core::encodeJpeg(image, kLiveJpegQuality, exposure), protocol::imageMimeType(format));

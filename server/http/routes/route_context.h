@@ -73,6 +73,13 @@ inline const std::string kJobPath = kApi + R"(/jobs/([0-9a-f]+))";
 void putUpload(RouteContext& c, const std::string& pattern,
                std::function<void(const httplib::Request&, httplib::Response&, const std::string&)> handler);
 
+/// Live streams in one response (issue #40): multipart/x-mixed-replace, one part per event (a
+/// JPEG frame, a JSON failure or end, an empty keep-alive); an <img> shows the frames as they come.
+inline const char* const kMjpegContentType = "multipart/x-mixed-replace; boundary=volstyle-frame";
+inline const std::string kMjpegEnd = "--volstyle-frame--\r\n";  ///< after the last part
+/// One part: its type, extra header lines ("Name: value\r\n" each) and body.
+std::string mjpegPart(const std::string& contentType, const std::string& headers, const std::string& body);
+
 void reply(httplib::Response& res, int status, const nlohmann::json& body);
 /// 201 with `body` and `Location: location` (the new resource).
 void replyCreated(httplib::Response& res, const std::string& location, const nlohmann::json& body);
@@ -94,5 +101,6 @@ void addFrameRoutes(RouteContext& c);    ///< an animation's frames, its key-fra
 void addViewRoutes(RouteContext& c);     ///< views, targets, weights, view renders
 void addJobRoutes(RouteContext& c);      ///< solve, jobs, events, previews
 void addStylizerRoutes(RouteContext& c); ///< the stylizer's scene, meshes, TF, frames, live stream
+void addViewportRoutes(RouteContext& c); ///< the painting page's viewport and its live stream
 
 }  // namespace volstyle::server

@@ -107,18 +107,11 @@ LiveStreamFormat sseFormat() {
             [](const std::string& reason) { return sseEvent("closed", {{"reason", reason}}); }, ": still here\n\n"};
 }
 
-/// The frames themselves in one response (issue #40): multipart/x-mixed-replace, a JPEG part per
-/// frame (its revision and times in the part's headers; an <img> shows the stream as it comes), a
-/// JSON part for a failed revision or the end, and an empty part as keep-alive.
-constexpr const char* kMjpegBoundary = "volstyle-frame";
-
-std::string mjpegPart(const std::string& contentType, const std::string& headers, const std::string& body) {
-    return fmt::format("--{}\r\nContent-Type: {}\r\nContent-Length: {}\r\n{}\r\n", kMjpegBoundary, contentType, body.size(), headers) + body +
-           "\r\n";
-}
-
+/// The frames themselves in one response (issue #40): a JPEG part per frame (its revision and
+/// times in the part's headers), a JSON part for a failed revision or the end, and an empty part
+/// as keep-alive (route_context.h's mjpegPart).
 LiveStreamFormat mjpegFormat() {
-    return {"multipart/x-mixed-replace; boundary=volstyle-frame",
+    return {kMjpegContentType,
             [](const Session&, const LiveFrame& f) {
                 return mjpegPart("image/jpeg",
                                  fmt::format("X-Revision: {}\r\nX-Width: {}\r\nX-Height: {}\r\nX-Render-Ms: {:.1f}\r\nX-Encode-Ms: {:.1f}\r\n",
@@ -131,7 +124,7 @@ LiveStreamFormat mjpegFormat() {
             },
             [](const std::string& reason) {
                 return mjpegPart("application/json", "", protocol::toText({{"event", "closed"}, {"reason", reason}})) +
-                       fmt::format("--{}--\r\n", kMjpegBoundary);
+                       kMjpegEnd;
             },
             mjpegPart("text/plain", "", "")};
 }
