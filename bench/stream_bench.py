@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
-"""The stylizer's live stream (issue #40): frames per second and end-to-end latency through
-GET …/stylizer/stream (MJPEG) at 960×540 and 1920×1080, the paper's forest scene.
+"""The live streams (issue #40): frames per second and end-to-end latency through
+GET …/stylizer/stream (MJPEG) at 960×540 and 1920×1080, the paper's forest scene, and through
+the painting page's GET …/viewport/stream (the 64³ cloud orbited at 320², the page's size, and
+480²; --viewport-sizes).
 
 Starts `volstyle serve` on a free loopback port, opens the stream, then plays scene time as the
 page's Play button does:
@@ -13,10 +15,12 @@ the parts' headers. (The streamed JPEG against the PNG of the same frame: tests/
 LiveStream test.)
 
 Usage: python3 bench/stream_bench.py [--binary build/bin/volstyle] [--frames 30] [--sizes 960x540,1920x1080]
+                                     [--viewport-sizes 320x320,480x480]
 """
 import argparse
 import http.client
 import json
+import math
 import os
 import sys
 import tempfile
@@ -137,13 +141,42 @@ def run(port, sid, scene, size, frames):
     sys.stdout.flush()
 
 
+def put_viewport(port, sid, azimuth, size):
+    w, h = size
+    body = {"camera": {"eye": [3.4 * math.sin(azimuth), 0.2, 3.4 * math.cos(azimuth)], "target": [0, -0.05, 0], "fov_y_deg": 38,
+                       "width": w, "height": h}}
+    status, answer = request(port, "PUT", f"/sessions/{sid}/viewport", body)
+    assert status == 200, answer
+    return json.loads(answer)["revision"]
+
+
+def run_viewport(port, sid, size, frames):
+    """The page's viewport: each orbit step a PUT …/viewport, closed loop (one step in flight)."""
+    stream = Stream(port, f"/sessions/{sid}/viewport/stream")
+    stream.wait_revision(put_viewport(port, sid, 0, size))
+    latencies, render = [], []
+    t_start = time.monotonic()
+    for i in range(frames):
+        sent = time.monotonic()
+        arrived, headers, _ = stream.wait_revision(put_viewport(port, sid, 0.05 * (i + 1), size))
+        latencies.append((arrived - sent) * 1000)
+        render.append(float(headers["x-render-ms"]))
+    fps = frames / (time.monotonic() - t_start)
+    stream.close()
+    print(f"viewport {size[0]}x{size[1]} (64^3 cloud): closed loop {fps:.1f} fps, latency median {percentile(latencies, 50):.0f} ms, "
+          f"p95 {percentile(latencies, 95):.0f} ms (render {percentile(render, 50):.0f} ms)")
+    sys.stdout.flush()
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--binary", default=BINARY)
     ap.add_argument("--frames", type=int, default=30)
     ap.add_argument("--sizes", default="960x540,1920x1080")
+    ap.add_argument("--viewport-sizes", default="320x320,480x480")
     a = ap.parse_args()
-    sizes = [tuple(int(x) for x in s.split("x")) for s in a.sizes.split(",")]
+    parse = lambda text: [tuple(int(x) for x in s.split("x")) for s in text.split(",") if s]  # noqa: E731
+    sizes = parse(a.sizes)
     with tempfile.TemporaryDirectory() as data:
         server = Server(data, binary=a.binary)
         try:
@@ -154,6 +187,10 @@ def main():
             scene = json.loads(body)
             for size in sizes:
                 run(server.port, sid, scene, size, a.frames)
+            status, body = request(server.port, "POST", "/sessions", {"scene": "builtin:cloud", "resolution": 64})
+            assert status == 201, body
+            for size in parse(a.viewport_sizes):
+                run_viewport(server.port, json.loads(body)["id"], size, a.frames)
         finally:
             server.stop()
 

@@ -69,6 +69,7 @@ struct HttpServer::Impl {
     RouteTable table;
     IdempotencyKeys idempotency;
     RouteContext routes;
+    RequestMetrics metrics;
     std::atomic<uint64_t> requestCounter{0};
 
     explicit Impl(ServerOptions o)
@@ -76,7 +77,8 @@ struct HttpServer::Impl {
           http(opt.connections),
           services(serviceLimits(opt), opt.dataDir),
           streams(opt.maxEventStreams, opt.maxEventStreamsPerClient),
-          routes{http, services, requestLimits(opt), opt.maxJsonBytes, streams, table, idempotency, opt.eventKeepAliveSeconds} {}
+          routes{http,  services,    requestLimits(opt), opt.maxJsonBytes, streams, table, idempotency, opt.eventKeepAliveSeconds,
+                 &metrics, [this] { return http.serving(); }} {}
 
     void addMiddleware();
     /// 405 with Allow where the path has routes under other methods (OPTIONS: 204 with Allow),
@@ -99,6 +101,7 @@ HttpServer::HttpServer(ServerOptions options) {
     m = std::make_unique<Impl>(std::move(options));
     m->addMiddleware();
     addSystemRoutes(m->routes);
+    addOperationsRoutes(m->routes);
     addSessionRoutes(m->routes);
     addVolumeRoutes(m->routes);
     addFrameRoutes(m->routes);
@@ -151,6 +154,7 @@ void HttpServer::Impl::addMiddleware() {
     // Request ids, timing, and the bearer token on /api when one is set.
     http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
         beginRequest(res);
+        setCurrentRoute(nullptr);
         // A request with neither Content-Length nor Transfer-Encoding has no body (RFC 9112
         // §6.3); cpp-httplib 0.11 would read a POST's body until the connection closes, so
         // `curl -XPOST …/undo` waited out the read timeout and got a 400. The request object is
@@ -165,8 +169,12 @@ void HttpServer::Impl::addMiddleware() {
         }
         return httplib::Server::HandlerResponse::Unhandled;
     });
-    http.set_logger([](const httplib::Request& req, const httplib::Response& res) {
-        spdlog::info("{} {} {} {:.1f} ms id={}", req.method, req.path, res.status, msSince(t_requestStart), t_requestId);
+    http.set_logger([this](const httplib::Request& req, const httplib::Response& res) {
+        const double ms = msSince(t_requestStart);
+        spdlog::info("{} {} {} {:.1f} ms id={}", req.method, req.path, res.status, ms, t_requestId);
+        // The route's template as the label (the page's files are one label, unmatched paths another).
+        const std::string* route = currentRoute();
+        metrics.record(req.method, route ? *route : req.path.rfind("/api/", 0) == 0 ? "unmatched" : "page", res.status, ms / 1000);
     });
 }
 

@@ -15,6 +15,12 @@
 
 namespace volstyle::server {
 
+/// The GL thread's queue (GET /metrics, /ready).
+struct GlQueueDepth {
+    size_t shortTasks = 0, longTasks = 0;
+    bool stopping = false;
+};
+
 class GlExecutor {
 public:
     virtual ~GlExecutor() = default;
@@ -52,6 +58,8 @@ public:
     virtual void runShortTasks(core::GpuDevice& device) = 0;
 
     virtual const core::gl::Capabilities& capabilities() const = 0;
+    /// Tasks waiting now (a fake executor: none).
+    virtual GlQueueDepth queueDepth() const { return {}; }
 
 protected:
     /// Queues `task`; throws (GpuError) when it cannot run at all.

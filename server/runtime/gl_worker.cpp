@@ -91,4 +91,9 @@ void GlWorker::loop(std::promise<void>& started) {
     device.reset();  // GL objects and the context die on this thread
 }
 
+GlQueueDepth GlWorker::queueDepth() const {
+    std::lock_guard lock(m_mutex);
+    return {m_short.size(), m_long.size(), m_stopping};
+}
+
 }  // namespace volstyle::server

@@ -23,13 +23,14 @@ public:
 
     void runShortTasks(core::GpuDevice& device) override;
     const core::gl::Capabilities& capabilities() const override { return m_caps; }
+    GlQueueDepth queueDepth() const override;
 
 private:
     void post(std::function<void(core::GpuDevice&)> task, bool isLong) override;
     void loop(std::promise<void>& started);
 
     std::thread m_thread;
-    std::mutex m_mutex;
+    mutable std::mutex m_mutex;
     std::condition_variable m_wake;
     std::deque<std::function<void(core::GpuDevice&)>> m_short, m_long;
     bool m_stopping = false;

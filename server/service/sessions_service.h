@@ -18,6 +18,12 @@ public:
     const core::gl::Capabilities& capabilities() const { return m_ctx.gl->capabilities(); }
     /// What the data directory's quarantine holds (empty without one).
     std::vector<QuarantineEntry> quarantine() const;
+    /// GET /ready's checks: "" where it holds, else why not.
+    struct Readiness {
+        std::string store;  ///< "folder" or "memory"
+        std::string storeProblem, glProblem;
+    };
+    Readiness readiness() const;
 
     core::Lighting lighting(Session& s) const { return m_ctx.lighting(s); }
     /// Sets the lighting, "session" resolved to the session's map (ValidationError naming the

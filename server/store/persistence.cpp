@@ -21,6 +21,19 @@ Persistence::Persistence(fs::path dir, MeshReader readMesh) : m_dir(std::move(di
 
 std::string Persistence::versionFile(int version) { return store::versionFile(version); }
 
+std::string Persistence::writeProblem() const {
+    std::error_code ec;
+    if (!fs::is_directory(m_dir.root() / "sessions", ec)) return "the data folder '" + m_dir.root().string() + "' has no sessions folder (removed?)";
+    try {
+        const fs::path probe = m_dir.root() / ".ready-probe";
+        store::atomicWrite(probe, "ready\n");
+        fs::remove(probe);
+        return "";
+    } catch (const std::exception& e) {
+        return e.what();
+    }
+}
+
 void Persistence::saveSession(Session& s) {
     const fs::path dir = sessionDir(s.id);
     for (int n : s.volume.versions.unstored()) {

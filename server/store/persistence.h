@@ -76,6 +76,9 @@ public:
     /// Moves a session's file (relative to its directory) to the quarantine with its reason.
     void quarantineFile(const std::string& session, const std::string& file, const std::string& reason);
     std::vector<QuarantineEntry> quarantine() const;
+    /// Whether the data folder takes a write now (GET /ready): "" or what failed. Writes and
+    /// removes a small file, as a session's save would.
+    std::string writeProblem() const;
 
     std::vector<std::shared_ptr<Session>> loadSessions();
     /// Loads jobs; unfinished ones become failed/interrupted (and are written back).

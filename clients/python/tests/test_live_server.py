@@ -88,6 +88,14 @@ class LiveServer(unittest.TestCase):
         self.assertEqual(jpeg[:2], b"\xff\xd8")
         self.assertEqual(len(jpeg), int(headers["content-length"]))
 
+    def test_ready_and_metrics(self):
+        # Issue #41: readiness for a load balancer, and the Prometheus counters by route template.
+        self.assertEqual(self.vs.ready()["status"], "ready")
+        self.vs.health()
+        m = self.vs.metrics()
+        self.assertGreaterEqual(m['volstyle_http_requests_total{method="GET",route="/api/v1/health",status="200"}'], 1)
+        self.assertIn('volstyle_jobs{state="queued"}', m)
+
     def test_the_viewport_streams_what_it_was_set_to(self):
         # Issue #40: PUT …/viewport, then …/viewport/stream brings that camera's frame as a JPEG.
         sid = self.session(resolution=16)

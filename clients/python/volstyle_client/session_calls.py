@@ -15,6 +15,23 @@ class SessionCalls(ClientBase):
         """The server's state: version, GL device, sessions, queue."""
         return self._json("GET", "/health")
 
+    @route("get_ready", "GET", "/ready")
+    def ready(self) -> Json:
+        """Readiness (a load balancer's check): {"status": "ready", "store", "gl_renderer"}; raises
+        an ApiError (503 overloaded, saying why) when the store takes no writes, GL is down or the
+        server is stopping."""
+        return self._json("GET", "/ready")
+
+    @route("get_metrics", "GET", "/metrics")
+    def metrics(self) -> dict[str, float]:
+        """The server's Prometheus metrics as {"name{labels}": value} (comments dropped)."""
+        out: dict[str, float] = {}
+        for line in self._bytes("GET", "/metrics").decode().splitlines():
+            if line and not line.startswith("#"):
+                key, _, value = line.rpartition(" ")
+                out[key] = float(value)
+        return out
+
     @route("get_schema_json", "GET", "/schema.json")
     def schema(self) -> Json:
         """The JSON Schema of every request and response body."""

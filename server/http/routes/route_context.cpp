@@ -8,30 +8,44 @@
 #include "core/image/jpeg_encoder.h"
 #include "core/render/exr_layers.h"
 #include "core/base/content_hash.h"
+#include "server/http/request_metrics.h"
 #include "server/state/stylizer_state.h"
 
 namespace volstyle::server {
+
+namespace {
+
+/// The handler, telling the metrics which route answers (request_metrics.h).
+httplib::Server::Handler labelled(const std::string& pattern, httplib::Server::Handler handler) {
+    return [label = std::make_shared<const std::string>(routeLabel(pattern)), handler = std::move(handler)](const httplib::Request& req,
+                                                                                                          httplib::Response& res) {
+        setCurrentRoute(label.get());
+        handler(req, res);
+    };
+}
+
+}  // namespace
 
 nlohmann::json RouteContext::body(const httplib::Request& req) const { return protocol::parseJsonBody(req.body, maxJsonBytes); }
 
 void RouteContext::get(const std::string& pattern, httplib::Server::Handler handler) {
     table.add("GET", pattern);
-    http.Get(pattern, std::move(handler));
+    http.Get(pattern, labelled(pattern, std::move(handler)));
 }
 
 void RouteContext::post(const std::string& pattern, httplib::Server::Handler handler) {
     table.add("POST", pattern);
-    http.Post(pattern, std::move(handler));
+    http.Post(pattern, labelled(pattern, std::move(handler)));
 }
 
 void RouteContext::put(const std::string& pattern, httplib::Server::Handler handler) {
     table.add("PUT", pattern);
-    http.Put(pattern, std::move(handler));
+    http.Put(pattern, labelled(pattern, std::move(handler)));
 }
 
 void RouteContext::del(const std::string& pattern, httplib::Server::Handler handler) {
     table.add("DELETE", pattern);
-    http.Delete(pattern, std::move(handler));
+    http.Delete(pattern, labelled(pattern, std::move(handler)));
 }
 
 namespace {
@@ -85,6 +99,11 @@ void StreamLimiter::acquire(const std::string& client) {
     ++m_total;
 }
 
+int StreamLimiter::open() const {
+    std::lock_guard lock(m_mutex);
+    return m_total;
+}
+
 void StreamLimiter::release(const std::string& client) {
     std::lock_guard lock(m_mutex);
     auto it = m_open.find(client);
@@ -96,8 +115,9 @@ void StreamLimiter::release(const std::string& client) {
 void putUpload(RouteContext& c, const std::string& pattern,
                std::function<void(const httplib::Request&, httplib::Response&, const std::string&)> handler) {
     c.table.add("PUT", pattern);
-    c.http.Put(pattern, [handler = std::move(handler)](const httplib::Request& req, httplib::Response& res,
-                                                       const httplib::ContentReader& reader) {
+    c.http.Put(pattern, [handler = std::move(handler), label = std::make_shared<const std::string>(routeLabel(pattern))](
+                            const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader) {
+        setCurrentRoute(label.get());
         if (req.is_multipart_form_data()) {
             res.set_header("Connection", "close");  // the form's bytes are not read
             throw protocol::ApiError(protocol::ErrorCode::UnsupportedMedia,

@@ -16,6 +16,7 @@
 #include "core/render/renderer.h"
 #include "protocol/requests.h"
 #include "server/http/idempotency.h"
+#include "server/http/request_metrics.h"
 #include "server/http/route_table.h"
 #include "server/service/services.h"
 
@@ -29,9 +30,10 @@ public:
     /// Counts a new stream of `client`; ApiError too_many_streams (429) over a limit.
     void acquire(const std::string& client);
     void release(const std::string& client);
+    int open() const;  ///< streams open now, in all
 
 private:
-    std::mutex m_mutex;
+    mutable std::mutex m_mutex;
     std::map<std::string, int> m_open;
     int m_total = 0;
     const int m_maxTotal, m_maxPerClient;
@@ -46,6 +48,9 @@ struct RouteContext {
     RouteTable& table;
     IdempotencyKeys& idempotency;
     double eventKeepAliveSeconds = 15;  ///< a quiet job event stream's comment interval
+    RequestMetrics* metrics = nullptr;  ///< what GET /metrics reports of requests
+    /// Whether the server takes new requests (false while it stops: GET /ready says so).
+    std::function<bool()> serving;
 
     /// The JSON body ({} when empty): 413 over maxJsonBytes, 400 invalid_json.
     nlohmann::json body(const httplib::Request& req) const;
@@ -102,5 +107,6 @@ void addViewRoutes(RouteContext& c);     ///< views, targets, weights, view rend
 void addJobRoutes(RouteContext& c);      ///< solve, jobs, events, previews
 void addStylizerRoutes(RouteContext& c); ///< the stylizer's scene, meshes, TF, frames, live stream
 void addViewportRoutes(RouteContext& c); ///< the painting page's viewport and its live stream
+void addOperationsRoutes(RouteContext& c); ///< /ready and /metrics
 
 }  // namespace volstyle::server
