@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
+#include <regex>
 #include <thread>
 
 #include "core/base/errors.h"
@@ -33,6 +34,7 @@ const CommandSpec kServe{
         {"port", "N", "port; default 8080 (0: any free port, printed at start)"},
         {"token", "T", "require 'Authorization: Bearer T' on /api (also $VOLSTYLE_TOKEN); default none"},
         {"data-dir", "DIR", "where sessions are kept; default ./volstyle-data"},
+        {"store", "URL", "also keep them in PostgreSQL (postgresql://user@host:port/db): committed there before each answer, the data folder its cache (docs/DEPLOY.md)"},
         {"web-dir", "DIR", "the page's folder; default the installed share/volstyle/web, else the source tree's web/"},
         {"render-budget", "S", "seconds one render may hold the GL thread (422 over_budget past it; 0: no limit); default 60"},
         {"max-sessions", "N", "sessions at once; default 64"},
@@ -70,6 +72,9 @@ int runServe(const std::vector<std::string>& argv) {
     opt.token = args.get("token", envToken ? envToken : "");
     opt.webDir = args.has("web-dir") ? args.get("web-dir") : defaultWebDir();
     opt.dataDir = args.get("data-dir", opt.dataDir);
+    opt.store = args.get("store", "");
+    if (!opt.store.empty() && opt.store.rfind("postgresql://", 0) != 0 && opt.store.rfind("postgres://", 0) != 0)
+        throw InvalidArgument("serve: --store takes a postgresql:// URL (the data folder is the default store)");
     opt.maxSessions = size_t(wholeNumber(args, "max-sessions", double(opt.maxSessions), 1, 1e6));
     opt.maxUploadBytes = size_t(wholeNumber(args, "max-upload-mib", double(opt.maxUploadBytes >> 20), 1, 1 << 20)) << 20;
     opt.maxImageSide = int(wholeNumber(args, "max-image-side", opt.maxImageSide, 16, 65536));
@@ -110,7 +115,8 @@ int runServe(const std::vector<std::string>& argv) {
     });
     std::cout << "volstyle: serving http://" << opt.host << ":" << bound << "/ (volstyle " << protocol::versionString() << ", page from "
               << (opt.webDir.empty() ? std::string("nowhere: no web folder found; pass --web-dir") : opt.webDir) << ", data in "
-              << (opt.dataDir.empty() ? std::string("memory") : opt.dataDir) << ")" << std::endl;
+              << (opt.dataDir.empty() ? std::string("memory") : opt.dataDir)
+              << (opt.store.empty() ? "" : ", kept in " + std::regex_replace(opt.store, std::regex(R"((://[^:/@]+):[^@]*@)"), "$1@")) << ")" << std::endl;
     server.listen();
     // listen() also returns if the listener fails; wake the waiter in that case.
     pthread_kill(waiter.native_handle(), SIGTERM);

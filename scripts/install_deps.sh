@@ -19,6 +19,7 @@ packages=(
   python3-venv python3-setuptools python3-wheel            # the Python client, pip-installed into a fresh venv offline
   python3-numpy                                            # the client's fast EXR path (Blender's and Houdini's Pythons have numpy)
   blender xvfb xauth                                       # the Blender add-on's tests (headless, and one in a window under Xvfb)
+  postgresql libpqxx-dev haproxy                           # serve --store postgresql://… and the cluster tests (issue #41)
 )
 packages+=("$@")  # extra packages a script needs (scripts/fuzz.sh: clang)
 # Node and npm for the browser test: the machine's own if present (Debian's would clash with it).

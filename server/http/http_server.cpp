@@ -48,6 +48,7 @@ ServiceLimits serviceLimits(const ServerOptions& o) {
     l.vdbReader.executable = o.vdbReader;
     l.finishedJobsKept = o.finishedJobsKept;
     l.memory = o.memory;
+    l.store = o.store;
     return l;
 }
 

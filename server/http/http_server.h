@@ -21,6 +21,8 @@ struct ServerOptions {
     std::string token;               ///< required when host is not loopback
     std::string webDir = "web";
     std::string dataDir = "volstyle-data";  ///< empty: keep everything in memory (tests)
+    /// "" (the data folder alone) or postgresql://… (committed there; the folder is its cache).
+    std::string store;
     size_t maxSessions = 64;
     size_t maxJsonBytes = 1 << 20;   ///< 1 MiB
     size_t maxUploadBytes = size_t(512) << 20;  ///< images and VDBs: 512 MiB

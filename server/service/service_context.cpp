@@ -18,19 +18,22 @@
 namespace volstyle::server {
 ServiceContext::ServiceContext(ServiceLimits serviceLimits, const std::string& dataDir, std::unique_ptr<GlExecutor> executor)
     : limits(std::move(serviceLimits)), sessions(limits.maxSessions), gl(executor ? std::move(executor) : std::make_unique<GlWorker>()) {
-    if (!dataDir.empty()) {
-        persist = std::make_unique<Persistence>(dataDir, [this](const std::string& bytes, const std::string& format) {
+    std::string folder = dataDir;
+    if (folder.empty() && !limits.store.empty())  // a store needs a folder to cache it in
+        folder = (std::filesystem::temp_directory_path() / ("volstyle-cache-" + SessionStore::newId())).string();
+    if (!folder.empty()) {
+        persist = std::make_unique<Persistence>(folder, [this](const std::string& bytes, const std::string& format) {
             core::MeshLimits meshLimits = limits.meshLimits;
             meshLimits.maxFileBytes = std::max(meshLimits.maxFileBytes, bytes.size());  // accepted once: the file limit may have changed since
             return loadUntrustedMesh(bytes, format, meshLimits, limits.vdbReader);
-        });
+        }, limits.store.empty() ? nullptr : openPostgresMirror(limits.store));
         for (auto& s : persist->loadSessions()) {
             memory.recount(*s);
             sessions.restore(s);
         }
         for (auto& j : persist->loadJobs()) jobs.restore(j);
         pruneJobs();
-        spdlog::info("restored {} session(s) from '{}'", sessions.size(), dataDir);
+        spdlog::info("restored {} session(s) from {}", sessions.size(), limits.store.empty() ? "'" + folder + "'" : persist->describe());
     } else {
         scratch = std::filesystem::temp_directory_path() / ("volstyle-jobs-" + SessionStore::newId());
     }

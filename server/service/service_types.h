@@ -74,6 +74,9 @@ struct ServiceLimits {
     size_t solveCacheBytes = size_t(1) << 30;
     /// Decoded bytes a session, and all sessions, may hold (memory_budget.h; over: 507).
     MemoryLimits memory;
+    /// Where sessions and jobs are kept beside the data folder (issue #41): "" (the folder alone)
+    /// or a PostgreSQL connection string (postgresql://…), the folder then a cache of it.
+    std::string store;
 };
 
 enum class ViewImage { Target, Weights, Background };

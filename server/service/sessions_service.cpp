@@ -172,7 +172,7 @@ SessionView SessionsService::removeViewImage(Session& s, const std::string& view
 
 SessionsService::Readiness SessionsService::readiness() const {
     Readiness r;
-    r.store = m_ctx.persist ? "folder" : "memory";
+    r.store = m_ctx.persist ? m_ctx.persist->describe() : "memory";
     if (m_ctx.persist) r.storeProblem = m_ctx.persist->writeProblem();
     if (m_ctx.gl->queueDepth().stopping) r.glProblem = "the GL thread is stopping";
     else if (m_ctx.gl->capabilities().renderer.empty()) r.glProblem = "no GL context";

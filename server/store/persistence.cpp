@@ -17,7 +17,32 @@ namespace volstyle::server {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-Persistence::Persistence(fs::path dir, MeshReader readMesh) : m_dir(std::move(dir)), m_readMesh(std::move(readMesh)) {}
+Persistence::Persistence(fs::path dir, MeshReader readMesh, std::unique_ptr<FileMirror> mirror)
+    : m_dir(std::move(dir)), m_mirror(std::move(mirror)), m_readMesh(std::move(readMesh)) {
+    if (!m_mirror) return;
+    // The folder is a cache of the mirror: what another replica wrote is in the mirror, and
+    // what is only here (a session deleted elsewhere) must not come back.
+    for (const char* sub : {"sessions", "jobs"}) {
+        fs::remove_all(m_dir.root() / sub);
+        fs::create_directories(m_dir.root() / sub);
+    }
+    const size_t n = m_mirror->materialize(m_dir.root());
+    spdlog::info("store: {} file(s) read from {}", n, m_mirror->describe());
+}
+
+std::string Persistence::describe() const { return m_mirror ? m_mirror->describe() : "folder"; }
+
+void Persistence::mirrorPut(const fs::path& file) {
+    if (m_mirror) m_mirror->put(relative(file), file);
+}
+
+void Persistence::mirrorRemove(const fs::path& file) {
+    if (m_mirror) m_mirror->remove(relative(file));
+}
+
+void Persistence::mirrorRemoveTree(const fs::path& dir) {
+    if (m_mirror) m_mirror->removeTree(relative(dir));
+}
 
 std::string Persistence::versionFile(int version) { return store::versionFile(version); }
 
@@ -28,7 +53,7 @@ std::string Persistence::writeProblem() const {
         const fs::path probe = m_dir.root() / ".ready-probe";
         store::atomicWrite(probe, "ready\n");
         fs::remove(probe);
-        return "";
+        return m_mirror ? m_mirror->writeProblem() : "";
     } catch (const std::exception& e) {
         return e.what();
     }
@@ -41,9 +66,11 @@ void Persistence::saveSession(Session& s) {
         if (n != s.volume.version && !(older = s.volume.versions.inMemory(n))) continue;  // cannot happen: unstored ones stay in memory
         const fs::path vdb = dir / versionFile(n);
         store::atomicWriteWith(vdb, [&](const fs::path& tmp) { core::saveVdb(tmp.string(), n == s.volume.version ? s.volume.current : *older); });
+        mirrorPut(vdb);
         s.volume.versions.markStored(n, fs::file_size(vdb));
     }
     store::atomicWrite(dir / "session.json", store::encodeSessionRecord(s));
+    mirrorPut(dir / "session.json");
 }
 
 std::string Persistence::readVersionFile(const std::string& session, int version, std::uintmax_t expectedBytes) const {
@@ -73,61 +100,75 @@ void Persistence::saveViewImage(const std::string& session, const std::string& v
                                 const core::Image& image) {
     core::SaveOptions opt;
     opt.halfFloat = false;  // exact
-    store::atomicWriteWith(sessionDir(session) / "views" / view / (kind + ".exr"),
-                           [&](const fs::path& tmp) { core::saveImage(tmp.string(), image, opt); });
+    const fs::path file = sessionDir(session) / "views" / view / (kind + ".exr");
+    store::atomicWriteWith(file, [&](const fs::path& tmp) { core::saveImage(tmp.string(), image, opt); });
+    mirrorPut(file);
 }
 
 void Persistence::removeViewImage(const std::string& session, const std::string& view, const std::string& kind) {
     std::error_code ec;
     fs::remove(sessionDir(session) / "views" / view / (kind + ".exr"), ec);
+    mirrorRemove(sessionDir(session) / "views" / view / (kind + ".exr"));
 }
 
 void Persistence::removeView(const std::string& session, const std::string& view) {
     std::error_code ec;
     fs::remove_all(sessionDir(session) / "views" / view, ec);
+    mirrorRemoveTree(sessionDir(session) / "views" / view);
 }
 
 void Persistence::removeSession(const std::string& session) {
     std::error_code ec;
     fs::remove_all(sessionDir(session), ec);
+    mirrorRemoveTree(sessionDir(session));
 }
 
 void Persistence::removeJob(const std::string& job) {
     std::error_code ec;
     fs::remove(m_dir.jobsDir() / (job + ".json"), ec);
     fs::remove_all(jobFilesDir(job), ec);
+    mirrorRemove(m_dir.jobsDir() / (job + ".json"));
 }
 
 void Persistence::saveFrame(const std::string& session, int frame, const core::Volume& volume) {
-    store::atomicWriteWith(sessionDir(session) / "frames" / (std::to_string(frame) + ".vdb"),
-                           [&](const fs::path& tmp) { core::saveVdb(tmp.string(), volume); });
+    const fs::path file = sessionDir(session) / "frames" / (std::to_string(frame) + ".vdb");
+    store::atomicWriteWith(file, [&](const fs::path& tmp) { core::saveVdb(tmp.string(), volume); });
+    mirrorPut(file);
 }
 
 void Persistence::removeFrame(const std::string& session, int frame) {
     std::error_code ec;
     fs::remove(sessionDir(session) / "frames" / (std::to_string(frame) + ".vdb"), ec);
+    mirrorRemove(sessionDir(session) / "frames" / (std::to_string(frame) + ".vdb"));
 }
 
-void Persistence::saveJob(const Job& job) { store::atomicWrite(m_dir.jobsDir() / (job.id + ".json"), store::encodeJobRecord(job)); }
+void Persistence::saveJob(const Job& job) {
+    store::atomicWrite(m_dir.jobsDir() / (job.id + ".json"), store::encodeJobRecord(job));
+    mirrorPut(m_dir.jobsDir() / (job.id + ".json"));
+}
 
 void Persistence::saveStylizerScene(const std::string& session, const core::StylizerScene& scene, const std::vector<std::string>& meshRefs,
                                     uint64_t revision) {
     store::atomicWrite(sessionDir(session) / "stylizer" / "scene.json",
                        store::encodeStylizerScene(protocol::stylizerSceneToJson(scene, meshRefs), revision));
+    mirrorPut(sessionDir(session) / "stylizer" / "scene.json");
 }
 
 void Persistence::saveStylizerHistory(const std::string& session, const std::vector<StylizerSceneEntry>& undo,
                                       const std::vector<StylizerSceneEntry>& redo) {
     store::atomicWrite(sessionDir(session) / "stylizer" / "history.json", store::encodeStylizerHistory(undo, redo));
+    mirrorPut(sessionDir(session) / "stylizer" / "history.json");
 }
 
 void Persistence::saveSessionFile(const std::string& session, const std::string& file, const std::string& bytes) {
     store::atomicWrite(sessionDir(session) / file, bytes);
+    mirrorPut(sessionDir(session) / file);
 }
 
 void Persistence::removeSessionFile(const std::string& session, const std::string& file) {
     std::error_code ec;
     fs::remove(sessionDir(session) / file, ec);
+    mirrorRemove(sessionDir(session) / file);
 }
 
 std::vector<std::shared_ptr<Session>> Persistence::loadSessions() {
@@ -152,6 +193,7 @@ std::shared_ptr<Session> Persistence::loadSession(const fs::path& dir) {
     store::restoreStylizerRecord(m_dir, *s, dir, m_readMesh,
                                  [&](const json& scene, uint64_t revision) {
                                      store::atomicWrite(dir / "stylizer" / "scene.json", store::encodeStylizerScene(scene, revision));
+                                     mirrorPut(dir / "stylizer" / "scene.json");
                                  });
     if (s->damaged.size() != recordedDamage) saveSession(*s);  // the damage (and any fall-back) is recorded
     return s;

@@ -31,6 +31,7 @@
 #include "server/state/job_store.h"
 #include "server/state/session_store.h"
 #include "server/store/data_dir.h"
+#include "server/store/file_mirror.h"
 
 namespace volstyle::server {
 
@@ -41,7 +42,12 @@ public:
     /// Stored meshes are read again with `readMesh` (the server's child reader: a stored file is
     /// as untrusted as it was when it was uploaded); empty: in this process.
     using MeshReader = std::function<core::Mesh(const std::string& bytes, const std::string& format)>;
-    explicit Persistence(std::filesystem::path dir, MeshReader readMesh = {});
+    /// With a `mirror` (serve --store postgresql://…) the folder is a cache: it is emptied and
+    /// filled from the mirror here, and every write below is committed to the mirror too before
+    /// it returns (acknowledged = committed).
+    explicit Persistence(std::filesystem::path dir, MeshReader readMesh = {}, std::unique_ptr<FileMirror> mirror = nullptr);
+    /// "folder" or the mirror's description.
+    std::string describe() const;
 
     /// Writes session.json and any version not on disk yet (marking it stored). Call with the
     /// session's mutex held.
@@ -90,7 +96,14 @@ private:
     std::filesystem::path sessionDir(const std::string& id) const { return m_dir.sessionDir(id); }
     /// Restores one session folder (its record, files and stylizer); throws if nothing of it is usable.
     std::shared_ptr<Session> loadSession(const std::filesystem::path& dir);
+    /// The mirror's copy of a file just written, of one removed, of a folder removed.
+    void mirrorPut(const std::filesystem::path& file);
+    void mirrorRemove(const std::filesystem::path& file);
+    void mirrorRemoveTree(const std::filesystem::path& dir);
+    std::string relative(const std::filesystem::path& p) const { return p.lexically_relative(m_dir.root()).generic_string(); }
+
     store::DataDir m_dir;
+    std::unique_ptr<FileMirror> m_mirror;
     MeshReader m_readMesh;
 };
 

@@ -13,6 +13,7 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "core/base/errors.h"
@@ -34,6 +35,7 @@ protected:
         opt.maxUploadBytes = m_maxUploadBytes;
         opt.maxImageSide = 64;
         opt.dataDir = dataDir;
+        opt.store = testStore();
         opt.vdbReader = VOLSTYLE_BINARY;  // uploads are read in a child, as `serve` does
         try {
             m_server = std::make_unique<server::HttpServer>(opt);
@@ -53,7 +55,28 @@ protected:
     void TearDown() override {
         if (m_server) m_server->stop();
         if (m_thread.joinable()) m_thread.join();
+        m_server.reset();
+        if (!m_database.empty()) psql("DROP DATABASE " + std::exchange(m_database, "") + " WITH (FORCE)");
     }
+
+    /// With $VOLSTYLE_TEST_STORE (tests/cluster/with_postgres.sh: the suite run against the
+    /// PostgreSQL store, issue #41), a database of this test's own, made at its first start.
+    std::string testStore() {
+        const char* url = std::getenv("VOLSTYLE_TEST_STORE");
+        if (!url || !*url) return "";
+        const std::string base = url;
+        if (m_database.empty()) {
+            static int counter = 0;
+            m_database = "volstyle_test_" + std::to_string(::getpid()) + "_" + std::to_string(++counter);
+            psql("CREATE DATABASE " + m_database);
+        }
+        return base.substr(0, base.rfind('/') + 1) + m_database;
+    }
+    static void psql(const std::string& sql) {
+        const std::string command = "psql \"" + std::string(std::getenv("VOLSTYLE_TEST_STORE")) + "\" -qc \"" + sql + "\" > /dev/null";
+        ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    }
+    std::string m_database;
     httplib::Client& client() { return *m_client; }
 
     /// Checks the SPEC's error body and returns it.
@@ -99,6 +122,10 @@ protected:
     void restart() {
         m_server->stop();
         m_thread.join();
+        m_server.reset();
+        // Against a store, the folder is its cache: a restart with an empty one proves that
+        // everything acknowledged was committed there.
+        if (!m_database.empty()) std::filesystem::remove_all(m_dir);
         start({}, m_dir.string());
     }
     std::filesystem::path m_dir;

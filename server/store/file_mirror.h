@@ -1,0 +1,39 @@
+#pragma once
+/// \file file_mirror.h
+/// A second home for the data folder's files (issue #41 item 1): with `serve --store
+/// postgresql://…` every file Persistence writes (session records, volume versions, views'
+/// images, uploads, frames, the stylizer's scene, job records) is committed to PostgreSQL before
+/// the request that wrote it is answered, and the folder becomes a cache that a replica fills from
+/// the database when it starts. Paths are relative to the data folder ("sessions/<sid>/1.vdb").
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace volstyle::server {
+
+class FileMirror {
+public:
+    virtual ~FileMirror() = default;
+    /// Stores the file at `local` as `path` (replacing it), committed when this returns.
+    virtual void put(const std::string& path, const std::filesystem::path& local) = 0;
+    virtual void remove(const std::string& path) = 0;
+    /// Removes `prefix` and everything under it ("sessions/<sid>").
+    virtual void removeTree(const std::string& prefix) = 0;
+    /// Writes every stored file under `root` (its path relative to it); the number written.
+    virtual size_t materialize(const std::filesystem::path& root) = 0;
+    /// "" when the store takes a write now, else why not (GET /ready).
+    virtual std::string writeProblem() = 0;
+    /// Where it is, for logs and /ready ("postgresql://host:port/db", no password).
+    virtual std::string describe() const = 0;
+};
+
+/// The PostgreSQL mirror (pg_file_mirror.cpp): connects to `url` (a libpq connection string or
+/// postgresql:// URI) and applies the schema's migrations (refusing a database whose schema is
+/// newer than this binary's). Throws IoError when it cannot.
+std::unique_ptr<FileMirror> openPostgresMirror(const std::string& url);
+
+/// The schema version this binary writes and reads.
+constexpr int kStoreSchemaVersion = 1;
+
+}  // namespace volstyle::server

@@ -1,0 +1,160 @@
+// The PostgreSQL file mirror (file_mirror.h). Each file is a large object (streamed from and to
+// the local file by libpq's lo_import/lo_export: never whole in memory) named by a row of
+// volstyle_files; a put replaces the row and unlinks the old object in one transaction, so a
+// reader sees the old file or the new one, never a part. Migrations are numbered, applied at
+// start under an advisory lock (replicas starting together apply each once), and a schema newer
+// than this binary's is refused.
+#include <pqxx/pqxx>
+#include <spdlog/spdlog.h>
+
+#include <mutex>
+#include <regex>
+
+#include "core/base/errors.h"
+#include "server/store/data_dir.h"
+#include "server/store/file_mirror.h"
+
+namespace volstyle::server {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Migration k (1-based) takes the schema from version k-1 to k.
+const char* const kMigrations[] = {
+    // 1: files as large objects by path.
+    "CREATE TABLE volstyle_files (path text PRIMARY KEY, object oid NOT NULL, bytes bigint NOT NULL, "
+    "written timestamptz NOT NULL DEFAULT now())",
+};
+static_assert(std::size(kMigrations) == kStoreSchemaVersion, "a migration for every schema version");
+
+/// An arbitrary constant: the advisory lock the migrations take.
+constexpr long long kMigrationLock = 0x766f6c7374796c65;  // "volstyle"
+
+/// The URL without a password (user:secret@ → user@).
+std::string withoutPassword(const std::string& url) { return std::regex_replace(url, std::regex(R"((://[^:/@]+):[^@]*@)"), "$1@"); }
+
+class PgFileMirror final : public FileMirror {
+public:
+    explicit PgFileMirror(const std::string& url) : m_url(url), m_conn(connect(url)) { migrate(); }
+
+    void put(const std::string& path, const fs::path& local) override {
+        run("store " + path, [&](pqxx::work& tx) {
+            const pqxx::largeobject object(tx, local.string());
+            const pqxx::result old = tx.exec_params("SELECT object FROM volstyle_files WHERE path = $1 FOR UPDATE", path);
+            tx.exec_params("INSERT INTO volstyle_files (path, object, bytes) VALUES ($1, $2, $3) ON CONFLICT (path) DO UPDATE "
+                           "SET object = EXCLUDED.object, bytes = EXCLUDED.bytes, written = now()",
+                           path, object.id(), static_cast<long long>(fs::file_size(local)));
+            for (const auto& row : old) pqxx::largeobject(row[0].as<pqxx::oid>()).remove(tx);
+        });
+    }
+
+    void remove(const std::string& path) override {
+        run("remove " + path, [&](pqxx::work& tx) {
+            for (const auto& row : tx.exec_params("DELETE FROM volstyle_files WHERE path = $1 RETURNING object", path))
+                pqxx::largeobject(row[0].as<pqxx::oid>()).remove(tx);
+        });
+    }
+
+    void removeTree(const std::string& prefix) override {
+        run("remove " + prefix, [&](pqxx::work& tx) {
+            const std::string like = escapeLike(prefix) + "/%";
+            for (const auto& row : tx.exec_params("DELETE FROM volstyle_files WHERE path = $1 OR path LIKE $2 RETURNING object", prefix, like))
+                pqxx::largeobject(row[0].as<pqxx::oid>()).remove(tx);
+        });
+    }
+
+    size_t materialize(const fs::path& root) override {
+        size_t n = 0;
+        run("read the stored files", [&](pqxx::work& tx) {
+            n = 0;
+            for (const auto& row : tx.exec("SELECT path, object FROM volstyle_files ORDER BY written, path")) {
+                const std::string path = row[0].as<std::string>();
+                if (path.find("..") != std::string::npos || path.empty() || path[0] == '/') throw IoError("a stored path is not relative: '" + path + "'");
+                const fs::path to = root / path;
+                fs::create_directories(to.parent_path());
+                pqxx::largeobject(row[1].as<pqxx::oid>()).to_file(tx, to.string());
+                ++n;
+            }
+        });
+        return n;
+    }
+
+    std::string writeProblem() override {
+        try {
+            run("check", [](pqxx::work& tx) { tx.exec("SELECT 1 FROM volstyle_files LIMIT 1"); });
+            return "";
+        } catch (const std::exception& e) {
+            return e.what();
+        }
+    }
+
+    std::string describe() const override { return withoutPassword(m_url); }
+
+private:
+    static std::unique_ptr<pqxx::connection> connect(const std::string& url) {
+        try {
+            return std::make_unique<pqxx::connection>(url);
+        } catch (const std::exception& e) {
+            throw IoError("cannot connect to the store " + withoutPassword(url) + ": " + e.what());
+        }
+    }
+
+    static std::string escapeLike(const std::string& s) {
+        std::string out;
+        for (char ch : s) {
+            if (ch == '%' || ch == '_' || ch == '\\') out += '\\';
+            out += ch;
+        }
+        return out;
+    }
+
+    /// One transaction on the shared connection; a broken connection is opened again once.
+    template <typename F>
+    void run(const std::string& what, F&& body) {
+        std::lock_guard lock(m_mutex);
+        for (int attempt = 0;; ++attempt) {
+            try {
+                if (!m_conn || !m_conn->is_open()) m_conn = connect(m_url);
+                pqxx::work tx(*m_conn);
+                body(tx);
+                tx.commit();
+                return;
+            } catch (const pqxx::broken_connection& e) {
+                m_conn.reset();
+                if (attempt == 0) continue;
+                throw IoError("the store " + describe() + " is unreachable (" + what + "): " + e.what());
+            } catch (const IoError&) {
+                throw;
+            } catch (const std::exception& e) {
+                throw IoError("the store " + describe() + " failed to " + what + ": " + e.what());
+            }
+        }
+    }
+
+    void migrate() {
+        run("migrate the schema", [](pqxx::work& tx) {
+            tx.exec("SELECT pg_advisory_xact_lock(" + std::to_string(kMigrationLock) + ")");
+            tx.exec("CREATE TABLE IF NOT EXISTS volstyle_schema (version integer NOT NULL)");
+            const pqxx::result r = tx.exec("SELECT version FROM volstyle_schema");
+            const int at = r.empty() ? 0 : r[0][0].as<int>();
+            if (at > kStoreSchemaVersion)
+                throw IoError("the store's schema is version " + std::to_string(at) + ", newer than this binary's (" +
+                              std::to_string(kStoreSchemaVersion) + "): run a newer volstyle");
+            for (int v = at; v < kStoreSchemaVersion; ++v) tx.exec(kMigrations[v]);
+            if (r.empty()) tx.exec("INSERT INTO volstyle_schema VALUES (" + std::to_string(kStoreSchemaVersion) + ")");
+            else tx.exec("UPDATE volstyle_schema SET version = " + std::to_string(kStoreSchemaVersion));
+            if (at < kStoreSchemaVersion) spdlog::info("store: schema migrated from version {} to {}", at, kStoreSchemaVersion);
+        });
+    }
+
+    std::string m_url;
+    std::unique_ptr<pqxx::connection> m_conn;
+    std::mutex m_mutex;
+};
+
+}  // namespace
+
+std::unique_ptr<FileMirror> openPostgresMirror(const std::string& url) { return std::make_unique<PgFileMirror>(url); }
+
+}  // namespace volstyle::server
