@@ -109,10 +109,42 @@ void ServiceContext::pruneJobs() {
     }
 }
 
-std::shared_ptr<Session> ServiceContext::find(const std::string& id) const {
+std::shared_ptr<Session> ServiceContext::find(const std::string& id) {
     auto s = sessions.find(id);
+    if (persist && persist->hasMirror()) s = freshFromStore(id, std::move(s));
     if (!s) throw ApiError(ErrorCode::NotFound, "no session '" + id + "'");
     return s;
+}
+
+std::shared_ptr<Session> ServiceContext::freshFromStore(const std::string& id, std::shared_ptr<Session> held) {
+    // Replicas share the store (issue #41): a session another replica made or changed is read
+    // from it here, one query per request when nothing changed.
+    if (id.empty() || id.size() > 64 || id.find_first_not_of("0123456789abcdef") != std::string::npos) return held;
+    const std::optional<uint64_t> stamp = persist->storedStamp(id);
+    uint64_t heldStamp = 0;
+    if (held) {
+        std::lock_guard lock(held->mutex);
+        heldStamp = held->storeStamp;
+    }
+    if (held && (!stamp || *stamp == heldStamp)) return held;  // the newest (or not stored yet: being created here)
+    if (!stamp) return nullptr;
+    std::lock_guard lock(storeLoads);  // one load at a time: two requests for a stale session load it once
+    if (auto again = sessions.find(id); again && again != held) return again;  // loaded meanwhile
+    std::shared_ptr<Session> fresh = persist->loadFromStore(id);
+    if (!fresh) return held;
+    if (held) {
+        std::lock_guard heldLock(held->mutex);
+        held->removed = true;  // its streams end; work queued on it answers not_found
+        held->changed.notify_all();
+        memory.forget(*held);
+    }
+    {
+        std::lock_guard freshLock(fresh->mutex);
+        memory.recount(*fresh);
+    }
+    sessions.restore(fresh);
+    spdlog::info("session {}: read from the store ({})", id, held ? "another replica changed it" : "made elsewhere");
+    return fresh;
 }
 
 core::Lighting ServiceContext::lighting(Session& s) const {

@@ -26,7 +26,10 @@ struct ServiceContext {
     ServiceContext& operator=(const ServiceContext&) = delete;
 
     // Lookups.
-    std::shared_ptr<Session> find(const std::string& id) const;  ///< ApiError not_found
+    std::shared_ptr<Session> find(const std::string& id);  ///< ApiError not_found
+    /// With a PostgreSQL store: `held` (may be null), or the session as the store has it when
+    /// another replica made or changed it (nullptr: the store has none).
+    std::shared_ptr<Session> freshFromStore(const std::string& id, std::shared_ptr<Session> held);
     std::shared_ptr<Job> job(const std::string& id) const;       ///< ApiError not_found
     SessionView view(Session& s, const std::string& viewId) const;  ///< a copy; ApiError not_found
     core::Lighting lighting(Session& s) const;
@@ -96,6 +99,7 @@ struct ServiceContext {
     JobStore jobs;
     std::mutex jobRecords;  ///< orders writing a job's record against forgetting it
     std::unique_ptr<Persistence> persist;  ///< null: in memory only
+    std::mutex storeLoads;                 ///< one session read from the store at a time
     std::filesystem::path scratch;          ///< job files without a data directory (removed at exit)
     std::counting_semaphore<> decodeSlots{kConcurrentDecodes};
     std::unique_ptr<core::Renderer> rendererEngine;             ///< GL thread only

@@ -47,7 +47,10 @@ protocol::JobInfo Job::info() const {
 
 std::shared_ptr<Job> JobStore::add(const std::string& session) {
     auto job = std::make_shared<Job>();
+    // The session's first 8 hex digits lead the job's id: a load balancer that hashes them sends
+    // a job's requests to the replica that holds its session (docs/DEPLOY.md).
     job->id = SessionStore::newId();
+    if (session.size() >= 8) job->id.replace(0, 8, session, 0, 8);
     job->session = session;
     std::lock_guard lock(m_mutex);
     job->sequence = ++m_sequence;

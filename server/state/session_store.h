@@ -111,6 +111,9 @@ struct Session {
     bool removed = false;
     /// What the server's MemoryBudget charges it (memory_budget.h; kept with the budget's lock).
     size_t chargedBytes = 0;
+    /// With a PostgreSQL store: the stamp of its record there as this server last wrote or read
+    /// it. Another replica's write changes the stamp, and the next request reloads the session.
+    uint64_t storeStamp = 0;
     std::mutex mutex;                      ///< guards the fields above
 };
 

@@ -7,21 +7,35 @@
 /// the database when it starts. Paths are relative to the data folder ("sessions/<sid>/1.vdb").
 
 #include <filesystem>
+#include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace volstyle::server {
 
 class FileMirror {
 public:
     virtual ~FileMirror() = default;
-    /// Stores the file at `local` as `path` (replacing it), committed when this returns.
-    virtual void put(const std::string& path, const std::filesystem::path& local) = 0;
+    /// Stores the file at `local` as `path` (replacing it), committed when this returns; its
+    /// stamp (new at every put: whether a copy read earlier is still the newest).
+    virtual uint64_t put(const std::string& path, const std::filesystem::path& local) = 0;
+    /// A session's record and the files it names (its new versions), in one transaction that
+    /// first locks the record's row and checks that its stamp is still `expected` (0: no record
+    /// yet): two replicas saving one session are serialized, and the one whose copy was stale
+    /// gets ApiError busy (409) with nothing written. The record's new stamp.
+    virtual uint64_t putRecord(const std::string& record, const std::filesystem::path& recordLocal,
+                               const std::vector<std::pair<std::string, std::filesystem::path>>& files, uint64_t expected) = 0;
+    /// The stamp of `path` now (nullopt: not stored).
+    virtual std::optional<uint64_t> stamp(const std::string& path) = 0;
     virtual void remove(const std::string& path) = 0;
     /// Removes `prefix` and everything under it ("sessions/<sid>").
     virtual void removeTree(const std::string& prefix) = 0;
-    /// Writes every stored file under `root` (its path relative to it); the number written.
-    virtual size_t materialize(const std::filesystem::path& root) = 0;
+    /// Writes the stored files under `prefix` ("sessions/<sid>", "jobs") into `root` (each at its
+    /// path relative to it); the number written.
+    virtual size_t materializeTree(const std::string& prefix, const std::filesystem::path& root) = 0;
     /// "" when the store takes a write now, else why not (GET /ready).
     virtual std::string writeProblem() = 0;
     /// Where it is, for logs and /ready ("postgresql://host:port/db", no password).

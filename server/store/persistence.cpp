@@ -21,13 +21,30 @@ Persistence::Persistence(fs::path dir, MeshReader readMesh, std::unique_ptr<File
     : m_dir(std::move(dir)), m_mirror(std::move(mirror)), m_readMesh(std::move(readMesh)) {
     if (!m_mirror) return;
     // The folder is a cache of the mirror: what another replica wrote is in the mirror, and
-    // what is only here (a session deleted elsewhere) must not come back.
+    // what is only here (a session deleted elsewhere) must not come back. Sessions are read when
+    // first asked for (ServiceContext::freshFromStore): a replica starts in the time its jobs'
+    // records take to read, not the whole store's.
     for (const char* sub : {"sessions", "jobs"}) {
         fs::remove_all(m_dir.root() / sub);
         fs::create_directories(m_dir.root() / sub);
     }
-    const size_t n = m_mirror->materialize(m_dir.root());
-    spdlog::info("store: {} file(s) read from {}", n, m_mirror->describe());
+    const size_t n = m_mirror->materializeTree("jobs", m_dir.root());
+    spdlog::info("store: {}; {} job record(s) read, sessions read when first asked for", m_mirror->describe(), n);
+}
+
+std::optional<uint64_t> Persistence::storedStamp(const std::string& id) {
+    return m_mirror ? m_mirror->stamp("sessions/" + id + "/session.json") : std::nullopt;
+}
+
+std::shared_ptr<Session> Persistence::loadFromStore(const std::string& id) {
+    if (!m_mirror) return nullptr;
+    const std::optional<uint64_t> stamp = storedStamp(id);
+    if (!stamp) return nullptr;
+    const fs::path dir = sessionDir(id);
+    fs::remove_all(dir);
+    m_mirror->materializeTree("sessions/" + id, m_dir.root());
+    if (!fs::exists(dir / "session.json")) return nullptr;  // deleted meanwhile
+    return loadSession(dir);
 }
 
 std::string Persistence::describe() const { return m_mirror ? m_mirror->describe() : "folder"; }
@@ -61,16 +78,25 @@ std::string Persistence::writeProblem() const {
 
 void Persistence::saveSession(Session& s) {
     const fs::path dir = sessionDir(s.id);
+    std::vector<std::pair<std::string, fs::path>> written;
+    std::vector<std::pair<int, std::uintmax_t>> stored;
     for (int n : s.volume.versions.unstored()) {
         std::shared_ptr<const core::Volume> older;
         if (n != s.volume.version && !(older = s.volume.versions.inMemory(n))) continue;  // cannot happen: unstored ones stay in memory
         const fs::path vdb = dir / versionFile(n);
         store::atomicWriteWith(vdb, [&](const fs::path& tmp) { core::saveVdb(tmp.string(), n == s.volume.version ? s.volume.current : *older); });
-        mirrorPut(vdb);
-        s.volume.versions.markStored(n, fs::file_size(vdb));
+        written.emplace_back(relative(vdb), vdb);
+        stored.emplace_back(n, fs::file_size(vdb));
     }
+    for (const auto& [n, bytes] : stored) s.volume.versions.markStored(n, bytes);
     store::atomicWrite(dir / "session.json", store::encodeSessionRecord(s));
-    mirrorPut(dir / "session.json");
+    if (!m_mirror) return;
+    try {
+        s.storeStamp = m_mirror->putRecord(relative(dir / "session.json"), dir / "session.json", written, s.storeStamp);
+    } catch (...) {
+        s.storeStamp = ~uint64_t(0);  // this copy is not the store's: the next request reads the store's
+        throw;
+    }
 }
 
 std::string Persistence::readVersionFile(const std::string& session, int version, std::uintmax_t expectedBytes) const {
@@ -190,6 +216,7 @@ std::vector<std::shared_ptr<Session>> Persistence::loadSessions() {
 std::shared_ptr<Session> Persistence::loadSession(const fs::path& dir) {
     size_t recordedDamage = 0;
     std::shared_ptr<Session> s = store::restoreSessionRecord(m_dir, dir, recordedDamage);
+    if (m_mirror) s->storeStamp = storedStamp(s->id).value_or(0);  // what a save below must find there
     store::restoreStylizerRecord(m_dir, *s, dir, m_readMesh,
                                  [&](const json& scene, uint64_t revision) {
                                      store::atomicWrite(dir / "stylizer" / "scene.json", store::encodeStylizerScene(scene, revision));

@@ -48,6 +48,12 @@ public:
     explicit Persistence(std::filesystem::path dir, MeshReader readMesh = {}, std::unique_ptr<FileMirror> mirror = nullptr);
     /// "folder" or the mirror's description.
     std::string describe() const;
+    bool hasMirror() const { return m_mirror != nullptr; }
+    /// With a mirror: the stamp of session `id`'s record there now (nullopt: no such session).
+    std::optional<uint64_t> storedStamp(const std::string& id);
+    /// With a mirror: session `id` as the mirror holds it now (another replica may have written
+    /// it), its folder here replaced; nullptr when the mirror has none.
+    std::shared_ptr<Session> loadFromStore(const std::string& id);
 
     /// Writes session.json and any version not on disk yet (marking it stored). Call with the
     /// session's mutex held.

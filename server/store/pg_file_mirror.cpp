@@ -11,6 +11,7 @@
 #include <regex>
 
 #include "core/base/errors.h"
+#include "protocol/error_body.h"
 #include "server/store/data_dir.h"
 #include "server/store/file_mirror.h"
 
@@ -38,15 +39,37 @@ class PgFileMirror final : public FileMirror {
 public:
     explicit PgFileMirror(const std::string& url) : m_url(url), m_conn(connect(url)) { migrate(); }
 
-    void put(const std::string& path, const fs::path& local) override {
-        run("store " + path, [&](pqxx::work& tx) {
-            const pqxx::largeobject object(tx, local.string());
-            const pqxx::result old = tx.exec_params("SELECT object FROM volstyle_files WHERE path = $1 FOR UPDATE", path);
-            tx.exec_params("INSERT INTO volstyle_files (path, object, bytes) VALUES ($1, $2, $3) ON CONFLICT (path) DO UPDATE "
-                           "SET object = EXCLUDED.object, bytes = EXCLUDED.bytes, written = now()",
-                           path, object.id(), static_cast<long long>(fs::file_size(local)));
-            for (const auto& row : old) pqxx::largeobject(row[0].as<pqxx::oid>()).remove(tx);
+    uint64_t put(const std::string& path, const fs::path& local) override {
+        uint64_t stamp = 0;
+        run("store " + path, [&](pqxx::work& tx) { stamp = putIn(tx, path, local); });
+        return stamp;
+    }
+
+    uint64_t putRecord(const std::string& record, const fs::path& recordLocal, const std::vector<std::pair<std::string, fs::path>>& files,
+                       uint64_t expected) override {
+        uint64_t stamp = 0;
+        run("store " + record, [&](pqxx::work& tx) {
+            // A new session's record cannot be locked before it exists: an advisory lock on its
+            // path's hash serializes two first saves too.
+            tx.exec_params("SELECT pg_advisory_xact_lock(hashtext($1))", record);
+            const pqxx::result r = tx.exec_params("SELECT object FROM volstyle_files WHERE path = $1 FOR UPDATE", record);
+            const uint64_t now = r.empty() ? 0 : r[0][0].as<pqxx::oid>();
+            if (now != expected)
+                throw protocol::ApiError(protocol::ErrorCode::Busy, "another replica changed this session meanwhile (" + record +
+                                                                       "); nothing of this request was kept: read the session and retry");
+            for (const auto& [path, local] : files) putIn(tx, path, local);
+            stamp = putIn(tx, record, recordLocal);
         });
+        return stamp;
+    }
+
+    std::optional<uint64_t> stamp(const std::string& path) override {
+        std::optional<uint64_t> out;
+        run("read the stamp of " + path, [&](pqxx::work& tx) {
+            const pqxx::result r = tx.exec_params("SELECT object FROM volstyle_files WHERE path = $1", path);
+            out = r.empty() ? std::nullopt : std::optional<uint64_t>(r[0][0].as<pqxx::oid>());
+        });
+        return out;
     }
 
     void remove(const std::string& path) override {
@@ -64,11 +87,12 @@ public:
         });
     }
 
-    size_t materialize(const fs::path& root) override {
+    size_t materializeTree(const std::string& prefix, const fs::path& root) override {
         size_t n = 0;
         run("read the stored files", [&](pqxx::work& tx) {
             n = 0;
-            for (const auto& row : tx.exec("SELECT path, object FROM volstyle_files ORDER BY written, path")) {
+            for (const auto& row :
+                 tx.exec_params("SELECT path, object FROM volstyle_files WHERE path LIKE $1 ORDER BY written, path", escapeLike(prefix) + "/%")) {
                 const std::string path = row[0].as<std::string>();
                 if (path.find("..") != std::string::npos || path.empty() || path[0] == '/') throw IoError("a stored path is not relative: '" + path + "'");
                 const fs::path to = root / path;
@@ -100,6 +124,18 @@ private:
         }
     }
 
+    /// Replaces `path`'s file with the one at `local` within `tx`; the new stamp (a new large
+    /// object's id: never the same for two puts while both exist).
+    static uint64_t putIn(pqxx::work& tx, const std::string& path, const fs::path& local) {
+        const pqxx::largeobject object(tx, local.string());
+        const pqxx::result old = tx.exec_params("SELECT object FROM volstyle_files WHERE path = $1 FOR UPDATE", path);
+        tx.exec_params("INSERT INTO volstyle_files (path, object, bytes) VALUES ($1, $2, $3) ON CONFLICT (path) DO UPDATE "
+                       "SET object = EXCLUDED.object, bytes = EXCLUDED.bytes, written = now()",
+                       path, object.id(), static_cast<long long>(fs::file_size(local)));
+        for (const auto& row : old) pqxx::largeobject(row[0].as<pqxx::oid>()).remove(tx);
+        return object.id();
+    }
+
     static std::string escapeLike(const std::string& s) {
         std::string out;
         for (char ch : s) {
@@ -125,6 +161,8 @@ private:
                 if (attempt == 0) continue;
                 throw IoError("the store " + describe() + " is unreachable (" + what + "): " + e.what());
             } catch (const IoError&) {
+                throw;
+            } catch (const protocol::ApiError&) {
                 throw;
             } catch (const std::exception& e) {
                 throw IoError("the store " + describe() + " failed to " + what + ": " + e.what());
