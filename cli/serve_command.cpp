@@ -34,7 +34,7 @@ const CommandSpec kServe{
         {"port", "N", "port; default 8080 (0: any free port, printed at start)"},
         {"token", "T", "require 'Authorization: Bearer T' on /api (also $VOLSTYLE_TOKEN); default none"},
         {"data-dir", "DIR", "where sessions are kept; default ./volstyle-data"},
-        {"store", "URL", "also keep them in PostgreSQL (postgresql://user@host:port/db): committed there before each answer, the data folder its cache (docs/DEPLOY.md)"},
+        {"store", "URL", "also keep them in PostgreSQL (postgresql://user@host:port/db): committed there before each answer, the data folder its cache (docs/DEPLOY.md); default none"},
         {"web-dir", "DIR", "the page's folder; default the installed share/volstyle/web, else the source tree's web/"},
         {"render-budget", "S", "seconds one render may hold the GL thread (422 over_budget past it; 0: no limit); default 60"},
         {"max-sessions", "N", "sessions at once; default 64"},
@@ -62,6 +62,18 @@ double wholeNumber(const Arguments& args, const std::string& flag, double fallba
 
 const CommandSpec& serveCommand() { return kServe; }
 
+namespace {
+
+/// --store: empty (the data folder alone) or a PostgreSQL URL.
+std::string storeUrl(const Arguments& args) {
+    const std::string url = args.get("store", "");
+    if (!url.empty() && url.rfind("postgresql://", 0) != 0 && url.rfind("postgres://", 0) != 0)
+        throw InvalidArgument("serve: --store takes a postgresql:// URL (the data folder is the default store)");
+    return url;
+}
+
+}  // namespace
+
 int runServe(const std::vector<std::string>& argv) {
     Arguments args = parseArguments(argv, kServe);
     if (printHelpIfAsked(args, kServe)) return 0;
@@ -72,9 +84,7 @@ int runServe(const std::vector<std::string>& argv) {
     opt.token = args.get("token", envToken ? envToken : "");
     opt.webDir = args.has("web-dir") ? args.get("web-dir") : defaultWebDir();
     opt.dataDir = args.get("data-dir", opt.dataDir);
-    opt.store = args.get("store", "");
-    if (!opt.store.empty() && opt.store.rfind("postgresql://", 0) != 0 && opt.store.rfind("postgres://", 0) != 0)
-        throw InvalidArgument("serve: --store takes a postgresql:// URL (the data folder is the default store)");
+    opt.store = storeUrl(args);
     opt.maxSessions = size_t(wholeNumber(args, "max-sessions", double(opt.maxSessions), 1, 1e6));
     opt.maxUploadBytes = size_t(wholeNumber(args, "max-upload-mib", double(opt.maxUploadBytes >> 20), 1, 1 << 20)) << 20;
     opt.maxImageSide = int(wholeNumber(args, "max-image-side", opt.maxImageSide, 16, 65536));

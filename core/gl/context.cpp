@@ -25,10 +25,15 @@ std::string envOr(const char* name, const std::string& fallback) {
     return v && *v ? std::string(v) : fallback;
 }
 
-/// The first EGL device that is not Mesa's software device, if any. NVIDIA's EGL names the
-/// enumeration EGL_EXT_device_base (enumeration and query together), Mesa's glvnd setup
+/// The EGL device that is not Mesa's software device, the first or the VOLSTYLE_EGL_DEVICE'th
+/// (0-based: a replica per GPU, docs/DEPLOY.md), if any. NVIDIA's EGL names the enumeration
+/// EGL_EXT_device_base (enumeration and query together), Mesa's glvnd setup
 /// EGL_EXT_device_enumeration: either will do (seen on the H200 device machine, driver 580).
 EGLDeviceEXT findHardwareDevice() {
+    const std::string wanted = envOr("VOLSTYLE_EGL_DEVICE", "0");
+    if (wanted.empty() || wanted.size() > 2 || wanted.find_first_not_of("0123456789") != std::string::npos)
+        throw GpuError("gl::Context: VOLSTYLE_EGL_DEVICE must be a GPU's index (0, 1, …), got '" + wanted + "'");
+    int skip = std::stoi(wanted), found = 0;
     if (!epoxy_has_egl_extension(EGL_NO_DISPLAY, "EGL_EXT_device_enumeration") &&
         !epoxy_has_egl_extension(EGL_NO_DISPLAY, "EGL_EXT_device_base"))
         return nullptr;
@@ -37,8 +42,12 @@ EGLDeviceEXT findHardwareDevice() {
     if (!eglQueryDevicesEXT(16, devices, &count)) return nullptr;
     for (EGLint i = 0; i < count; ++i) {
         const char* ext = eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS);
-        if (!ext || !std::strstr(ext, "EGL_MESA_device_software")) return devices[i];
+        if (ext && std::strstr(ext, "EGL_MESA_device_software")) continue;
+        if (skip-- == 0) return devices[i];
+        ++found;
     }
+    if (found > 0)
+        throw GpuError("gl::Context: VOLSTYLE_EGL_DEVICE=" + wanted + " but this machine has " + std::to_string(found) + " GPU device(s)");
     return nullptr;
 }
 

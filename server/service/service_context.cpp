@@ -120,13 +120,17 @@ std::shared_ptr<Session> ServiceContext::freshFromStore(const std::string& id, s
     // Replicas share the store (issue #41): a session another replica made or changed is read
     // from it here, one query per request when nothing changed.
     if (id.empty() || id.size() > 64 || id.find_first_not_of("0123456789abcdef") != std::string::npos) return held;
-    const std::optional<uint64_t> stamp = persist->storedStamp(id);
-    uint64_t heldStamp = 0;
+    std::optional<uint64_t> stamp;
     if (held) {
+        // Read with the session's lock held: a save here commits and takes its new stamp under
+        // it, so the two are compared at one moment (else a save between them looks like
+        // another replica's, and requests in flight on this copy would be cut off).
         std::lock_guard lock(held->mutex);
-        heldStamp = held->storeStamp;
+        stamp = persist->storedStamp(id);
+        if (!stamp || *stamp == held->storeStamp) return held;  // the newest (or not stored yet: being created here)
+    } else {
+        stamp = persist->storedStamp(id);
     }
-    if (held && (!stamp || *stamp == heldStamp)) return held;  // the newest (or not stored yet: being created here)
     if (!stamp) return nullptr;
     std::lock_guard lock(storeLoads);  // one load at a time: two requests for a stale session load it once
     if (auto again = sessions.find(id); again && again != held) return again;  // loaded meanwhile
