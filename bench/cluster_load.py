@@ -92,6 +92,35 @@ def run(store, replicas, seconds, clients=8, sessions=12):
         c.stop()
 
 
+def store_overhead(store, edits=40):
+    """One replica, no balancer: the median of `edits` sequential edits (a new 16³ version each,
+    written before the answer) with the data folder alone and with the PostgreSQL store."""
+    import subprocess
+    import tempfile
+    from cluster import BINARY, free_port, wait_ready
+    out = []
+    for label, extra in (("data folder", []), ("PostgreSQL store", ["--store", store])):
+        with tempfile.TemporaryDirectory() as data:
+            port = free_port()
+            p = subprocess.Popen([BINARY, "serve", "--port", str(port), "--data-dir", data, *extra], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            try:
+                url = f"http://127.0.0.1:{port}"
+                wait_ready(url)
+                status, body, _ = call(url + "/api/v1/sessions", "POST", {"scene": "builtin:sphere", "resolution": 16})
+                base = f"{url}/api/v1/sessions/{json.loads(body)['id']}"
+                ms = []
+                for k in range(edits):
+                    t0 = time.monotonic()
+                    status, _, _ = call(base + "/refraction", "POST" if k % 2 == 0 else "DELETE", {"index": 1.2, "radius": 0.4} if k % 2 == 0 else None)
+                    assert status == 200, status
+                    ms.append((time.monotonic() - t0) * 1000)
+                out.append(f"{label} {percentile(ms, 50):.1f} ms (p90 {percentile(ms, 90):.1f})")
+            finally:
+                p.terminate()
+                p.wait()
+    print("an edit's latency, one replica, median of %d: " % edits + "; ".join(out))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--replicas", default="1,2,3")
@@ -100,6 +129,7 @@ def main():
     store = os.environ.get("VOLSTYLE_TEST_STORE")
     if not store:
         sys.exit("cluster_load.py: run under tests/cluster/with_postgres.sh")
+    store_overhead(store)
     for n in (int(x) for x in a.replicas.split(",")):
         run(store, n, a.seconds)
 
