@@ -6,7 +6,8 @@
 'use strict';
 
 const vp = { sid: null, controller: null, live: false, waiters: [], shown: { revision: 0, shown: 0 }, arrivals: [],
-             lastBody: '', chain: Promise.resolve(), queued: null, fallbackBusy: false, fallbackPending: false };
+             lastBody: '', chain: Promise.resolve(), queued: null, fallbackBusy: false, fallbackPending: false, failedAt: -Infinity };
+const kStreamRetryMs = 10000;  // after a refused or broken stream, renders go one by one this long
 
 function viewportRequest() {
   const body = { camera: camera(320), format: 'jpeg' };  // a preview: JPEG encodes in ~1 ms where PNG takes ~10
@@ -47,19 +48,23 @@ function onViewportPart(headers, body) {
   }  // text/plain: a keep-alive
 }
 
-// Opens the session's viewport stream (closing any other); the first PUT follows.
+// Opens the session's viewport stream (closing any other); the first PUT follows. A new
+// stream starts from nothing: its frames' keys are its session's, from revision 0.
 function connectViewport(sid) {
   if (vp.sid === sid && vp.live) return;
   if (vp.controller) vp.controller.abort();
   settleViewportWaits({ revision: Infinity, shown: Infinity });
   const controller = new AbortController();
-  Object.assign(vp, { sid, controller, live: true, lastBody: '', arrivals: [] });
+  Object.assign(vp, { sid, controller, live: true, lastBody: '', arrivals: [], shown: { revision: 0, shown: 0 } });
   readMultipartStream(`${api}/sessions/${sid}/viewport/stream`, controller.signal, onViewportPart)
     .catch((err) => { if (!controller.signal.aborted) status(`the viewport stream stopped (${err.message}): previews are rendered one by one`, 'warn'); })
     .finally(() => {
-      if (vp.controller !== controller) return;
-      vp.live = false;  // ended or broken: one render per change from now on
+      if (vp.controller !== controller || controller.signal.aborted) return;
+      vp.live = false;  // ended or broken: one render per change for a while, then a new stream
+      vp.failedAt = performance.now();
+      const waited = vp.waiters.length > 0;
       settleViewportWaits({ revision: Infinity, shown: Infinity });
+      if (waited && state.sid === sid) renderViewportOnce();  // what they waited for, the other way
     });
 }
 
@@ -71,8 +76,9 @@ function syncViewport() {
     vp.queued = null;
     const body = JSON.stringify(viewportRequest());
     if (body === vp.lastBody) return call('GET', `/sessions/${state.sid}/viewport`);
-    vp.lastBody = body;
-    return call('PUT', `/sessions/${state.sid}/viewport`, JSON.parse(body));
+    const key = await call('PUT', `/sessions/${state.sid}/viewport`, JSON.parse(body));
+    vp.lastBody = body;  // only once the server has it: a failed PUT is sent again next time
+    return key;
   });
   vp.queued = next;
   vp.chain = next.catch(() => {});
@@ -83,10 +89,17 @@ function syncViewport() {
 // everything committed before the call is on screen.
 async function renderViewport() {
   if (!state.sid) return;
-  if (vp.sid !== state.sid || !vp.live) connectViewport(state.sid);
+  const retry = performance.now() - vp.failedAt > kStreamRetryMs;
+  if (vp.sid !== state.sid || (!vp.live && retry)) connectViewport(state.sid);
   if (!vp.live) return renderViewportOnce();
-  const key = await syncViewport();
-  if (!vp.live) return renderViewportOnce();
+  let key;
+  try {
+    key = await syncViewport();
+  } catch (e) {  // callers that do not wait (an orbit drag) must not leave a rejection unhandled
+    status(e.message, 'error');
+    return;
+  }
+  if (!vp.live || vp.sid !== state.sid) return renderViewportOnce();
   return new Promise((resolve) => {
     vp.waiters.push({ revision: key.revision, shown: key.shown, resolve });
     settleViewportWaits(vp.shown);

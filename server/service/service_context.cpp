@@ -19,8 +19,10 @@ namespace volstyle::server {
 ServiceContext::ServiceContext(ServiceLimits serviceLimits, const std::string& dataDir, std::unique_ptr<GlExecutor> executor)
     : limits(std::move(serviceLimits)), sessions(limits.maxSessions), gl(executor ? std::move(executor) : std::make_unique<GlWorker>()) {
     std::string folder = dataDir;
-    if (folder.empty() && !limits.store.empty())  // a store needs a folder to cache it in
-        folder = (std::filesystem::temp_directory_path() / ("volstyle-cache-" + SessionStore::newId())).string();
+    if (folder.empty() && !limits.store.empty()) {  // a store needs a folder to cache it in (removed at exit, as scratch)
+        scratch = std::filesystem::temp_directory_path() / ("volstyle-cache-" + SessionStore::newId());
+        folder = scratch.string();
+    }
     if (!folder.empty()) {
         persist = std::make_unique<Persistence>(folder, [this](const std::string& bytes, const std::string& format) {
             core::MeshLimits meshLimits = limits.meshLimits;
@@ -127,21 +129,19 @@ std::shared_ptr<Session> ServiceContext::freshFromStore(const std::string& id, s
         // another replica's, and requests in flight on this copy would be cut off).
         std::lock_guard lock(held->mutex);
         stamp = persist->storedStamp(id);
-        if (!stamp || *stamp == held->storeStamp) return held;  // the newest (or not stored yet: being created here)
+        if (stamp ? *stamp == held->storeStamp : held->storeStamp == 0) return held;  // the newest (or being created here)
     } else {
         stamp = persist->storedStamp(id);
     }
-    if (!stamp) return nullptr;
+    if (!stamp) {  // stored once, gone now: another replica deleted it
+        if (held && sessions.remove(id) == held) retire(*held);
+        return nullptr;
+    }
     std::lock_guard lock(storeLoads);  // one load at a time: two requests for a stale session load it once
     if (auto again = sessions.find(id); again && again != held) return again;  // loaded meanwhile
     std::shared_ptr<Session> fresh = persist->loadFromStore(id);
     if (!fresh) return held;
-    if (held) {
-        std::lock_guard heldLock(held->mutex);
-        held->removed = true;  // its streams end; work queued on it answers not_found
-        held->changed.notify_all();
-        memory.forget(*held);
-    }
+    if (held) retire(*held);
     {
         std::lock_guard freshLock(fresh->mutex);
         memory.recount(*fresh);
@@ -225,6 +225,20 @@ std::shared_ptr<core::GpuVolume> ServiceContext::commitStep(Session& s, core::Vo
     shownChanged(s);
     if (s.stylizer.scene.volume) stylizerChanged(s);  // its medium is the session's volume: live frames follow
     return std::move(s.volume.gpu);
+}
+
+void ServiceContext::retire(Session& s) {
+    std::shared_ptr<core::GpuVolume> gpu;
+    {
+        std::lock_guard lock(s.mutex);
+        s.removed = true;  // its streams end; work queued on it answers not_found
+        s.changed.notify_all();
+        memory.forget(s);
+        gpu = std::move(s.volume.gpu);  // freed on the GL thread, never by an HTTP thread's last reference
+        for (const std::string& j : s.jobs)
+            if (auto job = jobs.find(j)) job->cancel = true;
+    }
+    release(std::move(gpu));
 }
 
 void ServiceContext::release(std::shared_ptr<core::GpuVolume> gpu) {

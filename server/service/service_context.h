@@ -52,6 +52,9 @@ struct ServiceContext {
     /// caller's (an edit's bookkeeping is skipped).
     std::shared_ptr<core::GpuVolume> commitStep(Session& s, core::Volume volume, int shows);
     void release(std::shared_ptr<core::GpuVolume> gpu);
+    /// A held copy of a session that the store replaced or deleted (another replica's doing):
+    /// marked removed, its memory uncharged, its jobs cancelled, its GPU copy freed on the GL thread.
+    void retire(Session& s);
     /// What a render of `s` shows changed (a version, the lighting, the environment map): moves
     /// its shownRevision and wakes its streams (the lock held).
     void shownChanged(Session& s);

@@ -37,6 +37,7 @@ std::shared_ptr<Session> SessionsService::create(const protocol::CreateSessionRe
 }
 
 void SessionsService::remove(const std::string& id) {
+    if (m_ctx.persist && m_ctx.persist->hasMirror()) m_ctx.find(id);  // one only the store holds (another replica made it) is read first
     auto s = m_ctx.sessions.remove(id);
     if (!s) throw ApiError(ErrorCode::NotFound, "no session '" + id + "'");
     std::vector<std::string> jobs;

@@ -31,7 +31,8 @@ ViewportKey ViewportService::current(Session& s) const {
     return {s.viewport.revision, s.shownRevision};
 }
 
-std::optional<ViewportFrame> ViewportService::next(Session& s, const ViewportKey& after, std::chrono::milliseconds wait) {
+std::optional<ViewportFrame> ViewportService::next(Session& s, const ViewportKey& after, std::chrono::milliseconds wait,
+                                                   ViewportKey* attempted) {
     ViewportFrame f;
     protocol::RenderRequest request;
     {
@@ -43,6 +44,7 @@ std::optional<ViewportFrame> ViewportService::next(Session& s, const ViewportKey
         f.version = s.volume.version;
         request = s.viewport.request;
     }
+    if (attempted) *attempted = f.key;
     const auto t0 = Clock::now();
     const core::Image picture = request.mode == protocol::RenderMode::Translucent
                                     ? m_volumes.renderTranslucent(s, request.camera, request.translucent)

@@ -35,13 +35,14 @@ public:
 
     /// Sets the viewport (its format is ignored: the stream sends JPEG); the new revision.
     uint64_t set(Session& s, protocol::RenderRequest request);
-    /// The viewport's revision and what the session shows now (after a failed frame: the key
-    /// its stream then waits past).
+    /// The viewport's revision and what the session shows now (GET …/viewport).
     ViewportKey current(Session& s) const;
     /// Waits up to `wait` for a frame newer than `after` to be due, then renders and encodes it
     /// (nullopt: nothing changed). not_found once the session is deleted; a render's own error
     /// (e.g. over the render budget) is thrown, and the next call waits for the next change.
-    std::optional<ViewportFrame> next(Session& s, const ViewportKey& after, std::chrono::milliseconds wait);
+    /// `attempted` gets the key of the frame it renders before it renders it: after a failure,
+    /// the key to wait past (a move made meanwhile still renders).
+    std::optional<ViewportFrame> next(Session& s, const ViewportKey& after, std::chrono::milliseconds wait, ViewportKey* attempted = nullptr);
 
 private:
     ServiceContext& m_ctx;

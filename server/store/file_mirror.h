@@ -34,8 +34,10 @@ public:
     /// Removes `prefix` and everything under it ("sessions/<sid>").
     virtual void removeTree(const std::string& prefix) = 0;
     /// Writes the stored files under `prefix` ("sessions/<sid>", "jobs") into `root` (each at its
-    /// path relative to it); the number written.
-    virtual size_t materializeTree(const std::string& prefix, const std::filesystem::path& root) = 0;
+    /// path relative to it); the number written. With `recordStamp`, also the stamp of `record`
+    /// as of the same moment as the files (nullopt: none).
+    virtual size_t materializeTree(const std::string& prefix, const std::filesystem::path& root, const std::string& record = "",
+                                   std::optional<uint64_t>* recordStamp = nullptr) = 0;
     /// "" when the store takes a write now, else why not (GET /ready).
     virtual std::string writeProblem() = 0;
     /// Where it is, for logs and /ready ("postgresql://host:port/db", no password).

@@ -28,8 +28,10 @@ Persistence::Persistence(fs::path dir, MeshReader readMesh, std::unique_ptr<File
         fs::remove_all(m_dir.root() / sub);
         fs::create_directories(m_dir.root() / sub);
     }
-    const size_t n = m_mirror->materializeTree("jobs", m_dir.root());
-    spdlog::info("store: {}; {} job record(s) read, sessions read when first asked for", m_mirror->describe(), n);
+    // Job records are not read back: until the job queue (issue #41 item 2) a job is its
+    // replica's, and reading them would mark other replicas' running jobs interrupted and prune
+    // their records.
+    spdlog::info("store: {}; sessions are read when first asked for", m_mirror->describe());
 }
 
 std::optional<uint64_t> Persistence::storedStamp(const std::string& id) {
@@ -38,13 +40,12 @@ std::optional<uint64_t> Persistence::storedStamp(const std::string& id) {
 
 std::shared_ptr<Session> Persistence::loadFromStore(const std::string& id) {
     if (!m_mirror) return nullptr;
-    const std::optional<uint64_t> stamp = storedStamp(id);
-    if (!stamp) return nullptr;
     const fs::path dir = sessionDir(id);
     fs::remove_all(dir);
-    m_mirror->materializeTree("sessions/" + id, m_dir.root());
-    if (!fs::exists(dir / "session.json")) return nullptr;  // deleted meanwhile
-    return loadSession(dir);
+    std::optional<uint64_t> stamp;
+    m_mirror->materializeTree("sessions/" + id, m_dir.root(), "sessions/" + id + "/session.json", &stamp);
+    if (!stamp || !fs::exists(dir / "session.json")) return nullptr;  // none, or deleted meanwhile
+    return loadSession(dir, *stamp);
 }
 
 std::string Persistence::describe() const { return m_mirror ? m_mirror->describe() : "folder"; }
@@ -213,10 +214,10 @@ std::vector<std::shared_ptr<Session>> Persistence::loadSessions() {
     return out;
 }
 
-std::shared_ptr<Session> Persistence::loadSession(const fs::path& dir) {
+std::shared_ptr<Session> Persistence::loadSession(const fs::path& dir, uint64_t stamp) {
     size_t recordedDamage = 0;
     std::shared_ptr<Session> s = store::restoreSessionRecord(m_dir, dir, recordedDamage);
-    if (m_mirror) s->storeStamp = storedStamp(s->id).value_or(0);  // what a save below must find there
+    s->storeStamp = stamp;  // what a save below must find in the store (the files' own moment)
     store::restoreStylizerRecord(m_dir, *s, dir, m_readMesh,
                                  [&](const json& scene, uint64_t revision) {
                                      store::atomicWrite(dir / "stylizer" / "scene.json", store::encodeStylizerScene(scene, revision));

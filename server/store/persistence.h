@@ -101,7 +101,8 @@ public:
 private:
     std::filesystem::path sessionDir(const std::string& id) const { return m_dir.sessionDir(id); }
     /// Restores one session folder (its record, files and stylizer); throws if nothing of it is usable.
-    std::shared_ptr<Session> loadSession(const std::filesystem::path& dir);
+    /// `stamp`: its record's stamp in the mirror when its files were read (0: none).
+    std::shared_ptr<Session> loadSession(const std::filesystem::path& dir, uint64_t stamp = 0);
     /// The mirror's copy of a file just written, of one removed, of a folder removed.
     void mirrorPut(const std::filesystem::path& file);
     void mirrorRemove(const std::filesystem::path& file);

@@ -87,10 +87,18 @@ public:
         });
     }
 
-    size_t materializeTree(const std::string& prefix, const fs::path& root) override {
+    size_t materializeTree(const std::string& prefix, const fs::path& root, const std::string& record,
+                           std::optional<uint64_t>* recordStamp) override {
         size_t n = 0;
         run("read the stored files", [&](pqxx::work& tx) {
+            // One snapshot: the files and the record's stamp as of one moment, and a concurrent
+            // put's unlink cannot remove an object this export still reads.
+            tx.exec("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ");
             n = 0;
+            if (recordStamp) {
+                const pqxx::result r = tx.exec_params("SELECT object FROM volstyle_files WHERE path = $1", record);
+                *recordStamp = r.empty() ? std::nullopt : std::optional<uint64_t>(r[0][0].as<pqxx::oid>());
+            }
             for (const auto& row :
                  tx.exec_params("SELECT path, object FROM volstyle_files WHERE path LIKE $1 ORDER BY written, path", escapeLike(prefix) + "/%")) {
                 const std::string path = row[0].as<std::string>();
@@ -118,7 +126,12 @@ public:
 private:
     static std::unique_ptr<pqxx::connection> connect(const std::string& url) {
         try {
-            return std::make_unique<pqxx::connection>(url);
+            // A database that does not answer fails a request (and /ready) in 5 s, not never.
+            const bool uri = url.rfind("postgres", 0) == 0 && url.find("://") != std::string::npos;
+            const std::string withTimeout = url.find("connect_timeout") != std::string::npos ? url
+                                            : uri ? url + (url.find('?') == std::string::npos ? "?" : "&") + "connect_timeout=5"
+                                                  : url + " connect_timeout=5";
+            return std::make_unique<pqxx::connection>(withTimeout);
         } catch (const std::exception& e) {
             throw IoError("cannot connect to the store " + withoutPassword(url) + ": " + e.what());
         }
@@ -127,6 +140,9 @@ private:
     /// Replaces `path`'s file with the one at `local` within `tx`; the new stamp (a new large
     /// object's id: never the same for two puts while both exist).
     static uint64_t putIn(pqxx::work& tx, const std::string& path, const fs::path& local) {
+        // Two first puts of one path would both find no row, and the loser's object would be
+        // left unnamed: the path's advisory lock orders them.
+        tx.exec_params("SELECT pg_advisory_xact_lock(hashtext($1))", path);
         const pqxx::largeobject object(tx, local.string());
         const pqxx::result old = tx.exec_params("SELECT object FROM volstyle_files WHERE path = $1 FOR UPDATE", path);
         tx.exec_params("INSERT INTO volstyle_files (path, object, bytes) VALUES ($1, $2, $3) ON CONFLICT (path) DO UPDATE "

@@ -4,6 +4,7 @@
 // viewport's stream tests share it.
 #include <httplib.h>
 
+#include <atomic>
 #include <chrono>
 #include <functional>
 #include <map>
@@ -25,15 +26,20 @@ struct StreamPart {
 class MultipartStream {
 public:
     /// Opens GET `path` on 127.0.0.1:`port` and reads until the stream ends (join() waits for it).
-    MultipartStream(int port, const std::string& path) {
-        m_thread = std::thread([this, port, path] {
-            httplib::Client c("127.0.0.1", port);
-            c.set_read_timeout(120, 0);
-            c.Get(path.c_str(), [this](const httplib::Response& r) { m_contentType = r.get_header_value("Content-Type"); return true; },
-                  [this](const char* data, size_t n) { return consume(data, n); });
+    MultipartStream(int port, const std::string& path) : m_client("127.0.0.1", port) {
+        m_client.set_read_timeout(120, 0);
+        m_thread = std::thread([this, path] {
+            m_client.Get(path.c_str(), [this](const httplib::Response& r) { m_contentType = r.get_header_value("Content-Type"); return true; },
+                         [this](const char* data, size_t n) { return !m_closing && consume(data, n); });
         });
     }
-    ~MultipartStream() { join(); }
+    /// A test that ended early (a failed assertion) leaves the stream open: it is closed here
+    /// rather than waited for (keep-alive parts would hold it open for ever).
+    ~MultipartStream() {
+        m_closing = true;
+        m_client.stop();
+        join();
+    }
     void join() {
         if (m_thread.joinable()) m_thread.join();
     }
@@ -82,6 +88,8 @@ private:
         }
     }
 
+    httplib::Client m_client;
+    std::atomic<bool> m_closing{false};
     std::thread m_thread;
     std::string m_buffer, m_contentType;
     mutable std::mutex m_mutex;

@@ -36,8 +36,9 @@ void streamViewport(RouteContext& c, httplib::Response& res, std::shared_ptr<Ses
         kMjpegContentType,
         [&c, s, sent = ViewportKey{}, idle = 0](size_t, httplib::DataSink& sink) mutable {
             std::string part;
+            ViewportKey attempted = sent;
             try {
-                if (auto f = c.services.viewport.next(*s, sent, kViewportPoll)) {
+                if (auto f = c.services.viewport.next(*s, sent, kViewportPoll, &attempted)) {
                     sent = f->key;
                     idle = 0;
                     part = framePart(*f);
@@ -52,12 +53,9 @@ void streamViewport(RouteContext& c, httplib::Response& res, std::shared_ptr<Ses
                     sink.done();
                     return true;
                 }
-                // A frame that could not render: said once, and the stream waits for the next change.
-                try {
-                    sent = c.services.viewport.current(*s);
-                } catch (...) {
-                    return false;
-                }
+                // A frame that could not render: said once, and the stream waits past it (a move
+                // made while it rendered has a newer key, and renders next).
+                sent = attempted;
                 part = mjpegPart("application/json", fmt::format("X-Revision: {}\r\n", sent.revision),
                                  protocol::toText({{"event", "failed"}, {"revision", sent.revision},
                                                    {"error", protocol::errorBody(e.code, e.message, e.details, "")["error"]}}));
