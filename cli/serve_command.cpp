@@ -11,13 +11,13 @@
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
-#include <regex>
 #include <thread>
 
 #include "core/base/errors.h"
 #include "cli/cli.h"
 #include "protocol/build_version.h"
 #include "server/http/http_server.h"
+#include "server/store/file_mirror.h"
 
 namespace volstyle::cli {
 
@@ -126,7 +126,7 @@ int runServe(const std::vector<std::string>& argv) {
     std::cout << "volstyle: serving http://" << opt.host << ":" << bound << "/ (volstyle " << protocol::versionString() << ", page from "
               << (opt.webDir.empty() ? std::string("nowhere: no web folder found; pass --web-dir") : opt.webDir) << ", data in "
               << (opt.dataDir.empty() ? std::string("memory") : opt.dataDir)
-              << (opt.store.empty() ? "" : ", kept in " + std::regex_replace(opt.store, std::regex(R"((://[^:/@]+):[^@]*@)"), "$1@")) << ")" << std::endl;
+              << (opt.store.empty() ? "" : ", kept in " + server::withoutPassword(opt.store)) << ")" << std::endl;
     server.listen();
     // listen() also returns if the listener fails; wake the waiter in that case.
     pthread_kill(waiter.native_handle(), SIGTERM);

@@ -16,13 +16,13 @@ void throwIfRemoved(const Session& s) {
 
 }  // namespace
 
-uint64_t ViewportService::set(Session& s, protocol::RenderRequest request) {
+ViewportKey ViewportService::set(Session& s, protocol::RenderRequest request) {
     std::lock_guard lock(s.mutex);
     throwIfRemoved(s);
     s.viewport.request = std::move(request);
     ++s.viewport.revision;
     s.changed.notify_all();
-    return s.viewport.revision;
+    return {s.viewport.revision, s.shownRevision};
 }
 
 ViewportKey ViewportService::current(Session& s) const {

@@ -33,8 +33,9 @@ class ViewportService {
 public:
     ViewportService(ServiceContext& ctx, VolumeService& volumes) : m_ctx(ctx), m_volumes(volumes) {}
 
-    /// Sets the viewport (its format is ignored: the stream sends JPEG); the new revision.
-    uint64_t set(Session& s, protocol::RenderRequest request);
+    /// Sets the viewport (its format is ignored: the stream sends JPEG); its new revision and
+    /// what the session shows now (the key of the first frame that shows it).
+    ViewportKey set(Session& s, protocol::RenderRequest request);
     /// The viewport's revision and what the session shows now (GET …/viewport).
     ViewportKey current(Session& s) const;
     /// Waits up to `wait` for a frame newer than `after` to be due, then renders and encodes it

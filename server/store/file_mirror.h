@@ -49,6 +49,9 @@ public:
 /// newer than this binary's). Throws IoError when it cannot.
 std::unique_ptr<FileMirror> openPostgresMirror(const std::string& url);
 
+/// A store URL as logs and /ready show it: a password (user:secret@) left out.
+std::string withoutPassword(const std::string& url);
+
 /// The schema version this binary writes and reads.
 constexpr int kStoreSchemaVersion = 1;
 

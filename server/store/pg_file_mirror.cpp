@@ -32,9 +32,6 @@ static_assert(std::size(kMigrations) == kStoreSchemaVersion, "a migration for ev
 /// An arbitrary constant: the advisory lock the migrations take.
 constexpr long long kMigrationLock = 0x766f6c7374796c65;  // "volstyle"
 
-/// The URL without a password (user:secret@ → user@).
-std::string withoutPassword(const std::string& url) { return std::regex_replace(url, std::regex(R"((://[^:/@]+):[^@]*@)"), "$1@"); }
-
 class PgFileMirror final : public FileMirror {
 public:
     explicit PgFileMirror(const std::string& url) : m_url(url), m_conn(connect(url)) { migrate(); }
@@ -210,5 +207,7 @@ private:
 }  // namespace
 
 std::unique_ptr<FileMirror> openPostgresMirror(const std::string& url) { return std::make_unique<PgFileMirror>(url); }
+
+std::string withoutPassword(const std::string& url) { return std::regex_replace(url, std::regex(R"((://[^:/@]+):[^@]*@)"), "$1@"); }
 
 }  // namespace volstyle::server

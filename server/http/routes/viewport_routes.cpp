@@ -71,8 +71,8 @@ void streamViewport(RouteContext& c, httplib::Response& res, std::shared_ptr<Ses
 void addViewportRoutes(RouteContext& c) {
     c.put(kViewportPath, [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
-        const uint64_t revision = c.services.viewport.set(*s, protocol::RenderRequest::fromJson(c.body(req), c.limits));
-        reply(res, 200, {{"revision", revision}});
+        const ViewportKey k = c.services.viewport.set(*s, protocol::RenderRequest::fromJson(c.body(req), c.limits));
+        reply(res, 200, {{"revision", k.revision}, {"shown", k.shown}});
     });
     c.get(kViewportPath, [&c](const httplib::Request& req, httplib::Response& res) {
         const ViewportKey k = c.services.viewport.current(*c.services.sessions.find(req.matches[1]));
