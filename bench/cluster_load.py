@@ -92,13 +92,18 @@ def run(store, replicas, seconds, clients=8, sessions=12):
         c.stop()
 
 
-def store_overhead(store, edits=40):
-    """One replica, no balancer: the median of `edits` sequential edits (a new 16³ version each,
-    written before the answer) with the data folder alone and with the PostgreSQL store."""
+def store_overhead(store, edits=40, jobs=20):
+    """One replica, no balancer, with the data folder alone and with the PostgreSQL store: the
+    median of `edits` sequential edits (a new 16³ version each, written before the answer), and of
+    `jobs` sequential one-iteration solves (16³, one 16² view) from POST …/solve to the end of the
+    job's event stream. With the store a job is also a row of the job queue: added, written when
+    it runs and when it ends, its events sent through NOTIFY; the difference is the queue's cost."""
     import subprocess
     import tempfile
+    import urllib.request
     from cluster import BINARY, free_port, wait_ready
-    out = []
+    from cluster_test import png
+    edit_out, job_out, medians = [], [], {}
     for label, extra in (("data folder", []), ("PostgreSQL store", ["--store", store])):
         with tempfile.TemporaryDirectory() as data:
             port = free_port()
@@ -114,11 +119,28 @@ def store_overhead(store, edits=40):
                     status, _, _ = call(base + "/refraction", "POST" if k % 2 == 0 else "DELETE", {"index": 1.2, "radius": 0.4} if k % 2 == 0 else None)
                     assert status == 200, status
                     ms.append((time.monotonic() - t0) * 1000)
-                out.append(f"{label} {percentile(ms, 50):.1f} ms (p90 {percentile(ms, 90):.1f})")
+                edit_out.append(f"{label} {percentile(ms, 50):.1f} ms (p90 {percentile(ms, 90):.1f})")
+                medians["edit " + label] = percentile(ms, 50)
+                status, body, _ = call(base + "/views", "POST", {"camera": {"eye": [0, 0, 3], "target": [0, 0, 0], "width": 16, "height": 16}})
+                status, _, _ = call(f"{base}/views/{json.loads(body)['id']}/target", "PUT", raw=png(16, 16, 128))
+                assert status in (200, 201), status
+                ms = []
+                for _ in range(jobs):
+                    t0 = time.monotonic()
+                    status, body, _ = call(base + "/solve", "POST", {"max_iterations": 1})
+                    assert status == 202, body
+                    with urllib.request.urlopen(f"{url}/api/v1/jobs/{json.loads(body)['job']}/events", timeout=60) as r:
+                        r.read()
+                    ms.append((time.monotonic() - t0) * 1000)
+                medians[label] = percentile(ms, 50)
+                job_out.append(f"{label} {percentile(ms, 50):.1f} ms (p90 {percentile(ms, 90):.1f})")
             finally:
                 p.terminate()
                 p.wait()
-    print("an edit's latency, one replica, median of %d: " % edits + "; ".join(out))
+    print("an edit's latency, one replica, median of %d: " % edits + "; ".join(edit_out))
+    print("a one-iteration solve job, POST to its last event, median of %d: " % jobs + "; ".join(job_out) +
+          f"; the store's cost per job {medians['PostgreSQL store'] - medians['data folder']:.1f} ms, of which the job queue's "
+          f"(less one edit's store cost: a job commits one version) {medians['PostgreSQL store'] - medians['data folder'] - (medians['edit PostgreSQL store'] - medians['edit data folder']):.1f} ms")
 
 
 def main():

@@ -4,6 +4,7 @@
 #include <malloc.h>
 #include <pthread.h>
 #include <signal.h>
+#include <unistd.h>
 #include <spdlog/spdlog.h>
 
 #include <fmt/format.h>
@@ -35,6 +36,8 @@ const CommandSpec kServe{
         {"token", "T", "require 'Authorization: Bearer T' on /api (also $VOLSTYLE_TOKEN); default none"},
         {"data-dir", "DIR", "where sessions are kept; default ./volstyle-data"},
         {"store", "URL", "also keep them in PostgreSQL (postgresql://user@host:port/db): committed there before each answer, the data folder its cache (docs/DEPLOY.md); default none"},
+        {"replica", "NAME", "with --store: this replica's name in logs and job leases; default HOST:PID"},
+        {"job-lease", "SECONDS", "with --store: a running job's lease; another replica runs it again once it lapses unrenewed; default 10"},
         {"web-dir", "DIR", "the page's folder; default the installed share/volstyle/web, else the source tree's web/"},
         {"render-budget", "S", "seconds one render may hold the GL thread (422 over_budget past it; 0: no limit); default 60"},
         {"max-sessions", "N", "sessions at once; default 64"},
@@ -64,12 +67,29 @@ const CommandSpec& serveCommand() { return kServe; }
 
 namespace {
 
+/// A replica's name by default: the machine's, and the process's id.
+std::string defaultReplicaName() {
+    char host[256] = {};
+    if (gethostname(host, sizeof host - 1) != 0) std::snprintf(host, sizeof host, "volstyle");
+    return std::string(host) + ":" + std::to_string(getpid());
+}
+
 /// --store: empty (the data folder alone) or a PostgreSQL URL.
 std::string storeUrl(const Arguments& args) {
     const std::string url = args.get("store", "");
     if (!url.empty() && url.rfind("postgresql://", 0) != 0 && url.rfind("postgres://", 0) != 0)
         throw InvalidArgument("serve: --store takes a postgresql:// URL (the data folder is the default store)");
     return url;
+}
+
+/// --store, --replica, --job-lease; with a store, log lines name the replica (replicas' logs merge).
+void storeOptions(const Arguments& args, server::ServerOptions& opt) {
+    opt.store = storeUrl(args);
+    opt.replica = args.get("replica", defaultReplicaName());
+    opt.jobLeaseSeconds = args.number("job-lease", opt.jobLeaseSeconds);
+    if (!(opt.jobLeaseSeconds >= 0.3 && opt.jobLeaseSeconds <= 3600))
+        throw InvalidArgument("--job-lease must be a number of seconds from 0.3 to 3600");
+    if (!opt.store.empty()) spdlog::set_pattern("[%Y-%m-%d %H:%M:%S.%e] [" + opt.replica + "] [%l] %v");
 }
 
 }  // namespace
@@ -84,7 +104,7 @@ int runServe(const std::vector<std::string>& argv) {
     opt.token = args.get("token", envToken ? envToken : "");
     opt.webDir = args.has("web-dir") ? args.get("web-dir") : defaultWebDir();
     opt.dataDir = args.get("data-dir", opt.dataDir);
-    opt.store = storeUrl(args);
+    storeOptions(args, opt);
     opt.maxSessions = size_t(wholeNumber(args, "max-sessions", double(opt.maxSessions), 1, 1e6));
     opt.maxUploadBytes = size_t(wholeNumber(args, "max-upload-mib", double(opt.maxUploadBytes >> 20), 1, 1 << 20)) << 20;
     opt.maxImageSide = int(wholeNumber(args, "max-image-side", opt.maxImageSide, 16, 65536));

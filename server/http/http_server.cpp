@@ -49,6 +49,8 @@ ServiceLimits serviceLimits(const ServerOptions& o) {
     l.finishedJobsKept = o.finishedJobsKept;
     l.memory = o.memory;
     l.store = o.store;
+    l.replica = o.replica;
+    l.jobLease = std::chrono::milliseconds(static_cast<long long>(o.jobLeaseSeconds * 1000));
     return l;
 }
 
@@ -111,6 +113,7 @@ HttpServer::HttpServer(ServerOptions options) {
     addStylizerRoutes(m->routes);
     addViewportRoutes(m->routes);
     if (!m->opt.webDir.empty()) m->http.set_mount_point("/", m->opt.webDir);  // httplib refuses '..' paths
+    m->services.startJobQueue();
 }
 
 HttpServer::~HttpServer() { stop(); }

@@ -23,6 +23,8 @@ struct ServerOptions {
     std::string dataDir = "volstyle-data";  ///< empty: keep everything in memory (tests)
     /// "" (the data folder alone) or postgresql://… (committed there; the folder is its cache).
     std::string store;
+    std::string replica = "volstyle";  ///< with a store: this replica's name in logs and job leases
+    double jobLeaseSeconds = 10;      ///< with a store: a job's lease (another replica runs it again once lapsed)
     size_t maxSessions = 64;
     size_t maxJsonBytes = 1 << 20;   ///< 1 MiB
     size_t maxUploadBytes = size_t(512) << 20;  ///< images and VDBs: 512 MiB

@@ -175,7 +175,8 @@ std::filesystem::path JobService::jobFile(const std::string& jobId, const std::s
     return path;
 }
 
-std::shared_ptr<Job> JobService::startSolve(const std::shared_ptr<Session>& session, const core::SolveOptions& options) {
+std::shared_ptr<Job> JobService::startSolve(const std::shared_ptr<Session>& session, const core::SolveOptions& options,
+                                            const std::string& request) {
     Session& s = *session;
     m_ctx.checkJobQueue(s);
     {
@@ -197,9 +198,25 @@ std::shared_ptr<Job> JobService::startSolve(const std::shared_ptr<Session>& sess
         }
         if (!problems.empty()) throw protocol::ValidationError(problems);
     }
-    auto job = m_ctx.queueJob(s);
+    auto job = m_ctx.queueJob(s, "solve", request);
     m_ctx.gl->submit([this, job, session, options](core::GpuDevice& device) { runSolve(job, session, options, device); });
     return job;
+}
+
+void JobService::resume(const ClaimedJob& claimed) {
+    auto job = m_ctx.adoptJob(claimed);
+    try {
+        if (claimed.kind != "solve" || claimed.inputs.empty() || !m_decodeSolve)
+            throw ApiError(ErrorCode::Interrupted, "the replica running this " + (claimed.kind.empty() ? std::string("job") : claimed.kind + " job") +
+                                                       " stopped, and a job of this kind is not run again elsewhere: start it again");
+        auto session = m_ctx.find(claimed.session);  // as the store has it now (not_found: deleted)
+        const core::SolveOptions options = m_decodeSolve(claimed.inputs, *session);
+        m_ctx.gl->submit([this, job, session, options](core::GpuDevice& device) { runSolve(job, session, options, device); });
+    } catch (...) {
+        const protocol::ErrorReport e = protocol::describeException(std::current_exception());
+        job->fail(JobState::Failed, e.code, "could not run again after its replica stopped: " + e.message, e.details);
+        m_ctx.finishJob(*job);
+    }
 }
 
 }  // namespace volstyle::server

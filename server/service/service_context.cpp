@@ -34,6 +34,7 @@ ServiceContext::ServiceContext(ServiceLimits serviceLimits, const std::string& d
             sessions.restore(s);
         }
         for (auto& j : persist->loadJobs()) jobs.restore(j);
+        if (!limits.store.empty()) queue = openPostgresJobQueue(limits.store, limits.replica, limits.jobLease);
         pruneJobs();
         spdlog::info("restored {} session(s) from {}", sessions.size(), limits.store.empty() ? "'" + folder + "'" : persist->describe());
     } else {
@@ -44,9 +45,16 @@ ServiceContext::ServiceContext(ServiceLimits serviceLimits, const std::string& d
 void ServiceContext::shutdown() {
     if (!gl) return;
     // Stop the solves (a running one ends at its next iteration, queued ones before they start),
-    // then free every GPU object on the GL thread while the context lives: the last short task
-    // runs before the worker drains the cancelled solves, which create nothing on the way out.
+    // then free every GPU object on the GL thread while the context lives. The freeing waits for
+    // the running job to end: as a short task between a cancelled solve's iterations, it freed
+    // the solve cache that the solve still wrote its last state to (a heap corruption). Queued
+    // jobs then end at once, cancelled, without touching the GPU.
     for (auto& j : jobs.all()) j->cancel = true;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    for (auto& j : jobs.all()) {
+        std::unique_lock lock(j->mutex);
+        j->changed.wait_until(lock, deadline, [&] { return j->remote || j->state != JobState::Running; });  // another replica runs a remote one
+    }
     try {
         if (gl->used()) freeGpuObjects();  // nothing to free when nothing ever ran on GL
     } catch (const std::exception& e) {
@@ -82,33 +90,6 @@ void ServiceContext::saved(Session& s) {
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
     if (persist) persist->saveSession(s);
     memory.recount(s);  // what it holds now, whatever changed
-}
-
-void ServiceContext::saved(const Job& j) {
-    std::lock_guard lock(jobRecords);
-    if (persist && !j.forgotten) persist->saveJob(j);
-}
-
-void ServiceContext::pruneJobs() {
-    std::error_code ec;
-    for (const auto& j : jobs.prune(limits.finishedJobsKept)) {
-        {
-            std::lock_guard lock(jobRecords);
-            j->forgotten = true;
-            if (persist) persist->removeJob(j->id);
-            else std::filesystem::remove_all(jobFilesDir(j->id), ec);
-        }
-        if (auto s = sessions.find(j->session)) {
-            std::lock_guard lock(s->mutex);
-            std::erase(s->jobs, j->id);
-        }
-        std::shared_ptr<core::GpuVolume> preview;
-        {
-            std::lock_guard lock(j->mutex);
-            preview = std::move(j->preview);
-        }
-        release(std::move(preview));
-    }
 }
 
 std::shared_ptr<Session> ServiceContext::find(const std::string& id) {
@@ -174,32 +155,6 @@ void ServiceContext::dropPreviews(const Session& s) {
         std::lock_guard lock(j->mutex);
         if (j->isFinished()) j->preview.reset();
     }
-}
-
-std::shared_ptr<Job> ServiceContext::job(const std::string& id) const {
-    auto j = jobs.find(id);
-    if (!j) throw ApiError(ErrorCode::NotFound, "no job '" + id + "'");
-    return j;
-}
-
-std::shared_ptr<Job> ServiceContext::queueJob(Session& s) {
-    checkJobQueue(s);
-    pruneJobs();
-    auto job = jobs.add(s.id);
-    saved(*job);
-    {
-        std::lock_guard lock(s.mutex);
-        s.jobs.push_back(job->id);
-        saved(s);
-    }
-    spdlog::info("job {} queued (session {})", job->id, s.id);
-    return job;
-}
-
-void ServiceContext::checkJobQueue(const Session& s) const {
-    if (jobs.pending(s.id) >= limits.maxQueuedJobs)
-        throw ApiError(ErrorCode::TooManyJobs, "session '" + s.id + "' already has " + std::to_string(limits.maxQueuedJobs) +
-                                                   " queued jobs (the limit); wait or cancel one");
 }
 
 std::filesystem::path ServiceContext::jobFilesDir(const std::string& jobId) const {
@@ -282,37 +237,6 @@ void ServiceContext::stylizerChanged(Session& s, bool history) {
 core::Stylizer& ServiceContext::stylizerEngine(core::GpuDevice& device) {
     if (!stylizer) stylizer = std::make_unique<core::Stylizer>(device);
     return *stylizer;
-}
-
-void ServiceContext::runJob(Job& job, const std::function<void()>& work) {
-    if (job.cancel) {
-        job.fail(JobState::Cancelled, protocol::ErrorCode::Cancelled, "cancelled before it started");
-        return;
-    }
-    job.setState(JobState::Running);
-    saved(job);
-    spdlog::info("job {} running", job.id);
-    try {
-        work();
-    } catch (...) {
-        const protocol::ErrorReport e = protocol::describeException(std::current_exception());
-        job.fail(e.code == protocol::ErrorCode::Cancelled ? JobState::Cancelled : JobState::Failed, e.code, e.message, e.details);
-    }
-}
-
-void ServiceContext::finishJob(Job& job) {
-    JobState state;
-    {
-        std::lock_guard lock(job.mutex);
-        state = job.state;
-    }
-    spdlog::info("job {} {}", job.id, protocol::jobStateName(state));
-    try {
-        saved(job);
-    } catch (const std::exception& e) {
-        spdlog::error("job {}: cannot record its end: {}", job.id, e.what());
-    }
-    job.emitFinal();
 }
 
 }  // namespace volstyle::server

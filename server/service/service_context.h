@@ -30,14 +30,18 @@ struct ServiceContext {
     /// With a PostgreSQL store: `held` (may be null), or the session as the store has it when
     /// another replica made or changed it (nullptr: the store has none).
     std::shared_ptr<Session> freshFromStore(const std::string& id, std::shared_ptr<Session> held);
-    std::shared_ptr<Job> job(const std::string& id) const;       ///< ApiError not_found
+    /// ApiError not_found. With the job queue, a job another replica runs is read from the queue
+    /// (a remote copy here, refreshed at each lookup).
+    std::shared_ptr<Job> job(const std::string& id);
     SessionView view(Session& s, const std::string& viewId) const;  ///< a copy; ApiError not_found
     core::Lighting lighting(Session& s) const;
 
     // Writing what changed.
     /// Throws not_found if `s` was deleted; else writes it and recounts its memory (its lock held).
     void saved(Session& s);
-    void saved(const Job& j);
+    /// Writes a job's record (a remote copy's is not this replica's to write); with the queue, a
+    /// job another replica took over is cancelled here instead.
+    void saved(Job& j);
     /// Forgets the oldest finished jobs beyond ServiceLimits::finishedJobsKept: memory, record
     /// on disk, the id in its session's list, and its preview copy (freed on the GL thread).
     void pruneJobs();
@@ -63,8 +67,19 @@ struct ServiceContext {
     void stylizerChanged(Session& s, bool history = false);
 
     // Jobs.
-    /// A new job of session `s` (too_many_jobs at its queue limit), recorded and listed.
-    std::shared_ptr<Job> queueJob(Session& s);
+    /// A new job of session `s` (too_many_jobs at its queue limit), recorded and listed. With the
+    /// job queue, its row holds `kind` and `inputs` (what another replica runs it again from;
+    /// empty: it cannot be run again) under this replica's lease.
+    std::shared_ptr<Job> queueJob(Session& s, const std::string& kind = "", const std::string& inputs = "");
+    /// A job claimed from the queue, local here now and queued again (its row written).
+    std::shared_ptr<Job> adoptJob(const ClaimedJob& c);
+    /// Cancels a job: here, or (a remote copy) by asking the replica running it through the queue.
+    void cancelJob(Job& j);
+    /// The queue's notifications (JobQueue::Listener): events and states of remote copies, cancels.
+    void onQueueNotice(const std::string& id, const std::string& what, const std::string& data);
+    /// After a renewal: cancels each of `running` (local jobs that were running before it) whose
+    /// lease another replica holds now, and each whose cancel was asked elsewhere.
+    void checkLeases(const std::vector<std::shared_ptr<Job>>& running, const std::vector<HeldLease>& held);
     void checkJobQueue(const Session& s) const;  ///< too_many_jobs at the session's queue limit
     /// Runs `work` as the job's body: cancelled before it starts, or running (recorded) until it
     /// returns (it sets the result and done) or throws (failed or cancelled, with the error).
@@ -85,6 +100,14 @@ struct ServiceContext {
     std::shared_ptr<core::GpuVolume> lockedSessionGpu(Session& s);
     /// On the GL thread: frees every session's GPU copy, every job's preview and the engines.
     void freeGpuObjects();
+    /// A remote copy of job `id` (`held`, refreshed, or a new one); nullptr when the queue has none.
+    std::shared_ptr<Job> remoteJob(const std::string& id, std::shared_ptr<Job> held);
+    void refreshRemote(Job& j, const std::string& record);
+    /// A remote copy read again from the queue (a notification may be lost while the listener
+    /// reconnects: a stream of a remote job refreshes it while quiet). Nothing for a local job.
+    void refreshRemote(Job& j);
+    /// Sends the job's events to other replicas through the queue.
+    void relayEvents(Job& j);
 
     /// A slot of decodeSlots, held while an upload's pixels are decoded.
     struct DecodeSlot {
@@ -102,7 +125,9 @@ struct ServiceContext {
     JobStore jobs;
     std::mutex jobRecords;  ///< orders writing a job's record against forgetting it
     std::unique_ptr<Persistence> persist;  ///< null: in memory only
+    std::unique_ptr<JobQueue> queue;       ///< with a PostgreSQL store only
     std::mutex storeLoads;                 ///< one session read from the store at a time
+    std::mutex remoteCopies;               ///< one remote copy of a job made at a time
     std::filesystem::path scratch;          ///< job files without a data directory (removed at exit)
     std::counting_semaphore<> decodeSlots{kConcurrentDecodes};
     std::unique_ptr<core::Renderer> rendererEngine;             ///< GL thread only

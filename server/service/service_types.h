@@ -24,6 +24,7 @@
 #include "protocol/requests.h"
 #include "protocol/response_values.h"
 #include "server/runtime/gl_executor.h"
+#include "server/store/job_queue.h"
 #include "server/state/job_store.h"
 #include "server/service/memory_budget.h"
 #include "server/store/persistence.h"
@@ -77,6 +78,10 @@ struct ServiceLimits {
     /// Where sessions and jobs are kept beside the data folder (issue #41): "" (the folder alone)
     /// or a PostgreSQL connection string (postgresql://…), the folder then a cache of it.
     std::string store;
+    /// With a store: this replica's name (logs, the job queue's owner tokens) and how long a job's
+    /// lease lasts unrenewed (another replica runs a job again that long after its replica died).
+    std::string replica = "volstyle";
+    std::chrono::milliseconds jobLease{10000};
 };
 
 enum class ViewImage { Target, Weights, Background };

@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "server/service/job_queue_runner.h"
 #include "server/service/job_service.h"
 #include "server/service/sessions_service.h"
 #include "server/service/stylizer_service.h"
@@ -20,8 +21,17 @@ struct Services {
     /// (none: its own GL thread).
     Services(ServiceLimits limits, const std::string& dataDir, std::unique_ptr<GlExecutor> gl = nullptr)
         : context(std::move(limits), dataDir, std::move(gl)) {}
-    /// The GL thread stops before the services go: the work queued for it calls into them.
-    ~Services() { context.shutdown(); }
+    /// The job queue's threads, then the GL thread stop before the services go: the work queued
+    /// for them calls into the services.
+    ~Services() {
+        queueRunner.reset();
+        context.shutdown();
+    }
+    /// With a PostgreSQL store: this replica's part in the job queue (job_queue_runner.h), from
+    /// now on. Call once the routes are set (the solve decoder with them).
+    void startJobQueue() {
+        if (context.queue && !queueRunner) queueRunner = std::make_unique<JobQueueRunner>(context, [this](const ClaimedJob& c) { jobs.resume(c); });
+    }
     Services(const Services&) = delete;
     Services& operator=(const Services&) = delete;
 
@@ -31,6 +41,7 @@ struct Services {
     ViewportService viewport{context, volumes};
     StylizerService stylizer{context};
     JobService jobs{context};
+    std::unique_ptr<JobQueueRunner> queueRunner;
 };
 
 }  // namespace volstyle::server

@@ -22,17 +22,24 @@ void Job::report(protocol::JobProgress p) {
     {
         std::lock_guard lock(mutex);
         progress = p;
-        events.push_back({protocol::JobEvent::Progress, std::move(p)});
     }
-    changed.notify_all();
+    emit({protocol::JobEvent::Progress, std::move(p)});
 }
 
 void Job::emit(protocol::JobEventData event) {
+    Relay send;
     {
         std::lock_guard lock(mutex);
-        events.push_back(std::move(event));
+        if (!protocol::isFinal(event.event)) send = relay;  // the final state goes with the record
+        events.push_back(event);
     }
     changed.notify_all();
+    if (send) send(event);
+}
+
+void Job::setRelay(Relay r) {
+    std::lock_guard lock(mutex);
+    relay = std::move(r);
 }
 
 void Job::emitFinal() {
@@ -56,6 +63,23 @@ std::shared_ptr<Job> JobStore::add(const std::string& session) {
     job->sequence = ++m_sequence;
     m_jobs[job->id] = job;
     return job;
+}
+
+std::shared_ptr<Job> JobStore::adopt(const std::string& id, const std::string& session) {
+    std::lock_guard lock(m_mutex);
+    std::shared_ptr<Job>& slot = m_jobs[id];
+    if (!slot) {
+        slot = std::make_shared<Job>();
+        slot->id = id;
+        slot->session = session;
+        slot->sequence = ++m_sequence;
+    }
+    std::lock_guard jl(slot->mutex);
+    slot->remote = false;
+    slot->state = protocol::JobState::Queued;
+    slot->error.reset();
+    slot->result = {};
+    return slot;
 }
 
 void JobStore::restore(std::shared_ptr<Job> job) {
@@ -89,7 +113,7 @@ size_t JobStore::pending(const std::string& session) const {
     size_t n = 0;
     for (const auto& [id, j] : m_jobs) {
         std::lock_guard jl(j->mutex);
-        n += j->session == session && !j->isFinished() ? 1 : 0;
+        n += j->session == session && !j->isFinished() && !j->remote ? 1 : 0;
     }
     return n;
 }

@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -25,6 +26,8 @@ struct Job {
     std::atomic<bool> cancel{false};
     /// Pruned from the store: its record must not be written again (ServiceContext::saved).
     bool forgotten = false;
+    /// Sends each non-final event on to other replicas (the job queue's NOTIFY), once emitted.
+    using Relay = std::function<void(const protocol::JobEventData&)>;
 
     mutable std::mutex mutex;
     std::condition_variable changed;
@@ -33,6 +36,10 @@ struct Job {
     protocol::JobResult result;
     std::optional<protocol::JobError> error;
     std::vector<protocol::JobEventData> events;
+    /// Another replica runs it (job queue): its state is read from the queue's record, its events
+    /// come through notifications; nothing here runs it or writes its record.
+    bool remote = false;
+    Relay relay;
     /// The latest iterate on the GPU, for previews: created and updated on the GL thread while the
     /// job runs (one copy per job, not one upload per request). A done job frees it (previews
     /// then show the session's version, the solution); a failed or cancelled one keeps it until
@@ -46,7 +53,8 @@ struct Job {
               const std::vector<protocol::FieldError>& details = {});
     /// Sets the progress and sends it as a progress event.
     void report(protocol::JobProgress p);
-    void emit(protocol::JobEventData event);  ///< appends and wakes listeners
+    void emit(protocol::JobEventData event);  ///< appends, wakes listeners, relays it
+    void setRelay(Relay r);
     /// Sends the final event, the job's snapshot now (after its state became final).
     void emitFinal();
     protocol::JobInfo info() const;
@@ -57,6 +65,9 @@ public:
     std::shared_ptr<Job> add(const std::string& session);
     std::shared_ptr<Job> find(const std::string& id) const;
     void restore(std::shared_ptr<Job> job);
+    /// Job `id` to be run here (claimed from the queue): the copy held (a remote one, which
+    /// streams keep watching) made local and queued again, or a new one.
+    std::shared_ptr<Job> adopt(const std::string& id, const std::string& session);
     /// Jobs of a session not yet finished (the queue limit counts them).
     size_t pending(const std::string& session) const;
     std::vector<std::shared_ptr<Job>> all() const;

@@ -53,6 +53,6 @@ std::unique_ptr<FileMirror> openPostgresMirror(const std::string& url);
 std::string withoutPassword(const std::string& url);
 
 /// The schema version this binary writes and reads.
-constexpr int kStoreSchemaVersion = 1;
+constexpr int kStoreSchemaVersion = 2;
 
 }  // namespace volstyle::server

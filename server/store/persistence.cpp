@@ -28,9 +28,8 @@ Persistence::Persistence(fs::path dir, MeshReader readMesh, std::unique_ptr<File
         fs::remove_all(m_dir.root() / sub);
         fs::create_directories(m_dir.root() / sub);
     }
-    // Job records are not read back: until the job queue (issue #41 item 2) a job is its
-    // replica's, and reading them would mark other replicas' running jobs interrupted and prune
-    // their records.
+    // Job records are not read back from here: the job queue holds them (a replica reads a job
+    // another one runs from its row, and runs again one whose replica died).
     spdlog::info("store: {}; sessions are read when first asked for", m_mirror->describe());
 }
 
@@ -154,7 +153,6 @@ void Persistence::removeJob(const std::string& job) {
     std::error_code ec;
     fs::remove(m_dir.jobsDir() / (job + ".json"), ec);
     fs::remove_all(jobFilesDir(job), ec);
-    mirrorRemove(m_dir.jobsDir() / (job + ".json"));
 }
 
 void Persistence::saveFrame(const std::string& session, int frame, const core::Volume& volume) {
@@ -170,8 +168,8 @@ void Persistence::removeFrame(const std::string& session, int frame) {
 }
 
 void Persistence::saveJob(const Job& job) {
+    // With a store, the job queue's row is the record other replicas read (pg_job_queue.cpp).
     store::atomicWrite(m_dir.jobsDir() / (job.id + ".json"), store::encodeJobRecord(job));
-    mirrorPut(m_dir.jobsDir() / (job.id + ".json"));
 }
 
 void Persistence::saveStylizerScene(const std::string& session, const core::StylizerScene& scene, const std::vector<std::string>& meshRefs,

@@ -4,16 +4,12 @@
 // reader sees the old file or the new one, never a part. Migrations are numbered, applied at
 // start under an advisory lock (replicas starting together apply each once), and a schema newer
 // than this binary's is refused.
-#include <pqxx/pqxx>
 #include <spdlog/spdlog.h>
 
-#include <mutex>
 #include <regex>
 
-#include "core/base/errors.h"
-#include "protocol/error_body.h"
 #include "server/store/data_dir.h"
-#include "server/store/file_mirror.h"
+#include "server/store/pg_connection.h"
 
 namespace volstyle::server {
 
@@ -26,6 +22,11 @@ const char* const kMigrations[] = {
     // 1: files as large objects by path.
     "CREATE TABLE volstyle_files (path text PRIMARY KEY, object oid NOT NULL, bytes bigint NOT NULL, "
     "written timestamptz NOT NULL DEFAULT now())",
+    // 2: the job queue (pg_job_queue.cpp): a row per job, leased by the replica running it.
+    "CREATE TABLE volstyle_jobs (id text PRIMARY KEY, session text NOT NULL, kind text NOT NULL, inputs text NOT NULL, "
+    "state text NOT NULL, record text NOT NULL, owner text, lease_until timestamptz, attempts integer NOT NULL DEFAULT 1, "
+    "cancel boolean NOT NULL DEFAULT false, created timestamptz NOT NULL DEFAULT clock_timestamp()); "
+    "CREATE INDEX volstyle_jobs_lapsed ON volstyle_jobs (lease_until) WHERE state IN ('queued', 'running')",
 };
 static_assert(std::size(kMigrations) == kStoreSchemaVersion, "a migration for every schema version");
 
@@ -34,7 +35,7 @@ constexpr long long kMigrationLock = 0x766f6c7374796c65;  // "volstyle"
 
 class PgFileMirror final : public FileMirror {
 public:
-    explicit PgFileMirror(const std::string& url) : m_url(url), m_conn(connect(url)) { migrate(); }
+    explicit PgFileMirror(const std::string& url) : m_db(url) { migrate(); }
 
     uint64_t put(const std::string& path, const fs::path& local) override {
         uint64_t stamp = 0;
@@ -118,22 +119,9 @@ public:
         }
     }
 
-    std::string describe() const override { return withoutPassword(m_url); }
+    std::string describe() const override { return m_db.describe(); }
 
 private:
-    static std::unique_ptr<pqxx::connection> connect(const std::string& url) {
-        try {
-            // A database that does not answer fails a request (and /ready) in 5 s, not never.
-            const bool uri = url.rfind("postgres", 0) == 0 && url.find("://") != std::string::npos;
-            const std::string withTimeout = url.find("connect_timeout") != std::string::npos ? url
-                                            : uri ? url + (url.find('?') == std::string::npos ? "?" : "&") + "connect_timeout=5"
-                                                  : url + " connect_timeout=5";
-            return std::make_unique<pqxx::connection>(withTimeout);
-        } catch (const std::exception& e) {
-            throw IoError("cannot connect to the store " + withoutPassword(url) + ": " + e.what());
-        }
-    }
-
     /// Replaces `path`'s file with the one at `local` within `tx`; the new stamp (a new large
     /// object's id: never the same for two puts while both exist).
     static uint64_t putIn(pqxx::work& tx, const std::string& path, const fs::path& local) {
@@ -158,31 +146,6 @@ private:
         return out;
     }
 
-    /// One transaction on the shared connection; a broken connection is opened again once.
-    template <typename F>
-    void run(const std::string& what, F&& body) {
-        std::lock_guard lock(m_mutex);
-        for (int attempt = 0;; ++attempt) {
-            try {
-                if (!m_conn || !m_conn->is_open()) m_conn = connect(m_url);
-                pqxx::work tx(*m_conn);
-                body(tx);
-                tx.commit();
-                return;
-            } catch (const pqxx::broken_connection& e) {
-                m_conn.reset();
-                if (attempt == 0) continue;
-                throw IoError("the store " + describe() + " is unreachable (" + what + "): " + e.what());
-            } catch (const IoError&) {
-                throw;
-            } catch (const protocol::ApiError&) {
-                throw;
-            } catch (const std::exception& e) {
-                throw IoError("the store " + describe() + " failed to " + what + ": " + e.what());
-            }
-        }
-    }
-
     void migrate() {
         run("migrate the schema", [](pqxx::work& tx) {
             tx.exec("SELECT pg_advisory_xact_lock(" + std::to_string(kMigrationLock) + ")");
@@ -199,9 +162,12 @@ private:
         });
     }
 
-    std::string m_url;
-    std::unique_ptr<pqxx::connection> m_conn;
-    std::mutex m_mutex;
+    template <typename F>
+    void run(const std::string& what, F&& body) {
+        m_db.run(what, std::forward<F>(body));
+    }
+
+    PgConnection m_db;
 };
 
 }  // namespace

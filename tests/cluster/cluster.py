@@ -76,8 +76,8 @@ def wait_ready(url, seconds=60):
 
 
 class Cluster:
-    def __init__(self, store, replicas=3, port=0, binary=BINARY, quiet=True):
-        self.store, self.n, self.binary, self.quiet = store, replicas, binary, quiet
+    def __init__(self, store, replicas=3, port=0, binary=BINARY, quiet=True, job_lease=10.0):
+        self.store, self.n, self.binary, self.quiet, self.job_lease = store, replicas, binary, quiet, job_lease
         self.port = port or free_port()
         self.ports = [free_port() for _ in range(replicas)]
         self.dir = tempfile.mkdtemp(prefix="volstyle-cluster-")
@@ -99,6 +99,7 @@ class Cluster:
         data = os.path.join(self.dir, f"r{i + 1}")
         with open(self.log(i), "a") as log:
             self.procs[i] = subprocess.Popen([self.binary, "serve", "--port", str(self.ports[i]), "--data-dir", data, "--store", self.store,
+                                              "--replica", f"r{i + 1}", "--job-lease", str(self.job_lease),
                                               "--web-dir", os.path.join(ROOT, "web")], stdout=log, stderr=subprocess.STDOUT)
         if wait:
             wait_ready(self.replica_url(i))

@@ -7,7 +7,10 @@ HAProxy (tests/cluster/cluster.py), on a private PostgreSQL (run under with_post
   - the replica holding a session is killed (kill -9) and the session carries on through the
     balancer on another, with what was acknowledged;
   - 8 clients edit sessions through the balancer (new versions, targets) while replicas are
-    killed and restarted at random: afterwards every acknowledged version and target is there.
+    killed and restarted at random: afterwards every acknowledged version and target is there;
+  - a solve running on a replica that is killed (kill -9) is run again by another once its lease
+    lapses (the job queue), ends with the uninterrupted solve's result, and its event stream,
+    opened again through the balancer, goes on to the end.
 
 A client retries a request the balancer answered 502/503 (the dead replica's connection): such a
 request was not acknowledged. Prints the measured figures. Usage: with_postgres.sh python3 cluster_test.py
@@ -28,6 +31,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from cluster import Cluster  # noqa: E402
 
 KILLS = int(os.environ.get("VOLSTYLE_CLUSTER_KILLS", "20"))
+JOB_LEASE = 2.0  # seconds: a killed replica's solve runs again elsewhere that long after
 CLIENTS = 8
 
 
@@ -62,7 +66,7 @@ def png(width, height, value):
 class ClusterTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
-        cls.c = Cluster(os.environ["VOLSTYLE_TEST_STORE"], 3).start()
+        cls.c = Cluster(os.environ["VOLSTYLE_TEST_STORE"], 3, job_lease=JOB_LEASE).start()
 
     @classmethod
     def tearDownClass(cls):
@@ -110,6 +114,91 @@ class ClusterTest(unittest.TestCase):
         c.restart(owner)
         status, body, _ = call(f"{c.url}/api/v1/sessions/{sid}", retry_seconds=20)
         self.assertEqual(json.loads(body)["volume"]["version"], 3, "back on its replica, with the edit made elsewhere")
+
+    def painted(self, resolution, level):
+        sid = self.session_of(resolution)
+        base = f"{self.c.url}/api/v1/sessions/{sid}"
+        camera = {"eye": [0, 0, 3], "target": [0, 0, 0], "width": resolution, "height": resolution}
+        status, body, _ = call(base + "/views", "POST", {"camera": camera}, retry_seconds=20)
+        self.assertEqual(status, 201, body)
+        status, body, _ = call(f"{base}/views/{json.loads(body)['id']}/target", "PUT", raw=png(resolution, resolution, level), retry_seconds=20)
+        self.assertIn(status, (200, 201), body)
+        return sid
+
+    def session_of(self, resolution):
+        status, body, _ = call(self.c.url + "/api/v1/sessions", "POST", {"scene": "builtin:sphere", "resolution": resolution}, retry_seconds=20)
+        self.assertEqual(status, 201, body)
+        return json.loads(body)["id"]
+
+    def finished(self, job, seconds=180):
+        deadline = time.monotonic() + seconds
+        while True:
+            status, body, headers = call(f"{self.c.url}/api/v1/jobs/{job}", retry_seconds=20)
+            self.assertEqual(status, 200, body)
+            j = json.loads(body)
+            if j["state"] not in ("queued", "running") or time.monotonic() > deadline:
+                return j, headers
+            time.sleep(0.1)
+
+    def events(self, job, retry_seconds=20):
+        """The event names of the job's stream through the balancer, to its end (opened again while
+        the balancer answers 502/503: a killed replica's requests until its health check fails)."""
+        deadline = time.monotonic() + retry_seconds
+        while True:
+            names = []
+            try:
+                with urllib.request.urlopen(f"{self.c.url}/api/v1/jobs/{job}/events", timeout=180) as r:
+                    for line in r:
+                        if line.startswith(b"event: "):
+                            names.append(line[7:].strip().decode())
+                return names
+            except urllib.error.HTTPError as e:
+                if e.code not in (502, 503) or time.monotonic() > deadline:
+                    raise
+            except OSError:
+                if time.monotonic() > deadline:
+                    raise
+            time.sleep(0.2)
+
+    def test_a_solve_survives_kill_9_of_its_replica(self):
+        c = self.c
+        request = {"unknowns": ["albedo", "emission"], "max_iterations": 40, "tolerance": 0, "visible_change": 0}
+        # The reference: the same solve of the same paint, run through.
+        reference = self.painted(24, 80)
+        status, body, _ = call(f"{c.url}/api/v1/sessions/{reference}/solve", "POST", request, retry_seconds=20)
+        self.assertEqual(status, 202, body)
+        expected, _ = self.finished(json.loads(body)["job"])
+        self.assertEqual(expected["state"], "done", expected)
+
+        sid = self.painted(24, 80)
+        status, body, headers = call(f"{c.url}/api/v1/sessions/{sid}/solve", "POST", request, retry_seconds=20)
+        self.assertEqual(status, 202, body)
+        job, owner = json.loads(body)["job"], int(headers["x-volstyle-replica"][1:]) - 1
+        while True:  # running, some iterations in
+            status, body, _ = call(f"{c.url}/api/v1/jobs/{job}")
+            j = json.loads(body)
+            if j["state"] != "queued" and (j["state"] != "running" or (j["progress"] or {}).get("iteration", 0) >= 3):
+                break
+            time.sleep(0.05)
+        self.assertEqual(j["state"], "running", "the solve was still running when its replica was killed")
+        c.kill(owner)
+        t0 = time.monotonic()
+        names = self.events(job)  # opened again through the balancer: another replica's stream
+        end, headers = self.finished(job)
+        took = time.monotonic() - t0
+        self.assertEqual(end["state"], "done", end)
+        self.assertNotEqual(headers.get("x-volstyle-replica"), f"r{owner + 1}")
+        self.assertEqual(names[-1], "done", names)
+        self.assertIn("progress", names, "the re-run's progress reached a stream on another replica")
+        a, b = expected["result"]["report"], end["result"]["report"]
+        self.assertEqual(a["iterations"], b["iterations"])
+        # Float atomics may order the adjoint's sums differently: equal to 1e-5 of the start.
+        self.assertLessEqual(abs(a["final_objective"] - b["final_objective"]), 1e-5 * a["initial_objective"])
+        self.assertEqual(end["result"]["version"], 2, "committed once")
+        print(f"[ measured ] kill -9 mid-solve (iteration {j['progress']['iteration']}): done on another replica {took:.1f} s later "
+              f"(lease {JOB_LEASE:g} s; the solve alone {a['total_ms'] / 1000:.1f} s); final objective {b['final_objective']:.6g} "
+              f"vs {a['final_objective']:.6g} uninterrupted")
+        c.restart(owner)
 
     def test_nothing_acknowledged_is_lost_over_random_kills(self):
         c = self.c

@@ -37,15 +37,25 @@ void endChunkedAnswer(httplib::DataSink& sink) {
 /// stream ends after the final event (the job's state flips before that event is queued, so the
 /// events decide, not the state).
 /// While nothing happens, a comment line every `keepAliveSeconds`.
-void streamEvents(httplib::Response& res, std::shared_ptr<Job> job, StreamLimiter& streams, const std::string& client,
+void streamEvents(httplib::Response& res, std::shared_ptr<Job> job, JobService& jobs, StreamLimiter& streams, const std::string& client,
                   double keepAliveSeconds) {
     const auto keepAlive = std::chrono::duration<double>(keepAliveSeconds);
     streams.acquire(client);  // released when the response is destroyed, however the stream ends
     res.set_header("Cache-Control", "no-cache");
-    res.set_chunked_content_provider("text/event-stream", [job, keepAlive, sent = size_t(0), last = std::chrono::steady_clock::now()](
+    res.set_chunked_content_provider("text/event-stream", [job, &jobs, keepAlive, sent = size_t(0), last = std::chrono::steady_clock::now()](
                                                               size_t, httplib::DataSink& sink) mutable {
         std::unique_lock lock(job->mutex);
-        job->changed.wait_for(lock, kEventPoll, [&] { return job->events.size() > sent; });
+        if (!job->changed.wait_for(lock, kEventPoll, [&] { return job->events.size() > sent; }) && job->remote) {
+            // Another replica runs it: its events come as notifications, and one lost (the
+            // listener reconnecting) must not leave the stream waiting for an end it missed.
+            lock.unlock();
+            try {
+                jobs.refresh(*job);
+            } catch (const std::exception&) {
+                // The store is unreachable now: the stream waits, and asks again.
+            }
+            lock.lock();
+        }
         bool final = false;
         if (sent == job->events.size() && std::chrono::steady_clock::now() - last >= keepAlive) {
             // A phase without events (a large solve's set-up): a comment line keeps proxies and
@@ -85,9 +95,15 @@ void replyFile(const httplib::Request& req, httplib::Response& res, const std::f
 void addJobRoutes(RouteContext& c) {
     c.postCreating(kSessionPath + "/solve", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
+        const nlohmann::json body = c.body(req);
         const Vec3d background = c.services.sessions.lighting(*s).background.color;  // offered when L_m is left out
-        const protocol::SolveRequest request = protocol::SolveRequest::fromJson(c.body(req), c.limits, &background);
-        reply(res, 202, {{"job", c.services.jobs.startSolve(s, request.options)->id}});
+        const protocol::SolveRequest request = protocol::SolveRequest::fromJson(body, c.limits, &background);
+        reply(res, 202, {{"job", c.services.jobs.startSolve(s, request.options, protocol::toText(body))->id}});
+    });
+    // A replica running again a solve another one started (the job queue) reads its request here.
+    c.services.jobs.setSolveDecoder([&c](const std::string& request, Session& s) {
+        const Vec3d background = c.services.sessions.lighting(s).background.color;
+        return protocol::SolveRequest::fromJson(nlohmann::json::parse(request), c.limits, &background).options;
     });
     c.get(kApi + "/jobs", [&c](const httplib::Request& req, httplib::Response& res) {
         const protocol::ListQuery q = protocol::ListQuery::fromQuery(req.params, true);
@@ -109,7 +125,7 @@ void addJobRoutes(RouteContext& c) {
         reply(res, 202, protocol::jobToJson(job->info()));
     });
     c.get(kJobPath + "/events", [&c](const httplib::Request& req, httplib::Response& res) {
-        streamEvents(res, c.services.jobs.job(req.matches[1]), c.streams, req.remote_addr, c.eventKeepAliveSeconds);
+        streamEvents(res, c.services.jobs.job(req.matches[1]), c.services.jobs, c.streams, req.remote_addr, c.eventKeepAliveSeconds);
     });
     // A sequence job's files (issue #15): its frames and its video.
     c.get(kJobPath + R"(/frames/([0-9]{1,6})\.png)", [&c](const httplib::Request& req, httplib::Response& res) {

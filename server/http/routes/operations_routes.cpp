@@ -21,10 +21,21 @@ void writeGauges(RouteContext& c, MetricsText& out) {
     for (const auto& [state, name] : protocol::kJobStates) byState[name] = 0;
     for (const auto& j : c.services.jobs.all()) {
         std::lock_guard lock(j->mutex);
-        ++byState[protocol::jobStateName(j->state)];
+        if (!j->remote) ++byState[protocol::jobStateName(j->state)];
     }
-    out.family("volstyle_jobs", "gauge", "jobs known to this server by state (queued ones are the job queue's depth)");
+    out.family("volstyle_jobs", "gauge", "jobs this server runs or ran, by state (queued ones are its own queue's depth)");
     for (const auto& [name, n] : byState) out.sample("volstyle_jobs", fmt::format("state=\"{}\"", name), n);
+    if (auto& queue = c.services.context.queue) {
+        std::map<std::string, long long> stored;
+        for (const auto& [state, name] : protocol::kJobStates) stored[name] = 0;
+        try {
+            for (const auto& [state, n] : queue->countByState()) stored[state] = n;
+            out.family("volstyle_job_queue", "gauge", "the store's job queue by state, every replica's jobs (queued: its depth)");
+            for (const auto& [name, n] : stored) out.sample("volstyle_job_queue", fmt::format("state=\"{}\"", name), double(n));
+        } catch (const std::exception&) {
+            // The store is down: /ready says so; the other figures still come.
+        }
+    }
     const GlQueueDepth gl = c.services.context.gl->queueDepth();
     out.family("volstyle_gl_queue", "gauge", "tasks waiting for the GL thread (short: renders and uploads; long: solves)");
     out.sample("volstyle_gl_queue", "kind=\"short\"", double(gl.shortTasks));

@@ -1,0 +1,57 @@
+#include "server/service/job_queue_runner.h"
+
+#include <spdlog/spdlog.h>
+
+namespace volstyle::server {
+
+JobQueueRunner::JobQueueRunner(ServiceContext& ctx, std::function<void(const ClaimedJob&)> resume)
+    : m_ctx(ctx), m_resume(std::move(resume)), m_leases([this] { leases(); }), m_notifications([this] { notifications(); }) {}
+
+JobQueueRunner::~JobQueueRunner() {
+    {
+        std::lock_guard lock(m_mutex);
+        m_stopping = true;
+    }
+    m_wake.notify_all();
+    m_leases.join();
+    m_notifications.join();  // within one listen() timeout
+}
+
+bool JobQueueRunner::pause(std::chrono::milliseconds d) {
+    std::unique_lock lock(m_mutex);
+    return !m_wake.wait_for(lock, d, [&] { return m_stopping; });
+}
+
+void JobQueueRunner::leases() {
+    JobQueue& queue = *m_ctx.queue;
+    // Renewed three times a lease: one late renewal (a busy store) does not lose a job.
+    const auto period = std::max(std::chrono::milliseconds(100), queue.lease() / 3);
+    do {
+        try {
+            // The jobs running here before the renewal: a job queued since may not be in the
+            // store's answer yet, and must not look lost.
+            std::vector<std::shared_ptr<Job>> running;
+            for (auto& j : m_ctx.jobs.all()) {
+                std::lock_guard lock(j->mutex);
+                if (!j->remote && j->state == protocol::JobState::Running) running.push_back(j);
+            }
+            m_ctx.checkLeases(running, queue.renew());
+            while (auto claimed = queue.claimLapsed()) m_resume(*claimed);
+        } catch (const std::exception& e) {
+            spdlog::warn("job queue: {}", e.what());
+        }
+    } while (pause(period));
+}
+
+void JobQueueRunner::notifications() {
+    const JobQueue::Listener on = [this](const std::string& id, const std::string& what, const std::string& data) {
+        try {
+            m_ctx.onQueueNotice(id, what, data);
+        } catch (const std::exception& e) {
+            spdlog::debug("job queue: notice for job {} ({}): {}", id, what, e.what());
+        }
+    };
+    while (pause(std::chrono::milliseconds(0))) m_ctx.queue->listen(on, std::chrono::milliseconds(250));
+}
+
+}  // namespace volstyle::server

@@ -1,0 +1,231 @@
+// ServiceContext's jobs: queue, run and finish one, write its record (the data folder, and with
+// a PostgreSQL store the job queue's row), forget old ones, and — with the queue — the copies of
+// jobs other replicas run (their state read from the queue, their events from its notifications).
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+
+#include "protocol/error_body.h"
+#include "server/service/service_context.h"
+#include "server/store/job_record.h"
+
+namespace volstyle::server {
+namespace {
+
+bool isRemote(const Job& j) {
+    std::lock_guard lock(j.mutex);
+    return j.remote;
+}
+
+/// Ids are hex (the session's 8 digits first): anything else is not asked of the store.
+bool isJobId(const std::string& id) {
+    return !id.empty() && id.size() <= 64 && id.find_first_not_of("0123456789abcdef") == std::string::npos;
+}
+
+}  // namespace
+
+void ServiceContext::saved(Job& j) {
+    std::lock_guard lock(jobRecords);
+    if (j.forgotten || isRemote(j)) return;
+    if (persist) persist->saveJob(j);
+    if (!queue) return;
+    std::string state;
+    {
+        std::lock_guard jl(j.mutex);
+        state = protocol::jobStateName(j.state);
+    }
+    if (!queue->write(j.id, state, store::encodeJobRecord(j))) {
+        // Its lease lapsed and another replica runs it now: this copy stops and writes nothing.
+        j.cancel = true;
+        spdlog::warn("job {}: another replica took it over (its lease lapsed here); stopping this copy", j.id);
+    }
+}
+
+void ServiceContext::pruneJobs() {
+    std::error_code ec;
+    for (const auto& j : jobs.prune(limits.finishedJobsKept)) {
+        const bool remote = isRemote(*j);
+        {
+            std::lock_guard lock(jobRecords);
+            j->forgotten = true;
+            if (persist && !remote) persist->removeJob(j->id);
+            else if (!persist) std::filesystem::remove_all(jobFilesDir(j->id), ec);
+            try {
+                if (queue && !remote) queue->remove(j->id);
+            } catch (const std::exception& e) {
+                spdlog::warn("job {}: its row stays in the queue: {}", j->id, e.what());
+            }
+        }
+        if (auto s = sessions.find(j->session)) {
+            std::lock_guard lock(s->mutex);
+            std::erase(s->jobs, j->id);
+        }
+        std::shared_ptr<core::GpuVolume> preview;
+        {
+            std::lock_guard lock(j->mutex);
+            preview = std::move(j->preview);
+        }
+        release(std::move(preview));
+    }
+}
+
+std::shared_ptr<Job> ServiceContext::job(const std::string& id) {
+    auto j = jobs.find(id);
+    if (queue && isJobId(id) && (!j || isRemote(*j))) j = remoteJob(id, std::move(j));
+    if (!j) throw ApiError(ErrorCode::NotFound, "no job '" + id + "'");
+    return j;
+}
+
+std::shared_ptr<Job> ServiceContext::remoteJob(const std::string& id, std::shared_ptr<Job> held) {
+    const std::optional<std::string> record = queue->record(id);
+    if (!record) return nullptr;  // none, or pruned by the replica that ran it
+    if (held) {
+        refreshRemote(*held, *record);
+        return held;
+    }
+    std::lock_guard lock(remoteCopies);  // one copy per job: a stream must watch the copy lookups refresh
+    if (auto again = jobs.find(id)) {
+        refreshRemote(*again, *record);
+        return again;
+    }
+    auto j = std::make_shared<Job>();
+    j->remote = true;
+    const bool finished = store::readJobRecord(*record, *j);
+    // A stream opened here starts where the job is: its latest progress, then what comes.
+    if (!std::holds_alternative<std::monostate>(j->progress)) j->events.push_back({protocol::JobEvent::Progress, j->progress});
+    if (finished) j->emitFinal();
+    jobs.restore(j);
+    return j;
+}
+
+void ServiceContext::refreshRemote(Job& j) {
+    if (!queue || !isRemote(j)) return;
+    if (const auto record = queue->record(j.id)) refreshRemote(j, *record);
+}
+
+void ServiceContext::refreshRemote(Job& j, const std::string& record) {
+    bool wasFinished = false;
+    {
+        std::lock_guard lock(j.mutex);
+        wasFinished = j.isFinished();
+    }
+    if (store::readJobRecord(record, j) && !wasFinished) j.emitFinal();
+}
+
+void ServiceContext::onQueueNotice(const std::string& id, const std::string& what, const std::string& data) {
+    auto j = jobs.find(id);
+    if (!j) return;
+    const bool remote = isRemote(*j);
+    if (what == "cancel") {
+        if (!remote) j->cancel = true;  // DELETE /jobs/{jid} was asked of another replica
+        return;
+    }
+    if (!remote) return;
+    if (what == "state") return refreshRemote(*j);
+    if (auto event = store::decodeJobEvent(what, data)) {
+        if (event->event == protocol::JobEvent::Progress) {
+            std::lock_guard lock(j->mutex);
+            j->progress = std::get<protocol::JobProgress>(event->data);
+        }
+        j->emit(std::move(*event));
+    }
+}
+
+void ServiceContext::checkLeases(const std::vector<std::shared_ptr<Job>>& running, const std::vector<HeldLease>& held) {
+    for (const auto& j : running) {
+        auto it = std::find_if(held.begin(), held.end(), [&](const HeldLease& h) { return h.id == j->id; });
+        if (it == held.end()) {
+            {
+                std::lock_guard lock(j->mutex);
+                if (j->isFinished()) continue;  // it finished meanwhile: its row holds no lease
+            }
+            if (!j->cancel.exchange(true)) spdlog::warn("job {}: its lease went to another replica; stopping this copy", j->id);
+        } else if (it->cancel) {
+            j->cancel = true;
+        }
+    }
+}
+
+void ServiceContext::cancelJob(Job& j) {
+    if (isRemote(j) && queue) {
+        if (!queue->requestCancel(j.id)) throw ApiError(ErrorCode::NotFound, "no job '" + j.id + "'");
+        return refreshRemote(j);
+    }
+    j.cancel = true;
+}
+
+void ServiceContext::relayEvents(Job& j) {
+    if (!queue) return;
+    j.setRelay([this, id = j.id](const protocol::JobEventData& e) {
+        try {
+            queue->publish(id, protocol::jobEventName(e.event), store::encodeJobEvent(e));
+        } catch (const std::exception& ex) {
+            spdlog::debug("job {}: an event was not sent to other replicas: {}", id, ex.what());
+        }
+    });
+}
+
+std::shared_ptr<Job> ServiceContext::queueJob(Session& s, const std::string& kind, const std::string& inputs) {
+    checkJobQueue(s);
+    pruneJobs();
+    auto job = jobs.add(s.id);
+    if (queue) {
+        relayEvents(*job);
+        queue->add(job->id, s.id, kind, inputs, "queued", store::encodeJobRecord(*job));
+    }
+    if (persist) persist->saveJob(*job);
+    {
+        std::lock_guard lock(s.mutex);
+        s.jobs.push_back(job->id);
+        saved(s);
+    }
+    spdlog::info("job {} queued (session {})", job->id, s.id);
+    return job;
+}
+
+std::shared_ptr<Job> ServiceContext::adoptJob(const ClaimedJob& c) {
+    auto job = jobs.adopt(c.id, c.session);
+    relayEvents(*job);
+    saved(*job);  // queued again, under this replica's lease
+    spdlog::warn("job {} claimed from {} (attempt {}): its lease lapsed there", c.id, c.previousOwner, c.attempt);
+    return job;
+}
+
+void ServiceContext::checkJobQueue(const Session& s) const {
+    if (jobs.pending(s.id) >= limits.maxQueuedJobs)
+        throw ApiError(ErrorCode::TooManyJobs, "session '" + s.id + "' already has " + std::to_string(limits.maxQueuedJobs) +
+                                                   " queued jobs (the limit); wait or cancel one");
+}
+
+void ServiceContext::runJob(Job& job, const std::function<void()>& work) {
+    if (job.cancel) {
+        job.fail(JobState::Cancelled, protocol::ErrorCode::Cancelled, "cancelled before it started");
+        return;
+    }
+    job.setState(JobState::Running);
+    saved(job);
+    spdlog::info("job {} running", job.id);
+    try {
+        work();
+    } catch (...) {
+        const protocol::ErrorReport e = protocol::describeException(std::current_exception());
+        job.fail(e.code == protocol::ErrorCode::Cancelled ? JobState::Cancelled : JobState::Failed, e.code, e.message, e.details);
+    }
+}
+
+void ServiceContext::finishJob(Job& job) {
+    JobState state;
+    {
+        std::lock_guard lock(job.mutex);
+        state = job.state;
+    }
+    spdlog::info("job {} {}", job.id, protocol::jobStateName(state));
+    try {
+        saved(job);
+    } catch (const std::exception& e) {
+        spdlog::error("job {}: cannot record its end: {}", job.id, e.what());
+    }
+    job.emitFinal();
+}
+
+}  // namespace volstyle::server

@@ -1,0 +1,226 @@
+// The job queue on PostgreSQL (issue #41 item 2), run only under tests/cluster/with_postgres.sh
+// (CTest store_postgresql):
+//   - the queue itself: a lease held is never claimed, a lapsed one is claimed by exactly one of
+//     several replicas claiming at once (FOR UPDATE SKIP LOCKED), the replica that lost a job can
+//     no longer write it, and notifications reach another replica's listener;
+//   - two servers on one database: a solve running on one is read, streamed (progress through
+//     LISTEN/NOTIFY) and cancelled through the other;
+//   - a solve whose replica died (a lapsed row) is run again by a live server from its recorded
+//     request, and gives the uninterrupted solve's result.
+// The cluster test (tests/cluster/cluster_test.py) kills a real replica with kill -9 mid-solve.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdio>
+#include <set>
+#include <thread>
+
+#include "api_fixture.h"
+#include "server/store/file_mirror.h"
+#include "server/store/job_queue.h"
+
+using namespace volstyle;
+using namespace volstyle::test;
+using namespace std::chrono_literals;
+
+namespace {
+
+/// A database of the test's own with the store's schema, and no server.
+class JobQueueDb : public Api {
+protected:
+    void SetUp() override {
+        ASSERT_TRUE(std::getenv("VOLSTYLE_TEST_STORE")) << "run under tests/cluster/with_postgres.sh";
+        server::openPostgresMirror(testStore());  // applies the migrations
+    }
+    std::unique_ptr<server::JobQueue> queue(const std::string& replica, std::chrono::milliseconds lease) {
+        return server::openPostgresJobQueue(testStore(), replica, lease);
+    }
+};
+
+/// Two servers on one database, with short leases.
+class TwoReplicas : public PersistentApi {
+protected:
+    void SetUp() override {
+        ASSERT_TRUE(std::getenv("VOLSTYLE_TEST_STORE")) << "run under tests/cluster/with_postgres.sh";
+        m_dir = std::filesystem::temp_directory_path() / ("volstyle-queue-" + std::to_string(::getpid()));
+        std::filesystem::remove_all(m_dir);
+        server::ServerOptions opt;
+        opt.jobLeaseSeconds = 1;
+        start(opt, (m_dir / "a").string());
+        opt.host = "127.0.0.1";
+        opt.port = 0;
+        opt.dataDir = (m_dir / "b").string();
+        opt.store = testStore();
+        opt.vdbReader = VOLSTYLE_BINARY;
+        m_second = std::make_unique<server::HttpServer>(opt);
+        m_secondPort = m_second->bind();
+        m_secondClient = std::make_unique<httplib::Client>("127.0.0.1", m_secondPort);
+        m_secondThread = std::thread([this] { m_second->listen(); });
+        m_secondClient->set_read_timeout(120, 0);
+    }
+    void TearDown() override {
+        if (m_second) m_second->stop();
+        if (m_secondThread.joinable()) m_secondThread.join();
+        m_second.reset();
+        PersistentApi::TearDown();
+    }
+    httplib::Client& second() { return *m_secondClient; }
+    json jobVia(httplib::Client& c, const std::string& job) {
+        auto r = c.Get(("/api/v1/jobs/" + job).c_str());
+        EXPECT_TRUE(r && r->status == 200) << (r ? r->body : "no answer");
+        return r ? json::parse(r->body) : json();
+    }
+    json waitFinished(httplib::Client& c, const std::string& job, double seconds = 120) {
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+        json j;
+        do {
+            j = jobVia(c, job);
+            if (j.value("state", "") != "queued" && j.value("state", "") != "running") return j;
+            std::this_thread::sleep_for(50ms);
+        } while (std::chrono::steady_clock::now() < deadline);
+        ADD_FAILURE() << "job " << job << " did not finish: " << j.dump();
+        return j;
+    }
+    std::unique_ptr<server::HttpServer> m_second;
+    std::unique_ptr<httplib::Client> m_secondClient;
+    std::thread m_secondThread;
+    int m_secondPort = 0;
+};
+
+/// A session with one painted view, ready to solve.
+std::string paintedSession(httplib::Client& c, int resolution = 16, float paint = 0.5f) {
+    auto r = c.Post("/api/v1/sessions", json{{"scene", "builtin:sphere"}, {"resolution", resolution}}.dump(), "application/json");
+    EXPECT_EQ(r->status, 201) << r->body;
+    const std::string id = json::parse(r->body)["id"];
+    addConstantTargetView(c, "/api/v1/sessions/" + id, resolution, paint);
+    return id;
+}
+
+}  // namespace
+
+TEST_F(JobQueueDb, AHeldLeaseIsNeverClaimedAndALapsedOneByExactlyOneReplica) {
+    auto a = queue("a", 400ms), b = queue("b", 60s);
+    a->add("j1", "s1", "solve", "{}", "running", "{}");
+    EXPECT_FALSE(b->claimLapsed()) << "a's lease holds";
+    ASSERT_EQ(a->renew().size(), 1u);
+    std::this_thread::sleep_for(600ms);  // a stops renewing: as if killed
+    const auto claimed = b->claimLapsed();
+    ASSERT_TRUE(claimed);
+    EXPECT_EQ(claimed->id, "j1");
+    EXPECT_EQ(claimed->attempt, 2);
+    EXPECT_EQ(claimed->previousOwner, a->owner());
+    EXPECT_EQ(claimed->inputs, "{}");
+    EXPECT_TRUE(a->renew().empty()) << "a's lease is b's now";
+    EXPECT_FALSE(a->write("j1", "done", "{\"from\": \"a\"}")) << "the replica that lost a job cannot write it";
+    EXPECT_TRUE(b->write("j1", "done", "{\"from\": \"b\"}"));
+    EXPECT_EQ(a->record("j1"), "{\"from\": \"b\"}");
+    EXPECT_FALSE(a->claimLapsed()) << "a finished job holds no lease";
+
+    // 24 lapsed jobs, four replicas claiming at once: each job is claimed exactly once.
+    auto dead = queue("dead", 1ms);
+    for (int i = 0; i < 24; ++i) dead->add("k" + std::to_string(i), "s", "solve", "{}", "queued", "{}");
+    std::this_thread::sleep_for(20ms);
+    std::mutex mutex;
+    std::multiset<std::string> ids;
+    std::vector<std::thread> claimers;
+    for (int r = 0; r < 4; ++r)
+        claimers.emplace_back([&, r] {
+            auto q = queue("r" + std::to_string(r), 60s);
+            while (auto c = q->claimLapsed()) {
+                std::lock_guard lock(mutex);
+                ids.insert(c->id);
+            }
+        });
+    for (auto& t : claimers) t.join();
+    EXPECT_EQ(ids.size(), 24u);
+    EXPECT_EQ(std::set<std::string>(ids.begin(), ids.end()).size(), 24u) << "no job claimed twice";
+}
+
+TEST_F(JobQueueDb, NotificationsReachAnotherReplica) {
+    auto a = queue("a", 60s), b = queue("b", 60s);
+    std::vector<std::string> heard;
+    const server::JobQueue::Listener on = [&](const std::string& id, const std::string& what, const std::string& data) {
+        heard.push_back(id + " " + what + " " + data);
+    };
+    b->listen(on, 10ms);  // LISTEN before anything is sent
+    a->add("j1", "s1", "solve", "{}", "queued", "{}");
+    a->publish("j1", "progress", R"({"iteration": 3})");
+    a->publish("j1", "preview", std::string(9000, 'x'));  // over NOTIFY's payload limit: "read the record"
+    EXPECT_TRUE(a->write("j1", "running", "{}"));
+    EXPECT_TRUE(b->requestCancel("j1"));
+    for (int i = 0; i < 20 && heard.size() < 4; ++i) b->listen(on, 100ms);
+    const std::vector<std::string> expected = {R"(j1 progress {"iteration": 3})", "j1 state ", "j1 state ", "j1 cancel "};
+    EXPECT_EQ(heard, expected);
+    EXPECT_EQ(a->renew().at(0).cancel, true) << "the cancel is also read at the next renewal";
+}
+
+TEST_F(TwoReplicas, ASolveRunningOnOneIsReadStreamedAndCancelledThroughTheOther) {
+    const std::string sid = paintedSession(client(), 32, 0.3f);
+    // Long enough to be seen running (seconds): no tolerance, many iterations, two unknowns.
+    auto r = client().Post(("/api/v1/sessions/" + sid + "/solve").c_str(),
+                           R"({"unknowns": ["albedo", "emission"], "max_iterations": 10000, "tolerance": 0, "visible_change": 0})", "application/json");
+    ASSERT_EQ(r->status, 202) << r->body;
+    const std::string job = json::parse(r->body)["job"];
+    // The second replica streams the job's events: progress relayed through NOTIFY, then the end.
+    std::vector<std::string> events;
+    httplib::Client streamClient("127.0.0.1", m_secondPort);  // a client of its own: one request at a time each
+    std::thread stream([&] { events = readEvents(streamClient, "/api/v1/jobs/" + job + "/events"); });
+    json seen;
+    for (int i = 0; i < 400; ++i) {
+        seen = jobVia(second(), job);
+        if (seen["state"] == "running" && !seen["progress"].is_null() && seen["progress"].value("iteration", 0) > 0) break;
+        std::this_thread::sleep_for(50ms);
+    }
+    EXPECT_EQ(seen["state"], "running") << seen.dump();
+    std::this_thread::sleep_for(300ms);  // some iterations go by on the first replica
+    auto del = second().Delete(("/api/v1/jobs/" + job).c_str());
+    ASSERT_EQ(del->status, 202) << del->body;
+    const json end = waitFinished(second(), job, 30);
+    EXPECT_EQ(end["state"], "cancelled") << end.dump().substr(0, 2000);
+    EXPECT_EQ(jobVia(client(), job)["state"], "cancelled");
+    stream.join();
+    ASSERT_FALSE(events.empty());
+    EXPECT_EQ(events.back(), "cancelled");
+    EXPECT_GE(std::count(events.begin(), events.end(), "progress"), 3) << "progress relayed while it ran";
+}
+
+TEST_F(TwoReplicas, ASolveWhoseReplicaDiedRunsAgainFromItsRequestWithTheSameResult) {
+    const std::string request = R"({"unknowns": ["emission"], "max_iterations": 12, "tolerance": 0, "visible_change": 0})";
+    // The reference: the solve run through, on a session of its own.
+    const std::string reference = paintedSession(client());
+    const json expected = solveToEnd(client(), "/api/v1/sessions/" + reference, request);
+    ASSERT_EQ(expected["state"], "done") << expected.dump();
+    // The same solve, started by a replica that died at once: its row names its request, its
+    // lease lapsed, and no replica alive holds it.
+    const std::string sid = paintedSession(client());
+    const std::string job = sid.substr(0, 8) + "0123456789abcdef0123456789abcdef";
+    auto dead = server::openPostgresJobQueue(testStore(), "dead", 1ms);
+    dead->add(job, sid, "solve", request, "running", R"({"format": 1, "id": ")" + job + R"(", "session": ")" + sid +
+                                                         R"(", "state": "running", "progress": {}, "result": null, "error": null})");
+    const json end = waitFinished(second(), job);
+    ASSERT_EQ(end["state"], "done") << end.dump();
+    EXPECT_EQ(end["result"]["version"], 2);
+    const json& a = expected["result"]["report"];
+    const json& b = end["result"]["report"];
+    EXPECT_EQ(a["iterations"], b["iterations"]);
+    // Float atomics may order the adjoint's sums differently: equal to 1e-5 of where it started.
+    const double start = a["initial_objective"].get<double>();
+    EXPECT_NEAR(a["final_objective"].get<double>(), b["final_objective"].get<double>(), 1e-5 * start);
+    EXPECT_NEAR(a["final_rms"][0].get<double>(), b["final_rms"][0].get<double>(), 1e-5 * a["initial_rms"][0].get<double>());
+    // And the volumes render alike (the views are the sessions' first, v1).
+    auto render = [&](const std::string& s) {
+        const std::string bytes = client().Get(("/api/v1/sessions/" + s + "/views/v1/render.exr").c_str())->body;
+        return core::loadImageFromMemory(bytes.data(), bytes.size(), "render.exr").image;
+    };
+    const core::Image x = render(reference), y = render(sid);
+    ASSERT_EQ(x.rgba.size(), y.rgba.size());
+    float peak = 0, worst = 0;
+    for (size_t i = 0; i < x.rgba.size(); ++i) peak = std::max(peak, std::abs(x.rgba[i])), worst = std::max(worst, std::abs(x.rgba[i] - y.rgba[i]));
+    EXPECT_LE(worst, 1e-4f * peak) << "the re-run's volume renders as the uninterrupted one's";
+    const json session = json::parse(client().Get(("/api/v1/sessions/" + sid).c_str())->body);
+    EXPECT_EQ(session["volume"]["version"], 2) << "committed once, visible on every replica";
+    // Both solves are in the queue's figures on either replica; each replica counts its own.
+    const std::string metrics = client().Get("/api/v1/metrics")->body;
+    EXPECT_NE(metrics.find("volstyle_job_queue{state=\"done\"} 2\n"), std::string::npos) << metrics;
+    EXPECT_NE(metrics.find("volstyle_job_queue{state=\"running\"} 0\n"), std::string::npos) << metrics;
+}
