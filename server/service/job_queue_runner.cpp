@@ -28,14 +28,17 @@ void JobQueueRunner::leases() {
     const auto period = std::max(std::chrono::milliseconds(100), queue.lease() / 3);
     do {
         try {
-            // The jobs running here before the renewal: a job queued since may not be in the
-            // store's answer yet, and must not look lost.
+            // The jobs held here before the renewal; only those running are checked for a lost
+            // lease (one queued since may not be in the store yet, and must not look lost).
             std::vector<std::shared_ptr<Job>> running;
+            std::vector<std::string> held;
             for (auto& j : m_ctx.jobs.all()) {
                 std::lock_guard lock(j->mutex);
-                if (!j->remote && j->state == protocol::JobState::Running) running.push_back(j);
+                if (j->remote || j->isFinished()) continue;
+                held.push_back(j->id);
+                if (j->state == protocol::JobState::Running) running.push_back(j);
             }
-            m_ctx.checkLeases(running, queue.renew());
+            m_ctx.checkLeases(running, queue.renew(held));
             while (auto claimed = queue.claimLapsed()) m_resume(*claimed);
         } catch (const std::exception& e) {
             spdlog::warn("job queue: {}", e.what());

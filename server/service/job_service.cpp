@@ -170,15 +170,19 @@ std::filesystem::path JobService::jobFile(const std::string& jobId, const std::s
     m_ctx.job(jobId);  // not_found for no such job
     const std::filesystem::path path = m_ctx.jobFilesDir(jobId) / name;
     std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec) && m_ctx.persist) {
+        std::lock_guard lock(m_ctx.storeLoads);  // another replica ran it: its files are in the store (read once)
+        if (!std::filesystem::is_regular_file(path, ec)) m_ctx.persist->fetchJobFiles(jobId);
+    }
     if (!std::filesystem::is_regular_file(path, ec))
         throw ApiError(ErrorCode::NotFound, "job '" + jobId + "' has no file '" + name + "' (yet)");
     return path;
 }
 
 std::shared_ptr<Job> JobService::startSolve(const std::shared_ptr<Session>& session, const core::SolveOptions& options,
-                                            const std::string& request) {
+                                            const JobOrigin& origin) {
     Session& s = *session;
-    m_ctx.checkJobQueue(s);
+    if (!origin.adopted) m_ctx.checkJobQueue(s);  // an adopted job is counted already
     {
         std::lock_guard lock(s.mutex);
         bool anyTarget = false;
@@ -198,7 +202,7 @@ std::shared_ptr<Job> JobService::startSolve(const std::shared_ptr<Session>& sess
         }
         if (!problems.empty()) throw protocol::ValidationError(problems);
     }
-    auto job = m_ctx.queueJob(s, "solve", request);
+    auto job = m_ctx.queueJob(s, origin);
     m_ctx.gl->submit([this, job, session, options](core::GpuDevice& device) { runSolve(job, session, options, device); });
     return job;
 }
@@ -206,12 +210,12 @@ std::shared_ptr<Job> JobService::startSolve(const std::shared_ptr<Session>& sess
 void JobService::resume(const ClaimedJob& claimed) {
     auto job = m_ctx.adoptJob(claimed);
     try {
-        if (claimed.kind != "solve" || claimed.inputs.empty() || !m_decodeSolve)
-            throw ApiError(ErrorCode::Interrupted, "the replica running this " + (claimed.kind.empty() ? std::string("job") : claimed.kind + " job") +
-                                                       " stopped, and a job of this kind is not run again elsewhere: start it again");
+        const auto resumer = m_resumers.find(claimed.kind);
+        if (resumer == m_resumers.end() || claimed.inputs.empty())
+            throw ApiError(ErrorCode::Interrupted, "the replica running this job stopped, and a job of kind '" + claimed.kind +
+                                                       "' is not run again elsewhere: start it again");
         auto session = m_ctx.find(claimed.session);  // as the store has it now (not_found: deleted)
-        const core::SolveOptions options = m_decodeSolve(claimed.inputs, *session);
-        m_ctx.gl->submit([this, job, session, options](core::GpuDevice& device) { runSolve(job, session, options, device); });
+        resumer->second(JobOrigin{claimed.kind, claimed.inputs, job}, session);
     } catch (...) {
         const protocol::ErrorReport e = protocol::describeException(std::current_exception());
         job->fail(JobState::Failed, e.code, "could not run again after its replica stopped: " + e.message, e.details);

@@ -3,6 +3,8 @@
 /// Solve jobs (SPEC §2–3) and every job's lookup, files and cancel: a solve is checked when it
 /// is asked for, recorded, and run on the GL thread, which commits its result as a new version.
 
+#include <map>
+
 #include "server/service/service_context.h"
 
 namespace volstyle::server {
@@ -11,18 +13,19 @@ class JobService {
 public:
     explicit JobService(ServiceContext& ctx) : m_ctx(ctx) {}
 
-    /// Reads a solve's recorded request (its body as sent) into its options for session `s`: the
-    /// HTTP layer's parser, so a replica can run again a solve another one started.
-    using SolveDecoder = std::function<core::SolveOptions(const std::string& request, Session& s)>;
+    /// Starts a job of one kind again from its recorded request (`origin.request`, read by the
+    /// HTTP layer's parser) for session `s`, as the store has it now: the route's own start call
+    /// with `origin` (adopted). Throws as that call does.
+    using Resumer = std::function<void(const JobOrigin& origin, const std::shared_ptr<Session>& s)>;
 
-    /// `request`: the body as sent, kept in the job queue's row (with a PostgreSQL store) for a
-    /// replica to run the solve again if this one dies.
-    std::shared_ptr<Job> startSolve(const std::shared_ptr<Session>& s, const core::SolveOptions& options, const std::string& request = "");
-    /// Runs a job claimed from the queue: a solve again from its request and the session as the
-    /// store has it now; a job of another kind (or a solve without its request) fails
-    /// `interrupted`, for its client to start again.
+    /// `origin`: the request's kind and body (the job queue keeps them), or a job run again.
+    std::shared_ptr<Job> startSolve(const std::shared_ptr<Session>& s, const core::SolveOptions& options, const JobOrigin& origin = {});
+    /// Runs a job claimed from the queue again, from its request, with its kind's resumer; one
+    /// that cannot (no resumer, no request, the session gone, its request no longer valid) fails
+    /// `interrupted` with why, for its client to start it again.
     void resume(const ClaimedJob& claimed);
-    void setSolveDecoder(SolveDecoder decode) { m_decodeSolve = std::move(decode); }
+    /// Registered by each route module for the kinds of job it starts (before the queue starts).
+    void addResumer(const std::string& kind, Resumer r) { m_resumers[kind] = std::move(r); }
     std::shared_ptr<Job> job(const std::string& id) const { return m_ctx.job(id); }  ///< ApiError not_found
     /// Every job the server holds (finished ones until pruned), oldest first.
     std::vector<std::shared_ptr<Job>> all() const;
@@ -44,7 +47,7 @@ private:
     void solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options, core::GpuDevice& device);
 
     ServiceContext& m_ctx;
-    SolveDecoder m_decodeSolve;
+    std::map<std::string, Resumer> m_resumers;
 };
 
 }  // namespace volstyle::server

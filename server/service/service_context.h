@@ -70,7 +70,8 @@ struct ServiceContext {
     /// A new job of session `s` (too_many_jobs at its queue limit), recorded and listed. With the
     /// job queue, its row holds `kind` and `inputs` (what another replica runs it again from;
     /// empty: it cannot be run again) under this replica's lease.
-    std::shared_ptr<Job> queueJob(Session& s, const std::string& kind = "", const std::string& inputs = "");
+    /// An adopted origin's job is returned as it is (checked when it was first asked for).
+    std::shared_ptr<Job> queueJob(Session& s, const JobOrigin& origin = {});
     /// A job claimed from the queue, local here now and queued again (its row written).
     std::shared_ptr<Job> adoptJob(const ClaimedJob& c);
     /// Cancels a job: here, or (a remote copy) by asking the replica running it through the queue.

@@ -165,13 +165,14 @@ void ServiceContext::relayEvents(Job& j) {
     });
 }
 
-std::shared_ptr<Job> ServiceContext::queueJob(Session& s, const std::string& kind, const std::string& inputs) {
+std::shared_ptr<Job> ServiceContext::queueJob(Session& s, const JobOrigin& origin) {
+    if (origin.adopted) return origin.adopted;
     checkJobQueue(s);
     pruneJobs();
     auto job = jobs.add(s.id);
     if (queue) {
         relayEvents(*job);
-        queue->add(job->id, s.id, kind, inputs, "queued", store::encodeJobRecord(*job));
+        queue->add(job->id, s.id, origin.kind, origin.request, "queued", store::encodeJobRecord(*job));
     }
     if (persist) persist->saveJob(*job);
     {
@@ -221,6 +222,7 @@ void ServiceContext::finishJob(Job& job) {
     }
     spdlog::info("job {} {}", job.id, protocol::jobStateName(state));
     try {
+        if (queue && persist && !isRemote(job)) persist->saveJobFiles(job.id);  // before the record says done
         saved(job);
     } catch (const std::exception& e) {
         spdlog::error("job {}: cannot record its end: {}", job.id, e.what());

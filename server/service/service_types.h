@@ -84,6 +84,15 @@ struct ServiceLimits {
     std::chrono::milliseconds jobLease{10000};
 };
 
+/// Where a job comes from (issue #41): a request — its kind and its body as sent, kept in the job
+/// queue's row so that another replica can run it again if this one dies — or, `adopted`, a job
+/// claimed from the queue and run again here from that request.
+struct JobOrigin {
+    std::string kind;     ///< "solve", "animate", "frames-render", "sequence"
+    std::string request;  ///< the body as sent (JSON text); empty: the job cannot run again
+    std::shared_ptr<Job> adopted;
+};
+
 enum class ViewImage { Target, Weights, Background };
 /// "target", "weights", "background": its name in routes, files and "has_…" fields.
 const char* viewImageName(ViewImage kind);

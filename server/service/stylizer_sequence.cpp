@@ -25,7 +25,8 @@ constexpr double kMaxSequencePixels = 2.0e9;
 
 }  // namespace
 
-std::shared_ptr<Job> StylizerService::startSequence(const std::shared_ptr<Session>& session, const protocol::StylizerSequenceRequest& q) {
+std::shared_ptr<Job> StylizerService::startSequence(const std::shared_ptr<Session>& session, const protocol::StylizerSequenceRequest& q,
+                                                    const JobOrigin& origin) {
     const core::StylizerScene scene = stylizer(*session).scene;
     const auto [first, last] = core::pathSpan(scene.keyframes);
     if (scene.keyframes.empty() && !q.end)
@@ -56,7 +57,7 @@ std::shared_ptr<Job> StylizerService::startSequence(const std::shared_ptr<Sessio
         throw ApiError(ErrorCode::OverBudget, fmt::format("each frame would take about {:.0f} s, over the render budget of {:g} s; use fewer "
                                                           "pixels or a smaller shadow map",
                                                           seconds, m_ctx.limits.renderBudgetSeconds));
-    auto job = m_ctx.queueJob(*session);
+    auto job = m_ctx.queueJob(*session, origin);
     m_ctx.gl->submit([this, job, session, scene, times, q](core::GpuDevice& device) {
         m_ctx.runJob(*job, [&] { runSequence(*job, *session, scene, times, q, device); });
         m_ctx.finishJob(*job);

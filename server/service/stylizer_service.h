@@ -53,7 +53,8 @@ public:
     /// Renders the stylizer's camera path (or a span of its scene time) as PNG frames, and an MP4
     /// when asked, in a job on the GL thread: a progress event per frame, the files after
     /// (JobService::jobFile). Checked before it is queued: the span, the frame count, the per-frame budget.
-    std::shared_ptr<Job> startSequence(const std::shared_ptr<Session>& s, const protocol::StylizerSequenceRequest& request);
+    std::shared_ptr<Job> startSequence(const std::shared_ptr<Session>& s, const protocol::StylizerSequenceRequest& request,
+                                       const JobOrigin& origin = {});
 
 private:
     /// 413 when a camera of the scene (or of its key frames) is over the image-side limit.

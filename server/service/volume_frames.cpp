@@ -118,7 +118,8 @@ VdbDownload VolumeService::downloadFrame(Session& s, int n) {
     return {vdbBytes(v), fmt::format("{}-f{}-{:016x}", s.id, n, hash)};
 }
 
-std::shared_ptr<Job> VolumeService::startAnimate(const std::shared_ptr<Session>& session, const protocol::AnimateRequest& q) {
+std::shared_ptr<Job> VolumeService::startAnimate(const std::shared_ptr<Session>& session, const protocol::AnimateRequest& q,
+                                                 const JobOrigin& origin) {
     {
         std::lock_guard lock(session->mutex);
         if (session->frames.empty()) throw ApiError(ErrorCode::InvalidArgument, "the session has no frames: PUT …/frames/{n} first");
@@ -131,7 +132,7 @@ std::shared_ptr<Job> VolumeService::startAnimate(const std::shared_ptr<Session>&
             }
         if (!anyKey) throw ApiError(ErrorCode::InvalidArgument, "no view of a frame has a target: add views with \"frame\" and paint them");
     }
-    auto job = m_ctx.queueJob(*session);
+    auto job = m_ctx.queueJob(*session, origin);
     m_ctx.gl->submit([this, job, session, q](core::GpuDevice& device) {
         m_ctx.runJob(*job, [&] { runAnimate(*job, *session, q, device); });
         m_ctx.finishJob(*job);
@@ -192,12 +193,13 @@ void VolumeService::runAnimate(Job& job, Session& s, const protocol::AnimateRequ
     job.result = std::move(result);
 }
 
-std::shared_ptr<Job> VolumeService::startFramesRender(const std::shared_ptr<Session>& session, const protocol::FramesRenderRequest& q) {
+std::shared_ptr<Job> VolumeService::startFramesRender(const std::shared_ptr<Session>& session, const protocol::FramesRenderRequest& q,
+                                                      const JobOrigin& origin) {
     {
         std::lock_guard lock(session->mutex);
         if (session->frames.empty()) throw ApiError(ErrorCode::InvalidArgument, "the session has no frames: PUT …/frames/{n} first");
     }
-    auto job = m_ctx.queueJob(*session);
+    auto job = m_ctx.queueJob(*session, origin);
     m_ctx.gl->submit([this, job, session, q](core::GpuDevice& device) {
         m_ctx.runJob(*job, [&] {
             std::map<int, core::Volume> frames;

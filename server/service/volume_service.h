@@ -39,9 +39,11 @@ public:
     /// Solves the frames that have views with targets (key frames) jointly, fills every other
     /// frame from them, and stores the results (solved): a job with a progress event per key
     /// frame and sweep.
-    std::shared_ptr<Job> startAnimate(const std::shared_ptr<Session>& session, const protocol::AnimateRequest& request);
+    std::shared_ptr<Job> startAnimate(const std::shared_ptr<Session>& session, const protocol::AnimateRequest& request,
+                                      const JobOrigin& origin = {});
     /// Renders every frame with one camera to PNG in the job's folder (GET /jobs/{id}/frames/{i}.png).
-    std::shared_ptr<Job> startFramesRender(const std::shared_ptr<Session>& session, const protocol::FramesRenderRequest& request);
+    std::shared_ptr<Job> startFramesRender(const std::shared_ptr<Session>& session, const protocol::FramesRenderRequest& request,
+                                           const JobOrigin& origin = {});
 
     // Renders on the GL thread (session_render.cpp).
     /// The render (`beauty`), and with `layers` its compositing layers (for EXR answers).

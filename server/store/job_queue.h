@@ -55,8 +55,9 @@ public:
     /// Asks the replica running a job to cancel it; false when there is no such job.
     virtual bool requestCancel(const std::string& id) = 0;
     virtual void remove(const std::string& id) = 0;
-    /// Renews the leases of this replica's unfinished jobs; those it still holds.
-    virtual std::vector<HeldLease> renew() = 0;
+    /// Renews the leases of `ids`, the unfinished jobs this replica holds in memory; those it still
+    /// holds. A row leased to this replica but not named (a claim whose start failed) lapses.
+    virtual std::vector<HeldLease> renew(const std::vector<std::string>& ids) = 0;
     /// Claims the oldest unfinished job whose lease lapsed (none: nullopt).
     virtual std::optional<ClaimedJob> claimLapsed() = 0;
     /// Waits up to `timeout` for notifications (on its own connection) and hands each to `on`.

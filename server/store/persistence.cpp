@@ -153,6 +153,18 @@ void Persistence::removeJob(const std::string& job) {
     std::error_code ec;
     fs::remove(m_dir.jobsDir() / (job + ".json"), ec);
     fs::remove_all(jobFilesDir(job), ec);
+    mirrorRemoveTree(jobFilesDir(job));
+}
+
+void Persistence::saveJobFiles(const std::string& job) {
+    std::error_code ec;
+    if (!m_mirror || !fs::is_directory(jobFilesDir(job), ec)) return;
+    for (const auto& entry : fs::recursive_directory_iterator(jobFilesDir(job)))
+        if (entry.is_regular_file()) mirrorPut(entry.path());
+}
+
+bool Persistence::fetchJobFiles(const std::string& job) {
+    return m_mirror && m_mirror->materializeTree(relative(jobFilesDir(job)), m_dir.root()) > 0;
 }
 
 void Persistence::saveFrame(const std::string& session, int frame, const core::Volume& volume) {

@@ -77,6 +77,11 @@ public:
     void removeFrame(const std::string& session, int frame);
     void saveJob(const Job& job);
     void removeJob(const std::string& job);  ///< its record and its files
+    /// With a mirror: the files a finished job wrote (a sequence's frames and video), committed
+    /// there, so that whichever replica answers for the job can send them.
+    void saveJobFiles(const std::string& job);
+    /// With a mirror: a job's files as the mirror holds them, written here; whether there were any.
+    bool fetchJobFiles(const std::string& job);
     /// The folder of a job's files (a sequence's frames and video).
     std::filesystem::path jobFilesDir(const std::string& job) const { return m_dir.jobsDir() / job; }
 

@@ -98,12 +98,17 @@ public:
         m_db.run("remove job " + id, [&](pqxx::work& tx) { tx.exec_params("DELETE FROM volstyle_jobs WHERE id = $1", id); });
     }
 
-    std::vector<HeldLease> renew() override {
+    std::vector<HeldLease> renew(const std::vector<std::string>& ids) override {
         std::vector<HeldLease> held;
+        if (ids.empty()) return held;
+        std::string array = "{";  // a text[] literal: job ids are hex digits
+        for (const auto& id : ids) array += (array.size() > 1 ? "," : "") + id;
+        array += "}";
         m_db.run("renew the job leases", [&](pqxx::work& tx) {
             for (const auto& row : tx.exec_params("UPDATE volstyle_jobs SET lease_until = now() + $2 * interval '1 millisecond' "
-                                                  "WHERE owner = $1 AND state IN ('queued', 'running') RETURNING id, cancel",
-                                                  m_owner, leaseMs()))
+                                                  "WHERE owner = $1 AND id = ANY($3::text[]) AND state IN ('queued', 'running') "
+                                                  "RETURNING id, cancel",
+                                                  m_owner, leaseMs(), array))
                 held.push_back({row[0].as<std::string>(), row[1].as<bool>()});
         });
         return held;

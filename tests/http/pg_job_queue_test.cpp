@@ -102,7 +102,7 @@ TEST_F(JobQueueDb, AHeldLeaseIsNeverClaimedAndALapsedOneByExactlyOneReplica) {
     auto a = queue("a", 400ms), b = queue("b", 60s);
     a->add("j1", "s1", "solve", "{}", "running", "{}");
     EXPECT_FALSE(b->claimLapsed()) << "a's lease holds";
-    ASSERT_EQ(a->renew().size(), 1u);
+    ASSERT_EQ(a->renew({"j1"}).size(), 1u);
     std::this_thread::sleep_for(600ms);  // a stops renewing: as if killed
     const auto claimed = b->claimLapsed();
     ASSERT_TRUE(claimed);
@@ -110,7 +110,7 @@ TEST_F(JobQueueDb, AHeldLeaseIsNeverClaimedAndALapsedOneByExactlyOneReplica) {
     EXPECT_EQ(claimed->attempt, 2);
     EXPECT_EQ(claimed->previousOwner, a->owner());
     EXPECT_EQ(claimed->inputs, "{}");
-    EXPECT_TRUE(a->renew().empty()) << "a's lease is b's now";
+    EXPECT_TRUE(a->renew({"j1"}).empty()) << "a's lease is b's now";
     EXPECT_FALSE(a->write("j1", "done", "{\"from\": \"a\"}")) << "the replica that lost a job cannot write it";
     EXPECT_TRUE(b->write("j1", "done", "{\"from\": \"b\"}"));
     EXPECT_EQ(a->record("j1"), "{\"from\": \"b\"}");
@@ -151,7 +151,7 @@ TEST_F(JobQueueDb, NotificationsReachAnotherReplica) {
     for (int i = 0; i < 20 && heard.size() < 4; ++i) b->listen(on, 100ms);
     const std::vector<std::string> expected = {R"(j1 progress {"iteration": 3})", "j1 state ", "j1 state ", "j1 cancel "};
     EXPECT_EQ(heard, expected);
-    EXPECT_EQ(a->renew().at(0).cancel, true) << "the cancel is also read at the next renewal";
+    EXPECT_EQ(a->renew({"j1"}).at(0).cancel, true) << "the cancel is also read at the next renewal";
 }
 
 TEST_F(TwoReplicas, ASolveRunningOnOneIsReadStreamedAndCancelledThroughTheOther) {
@@ -223,4 +223,42 @@ TEST_F(TwoReplicas, ASolveWhoseReplicaDiedRunsAgainFromItsRequestWithTheSameResu
     const std::string metrics = client().Get("/api/v1/metrics")->body;
     EXPECT_NE(metrics.find("volstyle_job_queue{state=\"done\"} 2\n"), std::string::npos) << metrics;
     EXPECT_NE(metrics.find("volstyle_job_queue{state=\"running\"} 0\n"), std::string::npos) << metrics;
+}
+
+TEST_F(TwoReplicas, ASequenceWhoseReplicaDiedRendersAgainAndItsFramesComeFromEitherReplica) {
+    const std::string sid = paintedSession(client());
+    const std::string stylizer = "/api/v1/sessions/" + sid + "/stylizer";
+    json scene = json::parse(client().Get(stylizer.c_str())->body);
+    scene["camera"]["width"] = 64;
+    scene["camera"]["height"] = 36;
+    scene["light"]["shadow_map_size"] = 512;
+    ASSERT_EQ(client().Put(stylizer.c_str(), scene.dump(), "application/json")->status, 200);
+    const std::string job = sid.substr(0, 8) + "fedcba9876543210fedcba9876543210";
+    auto dead = server::openPostgresJobQueue(testStore(), "dead", 1ms);
+    dead->add(job, sid, "sequence", R"({"fps": 4, "end": 0.5, "video": false})",
+              "running", R"({"format": 1, "id": ")" + job + R"(", "session": ")" + sid + R"(", "state": "running", "progress": {}, "result": null, "error": null})");
+    const json end = waitFinished(client(), job);
+    ASSERT_EQ(end["state"], "done") << end.dump();
+    ASSERT_EQ(end["result"]["frames"], 3) << end.dump();
+    // The replica that rendered it committed the frames to the store: both replicas send them.
+    for (httplib::Client* c : {&client(), &second()}) {
+        auto frame = c->Get(end["result"]["frame_urls"][2].get<std::string>().c_str());
+        ASSERT_TRUE(frame);
+        ASSERT_EQ(frame->status, 200) << frame->body;
+        const core::Image last = core::loadImageFromMemory(frame->body.data(), frame->body.size(), "frame").image;
+        EXPECT_EQ(last.width, 64);
+        EXPECT_EQ(last.height, 36);
+    }
+}
+
+TEST_F(TwoReplicas, AJobThatCannotRunAgainFailsInterruptedSayingWhy) {
+    const std::string sid = paintedSession(client());
+    const std::string job = sid.substr(0, 8) + "00000000000000000000000000000001";
+    auto dead = server::openPostgresJobQueue(testStore(), "dead", 1ms);
+    dead->add(job, sid, "solve", "", "running",  // no request recorded: nothing to run again from
+              R"({"format": 1, "id": ")" + job + R"(", "session": ")" + sid + R"(", "state": "running", "progress": {}, "result": null, "error": null})");
+    const json end = waitFinished(second(), job);
+    EXPECT_EQ(end["state"], "failed") << end.dump();
+    EXPECT_EQ(end["error"]["code"], "interrupted") << end.dump();
+    EXPECT_NE(end["error"]["message"].get<std::string>().find("start it again"), std::string::npos) << end.dump();
 }

@@ -41,11 +41,22 @@ void addFrameRoutes(RouteContext& c) {
     });
     c.postCreating(kSessionPath + "/animate", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
-        reply(res, 202, {{"job", c.services.volumes.startAnimate(s, protocol::AnimateRequest::fromJson(c.body(req)))->id}});
+        const nlohmann::json body = c.body(req);
+        const JobOrigin origin{"animate", protocol::toText(body), nullptr};
+        reply(res, 202, {{"job", c.services.volumes.startAnimate(s, protocol::AnimateRequest::fromJson(body), origin)->id}});
     });
     c.postCreating(kSessionPath + "/frames/render", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
-        reply(res, 202, {{"job", c.services.volumes.startFramesRender(s, protocol::FramesRenderRequest::fromJson(c.body(req), c.limits))->id}});
+        const nlohmann::json body = c.body(req);
+        const JobOrigin origin{"frames-render", protocol::toText(body), nullptr};
+        reply(res, 202, {{"job", c.services.volumes.startFramesRender(s, protocol::FramesRenderRequest::fromJson(body, c.limits), origin)->id}});
+    });
+    // Run again on this replica when the one running them died (the job queue).
+    c.services.jobs.addResumer("animate", [&c](const JobOrigin& o, const std::shared_ptr<Session>& s) {
+        c.services.volumes.startAnimate(s, protocol::AnimateRequest::fromJson(nlohmann::json::parse(o.request)), o);
+    });
+    c.services.jobs.addResumer("frames-render", [&c](const JobOrigin& o, const std::shared_ptr<Session>& s) {
+        c.services.volumes.startFramesRender(s, protocol::FramesRenderRequest::fromJson(nlohmann::json::parse(o.request), c.limits), o);
     });
 }
 

@@ -98,12 +98,12 @@ void addJobRoutes(RouteContext& c) {
         const nlohmann::json body = c.body(req);
         const Vec3d background = c.services.sessions.lighting(*s).background.color;  // offered when L_m is left out
         const protocol::SolveRequest request = protocol::SolveRequest::fromJson(body, c.limits, &background);
-        reply(res, 202, {{"job", c.services.jobs.startSolve(s, request.options, protocol::toText(body))->id}});
+        reply(res, 202, {{"job", c.services.jobs.startSolve(s, request.options, JobOrigin{"solve", protocol::toText(body), nullptr})->id}});
     });
-    // A replica running again a solve another one started (the job queue) reads its request here.
-    c.services.jobs.setSolveDecoder([&c](const std::string& request, Session& s) {
-        const Vec3d background = c.services.sessions.lighting(s).background.color;
-        return protocol::SolveRequest::fromJson(nlohmann::json::parse(request), c.limits, &background).options;
+    // Run again on this replica when the one solving it died (the job queue).
+    c.services.jobs.addResumer("solve", [&c](const JobOrigin& o, const std::shared_ptr<Session>& s) {
+        const Vec3d background = c.services.sessions.lighting(*s).background.color;
+        c.services.jobs.startSolve(s, protocol::SolveRequest::fromJson(nlohmann::json::parse(o.request), c.limits, &background).options, o);
     });
     c.get(kApi + "/jobs", [&c](const httplib::Request& req, httplib::Response& res) {
         const protocol::ListQuery q = protocol::ListQuery::fromQuery(req.params, true);

@@ -161,7 +161,13 @@ void addStylizerSceneRoutes(RouteContext& c) {
     });
     c.postCreating(kStylizerPath + "/sequence", [&c](const httplib::Request& req, httplib::Response& res) {
         auto s = c.services.sessions.find(req.matches[1]);
-        reply(res, 202, {{"job", c.services.stylizer.startSequence(s, protocol::StylizerSequenceRequest::fromJson(c.body(req)))->id}});
+        const nlohmann::json body = c.body(req);
+        const JobOrigin origin{"sequence", protocol::toText(body), nullptr};
+        reply(res, 202, {{"job", c.services.stylizer.startSequence(s, protocol::StylizerSequenceRequest::fromJson(body), origin)->id}});
+    });
+    // Run again on this replica when the one rendering it died (the job queue).
+    c.services.jobs.addResumer("sequence", [&c](const JobOrigin& o, const std::shared_ptr<Session>& s) {
+        c.services.stylizer.startSequence(s, protocol::StylizerSequenceRequest::fromJson(nlohmann::json::parse(o.request)), o);
     });
 }
 
