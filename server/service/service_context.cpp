@@ -226,10 +226,7 @@ void ServiceContext::shownChanged(Session& s) {
 
 void ServiceContext::stylizerChanged(Session& s, bool history) {
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
-    if (persist) {
-        if (history) persist->saveStylizerHistory(s.id, s.stylizer.undo, s.stylizer.redo);
-        persist->saveStylizerScene(s.id, s.stylizer.scene, s.stylizer.meshRefs, s.stylizer.revision + 1);
-    }
+    if (persist) persist->commitStylizer(s, history, s.stylizer.revision + 1);
     ++s.stylizer.revision;
     s.changed.notify_all();
 }

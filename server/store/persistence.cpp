@@ -76,7 +76,7 @@ std::string Persistence::writeProblem() const {
     }
 }
 
-void Persistence::saveSession(Session& s) {
+void Persistence::saveSession(Session& s, const std::vector<fs::path>& alsoCommit) {
     const fs::path dir = sessionDir(s.id);
     std::vector<std::pair<std::string, fs::path>> written;
     std::vector<std::pair<int, std::uintmax_t>> stored;
@@ -89,6 +89,7 @@ void Persistence::saveSession(Session& s) {
         stored.emplace_back(n, fs::file_size(vdb));
     }
     for (const auto& [n, bytes] : stored) s.volume.versions.markStored(n, bytes);
+    for (const auto& file : alsoCommit) written.emplace_back(relative(file), file);
     store::atomicWrite(dir / "session.json", store::encodeSessionRecord(s));
     if (!m_mirror) return;
     try {
@@ -189,6 +190,22 @@ void Persistence::saveStylizerScene(const std::string& session, const core::Styl
     store::atomicWrite(sessionDir(session) / "stylizer" / "scene.json",
                        store::encodeStylizerScene(protocol::stylizerSceneToJson(scene, meshRefs), revision));
     mirrorPut(sessionDir(session) / "stylizer" / "scene.json");
+}
+
+void Persistence::commitStylizer(Session& s, bool history, uint64_t revision) {
+    if (!m_mirror) {
+        if (history) saveStylizerHistory(s.id, s.stylizer.undo, s.stylizer.redo);
+        saveStylizerScene(s.id, s.stylizer.scene, s.stylizer.meshRefs, revision);
+        return;
+    }
+    const fs::path dir = sessionDir(s.id) / "stylizer";
+    std::vector<fs::path> files{dir / "scene.json"};
+    if (history) {
+        store::atomicWrite(dir / "history.json", store::encodeStylizerHistory(s.stylizer.undo, s.stylizer.redo));
+        files.push_back(dir / "history.json");
+    }
+    store::atomicWrite(dir / "scene.json", store::encodeStylizerScene(protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), revision));
+    saveSession(s, files);
 }
 
 void Persistence::saveStylizerHistory(const std::string& session, const std::vector<StylizerSceneEntry>& undo,

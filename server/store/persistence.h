@@ -57,7 +57,7 @@ public:
 
     /// Writes session.json and any version not on disk yet (marking it stored). Call with the
     /// session's mutex held.
-    void saveSession(Session& s);
+    void saveSession(Session& s, const std::vector<std::filesystem::path>& alsoCommit = {});
     void saveViewImage(const std::string& session, const std::string& view, const std::string& kind, const core::Image& image);
     void removeViewImage(const std::string& session, const std::string& view, const std::string& kind);
     void removeView(const std::string& session, const std::string& view);
@@ -66,6 +66,11 @@ public:
     /// scene with its meshes named as the client named them; uploaded files as they were sent.
     void saveStylizerScene(const std::string& session, const core::StylizerScene& scene, const std::vector<std::string>& meshRefs,
                            uint64_t revision);
+    /// A stylizer change (ServiceContext::stylizerChanged): the scene as revision `revision`, and
+    /// with `history` its undo and redo stacks. With a mirror they are committed with the session's
+    /// record, under its stamp check: a replica whose copy is stale is refused (409) and writes
+    /// nothing, and the record's new stamp tells the others to read the session again.
+    void commitStylizer(Session& s, bool history, uint64_t revision);
     /// The stylizer's undo and redo stacks (arrays of scenes), apart from the scene: written only
     /// when they change (not for each frame of a played path).
     void saveStylizerHistory(const std::string& session, const std::vector<StylizerSceneEntry>& undo, const std::vector<StylizerSceneEntry>& redo);

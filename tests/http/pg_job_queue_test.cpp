@@ -6,7 +6,9 @@
 //   - two servers on one database: a solve running on one is read, streamed (progress through
 //     LISTEN/NOTIFY) and cancelled through the other;
 //   - a solve whose replica died (a lapsed row) is run again by a live server from its recorded
-//     request, and gives the uninterrupted solve's result.
+//     request, and gives the uninterrupted solve's result; a sequence too, its frames then served
+//     by either replica; a job that cannot run again fails `interrupted` saying why;
+//   - a stylizer change moves the session record's stamp, so a replica holding the session sees it.
 // The cluster test (tests/cluster/cluster_test.py) kills a real replica with kill -9 mid-solve.
 #include <gtest/gtest.h>
 
@@ -261,4 +263,15 @@ TEST_F(TwoReplicas, AJobThatCannotRunAgainFailsInterruptedSayingWhy) {
     EXPECT_EQ(end["state"], "failed") << end.dump();
     EXPECT_EQ(end["error"]["code"], "interrupted") << end.dump();
     EXPECT_NE(end["error"]["message"].get<std::string>().find("start it again"), std::string::npos) << end.dump();
+}
+
+TEST_F(TwoReplicas, AStylizerChangeOnOneIsSeenByAnotherThatHeldTheSession) {
+    const std::string sid = createSession(16), stylizer = "/api/v1/sessions/" + sid + "/stylizer";
+    json scene = json::parse(second().Get(stylizer.c_str())->body);  // the second replica now holds a copy
+    scene["camera"]["width"] = 48;  // within the fixture's image limit (64 a side)
+    scene["camera"]["height"] = 27;
+    scene["light"]["shadow_map_size"] = 512;
+    ASSERT_EQ(client().Put(stylizer.c_str(), scene.dump(), "application/json")->status, 200);
+    // The scene went with the session's record: its stamp moved, so the second reads it again.
+    EXPECT_EQ(json::parse(second().Get(stylizer.c_str())->body)["camera"]["width"], 48);
 }
