@@ -116,7 +116,10 @@ HttpServer::HttpServer(ServerOptions options) {
     m->services.startJobQueue();
 }
 
-HttpServer::~HttpServer() { stop(); }
+HttpServer::~HttpServer() {
+    stop();
+    m->services.stopJobQueue();  // its claims call the routes' resumers: stopped while the routes live
+}
 
 int HttpServer::bind() {
     const int port = m->http.bindWithBacklog(m->opt.host, m->opt.port);

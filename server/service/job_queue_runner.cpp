@@ -26,24 +26,41 @@ void JobQueueRunner::leases() {
     JobQueue& queue = *m_ctx.queue;
     // Renewed three times a lease: one late renewal (a busy store) does not lose a job.
     const auto period = std::max(std::chrono::milliseconds(100), queue.lease() / 3);
+    auto renewed = std::chrono::steady_clock::now();
     do {
         try {
-            // The jobs held here before the renewal; only those running are checked for a lost
-            // lease (one queued since may not be in the store yet, and must not look lost).
-            std::vector<std::shared_ptr<Job>> running;
-            std::vector<std::string> held;
-            for (auto& j : m_ctx.jobs.all()) {
-                std::lock_guard lock(j->mutex);
-                if (j->remote || j->isFinished()) continue;
-                held.push_back(j->id);
-                if (j->state == protocol::JobState::Running) running.push_back(j);
+            renew(renewed);
+            // One claim at a time, renewing between them: starting a claimed job reads its
+            // session from the store, and this replica's own leases must not lapse meanwhile.
+            while (auto claimed = queue.claimLapsed()) {
+                m_resume(*claimed);
+                renew(renewed);
             }
-            m_ctx.checkLeases(running, queue.renew(held));
-            while (auto claimed = queue.claimLapsed()) m_resume(*claimed);
         } catch (const std::exception& e) {
             spdlog::warn("job queue: {}", e.what());
         }
+        if (std::chrono::steady_clock::now() - renewed > queue.lease()) {
+            // No renewal for a whole lease (this replica cut off from the store): another replica
+            // may run these jobs now, so this one stops them rather than commit twice.
+            for (auto& j : m_ctx.jobs.all())
+                if (!j->isFinishedLocked()) m_ctx.loseJob(*j, "its lease could not be renewed for a whole lease");
+        }
     } while (pause(period));
+}
+
+void JobQueueRunner::renew(std::chrono::steady_clock::time_point& renewed) {
+    // The jobs held here before the renewal; only those running are checked for a lost lease
+    // (one queued since may not be in the store yet, and must not look lost).
+    std::vector<std::shared_ptr<Job>> running;
+    std::vector<std::string> held;
+    for (auto& j : m_ctx.jobs.all()) {
+        std::lock_guard lock(j->mutex);
+        if (j->remote || j->isFinished()) continue;
+        held.push_back(j->id);
+        if (j->state == protocol::JobState::Running) running.push_back(j);
+    }
+    m_ctx.checkLeases(running, m_ctx.queue->renew(held));
+    renewed = std::chrono::steady_clock::now();
 }
 
 void JobQueueRunner::notifications() {

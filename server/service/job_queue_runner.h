@@ -24,6 +24,8 @@ public:
 
 private:
     void leases();
+    /// Renews this replica's leases (cancelling the jobs it lost); `renewed` becomes now.
+    void renew(std::chrono::steady_clock::time_point& renewed);
     void notifications();
     /// Sleeps up to `d`; false once stopping.
     bool pause(std::chrono::milliseconds d);

@@ -208,8 +208,13 @@ std::shared_ptr<Job> JobService::startSolve(const std::shared_ptr<Session>& sess
 }
 
 void JobService::resume(const ClaimedJob& claimed) {
-    auto job = m_ctx.adoptJob(claimed);
+    std::shared_ptr<Job> job;
     try {
+        job = m_ctx.adoptJob(claimed);
+        if (claimed.cancel) throw ApiError(ErrorCode::Cancelled, "cancelled while its replica was down");
+        if (claimed.attempt > kMaxAttempts)
+            throw ApiError(ErrorCode::Interrupted, "its replica stopped while it ran " + std::to_string(kMaxAttempts) +
+                                                       " times (a job that brings its replica down is not run again): start it again");
         const auto resumer = m_resumers.find(claimed.kind);
         if (resumer == m_resumers.end() || claimed.inputs.empty())
             throw ApiError(ErrorCode::Interrupted, "the replica running this job stopped, and a job of kind '" + claimed.kind +
@@ -217,8 +222,11 @@ void JobService::resume(const ClaimedJob& claimed) {
         auto session = m_ctx.find(claimed.session);  // as the store has it now (not_found: deleted)
         resumer->second(JobOrigin{claimed.kind, claimed.inputs, job}, session);
     } catch (...) {
+        if (!job) throw;  // not adopted: its lease lapses again and it is claimed again
         const protocol::ErrorReport e = protocol::describeException(std::current_exception());
-        job->fail(JobState::Failed, e.code, "could not run again after its replica stopped: " + e.message, e.details);
+        if (e.code == ErrorCode::Cancelled) job->fail(JobState::Cancelled, e.code, e.message);
+        else if (e.code == ErrorCode::Interrupted) job->fail(JobState::Failed, e.code, e.message);
+        else job->fail(JobState::Failed, ErrorCode::Interrupted, "its replica stopped, and it could not run again here: " + e.message, e.details);
         m_ctx.finishJob(*job);
     }
 }

@@ -46,6 +46,9 @@ private:
     /// session's lighting gets the solved radiances (and the volume a new version).
     void solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& s, const core::SolveOptions& options, core::GpuDevice& device);
 
+    /// Runs of one job (its first and re-runs) after which a replica dying under it ends it.
+    static constexpr int kMaxAttempts = 3;
+
     ServiceContext& m_ctx;
     std::map<std::string, Resumer> m_resumers;
 };

@@ -49,18 +49,47 @@ void ServiceContext::shutdown() {
     // the running job to end: as a short task between a cancelled solve's iterations, it freed
     // the solve cache that the solve still wrote its last state to (a heap corruption). Queued
     // jobs then end at once, cancelled, without touching the GPU.
+    std::vector<std::shared_ptr<Job>> local;  // those this replica runs (not copies of other replicas')
+    for (auto& j : jobs.all()) {
+        std::lock_guard lock(j->mutex);
+        if (!j->remote) local.push_back(j);
+    }
+    handBackJobs();
     for (auto& j : jobs.all()) j->cancel = true;
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-    for (auto& j : jobs.all()) {
+    bool stopped = true;
+    for (auto& j : local) {
         std::unique_lock lock(j->mutex);
-        j->changed.wait_until(lock, deadline, [&] { return j->remote || j->state != JobState::Running; });  // another replica runs a remote one
+        stopped &= j->changed.wait_until(lock, deadline, [&] { return j->state != JobState::Running; });
     }
+    if (!stopped) spdlog::warn("shutting down: a job still runs after 60 s; its GPU objects are left to the process's end");
     try {
-        if (gl->used()) freeGpuObjects();  // nothing to free when nothing ever ran on GL
+        if (stopped && gl->used()) freeGpuObjects();  // nothing to free when nothing ever ran on GL
     } catch (const std::exception& e) {
         spdlog::debug("shutting down: the GPU objects were not freed on the GL thread: {}", e.what());
     }
     gl.reset();  // drains the queued work (it calls into the services: they must still live)
+}
+
+void ServiceContext::handBackJobs() {
+    if (!queue) return;
+    // A replica that stops hands its unfinished jobs back rather than ending them cancelled:
+    // their copies here become remote (they write nothing more) and their leases lapse now, so
+    // another replica runs them again at once.
+    std::vector<std::string> ids;
+    for (auto& j : jobs.all()) {
+        std::lock_guard lock(j->mutex);
+        if (j->remote || j->isFinished()) continue;
+        j->remote = true;
+        j->relay = nullptr;
+        ids.push_back(j->id);
+    }
+    try {
+        queue->release(ids);
+        if (!ids.empty()) spdlog::info("shutting down: {} unfinished job(s) handed back to the queue", ids.size());
+    } catch (const std::exception& e) {
+        spdlog::warn("shutting down: the job leases were not handed back ({}); they lapse in {} ms", e.what(), queue->lease().count());
+    }
 }
 
 ServiceContext::~ServiceContext() {

@@ -22,6 +22,8 @@ struct ServiceContext {
     /// Cancels the jobs, frees GPU objects on the GL thread, then stops it once the work queued
     /// for it is drained (that work calls into the services). Idempotent.
     void shutdown();
+    /// With the job queue: the unfinished jobs' leases handed back for another replica to run.
+    void handBackJobs();
     ServiceContext(const ServiceContext&) = delete;
     ServiceContext& operator=(const ServiceContext&) = delete;
 
@@ -81,6 +83,8 @@ struct ServiceContext {
     /// After a renewal: cancels each of `running` (local jobs that were running before it) whose
     /// lease another replica holds now, and each whose cancel was asked elsewhere.
     void checkLeases(const std::vector<std::shared_ptr<Job>>& running, const std::vector<HeldLease>& held);
+    /// This replica no longer holds the job's lease: its copy becomes remote and is cancelled.
+    void loseJob(Job& j, const std::string& why);
     void checkJobQueue(const Session& s) const;  ///< too_many_jobs at the session's queue limit
     /// Runs `work` as the job's body: cancelled before it starts, or running (recorded) until it
     /// returns (it sets the result and done) or throws (failed or cancelled, with the error).

@@ -34,11 +34,19 @@ void ServiceContext::saved(Job& j) {
         std::lock_guard jl(j.mutex);
         state = protocol::jobStateName(j.state);
     }
-    if (!queue->write(j.id, state, store::encodeJobRecord(j))) {
-        // Its lease lapsed and another replica runs it now: this copy stops and writes nothing.
-        j.cancel = true;
-        spdlog::warn("job {}: another replica took it over (its lease lapsed here); stopping this copy", j.id);
+    if (!queue->write(j.id, state, store::encodeJobRecord(j))) loseJob(j, "another replica took it over (its lease lapsed here)");
+}
+
+void ServiceContext::loseJob(Job& j, const std::string& why) {
+    {
+        // A remote copy from now on: it writes, relays and prunes nothing of the row.
+        std::lock_guard lock(j.mutex);
+        if (j.remote) return;
+        j.remote = true;
+        j.relay = nullptr;
     }
+    j.cancel = true;
+    spdlog::warn("job {}: {}; stopping this copy", j.id, why);
 }
 
 void ServiceContext::pruneJobs() {
@@ -48,12 +56,12 @@ void ServiceContext::pruneJobs() {
         {
             std::lock_guard lock(jobRecords);
             j->forgotten = true;
-            if (persist && !remote) persist->removeJob(j->id);
-            else if (!persist) std::filesystem::remove_all(jobFilesDir(j->id), ec);
             try {
+                if (persist && !remote) persist->removeJob(j->id);
+                else if (!persist) std::filesystem::remove_all(jobFilesDir(j->id), ec);
                 if (queue && !remote) queue->remove(j->id);
             } catch (const std::exception& e) {
-                spdlog::warn("job {}: its row stays in the queue: {}", j->id, e.what());
+                spdlog::warn("job {}: its record or files stay in the store: {}", j->id, e.what());
             }
         }
         if (auto s = sessions.find(j->session)) {
@@ -94,19 +102,26 @@ std::shared_ptr<Job> ServiceContext::remoteJob(const std::string& id, std::share
     // A stream opened here starts where the job is: its latest progress, then what comes.
     if (!std::holds_alternative<std::monostate>(j->progress)) j->events.push_back({protocol::JobEvent::Progress, j->progress});
     if (finished) j->emitFinal();
-    jobs.restore(j);
-    return j;
+    return jobs.insertIfAbsent(j);  // a claim may have made it local meanwhile
 }
 
 void ServiceContext::refreshRemote(Job& j) {
     if (!queue || !isRemote(j)) return;
-    if (const auto record = queue->record(j.id)) refreshRemote(j, *record);
+    if (const auto record = queue->record(j.id)) return refreshRemote(j, *record);
+    {
+        std::lock_guard lock(j.mutex);
+        if (j.isFinished()) return;
+    }
+    // Its row is gone (pruned by the replica that ran it): the copy ends, and its streams with it.
+    j.fail(JobState::Failed, protocol::ErrorCode::NotFound, "the job is no longer in the store (the replica that ran it forgot it)");
+    j.emitFinal();
 }
 
 void ServiceContext::refreshRemote(Job& j, const std::string& record) {
     bool wasFinished = false;
     {
         std::lock_guard lock(j.mutex);
+        if (!j.remote) return;  // claimed here meanwhile: the row is this replica's to write
         wasFinished = j.isFinished();
     }
     if (store::readJobRecord(record, j) && !wasFinished) j.emitFinal();
@@ -139,7 +154,7 @@ void ServiceContext::checkLeases(const std::vector<std::shared_ptr<Job>>& runnin
                 std::lock_guard lock(j->mutex);
                 if (j->isFinished()) continue;  // it finished meanwhile: its row holds no lease
             }
-            if (!j->cancel.exchange(true)) spdlog::warn("job {}: its lease went to another replica; stopping this copy", j->id);
+            loseJob(*j, "its lease went to another replica");
         } else if (it->cancel) {
             j->cancel = true;
         }
@@ -170,15 +185,24 @@ std::shared_ptr<Job> ServiceContext::queueJob(Session& s, const JobOrigin& origi
     checkJobQueue(s);
     pruneJobs();
     auto job = jobs.add(s.id);
-    if (queue) {
-        relayEvents(*job);
-        queue->add(job->id, s.id, origin.kind, origin.request, "queued", store::encodeJobRecord(*job));
-    }
-    if (persist) persist->saveJob(*job);
-    {
+    try {
+        if (queue) {
+            relayEvents(*job);
+            queue->add(job->id, s.id, origin.kind, origin.request, "queued", store::encodeJobRecord(*job));
+        }
+        if (persist) persist->saveJob(*job);
         std::lock_guard lock(s.mutex);
         s.jobs.push_back(job->id);
         saved(s);
+    } catch (...) {
+        // Not acknowledged: nothing of it stays (a queued job left here would be leased forever).
+        jobs.remove(job->id);
+        try {
+            if (queue) queue->remove(job->id);
+        } catch (const std::exception&) {
+            // Its row lapses and is claimed, then fails: its session's record does not name it.
+        }
+        throw;
     }
     spdlog::info("job {} queued (session {})", job->id, s.id);
     return job;
@@ -187,7 +211,12 @@ std::shared_ptr<Job> ServiceContext::queueJob(Session& s, const JobOrigin& origi
 std::shared_ptr<Job> ServiceContext::adoptJob(const ClaimedJob& c) {
     auto job = jobs.adopt(c.id, c.session);
     relayEvents(*job);
-    saved(*job);  // queued again, under this replica's lease
+    try {
+        saved(*job);  // queued again, under this replica's lease
+    } catch (...) {
+        loseJob(*job, "its claim could not be written");  // not renewed here: claimed again once it lapses
+        throw;
+    }
     spdlog::warn("job {} claimed from {} (attempt {}): its lease lapsed there", c.id, c.previousOwner, c.attempt);
     return job;
 }

@@ -27,8 +27,10 @@ struct Services {
         queueRunner.reset();
         context.shutdown();
     }
+    /// Stops the job queue's threads (before the routes, whose resumers they call, go).
+    void stopJobQueue() { queueRunner.reset(); }
     /// With a PostgreSQL store: this replica's part in the job queue (job_queue_runner.h), from
-    /// now on. Call once the routes are set (the solve decoder with them).
+    /// now on. Call once the routes are set (their resumers with them).
     void startJobQueue() {
         if (context.queue && !queueRunner) queueRunner = std::make_unique<JobQueueRunner>(context, [this](const ClaimedJob& c) { jobs.resume(c); });
     }

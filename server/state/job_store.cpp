@@ -79,7 +79,25 @@ std::shared_ptr<Job> JobStore::adopt(const std::string& id, const std::string& s
     slot->state = protocol::JobState::Queued;
     slot->error.reset();
     slot->result = {};
+    slot->progress = {};
+    // A stream opened from now on must not replay an end this copy once saw and close.
+    if (!slot->events.empty() && protocol::isFinal(slot->events.back().event)) slot->events.clear();
     return slot;
+}
+
+std::shared_ptr<Job> JobStore::insertIfAbsent(std::shared_ptr<Job> job) {
+    std::lock_guard lock(m_mutex);
+    std::shared_ptr<Job>& slot = m_jobs[job->id];
+    if (!slot) {
+        job->sequence = ++m_sequence;
+        slot = std::move(job);
+    }
+    return slot;
+}
+
+void JobStore::remove(const std::string& id) {
+    std::lock_guard lock(m_mutex);
+    m_jobs.erase(id);
 }
 
 void JobStore::restore(std::shared_ptr<Job> job) {

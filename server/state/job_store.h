@@ -46,7 +46,11 @@ struct Job {
     /// the session's next solve starts or the session is deleted.
     std::shared_ptr<core::GpuVolume> preview;
 
-    bool isFinished() const { return protocol::isFinished(state); }
+    bool isFinished() const { return protocol::isFinished(state); }  ///< the mutex held
+    bool isFinishedLocked() const {
+        std::lock_guard lock(mutex);
+        return isFinished();
+    }
     void setState(protocol::JobState s);
     /// Ends the job in state `s` (failed or cancelled) with an error body of `code` and `message`.
     void fail(protocol::JobState s, protocol::ErrorCode code, const std::string& message,
@@ -65,6 +69,9 @@ public:
     std::shared_ptr<Job> add(const std::string& session);
     std::shared_ptr<Job> find(const std::string& id) const;
     void restore(std::shared_ptr<Job> job);
+    /// Adds `job` unless one with its id is held; the one held then.
+    std::shared_ptr<Job> insertIfAbsent(std::shared_ptr<Job> job);
+    void remove(const std::string& id);
     /// Job `id` to be run here (claimed from the queue): the copy held (a remote one, which
     /// streams keep watching) made local and queued again, or a new one.
     std::shared_ptr<Job> adopt(const std::string& id, const std::string& session);

@@ -16,12 +16,20 @@
 
 namespace volstyle::server {
 
+/// A session's file written under its record's stamp check: the write happens only if the record
+/// `record` still has stamp `expected` (the copy writing it is the newest), else ApiError busy
+/// (409) and nothing is written.
+struct RecordGuard {
+    std::string record;
+    uint64_t expected = 0;
+};
+
 class FileMirror {
 public:
     virtual ~FileMirror() = default;
     /// Stores the file at `local` as `path` (replacing it), committed when this returns; its
     /// stamp (new at every put: whether a copy read earlier is still the newest).
-    virtual uint64_t put(const std::string& path, const std::filesystem::path& local) = 0;
+    virtual uint64_t put(const std::string& path, const std::filesystem::path& local, const RecordGuard* guard = nullptr) = 0;
     /// A session's record and the files it names (its new versions), in one transaction that
     /// first locks the record's row and checks that its stamp is still `expected` (0: no record
     /// yet): two replicas saving one session are serialized, and the one whose copy was stale
@@ -30,9 +38,9 @@ public:
                                const std::vector<std::pair<std::string, std::filesystem::path>>& files, uint64_t expected) = 0;
     /// The stamp of `path` now (nullopt: not stored).
     virtual std::optional<uint64_t> stamp(const std::string& path) = 0;
-    virtual void remove(const std::string& path) = 0;
+    virtual void remove(const std::string& path, const RecordGuard* guard = nullptr) = 0;
     /// Removes `prefix` and everything under it ("sessions/<sid>").
-    virtual void removeTree(const std::string& prefix) = 0;
+    virtual void removeTree(const std::string& prefix, const RecordGuard* guard = nullptr) = 0;
     /// Writes the stored files under `prefix` ("sessions/<sid>", "jobs") into `root` (each at its
     /// path relative to it); the number written. With `recordStamp`, also the stamp of `record`
     /// as of the same moment as the files (nullopt: none).

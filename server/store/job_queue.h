@@ -23,6 +23,7 @@ struct ClaimedJob {
     std::string id, session, kind, inputs;
     std::string previousOwner;
     int attempt = 1;  ///< 2 for the first re-run
+    bool cancel = false;  ///< DELETE /jobs/{jid} was asked while no replica ran it
 };
 
 /// A lease this replica renewed: the job is still its own; `cancel`: DELETE /jobs/{jid} was
@@ -54,7 +55,10 @@ public:
     virtual std::optional<std::string> record(const std::string& id) = 0;
     /// Asks the replica running a job to cancel it; false when there is no such job.
     virtual bool requestCancel(const std::string& id) = 0;
+    /// Removes a job's row, if this replica holds it or it is finished.
     virtual void remove(const std::string& id) = 0;
+    /// Hands back the leases of `ids` (this replica stops): another replica claims them at once.
+    virtual void release(const std::vector<std::string>& ids) = 0;
     /// Renews the leases of `ids`, the unfinished jobs this replica holds in memory; those it still
     /// holds. A row leased to this replica but not named (a claim whose start failed) lapses.
     virtual std::vector<HeldLease> renew(const std::vector<std::string>& ids) = 0;

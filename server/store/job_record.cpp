@@ -19,8 +19,8 @@ bool readJobRecord(const std::string& text, Job& job) {
     const json j = json::parse(text);
     if (j.value("format", 1) != 1) throw std::runtime_error("the record's format " + j.at("format").dump() + " is newer than this server's (1)");
     std::lock_guard lock(job.mutex);
-    job.id = j.at("id");
-    job.session = j.at("session");
+    if (job.id.empty()) job.id = j.at("id");  // read without the lock elsewhere: set once
+    if (job.session.empty()) job.session = j.at("session");
     const std::string state = j.at("state");
     job.state = protocol::jobStateFromName(state).value_or(protocol::JobState::Running);
     // A finished job's progress and result are replayed as they were answered (see RecordedJobBody).

@@ -49,16 +49,34 @@ std::shared_ptr<Session> Persistence::loadFromStore(const std::string& id) {
 
 std::string Persistence::describe() const { return m_mirror ? m_mirror->describe() : "folder"; }
 
-void Persistence::mirrorPut(const fs::path& file) {
-    if (m_mirror) m_mirror->put(relative(file), file);
+void Persistence::mirrorPut(const fs::path& file, const std::string& session) {
+    if (!m_mirror) return;
+    const std::optional<RecordGuard> guard = guardOf(session);
+    m_mirror->put(relative(file), file, guard ? &*guard : nullptr);
 }
 
-void Persistence::mirrorRemove(const fs::path& file) {
-    if (m_mirror) m_mirror->remove(relative(file));
+void Persistence::mirrorRemove(const fs::path& file, const std::string& session) {
+    if (!m_mirror) return;
+    const std::optional<RecordGuard> guard = guardOf(session);
+    m_mirror->remove(relative(file), guard ? &*guard : nullptr);
 }
 
-void Persistence::mirrorRemoveTree(const fs::path& dir) {
-    if (m_mirror) m_mirror->removeTree(relative(dir));
+void Persistence::mirrorRemoveTree(const fs::path& dir, const std::string& session) {
+    if (!m_mirror) return;
+    const std::optional<RecordGuard> guard = guardOf(session);
+    m_mirror->removeTree(relative(dir), guard ? &*guard : nullptr);
+}
+
+std::optional<RecordGuard> Persistence::guardOf(const std::string& session) {
+    if (session.empty()) return std::nullopt;
+    std::lock_guard lock(m_stampsMutex);
+    const auto it = m_stamps.find(session);
+    return RecordGuard{relative(sessionDir(session) / "session.json"), it == m_stamps.end() ? 0 : it->second};
+}
+
+void Persistence::knownStamp(const std::string& session, uint64_t stamp) {
+    std::lock_guard lock(m_stampsMutex);
+    m_stamps[session] = stamp;
 }
 
 std::string Persistence::versionFile(int version) { return store::versionFile(version); }
@@ -94,6 +112,7 @@ void Persistence::saveSession(Session& s, const std::vector<fs::path>& alsoCommi
     if (!m_mirror) return;
     try {
         s.storeStamp = m_mirror->putRecord(relative(dir / "session.json"), dir / "session.json", written, s.storeStamp);
+        knownStamp(s.id, s.storeStamp);
     } catch (...) {
         s.storeStamp = ~uint64_t(0);  // this copy is not the store's: the next request reads the store's
         throw;
@@ -129,19 +148,19 @@ void Persistence::saveViewImage(const std::string& session, const std::string& v
     opt.halfFloat = false;  // exact
     const fs::path file = sessionDir(session) / "views" / view / (kind + ".exr");
     store::atomicWriteWith(file, [&](const fs::path& tmp) { core::saveImage(tmp.string(), image, opt); });
-    mirrorPut(file);
+    mirrorPut(file, session);
 }
 
 void Persistence::removeViewImage(const std::string& session, const std::string& view, const std::string& kind) {
     std::error_code ec;
     fs::remove(sessionDir(session) / "views" / view / (kind + ".exr"), ec);
-    mirrorRemove(sessionDir(session) / "views" / view / (kind + ".exr"));
+    mirrorRemove(sessionDir(session) / "views" / view / (kind + ".exr"), session);
 }
 
 void Persistence::removeView(const std::string& session, const std::string& view) {
     std::error_code ec;
     fs::remove_all(sessionDir(session) / "views" / view, ec);
-    mirrorRemoveTree(sessionDir(session) / "views" / view);
+    mirrorRemoveTree(sessionDir(session) / "views" / view, session);
 }
 
 void Persistence::removeSession(const std::string& session) {
@@ -171,13 +190,13 @@ bool Persistence::fetchJobFiles(const std::string& job) {
 void Persistence::saveFrame(const std::string& session, int frame, const core::Volume& volume) {
     const fs::path file = sessionDir(session) / "frames" / (std::to_string(frame) + ".vdb");
     store::atomicWriteWith(file, [&](const fs::path& tmp) { core::saveVdb(tmp.string(), volume); });
-    mirrorPut(file);
+    mirrorPut(file, session);
 }
 
 void Persistence::removeFrame(const std::string& session, int frame) {
     std::error_code ec;
     fs::remove(sessionDir(session) / "frames" / (std::to_string(frame) + ".vdb"), ec);
-    mirrorRemove(sessionDir(session) / "frames" / (std::to_string(frame) + ".vdb"));
+    mirrorRemove(sessionDir(session) / "frames" / (std::to_string(frame) + ".vdb"), session);
 }
 
 void Persistence::saveJob(const Job& job) {
@@ -189,7 +208,7 @@ void Persistence::saveStylizerScene(const std::string& session, const core::Styl
                                     uint64_t revision) {
     store::atomicWrite(sessionDir(session) / "stylizer" / "scene.json",
                        store::encodeStylizerScene(protocol::stylizerSceneToJson(scene, meshRefs), revision));
-    mirrorPut(sessionDir(session) / "stylizer" / "scene.json");
+    mirrorPut(sessionDir(session) / "stylizer" / "scene.json", session);
 }
 
 void Persistence::commitStylizer(Session& s, bool history, uint64_t revision) {
@@ -211,18 +230,18 @@ void Persistence::commitStylizer(Session& s, bool history, uint64_t revision) {
 void Persistence::saveStylizerHistory(const std::string& session, const std::vector<StylizerSceneEntry>& undo,
                                       const std::vector<StylizerSceneEntry>& redo) {
     store::atomicWrite(sessionDir(session) / "stylizer" / "history.json", store::encodeStylizerHistory(undo, redo));
-    mirrorPut(sessionDir(session) / "stylizer" / "history.json");
+    mirrorPut(sessionDir(session) / "stylizer" / "history.json", session);
 }
 
 void Persistence::saveSessionFile(const std::string& session, const std::string& file, const std::string& bytes) {
     store::atomicWrite(sessionDir(session) / file, bytes);
-    mirrorPut(sessionDir(session) / file);
+    mirrorPut(sessionDir(session) / file, session);
 }
 
 void Persistence::removeSessionFile(const std::string& session, const std::string& file) {
     std::error_code ec;
     fs::remove(sessionDir(session) / file, ec);
-    mirrorRemove(sessionDir(session) / file);
+    mirrorRemove(sessionDir(session) / file, session);
 }
 
 std::vector<std::shared_ptr<Session>> Persistence::loadSessions() {
@@ -245,6 +264,7 @@ std::shared_ptr<Session> Persistence::loadSession(const fs::path& dir, uint64_t 
     size_t recordedDamage = 0;
     std::shared_ptr<Session> s = store::restoreSessionRecord(m_dir, dir, recordedDamage);
     s->storeStamp = stamp;  // what a save below must find in the store (the files' own moment)
+    if (m_mirror) knownStamp(s->id, stamp);
     store::restoreStylizerRecord(m_dir, *s, dir, m_readMesh,
                                  [&](const json& scene, uint64_t revision) {
                                      store::atomicWrite(dir / "stylizer" / "scene.json", store::encodeStylizerScene(scene, revision));

@@ -24,6 +24,9 @@
 
 #include <filesystem>
 #include <functional>
+#include <map>
+#include <mutex>
+#include <optional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -113,14 +116,22 @@ private:
     /// Restores one session folder (its record, files and stylizer); throws if nothing of it is usable.
     /// `stamp`: its record's stamp in the mirror when its files were read (0: none).
     std::shared_ptr<Session> loadSession(const std::filesystem::path& dir, uint64_t stamp = 0);
-    /// The mirror's copy of a file just written, of one removed, of a folder removed.
-    void mirrorPut(const std::filesystem::path& file);
-    void mirrorRemove(const std::filesystem::path& file);
-    void mirrorRemoveTree(const std::filesystem::path& dir);
+    /// The mirror's copy of a file just written, of one removed, of a folder removed. With a
+    /// `session`, under its record's stamp check (guardOf): a copy of the session that another
+    /// replica changed since is refused (409) and writes nothing.
+    void mirrorPut(const std::filesystem::path& file, const std::string& session = "");
+    void mirrorRemove(const std::filesystem::path& file, const std::string& session = "");
+    void mirrorRemoveTree(const std::filesystem::path& dir, const std::string& session = "");
+    /// The guard of session `session`'s files: its record's stamp as this replica last wrote or
+    /// read it (nullopt without a session).
+    std::optional<RecordGuard> guardOf(const std::string& session);
+    void knownStamp(const std::string& session, uint64_t stamp);
     std::string relative(const std::filesystem::path& p) const { return p.lexically_relative(m_dir.root()).generic_string(); }
 
     store::DataDir m_dir;
     std::unique_ptr<FileMirror> m_mirror;
+    std::mutex m_stampsMutex;
+    std::map<std::string, uint64_t> m_stamps;  ///< each session's record stamp as last written or read here
     MeshReader m_readMesh;
 };
 

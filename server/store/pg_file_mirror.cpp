@@ -37,9 +37,12 @@ class PgFileMirror final : public FileMirror {
 public:
     explicit PgFileMirror(const std::string& url) : m_db(url) { migrate(); }
 
-    uint64_t put(const std::string& path, const fs::path& local) override {
+    uint64_t put(const std::string& path, const fs::path& local, const RecordGuard* guard) override {
         uint64_t stamp = 0;
-        run("store " + path, [&](pqxx::work& tx) { stamp = putIn(tx, path, local); });
+        run("store " + path, [&](pqxx::work& tx) {
+            if (guard) checkRecord(tx, guard->record, guard->expected);
+            stamp = putIn(tx, path, local);
+        });
         return stamp;
     }
 
@@ -47,14 +50,7 @@ public:
                        uint64_t expected) override {
         uint64_t stamp = 0;
         run("store " + record, [&](pqxx::work& tx) {
-            // A new session's record cannot be locked before it exists: an advisory lock on its
-            // path's hash serializes two first saves too.
-            tx.exec_params("SELECT pg_advisory_xact_lock(hashtext($1))", record);
-            const pqxx::result r = tx.exec_params("SELECT object FROM volstyle_files WHERE path = $1 FOR UPDATE", record);
-            const uint64_t now = r.empty() ? 0 : r[0][0].as<pqxx::oid>();
-            if (now != expected)
-                throw protocol::ApiError(protocol::ErrorCode::Busy, "another replica changed this session meanwhile (" + record +
-                                                                       "); nothing of this request was kept: read the session and retry");
+            checkRecord(tx, record, expected);
             for (const auto& [path, local] : files) putIn(tx, path, local);
             stamp = putIn(tx, record, recordLocal);
         });
@@ -70,15 +66,17 @@ public:
         return out;
     }
 
-    void remove(const std::string& path) override {
+    void remove(const std::string& path, const RecordGuard* guard) override {
         run("remove " + path, [&](pqxx::work& tx) {
+            if (guard) checkRecord(tx, guard->record, guard->expected);
             for (const auto& row : tx.exec_params("DELETE FROM volstyle_files WHERE path = $1 RETURNING object", path))
                 pqxx::largeobject(row[0].as<pqxx::oid>()).remove(tx);
         });
     }
 
-    void removeTree(const std::string& prefix) override {
+    void removeTree(const std::string& prefix, const RecordGuard* guard) override {
         run("remove " + prefix, [&](pqxx::work& tx) {
+            if (guard) checkRecord(tx, guard->record, guard->expected);
             const std::string like = escapeLike(prefix) + "/%";
             for (const auto& row : tx.exec_params("DELETE FROM volstyle_files WHERE path = $1 OR path LIKE $2 RETURNING object", prefix, like))
                 pqxx::largeobject(row[0].as<pqxx::oid>()).remove(tx);
@@ -122,6 +120,19 @@ public:
     std::string describe() const override { return m_db.describe(); }
 
 private:
+    /// Locks `record`'s row for the transaction and checks that its stamp is still `expected`
+    /// (0: no record yet); ApiError busy when another replica changed the session meanwhile.
+    static void checkRecord(pqxx::work& tx, const std::string& record, uint64_t expected) {
+        // A new session's record cannot be locked before it exists: an advisory lock on its
+        // path's hash serializes two first saves too.
+        tx.exec_params("SELECT pg_advisory_xact_lock(hashtext($1))", record);
+        const pqxx::result r = tx.exec_params("SELECT object FROM volstyle_files WHERE path = $1 FOR UPDATE", record);
+        const uint64_t now = r.empty() ? 0 : r[0][0].as<pqxx::oid>();
+        if (now != expected)
+            throw protocol::ApiError(protocol::ErrorCode::Busy, "another replica changed this session meanwhile (" + record +
+                                                                   "); nothing of this request was kept: read the session and retry");
+    }
+
     /// Replaces `path`'s file with the one at `local` within `tx`; the new stamp (a new large
     /// object's id: never the same for two puts while both exist).
     static uint64_t putIn(pqxx::work& tx, const std::string& path, const fs::path& local) {

@@ -95,15 +95,25 @@ public:
     }
 
     void remove(const std::string& id) override {
-        m_db.run("remove job " + id, [&](pqxx::work& tx) { tx.exec_params("DELETE FROM volstyle_jobs WHERE id = $1", id); });
+        m_db.run("remove job " + id, [&](pqxx::work& tx) {
+            // Never another replica's running job (this copy may have lost it to that replica).
+            tx.exec_params("DELETE FROM volstyle_jobs WHERE id = $1 AND (owner = $2 OR state NOT IN ('queued', 'running'))", id, m_owner);
+        });
+    }
+
+    void release(const std::vector<std::string>& ids) override {
+        if (ids.empty()) return;
+        m_db.run("hand back the job leases", [&](pqxx::work& tx) {
+            tx.exec_params("UPDATE volstyle_jobs SET lease_until = now() - interval '1 second' WHERE owner = $1 AND id = ANY($2::text[]) "
+                           "AND state IN ('queued', 'running')",
+                           m_owner, textArray(ids));
+        });
     }
 
     std::vector<HeldLease> renew(const std::vector<std::string>& ids) override {
         std::vector<HeldLease> held;
         if (ids.empty()) return held;
-        std::string array = "{";  // a text[] literal: job ids are hex digits
-        for (const auto& id : ids) array += (array.size() > 1 ? "," : "") + id;
-        array += "}";
+        const std::string array = textArray(ids);
         m_db.run("renew the job leases", [&](pqxx::work& tx) {
             for (const auto& row : tx.exec_params("UPDATE volstyle_jobs SET lease_until = now() + $2 * interval '1 millisecond' "
                                                   "WHERE owner = $1 AND id = ANY($3::text[]) AND state IN ('queued', 'running') "
@@ -119,11 +129,11 @@ public:
         m_db.run("claim a job", [&](pqxx::work& tx) {
             // SKIP LOCKED: a row another replica is claiming now is passed over, not waited for.
             const pqxx::result r = tx.exec(
-                "SELECT id, session, kind, inputs, coalesce(owner, ''), attempts FROM volstyle_jobs "
+                "SELECT id, session, kind, inputs, coalesce(owner, ''), attempts, cancel FROM volstyle_jobs "
                 "WHERE state IN ('queued', 'running') AND lease_until < now() ORDER BY created LIMIT 1 FOR UPDATE SKIP LOCKED");
             if (r.empty()) return;
             ClaimedJob c{r[0][0].as<std::string>(), r[0][1].as<std::string>(), r[0][2].as<std::string>(), r[0][3].as<std::string>(),
-                         r[0][4].as<std::string>(), r[0][5].as<int>() + 1};
+                         r[0][4].as<std::string>(), r[0][5].as<int>() + 1, r[0][6].as<bool>()};
             tx.exec_params("UPDATE volstyle_jobs SET owner = $2, attempts = $3, lease_until = now() + $4 * interval '1 millisecond' "
                            "WHERE id = $1",
                            c.id, m_owner, c.attempt, leaseMs());
@@ -162,6 +172,12 @@ public:
     }
 
 private:
+    /// A text[] literal of job ids (hex digits: nothing to quote).
+    static std::string textArray(const std::vector<std::string>& ids) {
+        std::string array = "{";
+        for (const auto& id : ids) array += (array.size() > 1 ? "," : "") + id;
+        return array + "}";
+    }
     long long leaseMs() const { return static_cast<long long>(m_lease.count()); }
     static void notify(pqxx::work& tx, const std::string& id, const std::string& what, const std::string& data) {
         tx.exec_params("SELECT pg_notify($1, $2)", kChannel, id + "\t" + what + "\t" + data);

@@ -275,3 +275,24 @@ TEST_F(TwoReplicas, AStylizerChangeOnOneIsSeenByAnotherThatHeldTheSession) {
     // The scene went with the session's record: its stamp moved, so the second reads it again.
     EXPECT_EQ(json::parse(second().Get(stylizer.c_str())->body)["camera"]["width"], 48);
 }
+
+TEST_F(TwoReplicas, AReplicaThatStopsHandsItsJobsBackAndAnotherFinishesThem) {
+    const std::string sid = paintedSession(client());
+    auto r = client().Post(("/api/v1/sessions/" + sid + "/solve").c_str(), R"({"max_iterations": 40, "tolerance": 0, "visible_change": 0})",
+                           "application/json");
+    ASSERT_EQ(r->status, 202) << r->body;
+    const std::string job = json::parse(r->body)["job"];
+    for (int i = 0; i < 400 && jobVia(client(), job)["state"] != "running"; ++i) std::this_thread::sleep_for(10ms);
+    // A graceful stop (SIGTERM): the job is handed back, not ended cancelled.
+    const auto t0 = std::chrono::steady_clock::now();
+    m_server->stop();
+    m_thread.join();
+    m_server.reset();
+    const json end = waitFinished(second(), job);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_EQ(end["state"], "done") << end.dump().substr(0, 2000);
+    EXPECT_EQ(end["result"]["version"], 2);
+    const std::string metrics = second().Get("/api/v1/metrics")->body;
+    EXPECT_NE(metrics.find("volstyle_jobs{state=\"done\"} 1\n"), std::string::npos) << "the second replica ran it\n" << metrics;
+    std::printf("[ measured ] a stopped replica's solve done on the other %.2f s after the stop began\n", seconds);
+}

@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "api_fixture.h"
+#include "protocol/error_body.h"
 #include "server/store/file_mirror.h"
 
 using namespace volstyle;
@@ -95,4 +96,26 @@ TEST_F(PostgresStore, ASchemaNewerThanTheBinaryIsRefused) {
         EXPECT_NE(std::string(e.what()).find("schema is version 99, newer than this binary's"), std::string::npos) << e.what();
     }
     query("UPDATE volstyle_schema SET version = " + std::to_string(server::kStoreSchemaVersion));
+}
+
+TEST_F(PostgresStore, AStaleCopysFilesAreRefusedAndNothingIsWritten) {
+    // A view's image, a frame, an upload: written under the session record's stamp check, as the
+    // record itself is. Two handles on the store play two replicas.
+    auto mirror = server::openPostgresMirror(testStore());
+    const std::filesystem::path local = m_dir / "probe.bin";
+    std::FILE* f = std::fopen(local.c_str(), "wb");
+    ASSERT_TRUE(f);
+    std::fputs("probe", f);
+    std::fclose(f);
+    const std::string record = "sessions/0123abcd/session.json", dir = "sessions/0123abcd/views/v1/";
+    const uint64_t first = mirror->putRecord(record, local, {}, 0);
+    const server::RecordGuard current{record, first};
+    mirror->put(dir + "target.exr", local, &current);  // the newest copy writes
+    mirror->putRecord(record, local, {}, first);         // another replica saves the session
+    const server::RecordGuard stale{record, first};
+    EXPECT_THROW(mirror->put(dir + "weights.exr", local, &stale), protocol::ApiError);
+    EXPECT_THROW(mirror->remove(dir + "target.exr", &stale), protocol::ApiError);
+    EXPECT_THROW(mirror->removeTree("sessions/0123abcd/views/v1", &stale), protocol::ApiError);
+    EXPECT_EQ(query("SELECT count(*) FROM volstyle_files WHERE path = '" + dir + "weights.exr'"), "0");
+    EXPECT_EQ(query("SELECT count(*) FROM volstyle_files WHERE path = '" + dir + "target.exr'"), "1") << "the stale copy removed nothing";
 }
