@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <thread>
 
 #include "protocol/error_body.h"
 #include "server/service/service_context.h"
@@ -102,7 +103,9 @@ std::shared_ptr<Job> ServiceContext::remoteJob(const std::string& id, std::share
     // A stream opened here starts where the job is: its latest progress, then what comes.
     if (!std::holds_alternative<std::monostate>(j->progress)) j->events.push_back({protocol::JobEvent::Progress, j->progress});
     if (finished) j->emitFinal();
-    return jobs.insertIfAbsent(j);  // a claim may have made it local meanwhile
+    auto kept = jobs.insertIfAbsent(j);  // a claim may have made it local meanwhile
+    pruneJobs();                         // a replica that only reads keeps finishedJobsKept copies too
+    return kept;
 }
 
 void ServiceContext::refreshRemote(Job& j) {
@@ -250,11 +253,20 @@ void ServiceContext::finishJob(Job& job) {
         state = job.state;
     }
     spdlog::info("job {} {}", job.id, protocol::jobStateName(state));
-    try {
-        if (queue && persist && !isRemote(job)) persist->saveJobFiles(job.id);  // before the record says done
-        saved(job);
-    } catch (const std::exception& e) {
-        spdlog::error("job {}: cannot record its end: {}", job.id, e.what());
+    // A store that blinks must not make another replica run a finished job again: the end is
+    // tried three times (0.5 and 1 s apart) before it is left to the lease.
+    for (int attempt = 1;; ++attempt) {
+        try {
+            if (queue && persist && !isRemote(job)) persist->saveJobFiles(job.id);  // before the record says done
+            saved(job);
+            break;
+        } catch (const std::exception& e) {
+            if (!queue || attempt == 3) {
+                spdlog::error("job {}: cannot record its end: {}", job.id, e.what());
+                break;
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(500 * attempt));
+        }
     }
     job.emitFinal();
 }
