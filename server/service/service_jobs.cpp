@@ -141,9 +141,10 @@ void ServiceContext::onQueueNotice(const std::string& id, const std::string& wha
     if (!remote) return;
     if (what == "state") return refreshRemote(*j);
     if (auto event = store::decodeJobEvent(what, data)) {
-        if (event->event == protocol::JobEvent::Progress) {
+        {
             std::lock_guard lock(j->mutex);
-            j->progress = std::get<protocol::JobProgress>(event->data);
+            if (j->isFinished()) return;  // a late event: the copy has its end already
+            if (event->event == protocol::JobEvent::Progress) j->progress = std::get<protocol::JobProgress>(event->data);
         }
         j->emit(std::move(*event));
     }

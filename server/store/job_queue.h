@@ -49,7 +49,8 @@ public:
     /// Writes a job's record and state and tells every replica ("state"). False when this
     /// replica no longer holds the job (another claimed it): nothing is written.
     virtual bool write(const std::string& id, const std::string& state, const std::string& record) = 0;
-    /// Tells every replica of an event of a job this replica runs (not kept: the record is).
+    /// Tells every replica of an event of a job this replica runs (not kept: the record is). Queued
+    /// and sent on a thread of the queue's own; write() sends what was queued before it.
     virtual void publish(const std::string& id, const std::string& event, const std::string& data) = 0;
     /// A job's stored record (nullopt: none).
     virtual std::optional<std::string> record(const std::string& id) = 0;

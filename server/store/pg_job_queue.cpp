@@ -2,6 +2,8 @@
 // pg_file_mirror.cpp), notifications on channel volstyle_jobs as "<id>\t<what>\t<data>".
 #include <spdlog/spdlog.h>
 
+#include <condition_variable>
+#include <deque>
 #include <random>
 #include <thread>
 
@@ -38,6 +40,67 @@ private:
     const JobQueue::Listener*& m_on;
 };
 
+/// Sends events on a thread of its own: the GL thread only queues them, so a store that is slow
+/// or down delays the events, not the solve. Each wake sends what is queued in one transaction.
+/// Bounded: past kMaxPending the oldest are dropped (the record still says where a job is).
+class EventSender {
+public:
+    explicit EventSender(PgConnection& db) : m_db(db), m_thread([this] { loop(); }) {}
+    ~EventSender() {
+        {
+            std::lock_guard lock(m_mutex);
+            m_stopping = true;
+        }
+        m_wake.notify_all();
+        m_thread.join();
+    }
+    void push(std::string payload) {
+        {
+            std::lock_guard lock(m_mutex);
+            if (m_pending.size() >= kMaxPending) m_pending.pop_front();
+            m_pending.push_back(std::move(payload));
+        }
+        m_wake.notify_all();
+    }
+    /// Waits (at most 2 s) until what was queued so far is sent: a job's "state" then follows
+    /// its events.
+    void flush() {
+        std::unique_lock lock(m_mutex);
+        m_sent.wait_for(lock, std::chrono::seconds(2), [&] { return m_pending.empty() && !m_sending; });
+    }
+
+private:
+    static constexpr size_t kMaxPending = 1024;
+    void loop() {
+        std::unique_lock lock(m_mutex);
+        while (true) {
+            m_wake.wait(lock, [&] { return m_stopping || !m_pending.empty(); });
+            if (m_pending.empty()) return;  // stopping, and nothing left
+            std::deque<std::string> batch;
+            batch.swap(m_pending);
+            m_sending = true;
+            lock.unlock();
+            try {
+                m_db.run("publish job events", [&](pqxx::work& tx) {
+                    for (const auto& p : batch) tx.exec_params("SELECT pg_notify($1, $2)", kChannel, p);
+                });
+            } catch (const std::exception& e) {
+                spdlog::debug("job queue: {} event(s) not sent: {}", batch.size(), e.what());
+            }
+            lock.lock();
+            m_sending = false;
+            m_sent.notify_all();
+        }
+    }
+
+    PgConnection& m_db;
+    std::mutex m_mutex;
+    std::condition_variable m_wake, m_sent;
+    std::deque<std::string> m_pending;
+    bool m_sending = false, m_stopping = false;
+    std::thread m_thread;  ///< last: started once the rest is ready
+};
+
 class PgJobQueue final : public JobQueue {
 public:
     PgJobQueue(const std::string& url, const std::string& replica, std::chrono::milliseconds lease)
@@ -56,6 +119,7 @@ public:
     }
 
     bool write(const std::string& id, const std::string& state, const std::string& record) override {
+        m_events.flush();  // the job's events reach other replicas before its new state
         bool held = false;
         m_db.run("record job " + id, [&](pqxx::work& tx) {
             // A finished job holds no lease: nobody runs it again.
@@ -70,10 +134,8 @@ public:
     }
 
     void publish(const std::string& id, const std::string& event, const std::string& data) override {
-        m_db.run("publish an event of job " + id, [&](pqxx::work& tx) {
-            if (id.size() + event.size() + data.size() + 2 < kMaxPayload) notify(tx, id, event, data);
-            else notify(tx, id, "state", "");
-        });
+        if (id.size() + event.size() + data.size() + 2 < kMaxPayload) m_events.push(id + "\t" + event + "\t" + data);
+        else m_events.push(id + "\tstate\t");
     }
 
     std::optional<std::string> record(const std::string& id) override {
@@ -191,6 +253,7 @@ private:
     std::unique_ptr<pqxx::connection> m_listenConn;
     std::unique_ptr<Receiver> m_receiver;
     const Listener* m_on = nullptr;
+    EventSender m_events{m_db};  ///< last: its thread stops first
 };
 
 }  // namespace
