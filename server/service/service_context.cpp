@@ -131,7 +131,7 @@ std::shared_ptr<Session> ServiceContext::find(const std::string& id) {
 std::shared_ptr<Session> ServiceContext::freshFromStore(const std::string& id, std::shared_ptr<Session> held) {
     // Replicas share the store (issue #41): a session another replica made or changed is read
     // from it here, one query per request when nothing changed.
-    if (id.empty() || id.size() > 64 || id.find_first_not_of("0123456789abcdef") != std::string::npos) return held;
+    if (!SessionStore::isStoreId(id)) return held;
     std::optional<uint64_t> stamp;
     if (held) {
         // Read with the session's lock held: a save here commits and takes its new stamp under

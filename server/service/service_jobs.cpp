@@ -18,11 +18,6 @@ bool isRemote(const Job& j) {
     return j.remote;
 }
 
-/// Ids are hex (the session's 8 digits first): anything else is not asked of the store.
-bool isJobId(const std::string& id) {
-    return !id.empty() && id.size() <= 64 && id.find_first_not_of("0123456789abcdef") == std::string::npos;
-}
-
 }  // namespace
 
 void ServiceContext::saved(Job& j) {
@@ -80,7 +75,7 @@ void ServiceContext::pruneJobs() {
 
 std::shared_ptr<Job> ServiceContext::job(const std::string& id) {
     auto j = jobs.find(id);
-    if (queue && isJobId(id) && (!j || isRemote(*j))) j = remoteJob(id, std::move(j));
+    if (queue && SessionStore::isStoreId(id) && (!j || isRemote(*j))) j = remoteJob(id, std::move(j));
     if (!j) throw ApiError(ErrorCode::NotFound, "no job '" + id + "'");
     return j;
 }

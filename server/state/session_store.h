@@ -143,6 +143,11 @@ public:
     size_t size() const;
 
     static std::string newId();
+    /// Whether `id` could be a session's or job's id (hex digits, at most 64): anything else is
+    /// not asked of the store.
+    static bool isStoreId(const std::string& id) {
+        return !id.empty() && id.size() <= 64 && id.find_first_not_of("0123456789abcdef") == std::string::npos;
+    }
 
 private:
     size_t m_max;

@@ -204,19 +204,7 @@ void Persistence::saveJob(const Job& job) {
     store::atomicWrite(m_dir.jobsDir() / (job.id + ".json"), store::encodeJobRecord(job));
 }
 
-void Persistence::saveStylizerScene(const std::string& session, const core::StylizerScene& scene, const std::vector<std::string>& meshRefs,
-                                    uint64_t revision) {
-    store::atomicWrite(sessionDir(session) / "stylizer" / "scene.json",
-                       store::encodeStylizerScene(protocol::stylizerSceneToJson(scene, meshRefs), revision));
-    mirrorPut(sessionDir(session) / "stylizer" / "scene.json", session);
-}
-
 void Persistence::commitStylizer(Session& s, bool history, uint64_t revision) {
-    if (!m_mirror) {
-        if (history) saveStylizerHistory(s.id, s.stylizer.undo, s.stylizer.redo);
-        saveStylizerScene(s.id, s.stylizer.scene, s.stylizer.meshRefs, revision);
-        return;
-    }
     const fs::path dir = sessionDir(s.id) / "stylizer";
     std::vector<fs::path> files{dir / "scene.json"};
     if (history) {
@@ -224,13 +212,7 @@ void Persistence::commitStylizer(Session& s, bool history, uint64_t revision) {
         files.push_back(dir / "history.json");
     }
     store::atomicWrite(dir / "scene.json", store::encodeStylizerScene(protocol::stylizerSceneToJson(s.stylizer.scene, s.stylizer.meshRefs), revision));
-    saveSession(s, files);
-}
-
-void Persistence::saveStylizerHistory(const std::string& session, const std::vector<StylizerSceneEntry>& undo,
-                                      const std::vector<StylizerSceneEntry>& redo) {
-    store::atomicWrite(sessionDir(session) / "stylizer" / "history.json", store::encodeStylizerHistory(undo, redo));
-    mirrorPut(sessionDir(session) / "stylizer" / "history.json", session);
+    if (m_mirror) saveSession(s, files);  // the folder alone: its record is unchanged
 }
 
 void Persistence::saveSessionFile(const std::string& session, const std::string& file, const std::string& bytes) {

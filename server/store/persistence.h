@@ -65,18 +65,13 @@ public:
     void removeViewImage(const std::string& session, const std::string& view, const std::string& kind);
     void removeView(const std::string& session, const std::string& view);
     void removeSession(const std::string& session);
-    /// The stylizer (stylizer/scene.json, stylizer/occluders/NAME.EXT, stylizer/tf.image): the
-    /// scene with its meshes named as the client named them; uploaded files as they were sent.
-    void saveStylizerScene(const std::string& session, const core::StylizerScene& scene, const std::vector<std::string>& meshRefs,
-                           uint64_t revision);
-    /// A stylizer change (ServiceContext::stylizerChanged): the scene as revision `revision`, and
-    /// with `history` its undo and redo stacks. With a mirror they are committed with the session's
+    /// A stylizer change (ServiceContext::stylizerChanged): the scene as revision `revision`
+    /// (stylizer/scene.json: its meshes named as the client named them), and with `history` its
+    /// undo and redo stacks (stylizer/history.json: written only when they change, not for each
+    /// frame of a played path). With a mirror they are committed with the session's
     /// record, under its stamp check: a replica whose copy is stale is refused (409) and writes
     /// nothing, and the record's new stamp tells the others to read the session again.
     void commitStylizer(Session& s, bool history, uint64_t revision);
-    /// The stylizer's undo and redo stacks (arrays of scenes), apart from the scene: written only
-    /// when they change (not for each frame of a played path).
-    void saveStylizerHistory(const std::string& session, const std::vector<StylizerSceneEntry>& undo, const std::vector<StylizerSceneEntry>& redo);
     /// An uploaded file as it was sent (the stylizer's, environment.image), atomically.
     void saveSessionFile(const std::string& session, const std::string& file, const std::string& bytes);
     void removeSessionFile(const std::string& session, const std::string& file);

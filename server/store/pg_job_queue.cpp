@@ -25,6 +25,9 @@ std::string ownerToken(const std::string& replica) {
     return replica + "/" + hex;
 }
 
+/// A notification's payload: "<id>\t<what>\t<data>" (Receiver reads it back).
+std::string payload(const std::string& id, const std::string& what, const std::string& data) { return id + "\t" + what + "\t" + data; }
+
 /// Hands the channel's notifications to the listener of the current listen() call.
 class Receiver final : public pqxx::notification_receiver {
 public:
@@ -134,8 +137,7 @@ public:
     }
 
     void publish(const std::string& id, const std::string& event, const std::string& data) override {
-        if (id.size() + event.size() + data.size() + 2 < kMaxPayload) m_events.push(id + "\t" + event + "\t" + data);
-        else m_events.push(id + "\tstate\t");
+        m_events.push(id.size() + event.size() + data.size() + 2 < kMaxPayload ? payload(id, event, data) : payload(id, "state", ""));
     }
 
     std::optional<std::string> record(const std::string& id) override {
@@ -242,7 +244,7 @@ private:
     }
     long long leaseMs() const { return static_cast<long long>(m_lease.count()); }
     static void notify(pqxx::work& tx, const std::string& id, const std::string& what, const std::string& data) {
-        tx.exec_params("SELECT pg_notify($1, $2)", kChannel, id + "\t" + what + "\t" + data);
+        tx.exec_params("SELECT pg_notify($1, $2)", kChannel, payload(id, what, data));
     }
 
     std::string m_url;
