@@ -7,7 +7,8 @@
 //   hw_ms / hw_err — the texture unit's trilinear filter instead of 8 texel fetches
 // Then the light-depth volumes alone (issue #10): build ms per resolution and sun direction
 // (overhead, the default diagonal, grazing), with the grid's nodes and bytes.
-// Usage: render_bench [--quick] [--lights-only] [--reps N] [--resolutions 64,128,256] [--steps 0.5,1].
+// Usage: render_bench [--quick] [--lights-only] [--reps N] [--resolutions 64,128,256] [--steps 0.5,1]
+//        [--voxel-depth D] (frames of the cloud scaled so its densest voxel holds D optical depths).
 // Prints tables, then one JSON line per row.
 #include <spdlog/spdlog.h>
 
@@ -18,6 +19,7 @@
 #include <sstream>
 
 #include "bench_util.h"
+#include "core/cpu_ref/agreement.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/light_grid.h"
 #include "core/render/renderer.h"
@@ -108,12 +110,14 @@ int main(int argc, char** argv) {
     bool quick = false, lightsOnly = false;
     int reps = 3;
     std::vector<double> chosenResolutions, chosenSteps;
+    double voxelDepth = 0;
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--quick")) quick = true;
         if (!std::strcmp(argv[i], "--lights-only")) lightsOnly = true;
         if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
         if (!std::strcmp(argv[i], "--resolutions") && i + 1 < argc) chosenResolutions = numberList(argv[++i]);
         if (!std::strcmp(argv[i], "--steps") && i + 1 < argc) chosenSteps = numberList(argv[++i]);
+        if (!std::strcmp(argv[i], "--voxel-depth") && i + 1 < argc) voxelDepth = std::atof(argv[++i]);
     }
     spdlog::set_level(spdlog::level::warn);
     auto device = GpuDevice::create();
@@ -132,7 +136,9 @@ int main(int argc, char** argv) {
     const std::vector<LightRow> lightRows = benchLightVolumes(renderer, resolutions, reps);
     std::vector<Row> rows;
     for (int res : lightsOnly ? std::vector<int>{} : resolutions) {
-        GpuVolume volume(makeBuiltinScene("cloud", res));
+        Volume cloud = makeBuiltinScene("cloud", res);
+        if (voxelDepth > 0) cpu_ref::scaleToVoxelDepth(cloud, voxelDepth);
+        GpuVolume volume(cloud);
         Image finest;
         for (double step : steps) {
             auto time = [&](RenderSettings s, Image* out, RenderStats* firstStats) {
@@ -179,7 +185,8 @@ int main(int argc, char** argv) {
     std::printf("renderer: %s | %s | EGL %s\n", caps.renderer.c_str(), caps.version.c_str(), caps.platform.c_str());
     printLightVolumes(lightRows, reps, caps.renderer);
     if (lightsOnly) return 0;
-    std::printf("scene: builtin cloud, 480x480, 1 sun, median of %d runs (wall ms incl. readback)\n\n", reps);
+    std::printf("scene: builtin cloud%s, 480x480, 1 sun, median of %d runs (wall ms incl. readback)\n\n",
+                voxelDepth > 0 ? (" scaled to " + std::to_string(voxelDepth) + " optical depths a voxel").c_str() : "", reps);
     std::printf("| volume | step (vox) | ms skip | ms no-skip | speed-up | gpu ms | light-vol ms | skip err | term err | step err (RMS) | ms hw-filter | hw err |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (const Row& r : rows)

@@ -14,6 +14,7 @@
 #include "core/scene/camera.h"
 #include "core/scene/lighting.h"
 #include "core/scene/render_settings.h"
+#include "core/shaders/layout.h"
 
 namespace volstyle::core::cpu_ref::detail {
 
@@ -68,6 +69,53 @@ struct Segments {
     }
     S mid(int i) const { return t0 + (S(i) + S(0.5)) * dt; }
 };
+
+/// occupancy.comp's bricks: the largest extinction (any channel) over each kBrickSize³ brick and a
+/// one-voxel apron, which bounds every trilinear lookup within the brick.
+struct BrickBound {
+    Int3 bricks;
+    std::vector<float> bound;
+
+    BrickBound(const std::vector<float>& extinction, Int3 n) {
+        const int b = layout::kBrickSize;
+        bricks = {(n.x + b - 1) / b, (n.y + b - 1) / b, (n.z + b - 1) / b};
+        bound.assign(size_t(bricks.volume()), 0.0f);
+        for (int z = 0; z < n.z; ++z)
+            for (int y = 0; y < n.y; ++y)
+                for (int x = 0; x < n.x; ++x) {
+                    const size_t v = 3 * ((size_t(z) * n.y + size_t(y)) * n.x + size_t(x));
+                    const float m = std::max({extinction[v], extinction[v + 1], extinction[v + 2]});
+                    // Every brick whose box grown by a voxel holds voxel (x, y, z).
+                    for (int k = std::max(0, (z - 1) / b); k <= std::min(bricks.z - 1, (z + 1) / b); ++k)
+                        for (int j = std::max(0, (y - 1) / b); j <= std::min(bricks.y - 1, (y + 1) / b); ++j)
+                            for (int i = std::max(0, (x - 1) / b); i <= std::min(bricks.x - 1, (x + 1) / b); ++i) {
+                                float& slot = bound[(size_t(k) * bricks.y + size_t(j)) * bricks.x + size_t(i)];
+                                slot = std::max(slot, m);
+                            }
+                }
+    }
+
+    /// The bound of the brick holding index-space point p (march_segments.glsl's brickAt).
+    template <typename S>
+    S at(const V3<S>& p) const {
+        int c[3];
+        for (int a = 0; a < 3; ++a)
+            c[a] = std::clamp(int(std::floor((p[a] + S(0.5)) / S(layout::kBrickSize))), 0, bricks[a] - 1);
+        return S(bound[(size_t(c[2]) * bricks.y + size_t(c[1])) * bricks.x + size_t(c[0])]);
+    }
+};
+
+/// Calls visit(tMid, dt) for segment s of `seg` on the ray o + t d, cut as march.glsl's splitDense
+/// cuts it: into sub-segments of at most kMarchDenseSegmentDepth where its brick is dense.
+template <typename S, typename Visit>
+void forEachSubsegment(const Segments<S>& seg, int s, const V3<S>& o, const V3<S>& d, const BrickBound& bricks, Visit&& visit) {
+    const S tMid = seg.mid(s);
+    const S bound = bricks.at(o + d * tMid) * seg.dt;
+    const int k = std::clamp(int(std::ceil(bound / S(layout::kMarchDenseSegmentDepth) - S(1e-3))), 1, layout::kMarchMaxSubsegments);
+    if (k == 1) return visit(tMid, seg.dt);
+    const S start = tMid - S(0.5) * seg.dt, dt = seg.dt / S(k);
+    for (int i = 0; i < k; ++i) visit(start + (S(i) + S(0.5)) * dt, dt);
+}
 
 template <typename S>
 V3<S> toS(const Vec3d& v) { return V3<S>(S(v.x), S(v.y), S(v.z)); }

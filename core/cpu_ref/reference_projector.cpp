@@ -16,6 +16,7 @@ ReferenceProjector::ReferenceProjector(const Volume& volume, const Lighting& lig
                             m_lighting.lights.end());
     for (const auto& l : m_lighting.lights) m_lightDepth.push_back(lightDepthGrid<double>(volume, l.direction, spec.stepVoxels));
     for (const auto& c : cameras) m_pixelCount += size_t(c.width) * c.height;
+    m_bricks = std::make_shared<const detail::BrickBound>(volume.extinction(), volume.dims());
 }
 
 size_t ReferenceProjector::elementCount() const {
@@ -66,12 +67,15 @@ void ReferenceProjector::march(size_t view, int px, int py, Visit&& visit) const
         return;
     }
     const size_t albedoBlock = m_spec.unknown == Unknown::EmissionAlbedo ? size_t(nu.volume()) : 0;
+    const BrickBound& bricks = *m_bricks;
     V T(1.0);
-    for (int s = 0; s < seg.count; ++s) {
-        const V p = o + d * seg.mid(s);
+    bool done = false;
+    for (int s = 0; s < seg.count && !done; ++s) forEachSubsegment(seg, s, o, d, bricks, [&](double tMid, double dt) {
+        if (done) return;
+        const V p = o + d * tMid;
         const V sigma = trilinear<double>(m_volume.extinction(), n, p);
-        if (maxComponent(sigma) <= 0) continue;
-        const V tau = sigma * seg.dt;
+        if (maxComponent(sigma) <= 0) return;
+        const V tau = sigma * dt;
         const V opacity = T * V(-std::expm1(-tau.x), -std::expm1(-tau.y), -std::expm1(-tau.z));
         if (m_spec.unknown != Unknown::Albedo) basis(p, 0, opacity);
         if (m_spec.unknown != Unknown::Emission) {
@@ -85,8 +89,8 @@ void ReferenceProjector::march(size_t view, int px, int py, Visit&& visit) const
             basis(p, albedoBlock, opacity * scat);
         }
         T = T * V(std::exp(-tau.x), std::exp(-tau.y), std::exp(-tau.z));
-        if (maxComponent(T) < 1e-8) break;  // as project.comp
-    }
+        done = maxComponent(T) < 1e-8;  // as project.comp
+    });
 }
 
 std::vector<double> ReferenceProjector::forward(const std::vector<double>& a) const {

@@ -3,6 +3,7 @@
 /// Float64 oracle of project.comp: W a and Wᵀ r with plain loops, the same segments, weights and
 /// basis. Vectors are 4 doubles per element (rgb used) like the GPU's. For tiny problems only.
 
+#include <memory>
 #include <vector>
 
 #include "core/cpu_ref/reference_renderer.h"
@@ -13,6 +14,10 @@
 #include "core/volume/volume.h"
 
 namespace volstyle::core::cpu_ref {
+
+namespace detail {
+struct BrickBound;
+}
 
 struct ProjectionSpec {
     Unknown unknown = Unknown::Emission;
@@ -40,6 +45,7 @@ private:
     std::vector<Camera> m_cameras;
     ProjectionSpec m_spec;
     std::vector<LightDepthGrid<double>> m_lightDepth;
+    std::shared_ptr<const detail::BrickBound> m_bricks;  // march.glsl's dense segments
     size_t m_pixelCount = 0;
 };
 

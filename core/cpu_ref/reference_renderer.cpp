@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace volstyle::core::cpu_ref {
@@ -112,6 +113,37 @@ V3<S> LightDepthGrid<S>::interpolated(const V3<S>& p) const {
 }
 
 template <typename S>
+V3<S> LightDepthGrid<S>::onPlane(const V3<S>& p) const {
+    if (grid.alongAxis) return interpolated(p);
+    S q[3];
+    for (int a = 0; a < 3; ++a)
+        q[a] = S(grid.gridFromIndex(a, 0)) * p.x + S(grid.gridFromIndex(a, 1)) * p.y + S(grid.gridFromIndex(a, 2)) * p.z + S(grid.gridFromIndex(a, 3));
+    const Int3 n = grid.dims;
+    const int plane = std::clamp(int(std::lround(q[2])), 0, n.z - 1);
+    int i0[2];
+    S w[2][4];
+    for (int a = 0; a < 2; ++a) {
+        const S qa = std::clamp(q[a], S(0), S(n[a] - 1));
+        i0[a] = std::min(int(std::floor(qa)), n[a] - 1);
+        const S t = qa - S(i0[a]), t2 = t * t, t3 = t2 * t;
+        w[a][0] = S(-0.5) * t3 + t2 - S(0.5) * t, w[a][1] = S(1.5) * t3 - S(2.5) * t2 + 1;
+        w[a][2] = S(-1.5) * t3 + 2 * t2 + S(0.5) * t, w[a][3] = S(0.5) * t3 - S(0.5) * t2;
+    }
+    V3<S> sum(S(0)), lo(std::numeric_limits<S>::max()), hi(-std::numeric_limits<S>::max());
+    for (int b = 0; b < 4; ++b)
+        for (int a = 0; a < 4; ++a) {
+            const int x = std::clamp(i0[0] + a - 1, 0, n.x - 1), y = std::clamp(i0[1] + b - 1, 0, n.y - 1);
+            const size_t idx = 3 * ((size_t(plane) * n.y + size_t(y)) * n.x + size_t(x));
+            const V3<S> v(depth[idx], depth[idx + 1], depth[idx + 2]);
+            sum += v * (w[0][a] * w[1][b]);
+            if ((a == 1 || a == 2) && (b == 1 || b == 2))
+                for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], v[c]), hi[c] = std::max(hi[c], v[c]);
+        }
+    for (int c = 0; c < 3; ++c) sum[c] = std::clamp(sum[c], lo[c], hi[c]);
+    return sum;
+}
+
+template <typename S>
 V3<S> LightDepthGrid<S>::at(const V3<S>& p) const {
     // lighting.glsl's lightDepthAt, step for step (its comment says why).
     const Int3 n = volume->dims();
@@ -136,7 +168,7 @@ V3<S> LightDepthGrid<S>::at(const V3<S>& p) const {
         tau += span;
         if (exitNodes <= s1 || minComponent(tau) >= S(layout::kLightMarchOpaque)) return tau;
         if (k >= layout::kLightMarchMaxSpans || (s1 >= S(layout::kLightMarchMinNodes) && maxComponent(span) < S(layout::kLightMarchDenseSpan))) {
-            const V3<S> g = interpolated(p + toLight * s1);  // on the node plane
+            const V3<S> g = onPlane(p + toLight * s1);
             return tau + V3<S>(std::max(g.x, S(0)), std::max(g.y, S(0)), std::max(g.z, S(0)));
         }
         s0 = s1;
@@ -244,6 +276,7 @@ Image renderReference(const Volume& volume, const Camera& camera, const Lighting
     const LobeBasis backgroundBasis = lobeBackground ? lighting.environment.basis() : LobeBasis{};
     const std::vector<Vec3d> backgroundRadiance = lobeBackground ? lobeRadiance(lighting.environment) : std::vector<Vec3d>{};
 
+    const BrickBound bricks(volume.extinction(), n);
     Image image(camera.width, camera.height);
     const V3<S> eyeIndex = toS<S>(indexFromWorld.applyPoint(camera.eye));
     for (int py = 0; py < camera.height; ++py)
@@ -256,9 +289,10 @@ Image renderReference(const Volume& volume, const Camera& camera, const Lighting
             V3<S> L(S(0)), T(S(1));
             if (t0 < t1) {
                 Segments<S> seg(t0, t1, d, S(stepVoxels));
-                for (int s = 0; s < seg.count; ++s) {
-                    const V3<S> p = eyeIndex + d * seg.mid(s);
+                for (int s = 0; s < seg.count; ++s) forEachSubsegment(seg, s, eyeIndex, d, bricks, [&](S tMid, S dt) {
+                    const V3<S> p = eyeIndex + d * tMid;
                     const V3<S> sigma = trilinear<S>(volume.extinction(), n, p);
+                    if (maxComponent(sigma) <= 0) return;
                     V3<S> Lm = volume.hasEmission() ? trilinear<S>(volume.emission(), n, p) : V3<S>(S(0));
                     if (!lights.empty() || !lobes.direction.empty()) {
                         V3<S> albedo = volume.hasAlbedo() ? trilinear<S>(volume.albedo(), n, p) : V3<S>(S(1));
@@ -272,12 +306,12 @@ Image renderReference(const Volume& volume, const Camera& camera, const Lighting
                         if (!lobes.direction.empty()) scat += lobes.inScattering(p, dir, lighting.phase);
                         Lm += albedo * scat;
                     }
-                    const V3<S> tau = sigma * seg.dt;
+                    const V3<S> tau = sigma * dt;
                     const V3<S> segT(std::exp(-tau.x), std::exp(-tau.y), std::exp(-tau.z));
                     const V3<S> alpha(-std::expm1(-tau.x), -std::expm1(-tau.y), -std::expm1(-tau.z));
                     L += T * alpha * Lm;
                     T = T * segT;
-                }
+                });
             }
             const Background& bg = lighting.background;
             const float* plate = bg.plate ? bg.plate->pixel(px, py) : nullptr;

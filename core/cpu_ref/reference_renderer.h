@@ -46,6 +46,9 @@ struct LightDepthGrid {
     Vec3T<Scalar> at(const Vec3T<Scalar>& p) const;
     /// Trilinear between nodes at p (the grid alone, as lobe_volume.comp reads it).
     Vec3T<Scalar> interpolated(const Vec3T<Scalar>& p) const;
+    /// At p on a node plane, as lighting.glsl's lightDepthOnPlane reads it: bilinear for a light
+    /// along a voxel axis, else a Catmull–Rom spline over 4×4 nodes held to the nearest 2×2's range.
+    Vec3T<Scalar> onPlane(const Vec3T<Scalar>& p) const;
 };
 /// `across` ≤ 0: the spacing the GL renderer picks for this volume's lights (lightGridAcross).
 template <typename Scalar>

@@ -41,6 +41,7 @@ LightGrid makeLightGrid(const Vec3d& boxLo, const Vec3d& boxHi, const Mat4& inde
     const double h = across, hz = along;
     const double u0 = std::floor(lo.x / h) * h, v0 = std::floor(lo.y / h) * h, wTop = std::ceil(hi.z / hz) * hz;
     LightGrid g;
+    g.alongAxis = int(w.x == 0) + int(w.y == 0) + int(w.z == 0) == 2;
     g.dims = {int(std::ceil((hi.x - u0) / h)) + 1, int(std::ceil((hi.y - v0) / h)) + 1,
               int(std::ceil((wTop - lo.z) / hz)) + 1};
 

@@ -19,6 +19,10 @@ struct LightGrid {
     /// away from the light. The z column of indexFromGrid is the index-space step between nodes
     /// of a row, of length kLightGridSpacing.
     Mat4 gridFromIndex, indexFromGrid;
+    /// The light runs along a voxel axis: the nodes sit on voxel centres (and halfway between), so
+    /// the depth on a node plane is bilinear between them and is read bilinearly; otherwise the
+    /// march kernels read it with a Catmull–Rom spline across the beam (lighting.glsl).
+    bool alongAxis = false;
 };
 
 /// Voxels between neighbouring nodes (across and along the beam).

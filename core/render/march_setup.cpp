@@ -78,7 +78,7 @@ MarchSetup prepareMarch(GpuDevice& device, GpuVolume& volume, const Camera& came
         p.lightDirection[i] = f4(normalize(lights[i]->direction));
         p.lightIrradiance[i] = f4(lights[i]->irradiance);
         p.lightGridFromIndex[i] = toGl(setup.lightDepth[i]->grid.gridFromIndex);
-        p.lightGridDims[i] = i4(setup.lightDepth[i]->grid.dims);
+        p.lightGridDims[i] = i4(setup.lightDepth[i]->grid.dims, setup.lightDepth[i]->grid.alongAxis ? 1 : 0);
     }
     // The environment's lobes: their parameters, the light volumes when any is lit (cached), and
     // the lobes as the background when asked (and no plate hides it).

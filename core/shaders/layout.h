@@ -35,6 +35,15 @@ VS_CONSTANT(float, kLightMarchMinNodes, 1.0);
 VS_CONSTANT(int, kLightMarchMaxSpans, 3);
 VS_CONSTANT(float, kLightMarchDenseSpan, 0.1);
 VS_CONSTANT(float, kLightMarchOpaque, 12.0);
+/* Dense segments of a view ray (common/march.glsl splitDense, issue #34): a segment whose occupancy
+ * brick (the largest extinction within a voxel of it) allows more than kMarchDenseSegmentDepth
+ * optical depth is cut into equal sub-segments of at most that depth, at most kMarchMaxSubsegments
+ * of them. The midpoint quadrature misses how fast in-scattering changes in such media: with the
+ * exact light integral, a cloud of 4 optical depths a voxel lit from the side is 3.5% RMS off at a
+ * step of 0.5 voxel, 0.6% cut at 1 and 0.2% at 0.5. At 1, media below 2 optical depths a voxel (the
+ * built-in cloud at 64³: 1.25, ≤ 1.05% uncut) pay nothing; cutting at 0.5 cost it 1.9× a frame. */
+VS_CONSTANT(float, kMarchDenseSegmentDepth, 1.0);
+VS_CONSTANT(int, kMarchMaxSubsegments, 8);
 
 /* Kinds of solver unknowns (VOLSTYLE_UNKNOWN in project.comp; core::Unknown takes these values)
  * and bases (VOLSTYLE_BASIS; core::BasisType). Macros: GLSL compares them in #if. */
@@ -114,7 +123,7 @@ struct MarchParams {
     VS_IVEC4 dispatchOffset;
     /* Light-depth volumes on light-aligned grids (core/render/light_grid.h), one per light slot. */
     VS_MAT4 lightGridFromIndex[kLightSlots];  /* index-space point -> grid coordinates (nodes at integers) */
-    VS_IVEC4 lightGridDims[kLightSlots];      /* xyz: nodes; z runs away from the light */
+    VS_IVEC4 lightGridDims[kLightSlots];      /* xyz: nodes; z runs away from the light; w: 1 along a voxel axis */
     VS_MAT4 indexFromLightGrid;               /* light_depth.comp: the inverse, for light lightKernel.x */
     /* Environment lobes (core/render/lobe_volumes.h): the transmittance toward each lobe on a grid of its own. */
     VS_IVEC4 lobeGrid;    /* xyz: nodes of the light volumes' grid; w: lobes */

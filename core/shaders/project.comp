@@ -362,6 +362,7 @@ void main() {
         // Log-space tomography: o_k = Σ σ_i ∫ v_i dt. The current extinction is not involved,
         // so no skipping: every segment of the box counts.
         CornerCache cache = emptyCache(0u);
+        m.fine = false;  // ∫ v_i dt needs no cuts, and must not follow the current extinction
         while (nextSegment(m, false, tMid, dt)) apply(basisAt(m.o + tMid * m.d), cache, vec3(dt), r, sum);
         flush(cache);
 #else

@@ -26,7 +26,7 @@ ivec2 pathOf(ivec2 pix) {
 bool beginViewMarch(ivec2 pix, vec3 dir, out RayMarch m) {
 #if VOLSTYLE_CURVED
     ivec2 span = pathOf(pix);
-    m = RayMarch(vec3(0.0), vec3(0.0), vec3(0.0), Segments(0.0, 0.0, 0), 0, 0.0, 0.0, span.x, span.y - 1, u.rayRange.xy, dir);
+    m = RayMarch(vec3(0.0), vec3(0.0), vec3(0.0), Segments(0.0, 0.0, 0), 0, 0.0, 0.0, true, 0, 0, 0.0, 0.0, span.x, span.y - 1, u.rayRange.xy, dir);
     return m.lastVertex > m.vertex;  // no piece yet: the first nextSegment() starts one
 #else
     vec3 o, d;

@@ -28,6 +28,36 @@ float phaseFunction(float cosTheta) { return phaseValue(u.phase.x, u.phase.y, co
 // (not the transmittance) is exact for slabs, where the depth is linear.
 layout(binding = kUnitLightDepth0) uniform sampler3D s_lightDepth[kLightSlots];
 
+// Catmull–Rom weights of the four nodes around fraction t.
+vec4 catmullRomWeights(float t) {
+    float t2 = t * t, t3 = t2 * t;
+    return vec4(-0.5 * t3 + t2 - 0.5 * t, 1.5 * t3 - 2.5 * t2 + 1.0, -1.5 * t3 + 2.0 * t2 + 0.5 * t, 0.5 * t3 - 0.5 * t2);
+}
+
+// The light depth on node plane g.z (an integer) at (g.x, g.y). A light along a voxel axis puts the
+// nodes on voxel centres, where the depth of trilinear extinction is bilinear between nodes: read
+// bilinearly (exact). Otherwise its kinks fall between nodes and the depth is smoother across the
+// beam than bilinear reading makes it: a Catmull–Rom spline over the 4×4 nodes around the point,
+// held to the range of the 2×2 nearest (no overshoot at shadow edges). Issue #34: on clouds of
+// 0.6–4 optical depths a voxel lit from the side or at a grazing angle this takes the image's RMS
+// against the exact light integral from 1.8–3.1% to 0.5–1.5% (bench/light_depth_bench).
+vec3 lightDepthOnPlane(sampler3D tex, vec3 g, ivec4 dims) {
+    Stencil s = stencilOn(g, dims.xyz);
+    if (dims.w != 0) return fetchTrilinear(tex, s);
+    vec4 wx = catmullRomWeights(s.f.x), wy = catmullRomWeights(s.f.y);
+    int plane = clamp(int(round(g.z)), 0, dims.z - 1);  // g.z is a node plane up to rounding
+    vec3 sum = vec3(0.0), lo = vec3(3e38), hi = vec3(-3e38);
+    for (int b = 0; b < 4; ++b)
+        for (int a = 0; a < 4; ++a) {
+            ivec3 node = ivec3(clamp(s.i0.xy + ivec2(a - 1, b - 1), ivec2(0), dims.xy - 1), plane);
+            vec3 v = texelFetch(tex, node, 0).rgb;
+            sum += wx[a] * wy[b] * v;
+            if (a == 1 || a == 2)
+                if (b == 1 || b == 2) lo = min(lo, v), hi = max(hi, v);
+        }
+    return clamp(sum, lo, hi);
+}
+
 // τ_l(p): the optical depth from index-space point p toward light l. Near p it is marched from p
 // itself: the grid cannot follow a dense medium's rise within a node (up to 4 optical depths a
 // voxel, issue #34: 31% off on a dense backlit cloud), and what a sample sees is decided there.
@@ -73,8 +103,7 @@ vec3 lightDepthAt(int l, vec3 p) {
         s1 += 1.0;
     }
     // On the node plane the grid is exact along the beam.
-    if (gridAt >= 0.0)
-        tau += max(fetchTrilinear(s_lightDepth[l], stencilOn(vec3(g.xy, g.z - gridAt), u.lightGridDims[l].xyz)), vec3(0.0));
+    if (gridAt >= 0.0) tau += max(lightDepthOnPlane(s_lightDepth[l], vec3(g.xy, g.z - gridAt), u.lightGridDims[l]), vec3(0.0));
     return tau;
 }
 

@@ -8,6 +8,8 @@
 // traced on the CPU (core/render/curved_paths.h); each of its straight pieces is marched as a
 // straight ray is, so W and Wᵀ still share every segment. Without it the code below is the
 // straight march, unchanged.
+// Dense segments (splitDense, issue #34) are cut into sub-segments of bounded optical depth, by the
+// occupancy bricks, so W and Wᵀ see the same cuts as the renderer.
 #include "common/volume.glsl"
 #include "common/march_segments.glsl"
 
@@ -69,6 +71,11 @@ struct RayMarch {
     int i;         // marching: the next segment
     float t;       // exact traversal: where the next segment starts
     float tEnd;
+    bool fine;       // cut dense segments (splitDense); off where only ∫σ is marched
+    int sub;         // the next sub-segment of a dense segment, of subCount
+    int subCount;
+    float subStart;  // where the dense segment starts, and its sub-segments' length
+    float subDt;
 #if VOLSTYLE_CURVED
     int vertex;      // the first vertex of the next piece
     int lastVertex;  // the path's last vertex
@@ -86,7 +93,28 @@ RayMarch beginMarch(vec2 range, vec3 o, vec3 d) {
     m.i = 0;
     m.t = range.x;
     m.tEnd = range.y;
+    m.fine = true;
+    m.sub = m.subCount = 0;
     return m;
+}
+
+// Sub-segments of a segment whose occupancy brick allows optical depth `bound` (layout.h,
+// kMarchDenseSegmentDepth: why). The tolerance keeps float rounding of a bound at a whole number
+// of sub-segments from flipping the count (and the float64 oracle in step).
+int denseSubsegments(float bound) { return clamp(int(ceil(bound / kMarchDenseSegmentDepth - 1e-3)), 1, kMarchMaxSubsegments); }
+
+// Cuts the segment (tMid, dt) into equal sub-segments where the medium within a voxel of it is
+// dense: tMid and dt become the first one's, and nextSegment returns the others before moving on.
+void splitDense(inout RayMarch m, inout float tMid, inout float dt) {
+    if (!m.fine) return;
+    int k = denseSubsegments(texelFetch(s_occupancy, brickAt(m.o + tMid * m.d, u.brickDims.xyz), 0).r * dt);
+    if (k <= 1) return;
+    m.subStart = tMid - 0.5 * dt;
+    m.subDt = dt / float(k);
+    m.subCount = k;
+    m.sub = 1;
+    tMid = m.subStart + 0.5 * m.subDt;
+    dt = m.subDt;
 }
 
 #if VOLSTYLE_CURVED
@@ -102,6 +130,7 @@ bool nextPiece(inout RayMarch m) {
         if (!(r.y > r.x) || !(b.w > a.w)) continue;
         vec3 d = (b.xyz - a.xyz) / (b.w - a.w);  // index units per unit of path length
         RayMarch piece = beginMarch(r, a.xyz - a.w * d, d);  // marched as a straight ray is
+        piece.fine = m.fine;
         piece.vertex = m.vertex;
         piece.lastVertex = m.lastVertex;
         piece.range = m.range;
@@ -115,6 +144,12 @@ bool nextPiece(inout RayMarch m) {
 
 // The next segment of the current straight ray or piece.
 bool nextSegmentOnPiece(inout RayMarch m, bool skip, out float tMid, out float dt) {
+    if (m.sub < m.subCount) {
+        tMid = m.subStart + (float(m.sub) + 0.5) * m.subDt;
+        dt = m.subDt;
+        ++m.sub;
+        return true;
+    }
 #if !VOLSTYLE_EXACT_TRAVERSAL
     while (m.i < m.seg.count) {
         if (skip) {
@@ -127,6 +162,7 @@ bool nextSegmentOnPiece(inout RayMarch m, bool skip, out float tMid, out float d
         tMid = segmentMidpoint(m.seg, m.i);
         dt = m.seg.dt;
         ++m.i;
+        splitDense(m, tMid, dt);
         return true;
     }
     return false;
@@ -150,6 +186,7 @@ bool nextSegmentOnPiece(inout RayMarch m, bool skip, out float tMid, out float d
         tMid = 0.5 * (m.t + tNext);
         dt = tNext - m.t;
         m.t = tNext;
+        splitDense(m, tMid, dt);
         return true;
     }
     return false;
