@@ -1,4 +1,5 @@
 #include "core/gl/context.h"
+#include "core/gl/gpu_memory.h"
 
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
@@ -192,6 +193,7 @@ std::unique_ptr<Context> Context::createOn(const std::string& platform, bool deb
     GLint64 storageBlock = 0;
     glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &storageBlock);
     caps.maxStorageBlockBytes = storageBlock;
+    caps.memoryInfo = gpuMemorySource();
 
     glEnable(GL_DEBUG_OUTPUT);
     if (debug) glEnable(GL_DEBUG_OUTPUT_SYNCHRONOUS);

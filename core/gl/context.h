@@ -25,6 +25,7 @@ struct Capabilities {
     int max3DTextureSize = 0;
     int maxComputeInvocations = 0;
     long long maxStorageBlockBytes = 0;  ///< GL_MAX_SHADER_STORAGE_BLOCK_SIZE (llvmpipe: 128 MiB)
+    std::string memoryInfo;  ///< the extension the driver reports its memory through, or "" (gpu_memory.h)
 };
 
 struct ContextOptions {

@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "core/gl/context.h"
+#include "core/gl/gpu_memory.h"
 #include "core/gpu/gpu_device.h"
 
 namespace volstyle::server {
@@ -60,6 +61,9 @@ public:
     virtual const core::gl::Capabilities& capabilities() const = 0;
     /// Tasks waiting now (a fake executor: none).
     virtual GlQueueDepth queueDepth() const { return {}; }
+    /// The GPU memory the driver last reported (read on the GL thread at most once a second, between
+    /// tasks; -1 where the driver reports none: capabilities().memoryInfo is then empty).
+    virtual core::gl::GpuMemory gpuMemory() const { return {}; }
 
 protected:
     /// Queues `task`; throws (GpuError) when it cannot run at all.

@@ -9,7 +9,16 @@
 namespace volstyle::server {
 namespace {
 constexpr auto kTrimInterval = std::chrono::seconds(5);
+constexpr auto kGpuMemoryInterval = std::chrono::seconds(1);
 }  // namespace
+
+void GlWorker::sampleGpuMemory(std::chrono::steady_clock::time_point& last) {
+    if (m_caps.memoryInfo.empty() || std::chrono::steady_clock::now() - last < kGpuMemoryInterval) return;
+    const core::gl::GpuMemory m = core::gl::queryGpuMemory(m_caps.memoryInfo);
+    m_gpuTotal = m.totalBytes;
+    m_gpuAvailable = m.availableBytes;
+    last = std::chrono::steady_clock::now();
+}
 
 GlWorker::GlWorker() {
     std::promise<void> started;
@@ -67,6 +76,8 @@ void GlWorker::loop(std::promise<void>& started) {
         return;
     }
     auto lastTrim = std::chrono::steady_clock::now();
+    auto lastMemory = lastTrim - kGpuMemoryInterval;
+    sampleGpuMemory(lastMemory);
     for (;;) {
         std::function<void(core::GpuDevice&)> task;
         {
@@ -87,6 +98,7 @@ void GlWorker::loop(std::promise<void>& started) {
             queue.pop_front();
         }
         task(*device);  // packaged tasks capture their own exceptions
+        sampleGpuMemory(lastMemory);
     }
     device.reset();  // GL objects and the context die on this thread
 }

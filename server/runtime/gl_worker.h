@@ -3,6 +3,8 @@
 /// The server's GL thread (SPEC §3 Concurrency), the GlExecutor of `volstyle serve`: HTTP
 /// threads post closures to it and wait for their results.
 
+#include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <deque>
 #include <functional>
@@ -24,10 +26,13 @@ public:
     void runShortTasks(core::GpuDevice& device) override;
     const core::gl::Capabilities& capabilities() const override { return m_caps; }
     GlQueueDepth queueDepth() const override;
+    core::gl::GpuMemory gpuMemory() const override { return {m_gpuTotal.load(), m_gpuAvailable.load()}; }
 
 private:
     void post(std::function<void(core::GpuDevice&)> task, bool isLong) override;
     void loop(std::promise<void>& started);
+    /// Reads the driver's memory figures if a second has passed since the last read (GL thread).
+    void sampleGpuMemory(std::chrono::steady_clock::time_point& last);
 
     std::thread m_thread;
     mutable std::mutex m_mutex;
@@ -35,6 +40,7 @@ private:
     std::deque<std::function<void(core::GpuDevice&)>> m_short, m_long;
     bool m_stopping = false;
     core::gl::Capabilities m_caps;
+    std::atomic<long long> m_gpuTotal{-1}, m_gpuAvailable{-1};
 };
 
 }  // namespace volstyle::server

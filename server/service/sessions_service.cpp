@@ -18,6 +18,7 @@
 #include "core/volume/builtin_scenes.h"
 #include "server/runtime/gl_worker.h"
 #include "server/runtime/mesh_reader.h"
+#include "server/state/session_info.h"
 
 namespace volstyle::server {
 std::shared_ptr<Session> SessionsService::create(const protocol::CreateSessionRequest& request) {
@@ -66,6 +67,27 @@ void SessionsService::remove(const std::string& id) {
         s->volume.gpu.reset();
         m_ctx.dropPreviews(*s);
     });
+}
+
+std::vector<SessionsService::Listed> SessionsService::list() const {
+    std::vector<Listed> out;
+    const bool stored = m_ctx.persist && m_ctx.persist->hasMirror();
+    if (stored) {
+        Persistence::StoredSessions all = m_ctx.persist->storedSessions();
+        for (auto& [id, text] : all.summaries) out.push_back({id, std::nullopt, std::move(text)});
+        for (const auto& id : all.unsummed) {
+            try {
+                out.push_back({id, sessionInfo(*m_ctx.find(id)), ""});
+            } catch (const ApiError&) {
+                // deleted meanwhile
+            }
+        }
+    }
+    // A stored session held here is listed above if it still exists (another replica may have
+    // deleted it); only the ones that never go to the store come from memory.
+    for (auto& s : m_ctx.sessions.all())
+        if (!stored || !SessionStore::isStoreId(s->id)) out.push_back({s->id, sessionInfo(*s), ""});
+    return out;
 }
 
 core::Lighting SessionsService::setLighting(Session& s, const protocol::LightingRequest& request) {

@@ -14,6 +14,16 @@ public:
     std::shared_ptr<Session> create(const protocol::CreateSessionRequest& request);
     std::shared_ptr<Session> find(const std::string& id) const { return m_ctx.find(id); }  ///< ApiError not_found
     std::vector<std::shared_ptr<Session>> all() const { return m_ctx.sessions.all(); }
+    /// A session as GET /sessions lists it: its state here, or (another replica's, from the store)
+    /// the JSON its last save wrote beside its record.
+    struct Listed {
+        std::string id;
+        std::optional<protocol::SessionInfo> info;
+        std::string storedJson;
+    };
+    /// Every session: those held here and, with a store, every replica's (issue #41): one query
+    /// for the summaries, no session loaded (but a record an older volstyle saved, once).
+    std::vector<Listed> list() const;
     void remove(const std::string& id);
     const core::gl::Capabilities& capabilities() const { return m_ctx.gl->capabilities(); }
     /// What the data directory's quarantine holds (empty without one).

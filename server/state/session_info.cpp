@@ -17,6 +17,10 @@ std::vector<protocol::ViewInfo> viewInfos(Session& s) {
 
 protocol::SessionInfo sessionInfo(Session& s) {
     std::lock_guard lock(s.mutex);
+    return sessionInfoLocked(s);
+}
+
+protocol::SessionInfo sessionInfoLocked(const Session& s) {
     const core::Volume& v = s.volume.current;
     protocol::SessionInfo info;
     info.id = s.id, info.created = s.created, info.scene = s.scene;

@@ -11,6 +11,7 @@
 namespace volstyle::server {
 
 protocol::SessionInfo sessionInfo(Session& s);  ///< takes the session's lock
+protocol::SessionInfo sessionInfoLocked(const Session& s);  ///< the caller holds the session's lock
 protocol::ViewInfo viewInfo(const SessionView& v);
 std::vector<protocol::ViewInfo> viewInfos(Session& s);    ///< takes the session's lock
 std::vector<protocol::FrameInfo> frameInfos(Session& s);  ///< takes the session's lock

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <set>
 
 #include "core/base/errors.h"
 #include "core/image/image_io.h"
@@ -45,6 +46,21 @@ std::shared_ptr<Session> Persistence::loadFromStore(const std::string& id) {
     m_mirror->materializeTree("sessions/" + id, m_dir.root(), "sessions/" + id + "/session.json", &stamp);
     if (!stamp || !fs::exists(dir / "session.json")) return nullptr;  // none, or deleted meanwhile
     return loadSession(dir, *stamp);
+}
+
+Persistence::StoredSessions Persistence::storedSessions() {
+    StoredSessions out;
+    if (!m_mirror) return out;
+    // "sessions/<sid>/summary.json" → <sid>
+    const auto idOf = [](const std::string& path) { return path.substr(9, path.find('/', 9) - 9); };
+    std::set<std::string> summed;
+    for (auto& [path, text] : m_mirror->readEach("sessions", "summary.json", true)) {
+        summed.insert(idOf(path));
+        out.summaries.emplace_back(idOf(path), std::move(text));
+    }
+    for (const auto& [path, unused] : m_mirror->readEach("sessions", "session.json", false))
+        if (!summed.count(idOf(path))) out.unsummed.push_back(idOf(path));
+    return out;
 }
 
 std::string Persistence::describe() const { return m_mirror ? m_mirror->describe() : "folder"; }
@@ -110,6 +126,8 @@ void Persistence::saveSession(Session& s, const std::vector<fs::path>& alsoCommi
     for (const auto& file : alsoCommit) written.emplace_back(relative(file), file);
     store::atomicWrite(dir / "session.json", store::encodeSessionRecord(s));
     if (!m_mirror) return;
+    store::atomicWrite(dir / "summary.json", store::encodeSessionSummary(s));
+    written.emplace_back(relative(dir / "summary.json"), dir / "summary.json");
     try {
         s.storeStamp = m_mirror->putRecord(relative(dir / "session.json"), dir / "session.json", written, s.storeStamp);
         knownStamp(s.id, s.storeStamp);

@@ -57,6 +57,14 @@ public:
     /// With a mirror: session `id` as the mirror holds it now (another replica may have written
     /// it), its folder here replaced; nullptr when the mirror has none.
     std::shared_ptr<Session> loadFromStore(const std::string& id);
+    /// Every session in the store (GET /sessions across replicas): the summary each record's save
+    /// wrote beside it (the session as GET /sessions/{sid} answered then, JSON), by id; `unsummed`:
+    /// sessions whose record has no summary (saved by an older volstyle).
+    struct StoredSessions {
+        std::vector<std::pair<std::string, std::string>> summaries;
+        std::vector<std::string> unsummed;
+    };
+    StoredSessions storedSessions();
 
     /// Writes session.json and any version not on disk yet (marking it stored). Call with the
     /// session's mutex held.

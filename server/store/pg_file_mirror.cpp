@@ -108,6 +108,21 @@ public:
         return n;
     }
 
+    std::vector<std::pair<std::string, std::string>> readEach(const std::string& prefix, const std::string& name, bool content) override {
+        std::vector<std::pair<std::string, std::string>> out;
+        run("read the stored files", [&](pqxx::work& tx) {
+            out.clear();
+            const std::string query = content ? "SELECT path, convert_from(lo_get(object), 'UTF8') FROM volstyle_files WHERE path LIKE $1 ORDER BY path"
+                                              : "SELECT path, '' FROM volstyle_files WHERE path LIKE $1 ORDER BY path";
+            for (const auto& row : tx.exec_params(query, escapeLike(prefix) + "/%/" + escapeLike(name))) {
+                const std::string path = row[0].as<std::string>();
+                if (path.find('/', prefix.size() + 1) != path.size() - name.size() - 1) continue;  // one folder deep only
+                out.emplace_back(path, row[1].as<std::string>());
+            }
+        });
+        return out;
+    }
+
     std::string writeProblem() override {
         try {
             run("check", [](pqxx::work& tx) { tx.exec("SELECT 1 FROM volstyle_files LIMIT 1"); });

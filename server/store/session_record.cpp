@@ -7,6 +7,8 @@
 #include "core/scene/environment_lobes.h"
 #include "core/volume/vdb_io.h"
 #include "protocol/render_json.h"
+#include "protocol/response_json.h"
+#include "server/state/session_info.h"
 
 namespace volstyle::server::store {
 namespace {
@@ -193,5 +195,7 @@ core::Volume loadVersionFile(const DataDir& dir, const std::string& session, int
                       std::to_string(expectedBytes));
     return core::loadVdb(path.string());
 }
+
+std::string encodeSessionSummary(const Session& s) { return protocol::sessionToJson(sessionInfoLocked(s)).dump(); }
 
 }  // namespace volstyle::server::store

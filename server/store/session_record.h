@@ -21,6 +21,9 @@ std::string versionFile(int version);
 
 /// The record of `s` (call with its lock held).
 std::string encodeSessionRecord(const Session& s);
+/// What GET /sessions lists for `s` (the session as GET /sessions/{sid} answers), written beside
+/// its record in the store so that any replica lists it without loading it. The caller holds its lock.
+std::string encodeSessionSummary(const Session& s);
 
 /// A session restored from its folder: session.json and the files beside it, damage quarantined
 /// and listed in its `damaged`. Throws when nothing of it is usable (no record, no readable

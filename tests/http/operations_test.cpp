@@ -89,6 +89,22 @@ TEST_F(Operations, MetricsCountRequestsByRouteTemplateAndTimeThem) {
         EXPECT_EQ(at(fmt::format(R"(volstyle_jobs{{state="{}"}})", state)), 0) << state;
     EXPECT_EQ(at(R"(volstyle_gl_queue{kind="long"})"), 0);
     EXPECT_GT(at("volstyle_memory_charged_bytes"), 0) << "the session's volume is charged";
+    // GPU memory: what the driver reports, and whether it does (llvmpipe: it does not).
+    std::vector<std::pair<std::string, double>> reported;
+    for (const auto& [key, value] : m)
+        if (key.rfind("volstyle_gpu_memory_reported{", 0) == 0) reported.emplace_back(key, value);
+    ASSERT_EQ(reported.size(), 1u) << r->body;
+    if (reported[0].first == R"(volstyle_gpu_memory_reported{source="none"})") {
+        EXPECT_EQ(reported[0].second, 0);
+        EXPECT_EQ(m.count(R"(volstyle_gpu_memory_bytes{kind="available"})"), 0u) << "no figure the driver did not give";
+    } else {
+        EXPECT_EQ(reported[0].second, 1);
+        const double available = at(R"(volstyle_gpu_memory_bytes{kind="available"})");
+        EXPECT_GT(available, 0);
+        if (m.count(R"(volstyle_gpu_memory_bytes{kind="total"})")) {
+            EXPECT_LE(available, m.at(R"(volstyle_gpu_memory_bytes{kind="total"})"));
+        }
+    }
 
     // A finished solve is counted by its state.
     addConstantTargetView(client(), "/api/v1/sessions/" + id, 16, 0.5f);

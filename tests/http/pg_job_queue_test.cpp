@@ -296,3 +296,33 @@ TEST_F(TwoReplicas, AReplicaThatStopsHandsItsJobsBackAndAnotherFinishesThem) {
     EXPECT_NE(metrics.find("volstyle_jobs{state=\"done\"} 1\n"), std::string::npos) << "the second replica ran it\n" << metrics;
     std::printf("[ measured ] a stopped replica's solve done on the other %.2f s after the stop began\n", seconds);
 }
+
+// GET /sessions through any replica lists every replica's sessions (issue #41), from the summary
+// each save writes beside its record: no session is loaded to be listed, a change made through one
+// replica shows in the other's list, and a session deleted through one leaves the other's list
+// even though the other still holds it.
+TEST_F(TwoReplicas, EitherReplicaListsEverySessionWithoutLoadingIt) {
+    const auto listed = [](httplib::Client& c) {
+        auto r = c.Get("/api/v1/sessions?limit=100");
+        EXPECT_EQ(r->status, 200) << r->body;
+        std::map<std::string, json> byId;
+        for (const json& s : json::parse(r->body)) byId[s["id"]] = s;
+        return byId;
+    };
+    const std::string onA = paintedSession(client()), onB = paintedSession(second());
+    for (httplib::Client* c : {&client(), &second()}) {
+        const auto all = listed(*c);
+        EXPECT_TRUE(all.count(onA) && all.count(onB)) << json(all).dump();
+    }
+    EXPECT_EQ(listed(client())[onB], json::parse(second().Get(("/api/v1/sessions/" + onB).c_str())->body))
+        << "the other replica's session, as it answers for it";
+    EXPECT_NE(client().Get("/api/v1/metrics")->body.find("\nvolstyle_sessions 1\n"), std::string::npos) << "A listed B's session without loading it";
+
+    // A change through B shows in A's list; a deletion through B leaves it, though A holds the session.
+    ASSERT_EQ(second().Post(("/api/v1/sessions/" + onA + "/views").c_str(), R"({"camera": {"eye": [0, 0, 3], "target": [0, 0, 0]}})",
+                            "application/json")->status, 201);
+    EXPECT_EQ(listed(client())[onA]["views"].size(), 2u);
+    ASSERT_EQ(second().Delete(("/api/v1/sessions/" + onA).c_str())->status, 204);
+    EXPECT_EQ(listed(client()).count(onA), 0u);
+    EXPECT_EQ(listed(second()).count(onA), 0u);
+}

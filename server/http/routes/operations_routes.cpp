@@ -11,6 +11,19 @@ namespace volstyle::server {
 
 namespace {
 
+/// The GPU's memory as its driver reports it (read at most once a second on the GL thread), and
+/// whether it does: Mesa's llvmpipe reports none, NVIDIA through GL_NVX_gpu_memory_info.
+void writeGpuMemory(const GlExecutor& gl, MetricsText& out) {
+    const std::string& source = gl.capabilities().memoryInfo;
+    out.family("volstyle_gpu_memory_reported", "gauge", "1 when the GL driver reports its memory (through the extension named), else 0");
+    out.sample("volstyle_gpu_memory_reported", fmt::format("source=\"{}\"", source.empty() ? "none" : source), source.empty() ? 0 : 1);
+    const core::gl::GpuMemory m = gl.gpuMemory();
+    if (m.totalBytes < 0 && m.availableBytes < 0) return;
+    out.family("volstyle_gpu_memory_bytes", "gauge", "the GPU's memory as its driver reports it: total and available now");
+    if (m.totalBytes >= 0) out.sample("volstyle_gpu_memory_bytes", "kind=\"total\"", double(m.totalBytes));
+    if (m.availableBytes >= 0) out.sample("volstyle_gpu_memory_bytes", "kind=\"available\"", double(m.availableBytes));
+}
+
 /// The gauges read when /metrics is scraped.
 void writeGauges(RouteContext& c, MetricsText& out) {
     out.family("volstyle_build_info", "gauge", "the running build (its version as a label)");
@@ -47,6 +60,7 @@ void writeGauges(RouteContext& c, MetricsText& out) {
     out.sample("volstyle_memory_charged_bytes", "", double(c.services.context.memory.total()));
     out.family("volstyle_memory_limit_bytes", "gauge", "the memory budget of all sessions together");
     out.sample("volstyle_memory_limit_bytes", "", double(c.services.context.memory.limits().total));
+    writeGpuMemory(*c.services.context.gl, out);
 }
 
 }  // namespace

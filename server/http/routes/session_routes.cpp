@@ -47,9 +47,9 @@ void addSessionItselfRoutes(RouteContext& c) {
     c.get(kApi + "/sessions", [&c](const httplib::Request& req, httplib::Response& res) {
         const protocol::ListQuery q = protocol::ListQuery::fromQuery(req.params, false);
         std::vector<std::pair<std::string, nlohmann::json>> keyed;
-        for (auto& s : c.services.sessions.all()) {
-            const protocol::SessionInfo info = sessionInfo(*s);
-            keyed.emplace_back(info.created + "/" + info.id, protocol::sessionToJson(info));  // oldest first
+        for (auto& s : c.services.sessions.list()) {
+            nlohmann::json j = s.info ? protocol::sessionToJson(*s.info) : nlohmann::json::parse(s.storedJson);
+            keyed.emplace_back(j.value("created", "") + "/" + s.id, std::move(j));  // oldest first
         }
         replyPage(res, std::move(keyed), q, kApi + "/sessions");
     });
