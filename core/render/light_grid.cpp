@@ -41,7 +41,8 @@ LightGrid makeLightGrid(const Vec3d& boxLo, const Vec3d& boxHi, const Mat4& inde
     const double h = across, hz = along;
     const double u0 = std::floor(lo.x / h) * h, v0 = std::floor(lo.y / h) * h, wTop = std::ceil(hi.z / hz) * hz;
     LightGrid g;
-    g.alongAxis = int(w.x == 0) + int(w.y == 0) + int(w.z == 0) == 2;
+    // (A rotated grid can leave ~1e-17 in the other components of an axis-aligned light.)
+    g.alongAxis = int(std::abs(w.x) < 1e-9) + int(std::abs(w.y) < 1e-9) + int(std::abs(w.z) < 1e-9) == 2;
     g.dims = {int(std::ceil((hi.x - u0) / h)) + 1, int(std::ceil((hi.y - v0) / h)) + 1,
               int(std::ceil((wTop - lo.z) / hz)) + 1};
 

@@ -41,7 +41,9 @@ VS_CONSTANT(float, kLightMarchOpaque, 12.0);
  * of them. The midpoint quadrature misses how fast in-scattering changes in such media: with the
  * exact light integral, a cloud of 4 optical depths a voxel lit from the side is 3.5% RMS off at a
  * step of 0.5 voxel, 0.6% cut at 1 and 0.2% at 0.5. At 1, media below 2 optical depths a voxel (the
- * built-in cloud at 64³: 1.25, ≤ 1.05% uncut) pay nothing; cutting at 0.5 cost it 1.9× a frame. */
+ * built-in cloud at 64³: 1.25, ≤ 1.05% uncut) pay nothing; cutting at 0.5 cost it 1.9× a frame.
+ * The bound is the brick at the segment's midpoint, whose one-voxel apron covers the segment for
+ * steps up to a voxel; a coarser step (a preview's) can cross a denser brick uncut. */
 VS_CONSTANT(float, kMarchDenseSegmentDepth, 1.0);
 VS_CONSTANT(int, kMarchMaxSubsegments, 8);
 

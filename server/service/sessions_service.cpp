@@ -69,19 +69,28 @@ void SessionsService::remove(const std::string& id) {
     });
 }
 
+SessionsService::Listed SessionsService::summaryOfUnsummed(const std::string& id) const {
+    // A record an older volstyle saved: held here, its state; else its summary is written to the
+    // store once (read from the store's files, not kept), and every replica lists it from then on.
+    if (auto held = m_ctx.sessions.find(id)) return {id, sessionInfo(*held), ""};
+    try {
+        std::lock_guard lock(m_ctx.storeLoads);  // as freshFromStore: one load of a session at a time
+        if (auto held = m_ctx.sessions.find(id)) return {id, sessionInfo(*held), ""};  // loaded meanwhile: its folder is in use
+        if (auto text = m_ctx.persist->summarizeStored(id)) return {id, std::nullopt, std::move(*text)};
+    } catch (const std::exception& e) {
+        spdlog::warn("session {}: not listed, its record could not be read: {}", id, e.what());
+    }
+    return {};  // gone, or unreadable: not listed
+}
+
 std::vector<SessionsService::Listed> SessionsService::list() const {
     std::vector<Listed> out;
     const bool stored = m_ctx.persist && m_ctx.persist->hasMirror();
     if (stored) {
         Persistence::StoredSessions all = m_ctx.persist->storedSessions();
         for (auto& [id, text] : all.summaries) out.push_back({id, std::nullopt, std::move(text)});
-        for (const auto& id : all.unsummed) {
-            try {
-                out.push_back({id, sessionInfo(*m_ctx.find(id)), ""});
-            } catch (const ApiError&) {
-                // deleted meanwhile
-            }
-        }
+        for (const auto& id : all.unsummed) out.push_back(summaryOfUnsummed(id));
+        std::erase_if(out, [](const Listed& l) { return l.id.empty(); });
     }
     // A stored session held here is listed above if it still exists (another replica may have
     // deleted it); only the ones that never go to the store come from memory.

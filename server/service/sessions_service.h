@@ -24,6 +24,11 @@ public:
     /// Every session: those held here and, with a store, every replica's (issue #41): one query
     /// for the summaries, no session loaded (but a record an older volstyle saved, once).
     std::vector<Listed> list() const;
+
+private:
+    Listed summaryOfUnsummed(const std::string& id) const;
+
+public:
     void remove(const std::string& id);
     const core::gl::Capabilities& capabilities() const { return m_ctx.gl->capabilities(); }
     /// What the data directory's quarantine holds (empty without one).

@@ -46,9 +46,11 @@ public:
     /// as of the same moment as the files (nullopt: none).
     virtual size_t materializeTree(const std::string& prefix, const std::filesystem::path& root, const std::string& record = "",
                                    std::optional<uint64_t>* recordStamp = nullptr) = 0;
-    /// The stored files `prefix`/<folder>/`name` ("sessions", "summary.json"), as (path, content),
-    /// read in one query; with `content` false, only their paths (content ""). For small files.
-    virtual std::vector<std::pair<std::string, std::string>> readEach(const std::string& prefix, const std::string& name, bool content) = 0;
+    /// The stored files `prefix`/<folder>/`name` for each (name, with content) of `names`
+    /// ("sessions", {{"summary.json", true}, {"session.json", false}}), as (path, content; "" without),
+    /// all read in one snapshot. For small files.
+    virtual std::vector<std::pair<std::string, std::string>> readEach(const std::string& prefix,
+                                                                      const std::vector<std::pair<std::string, bool>>& names) = 0;
     /// "" when the store takes a write now, else why not (GET /ready).
     virtual std::string writeProblem() = 0;
     /// Where it is, for logs and /ready ("postgresql://host:port/db", no password).

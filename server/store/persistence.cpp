@@ -53,14 +53,36 @@ Persistence::StoredSessions Persistence::storedSessions() {
     if (!m_mirror) return out;
     // "sessions/<sid>/summary.json" → <sid>
     const auto idOf = [](const std::string& path) { return path.substr(9, path.find('/', 9) - 9); };
-    std::set<std::string> summed;
-    for (auto& [path, text] : m_mirror->readEach("sessions", "summary.json", true)) {
-        summed.insert(idOf(path));
-        out.summaries.emplace_back(idOf(path), std::move(text));
+    std::set<std::string> summed, recorded;
+    for (auto& [path, text] : m_mirror->readEach("sessions", {{"summary.json", true}, {"session.json", false}})) {
+        if (path.ends_with("/summary.json")) {
+            summed.insert(idOf(path));
+            out.summaries.emplace_back(idOf(path), std::move(text));
+        } else {
+            recorded.insert(idOf(path));
+        }
     }
-    for (const auto& [path, unused] : m_mirror->readEach("sessions", "session.json", false))
-        if (!summed.count(idOf(path))) out.unsummed.push_back(idOf(path));
+    for (const std::string& id : recorded)
+        if (!summed.count(id)) out.unsummed.push_back(id);
     return out;
+}
+
+std::optional<std::string> Persistence::summarizeStored(const std::string& id) {
+    std::shared_ptr<Session> s = loadFromStore(id);
+    if (!s) return std::nullopt;  // deleted meanwhile
+    std::string text;
+    {
+        std::lock_guard lock(s->mutex);
+        text = store::encodeSessionSummary(*s);
+    }
+    const fs::path file = sessionDir(id) / "summary.json";
+    store::atomicWrite(file, text);
+    // Under the record's stamp: a save meanwhile wrote a newer summary, and this one is refused.
+    const RecordGuard guard{relative(sessionDir(id) / "session.json"), s->storeStamp};
+    m_mirror->put(relative(file), file, &guard);
+    s.reset();
+    fs::remove_all(sessionDir(id));  // a cache of a session this replica does not hold
+    return text;
 }
 
 std::string Persistence::describe() const { return m_mirror ? m_mirror->describe() : "folder"; }

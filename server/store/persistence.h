@@ -65,6 +65,10 @@ public:
         std::vector<std::string> unsummed;
     };
     StoredSessions storedSessions();
+    /// Session `id`'s summary written to the store for a record that has none (saved by an older
+    /// volstyle), from the record and files read there; nullopt when it is gone. Call only for a
+    /// session this replica does not hold (its folder here is replaced, then removed).
+    std::optional<std::string> summarizeStored(const std::string& id);
 
     /// Writes session.json and any version not on disk yet (marking it stored). Call with the
     /// session's mutex held.

@@ -108,16 +108,20 @@ public:
         return n;
     }
 
-    std::vector<std::pair<std::string, std::string>> readEach(const std::string& prefix, const std::string& name, bool content) override {
+    std::vector<std::pair<std::string, std::string>> readEach(const std::string& prefix,
+                                                              const std::vector<std::pair<std::string, bool>>& names) override {
         std::vector<std::pair<std::string, std::string>> out;
         run("read the stored files", [&](pqxx::work& tx) {
+            tx.exec("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ");  // every name as of one moment
             out.clear();
-            const std::string query = content ? "SELECT path, convert_from(lo_get(object), 'UTF8') FROM volstyle_files WHERE path LIKE $1 ORDER BY path"
-                                              : "SELECT path, '' FROM volstyle_files WHERE path LIKE $1 ORDER BY path";
-            for (const auto& row : tx.exec_params(query, escapeLike(prefix) + "/%/" + escapeLike(name))) {
-                const std::string path = row[0].as<std::string>();
-                if (path.find('/', prefix.size() + 1) != path.size() - name.size() - 1) continue;  // one folder deep only
-                out.emplace_back(path, row[1].as<std::string>());
+            for (const auto& [name, content] : names) {
+                const std::string query = content ? "SELECT path, convert_from(lo_get(object), 'UTF8') FROM volstyle_files WHERE path LIKE $1"
+                                                  : "SELECT path, '' FROM volstyle_files WHERE path LIKE $1";
+                for (const auto& row : tx.exec_params(query, escapeLike(prefix) + "/%/" + escapeLike(name))) {
+                    const std::string path = row[0].as<std::string>();
+                    if (path.find('/', prefix.size() + 1) != path.size() - name.size() - 1) continue;  // one folder deep only
+                    out.emplace_back(path, row[1].as<std::string>());
+                }
             }
         });
         return out;

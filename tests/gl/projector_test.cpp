@@ -21,7 +21,9 @@ struct Problem {
     std::vector<Camera> cameras;
 };
 
-Problem makeProblem(uint32_t seed) {
+/// `dense`: extinction up to 40 per world unit (3 optical depths a segment of 0.5 voxel), so the
+/// march cuts dense segments into pieces (march.glsl splitDense, issue #34) on both sides.
+Problem makeProblem(uint32_t seed, bool dense = false) {
     // Odd sizes: a ray crossing the box face to face in n equal segments then never has a
     // midpoint on a voxel face, where the box basis is discontinuous and float and double would
     // pick different voxels.
@@ -31,7 +33,7 @@ Problem makeProblem(uint32_t seed) {
     auto u = [&] { return float(rng() % 100000) / 100000.0f; };
     for (size_t i = 0; i < p.volume.voxelCount(); ++i) {
         bool hole = u() < 0.25f;
-        for (int c = 0; c < 3; ++c) p.volume.extinction()[3 * i + size_t(c)] = hole ? 0.0f : 4.0f * u();
+        for (int c = 0; c < 3; ++c) p.volume.extinction()[3 * i + size_t(c)] = hole ? 0.0f : (dense ? 40.0f : 4.0f) * u();
     }
     p.lighting.lights = {{{0.3, 0.8, 0.2}, {3, 2.5, 2}}, {{-0.6, 0.2, 0.7}, {1, 1.5, 2}}};
     p.lighting.phase = {PhaseType::HenyeyGreenstein, 0.3};
@@ -74,6 +76,7 @@ struct Case {
     Unknown unknown;
     BasisType basis;
     bool coarse;
+    bool dense = false;
 };
 
 /// How W and Wᵀ run: matrix-free with float atomics or the compare-and-swap loop, or from the
@@ -88,7 +91,7 @@ struct Path {
 
 void checkCase(const Case& k, const Path& path) {
     const bool floatAtomics = path.floatAtomics;
-    Problem prob = makeProblem(7);
+    Problem prob = makeProblem(7, k.dense);
     const Int3 udims = k.coarse ? Int3{5, 5, 7} : prob.volume.dims();
     GpuVolume gpu(prob.volume);
     Projector W(test::device(), gpu, prob.lighting, k.unknown, k.basis, udims, 0.5);
@@ -160,7 +163,7 @@ void checkCase(const Case& k, const Path& path) {
             compare(ref.adjoint(rv), viewWtr.download(), "one view's adjoint from merged rows");
         }
     }
-    std::cout << "[ measured ] unknown " << int(k.unknown) << " basis " << int(k.basis) << (k.coarse ? " coarse" : "")
+    std::cout << "[ measured ] unknown " << int(k.unknown) << " basis " << int(k.basis) << (k.coarse ? " coarse" : "") << (k.dense ? " dense" : "")
               << (path.cached ? " cached rows (" + std::to_string(W.stats().cachedViews) + " views)"
                               : floatAtomics ? " atomics" : " CAS")
               << ": identity " << std::abs(lhs.x - rhs.x) / std::abs(lhs.x)
@@ -192,7 +195,10 @@ INSTANTIATE_TEST_SUITE_P(AllUnknownsAndBases, ProjectorAdjoint,
                                            Case{Unknown::Extinction, BasisType::Trilinear, false},
                                            Case{Unknown::Extinction, BasisType::Box, false},
                                            Case{Unknown::Emission, BasisType::Trilinear, true},
-                                           Case{Unknown::Albedo, BasisType::Box, true}));
+                                           Case{Unknown::Albedo, BasisType::Box, true},
+                                           Case{Unknown::Emission, BasisType::Trilinear, false, true},
+                                           Case{Unknown::Albedo, BasisType::Box, false, true},
+                                           Case{Unknown::EmissionAlbedo, BasisType::Trilinear, false, true}));
 
 TEST(Projector, ColumnsFromTheHostAndFromTheFillPassBothMatchTheOracle) {
     VOLSTYLE_REQUIRE_GL();

@@ -325,4 +325,23 @@ TEST_F(TwoReplicas, EitherReplicaListsEverySessionWithoutLoadingIt) {
     ASSERT_EQ(second().Delete(("/api/v1/sessions/" + onA).c_str())->status, 204);
     EXPECT_EQ(listed(client()).count(onA), 0u);
     EXPECT_EQ(listed(second()).count(onA), 0u);
+
+    // A record saved by a volstyle before summaries (its summary removed from the store): listed
+    // through A, which does not hold it, from its record and files, without being loaded; its
+    // summary is then in the store for every replica.
+    const std::string old = paintedSession(second());
+    const std::string sql = "DELETE FROM volstyle_files WHERE path = 'sessions/" + old + "/summary.json'";
+    ASSERT_EQ(std::system(("psql -q '" + testStore() + "' -c \"" + sql + "\" > /dev/null").c_str()), 0);
+    const auto held = [&] {
+        const std::string m = client().Get("/api/v1/metrics")->body;
+        const size_t at = m.find("\nvolstyle_sessions ");
+        return at == std::string::npos ? -1 : std::stoi(m.substr(at + 19));
+    };
+    const int before = held();
+    const auto viaA = listed(client());
+    ASSERT_TRUE(viaA.count(old)) << json(viaA).dump();
+    EXPECT_EQ(viaA.at(old), json::parse(second().Get(("/api/v1/sessions/" + old).c_str())->body));
+    EXPECT_EQ(held(), before) << "A read it to list it, and did not keep it";
+    const std::string count = "SELECT count(*) FROM volstyle_files WHERE path = 'sessions/" + old + "/summary.json'";
+    EXPECT_EQ(std::system(("test \"$(psql -tA '" + testStore() + "' -c \"" + count + "\")\" = 1").c_str()), 0) << "the summary was written back";
 }

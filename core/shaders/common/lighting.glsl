@@ -63,7 +63,7 @@ vec3 lightDepthOnPlane(sampler3D tex, vec3 g, ivec4 dims) {
 // voxel, issue #34: 31% off on a dense backlit cloud), and what a sample sees is decided there.
 // The march runs toward the light to the node planes across the beam (planes c = const of the
 // grid), for at least kLightMarchMinNodes, on while the last span was dense, and then adds the
-// grid's depth on the plane it stopped at (bilinear there). A ray that leaves the voxels' box on
+// grid's depth on the plane it stopped at (lightDepthOnPlane). A ray that leaves the voxels' box on
 // the way needs no grid; one that has gathered kLightMarchOpaque is dark. Thin media pay 2–4
 // samples, dense ones up to 2·(kLightMarchMaxSpans + 1) at a step of 0.5 voxel.
 vec3 lightDepthAt(int l, vec3 p) {

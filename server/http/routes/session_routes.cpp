@@ -48,7 +48,8 @@ void addSessionItselfRoutes(RouteContext& c) {
         const protocol::ListQuery q = protocol::ListQuery::fromQuery(req.params, false);
         std::vector<std::pair<std::string, nlohmann::json>> keyed;
         for (auto& s : c.services.sessions.list()) {
-            nlohmann::json j = s.info ? protocol::sessionToJson(*s.info) : nlohmann::json::parse(s.storedJson);
+            nlohmann::json j = s.info ? protocol::sessionToJson(*s.info) : nlohmann::json::parse(s.storedJson, nullptr, false);
+            if (j.is_discarded()) continue;  // a summary that does not parse (damaged in the store): the session itself still answers
             keyed.emplace_back(j.value("created", "") + "/" + s.id, std::move(j));  // oldest first
         }
         replyPage(res, std::move(keyed), q, kApi + "/sessions");
