@@ -29,14 +29,6 @@ using namespace volstyle::core;
 
 namespace {
 
-/// The built-in scene scaled so that its densest voxel holds `voxelDepth` optical depths (0: as it is).
-Volume sceneOf(const char* name, int res, double voxelDepth) {
-    Volume v = makeBuiltinScene(name, res);
-    if (voxelDepth > 0) cpu_ref::scaleToVoxelDepth(v, voxelDepth);
-    for (float& a : v.ensureAlbedo()) a = 0.9f;
-    return v;
-}
-
 struct Scene {
     const char* name;
     int res;
@@ -67,7 +59,7 @@ void table(const char* bench, const std::vector<Scene>& scenes, const Camera& ca
     for (const Column& c : columns) std::printf(" %s |", c.name);
     std::printf("\n|---|---|---|%s\n", separator(columns.size()).c_str());
     for (const Scene& sc : scenes) {
-        const Volume v = sceneOf(sc.name, sc.res, sc.voxelDepth);
+        const Volume v = cpu_ref::denseBuiltinScene(sc.name, sc.res, sc.voxelDepth);
         const double voxelDepth = maxComponent(Volume::range(v.extinction()).second) * length(v.worldFromIndex().applyVector({1, 0, 0}));
         for (const auto& [sunName, dir] : kSuns) {
             Lighting l;

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "core/image/image.h"
+#include "core/volume/builtin_scenes.h"
 #include "core/volume/volume.h"
 
 namespace volstyle::core::cpu_ref {
@@ -32,6 +33,15 @@ inline void scaleToVoxelDepth(Volume& volume, double voxelDepth) {
     const double peak = maxComponent(Volume::range(volume.extinction()).second);
     const double voxel = length(volume.worldFromIndex().applyVector({1, 0, 0}));
     for (float& s : volume.extinction()) s = float(s * voxelDepth / (peak * voxel));
+}
+
+/// Built-in scene `name` at `res`³, scaled so that its densest voxel holds `voxelDepth` optical
+/// depths (0: as it is), with albedo 0.9: the dense media the light-depth checks use.
+inline Volume denseBuiltinScene(const char* name, int res, double voxelDepth) {
+    Volume v = makeBuiltinScene(name, res);
+    if (voxelDepth > 0) scaleToVoxelDepth(v, voxelDepth);
+    for (float& a : v.ensureAlbedo()) a = 0.9f;
+    return v;
 }
 
 }  // namespace volstyle::core::cpu_ref

@@ -23,12 +23,7 @@ using namespace volstyle::core;
 
 namespace {
 
-Volume denseCloud() {
-    Volume v = makeBuiltinScene("cloud", 48);
-    cpu_ref::scaleToVoxelDepth(v, 4.0);
-    for (float& a : v.ensureAlbedo()) a = 0.9f;
-    return v;
-}
+Volume denseCloud() { return cpu_ref::denseBuiltinScene("cloud", 48, 4.0); }
 
 Camera frontCamera() {
     Camera cam;

@@ -35,16 +35,8 @@ struct Bounds {
     double sum, rms;
 };
 
-/// The built-in scene scaled so that its densest voxel holds `voxelDepth` optical depths.
-Volume denseScene(const char* name, int res, double voxelDepth) {
-    Volume v = makeBuiltinScene(name, res);
-    cpu_ref::scaleToVoxelDepth(v, voxelDepth);
-    for (float& a : v.ensureAlbedo()) a = 0.9f;
-    return v;
-}
-
 void expectAccurate(const char* scene, int res, double voxelDepth, Bounds b) {
-    const Volume v = denseScene(scene, res, voxelDepth);
+    const Volume v = cpu_ref::denseBuiltinScene(scene, res, voxelDepth);
     Camera cam;
     cam.eye = {0.3, 0.4, 2.9};
     cam.target = {0, -0.05, 0};
