@@ -1,6 +1,7 @@
 // `volstyle animate`: an animated volume (a VDB per frame) restyled from painted key frames and/or
 // rendered frame by frame (issue #16; core/solve/keyframe_solver.h).
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
@@ -46,6 +47,7 @@ const CommandSpec kAnimate{
         {"sweeps", "N", "Gauss-Seidel sweeps over the key frames, 1-100; default 3"},
         {"iterations", "N", "most CGLS iterations per key frame and sweep; default 30"},
         {"no-flow", "", "tie key frames voxel for voxel even where the files carry velocity"},
+        {"storage", "MODE", "how frames are stored: auto (dense while the box fits 256^3 voxels), dense or sparse (8^3 bricks); default auto"},
         {"fps", "F", "frames per second, to turn the files' velocity (units per second) into units per frame; default 24"},
         {"camera", "CAM.json", "the camera of --render (eye, target, up, fov_y_deg, width, height); default: frames the first frame"},
         {"lighting", "L.json", "sun(s), background and phase function; default: one warm sun and a blue sky"},
@@ -96,11 +98,11 @@ struct Frames {
     std::vector<std::vector<float>> velocity;
 };
 
-Frames readFrames(const std::string& pattern, int first, int last, double fps, bool oneGrid) {
+Frames readFrames(const std::string& pattern, int first, int last, double fps, bool oneGrid, const core::VolumeLimits& limits) {
     std::map<int, core::Volume> stamped;
     const bool oneFile = pattern.find('%') == std::string::npos;
     if (oneFile) {
-        stamped = core::loadVdbFrames(pattern);
+        stamped = core::loadVdbFrames(pattern, limits);
         if (stamped.empty())
             throw InvalidArgument("'" + pattern + "' has no frame number (use %d or %04d) and holds no grids stamped with a frame "
                                   "(density.12, vel_12, or a 'frame' metadata entry)");
@@ -109,7 +111,7 @@ Frames readFrames(const std::string& pattern, int first, int last, double fps, b
     auto& frames = out.volumes;
     for (int f = first; f <= last; ++f) {
         if (oneFile && !stamped.count(f)) throw InvalidArgument("'" + pattern + "' holds no frame " + std::to_string(f));
-        frames.push_back(oneFile ? std::move(stamped[f]) : core::loadVdb(frameName(pattern, f)));
+        frames.push_back(oneFile ? std::move(stamped[f]) : core::loadVdb(frameName(pattern, f), limits));
         std::vector<float> v = core::velocityOf(frames.back());
         for (float& x : v) x = float(x / fps);
         out.velocity.push_back(std::move(v));
@@ -136,6 +138,10 @@ void solveFrames(const Arguments& args, core::GpuDevice& device, Frames& in, std
     o.sweeps = int(args.number("sweeps", 3));
     o.followFlow = !args.has("no-flow");
     o.solve.validate();
+    std::vector<core::Volume*> all;  // sparse frames: one layout, so values carry brick for brick
+    std::vector<std::vector<float>*> velocities;
+    for (size_t i = 0; i < frames.size(); ++i) all.push_back(&frames[i]), velocities.push_back(&in.velocity[i]);
+    core::putFramesOnOneLayout(all, velocities, o.solve.unknown);
     std::vector<core::KeyFrame> keys;
     for (auto& [f, v] : byFrame) keys.push_back({f, frames[size_t(f - first)], std::move(v), in.velocity[size_t(f - first)]});
     core::KeyFrameReport report;
@@ -151,8 +157,9 @@ void solveFrames(const Arguments& args, core::GpuDevice& device, Frames& in, std
     }
     std::string changes;
     for (double c : report.change) changes += (changes.empty() ? "" : ", ") + std::to_string(c);
-    progressLine(quiet, std::to_string(keys.size()) + " key frames solved in " + std::to_string(msSince(t0) / 1000) +
-                            " s; largest change per sweep: " + changes);
+    progressLine(quiet, fmt::format("{} key frames solved in {:.1f} s ({:.1f} s solving, {:.1f} s extending into empty voxels); "
+                                    "largest change per sweep: {}",
+                                    keys.size(), msSince(t0) / 1000, report.solveSeconds, report.extendSeconds, changes));
     if (args.has("output"))
         for (int f = first; f <= last; ++f) {
             core::saveVdb(frameName(args.get("output"), f), frames[size_t(f - first)]);
@@ -207,8 +214,12 @@ int runAnimate(const std::vector<std::string>& argv) {
             if (viewFrames[i] < first || viewFrames[i] > last)
                 throw InvalidArgument("view '" + views[i].name + "' is on frame " + std::to_string(viewFrames[i]) + ", outside --range");
     }
-    Frames frames = readFrames(args.get("frames"), first, last, fps, solve);
-    progressLine(args.has("quiet"), "read " + std::to_string(frames.volumes.size()) + " frames");
+    core::VolumeLimits limits;
+    limits.storage = core::volumeStorageNamed(args.get("storage", "auto"));
+    Frames frames = readFrames(args.get("frames"), first, last, fps, solve, limits);
+    const core::Volume& firstFrame = frames.volumes.front();
+    progressLine(args.has("quiet"), "read " + std::to_string(frames.volumes.size()) + " frames, stored " +
+                                        (firstFrame.isSparse() ? "sparse (the first: " + std::to_string(firstFrame.activeVoxels()) + " active voxels)" : "dense"));
     auto device = core::GpuDevice::create();
     if (solve) solveFrames(args, *device, frames, std::move(views), viewFrames, lighting, first, last);
     if (args.has("render")) renderFrames(args, *device, frames.volumes, lighting, first, last);

@@ -45,7 +45,12 @@ nlohmann::json sessionToJson(const SessionInfo& s) {
 
 nlohmann::json framesToJson(const std::vector<FrameInfo>& frames) {
     nlohmann::json list = nlohmann::json::array();
-    for (const FrameInfo& f : frames) list.push_back({{"frame", f.frame}, {"dims", {f.dims.x, f.dims.y, f.dims.z}}, {"solved", f.solved}, {"views", f.views}});
+    for (const FrameInfo& f : frames) list.push_back({{"frame", f.frame},
+                        {"dims", {f.dims.x, f.dims.y, f.dims.z}},
+                        {"storage", f.sparse ? "sparse" : "dense"},
+                        {"active_voxels", f.activeVoxels},
+                        {"solved", f.solved},
+                        {"views", f.views}});
     return list;
 }
 

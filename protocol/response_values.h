@@ -58,6 +58,8 @@ struct SessionInfo {
 struct FrameInfo {
     int frame = 0;
     Int3 dims;
+    bool sparse = false;      ///< stored as bricks (issue #39)
+    size_t activeVoxels = 0;  ///< voxels that hold data (dense: the box's)
     bool solved = false;
     int views = 0;  ///< views of this frame
 };

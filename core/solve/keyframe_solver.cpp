@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 
 #include "core/base/errors.h"
+#include "core/base/stopwatch.h"
 #include "core/solve/solver.h"
 #include "core/volume/sequence.h"
 
@@ -27,28 +29,57 @@ void check(const std::vector<KeyFrame>& frames, const KeyFrameOptions& o) {
         if (!(f.volume.dims() == frames[0].volume.dims()) || !(f.volume.worldFromIndex() == frames[0].volume.worldFromIndex()))
             throw InvalidArgument(name + ": every key frame must share the first one's grid (dims and transform)");
         if (k > 0 && f.frame <= frames[k - 1].frame) throw InvalidArgument(name + ": frame numbers must increase");
-        if (!f.velocity.empty() && f.velocity.size() != 3 * f.volume.voxelCount())
+        const BrickLayout *bricks = f.volume.bricks(), *first = frames[0].volume.bricks();
+        if (bool(bricks) != bool(first) || (bricks && !(*bricks == *first)))
+            throw InvalidArgument(name + ": sparse key frames must share one brick layout (putFramesOnOneLayout)");
+        if (!f.velocity.empty() && f.velocity.size() != 3 * f.volume.storedVoxels())
             throw InvalidArgument(name + ": its velocity grid has " + std::to_string(f.velocity.size() / 3) + " voxels, not " +
-                                  std::to_string(f.volume.voxelCount()));
+                                  std::to_string(f.volume.storedVoxels()));
     }
 }
 
-/// Voxels a frame's property acts in: non-zero extinction.
+/// Voxels a frame's property acts in: non-zero extinction (per stored voxel).
 std::vector<uint8_t> occupied(const Volume& v) {
-    std::vector<uint8_t> known(v.voxelCount());
+    std::vector<uint8_t> known(v.storedVoxels());
     for (size_t i = 0; i < known.size(); ++i)
         known[i] = (v.extinction()[3 * i] > 0 || v.extinction()[3 * i + 1] > 0 || v.extinction()[3 * i + 2] > 0) ? 1 : 0;
     return known;
 }
 
+/// The solved property of `solved` on `frame`'s layout: the same grid, or (a sparse solve that
+/// activated more bricks than the frame has) its values in the frame's bricks.
+std::vector<float> onLayoutOf(const Volume& frame, Volume& solved, Unknown u) {
+    if (!frame.isSparse() || *frame.bricks() == *solved.bricks()) return std::move(propertyOf(solved, u));
+    return gridOnBricks(solved, propertyOf(solved, u), 3, *frame.bricks(), 0.0f);
+}
+
 }  // namespace
+
+void putFramesOnOneLayout(const std::vector<Volume*>& frames, const std::vector<std::vector<float>*>& velocities, Unknown unknown) {
+    const auto sparse = std::find_if(frames.begin(), frames.end(), [](const Volume* v) { return v->isSparse(); });
+    if (sparse == frames.end()) return;
+    const BrickLayout& reference = *(*sparse)->bricks();
+    BrickLayout shared(reference.dims(), reference.offset());
+    for (const Volume* frame : frames) {
+        std::optional<Volume> converted;  // a dense frame's bricks: those that hold data
+        const Volume& asBricks = frame->isSparse() ? *frame : converted.emplace(frame->toSparse(reference.offset()));
+        if (!(asBricks.dims() == reference.dims()) || !(asBricks.bricks()->offset() == reference.offset()))
+            throw InvalidArgument("the frames of a sequence must share one grid (dims, transform and brick offset) to be solved together");
+        asBricks.bricks()->forEachActiveBrick([&](Int3 b, uint32_t) { shared.activate(b); });
+        for (const Int3& b : sparseSolveApron(asBricks, unknown)) shared.activate(b);
+    }
+    for (size_t i = 0; i < frames.size(); ++i) {
+        if (frames[i]->isSparse() && *frames[i]->bricks() == shared) continue;
+        if (i < velocities.size() && velocities[i] && !velocities[i]->empty())
+            *velocities[i] = gridOnBricks(*frames[i], *velocities[i], 3, shared, 0.0f);
+        *frames[i] = frames[i]->onBricks(shared);
+    }
+}
 
 std::vector<Volume> solveKeyFrames(GpuDevice& device, const std::vector<KeyFrame>& frames, const Lighting& lighting, const KeyFrameOptions& o,
                                    KeyFrameReport* report, const std::function<void(int, int)>& progress) {
     check(frames, o);
-    for (const KeyFrame& f : frames) requireDense(f.volume, "key-frame animation");
     const Unknown unknown = o.solve.unknown;
-    const Int3 dims = frames[0].volume.dims();
     const Mat4 indexFromWorld = frames[0].volume.worldFromIndex().inverseAffine();
     std::vector<Volume> out;
     std::vector<std::vector<float>> velocity;  // index units per frame (empty: same voxel)
@@ -59,7 +90,7 @@ std::vector<Volume> solveKeyFrames(GpuDevice& device, const std::vector<KeyFrame
     }
     // Frame j's values carried to frame k (along j's velocity, or voxel for voxel).
     auto carried = [&](size_t j, size_t k) {
-        return advect(propertyOf(out[j], unknown), dims, velocity[j], double(frames[k].frame - frames[j].frame));
+        return advect(propertyOf(out[j], unknown), GridSpace::of(out[j]), velocity[j], double(frames[k].frame - frames[j].frame));
     };
     KeyFrameReport rep;
     rep.frames.resize(frames.size());
@@ -73,7 +104,7 @@ std::vector<Volume> solveKeyFrames(GpuDevice& device, const std::vector<KeyFrame
             if (k + 1 < frames.size()) neighbours.push_back(k + 1);
             std::shared_ptr<std::vector<float>> prior;
             if (sweep > 0 && o.temporal > 0 && !neighbours.empty()) {
-                prior = std::make_shared<std::vector<float>>(3 * out[k].voxelCount(), 0.0f);
+                prior = std::make_shared<std::vector<float>>(3 * out[k].storedVoxels(), 0.0f);
                 for (size_t j : neighbours) {
                     const std::vector<float> c = carried(j, k);
                     for (size_t i = 0; i < c.size(); ++i) (*prior)[i] += c[i] / float(neighbours.size());
@@ -87,12 +118,16 @@ std::vector<Volume> solveKeyFrames(GpuDevice& device, const std::vector<KeyFrame
                 SolveOptions so = o.solve;
                 so.localResolve = false;
                 if (prior) so.prior = {prior, o.temporal * double(neighbours.size())};
+                const auto t0 = Clock::now();
                 Solver solver(device, out[k], lighting, frames[k].views, so);
                 SolveResult r = solver.run();
+                rep.solveSeconds += msSince(t0) / 1000;
                 rep.frames[k] = r.report;
-                propertyOf(out[k], unknown) = std::move(propertyOf(r.volume, unknown));
+                propertyOf(out[k], unknown) = onLayoutOf(out[k], r.volume, unknown);
             }
-            if (o.extendIntoEmpty) extendByDiffusion(propertyOf(out[k], unknown), dims, occupied(out[k]));
+            const auto t0 = Clock::now();
+            if (o.extendIntoEmpty) extendByDiffusion(propertyOf(out[k], unknown), GridSpace::of(out[k]), occupied(out[k]));
+            rep.extendSeconds += msSince(t0) / 1000;
             const std::vector<float>& now = propertyOf(out[k], unknown);
             for (size_t i = 0; i < now.size(); ++i) change = std::max(change, double(std::abs(now[i] - before[i])));
         }
@@ -118,19 +153,19 @@ std::vector<float> frameFromKeys(const std::vector<KeyFrame>& keys, const std::v
     if (next == 0 || next == keys.size()) {
         const size_t k = next == 0 ? 0 : keys.size() - 1;
         const auto index = velocity(k).empty() ? std::vector<float>{} : velocityInIndexUnits(velocity(k), grid.worldFromIndex().inverseAffine());
-        return advect(property(k), grid.dims(), index, double(f - keys[k].frame));
+        return advect(property(k), GridSpace::of(grid), index, double(f - keys[k].frame));
     }
     return inBetween(property(next - 1), keys[next - 1].frame, velocity(next - 1), property(next), keys[next].frame, velocity(next), f,
-                     grid.dims(), grid.worldFromIndex());
+                     GridSpace::of(grid), grid.worldFromIndex());
 }
 
 std::vector<float> inBetween(const std::vector<float>& a, int fa, const std::vector<float>& velocityA, const std::vector<float>& b, int fb,
-                             const std::vector<float>& velocityB, int f, Int3 dims, const Mat4& worldFromIndex) {
+                             const std::vector<float>& velocityB, int f, const GridSpace& space, const Mat4& worldFromIndex) {
     if (!(fa < fb) || f < fa || f > fb) throw InvalidArgument("inBetween: the frame must lie between its key frames");
     const Mat4 indexFromWorld = worldFromIndex.inverseAffine();
     auto index = [&](const std::vector<float>& v) { return v.empty() ? v : velocityInIndexUnits(v, indexFromWorld); };
-    const std::vector<float> fromA = advect(a, dims, index(velocityA), double(f - fa));
-    const std::vector<float> fromB = advect(b, dims, index(velocityB), double(f - fb));
+    const std::vector<float> fromA = advect(a, space, index(velocityA), double(f - fa));
+    const std::vector<float> fromB = advect(b, space, index(velocityB), double(f - fb));
     return blend(fromA, fromB, double(f - fa) / double(fb - fa));
 }
 

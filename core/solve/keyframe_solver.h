@@ -20,6 +20,7 @@
 
 #include "core/gpu/gpu_device.h"
 #include "core/scene/solve_options.h"
+#include "core/volume/sequence.h"
 #include "core/volume/volume.h"
 
 namespace volstyle::core {
@@ -45,11 +46,21 @@ struct KeyFrameReport {
     /// Per sweep: the largest change of any frame's values (max abs), the last one's convergence.
     std::vector<double> change;
     std::vector<SolveReport> frames;  ///< the last solve of each frame (frames without views: empty)
+    double solveSeconds = 0, extendSeconds = 0;  ///< wall clock in the frames' solves, and in extending them
 };
 
+/// Puts the frames of one sequence (one box and transform) on one brick layout when any of them is
+/// sparse (issue #39): the union of their active bricks and of the apron a solve of `unknown`
+/// adds to each (sparseSolveApron), so that a key frame's solve keeps the layout and values carry
+/// from frame to frame brick for brick. Dense frames among sparse ones are stored sparse too;
+/// each non-empty velocity grid (`velocities[i]`, may be null) follows its frame. Nothing changes
+/// when every frame is dense. Throws InvalidArgument when the frames' boxes or brick offsets differ.
+void putFramesOnOneLayout(const std::vector<Volume*>& frames, const std::vector<std::vector<float>*>& velocities, Unknown unknown);
+
 /// The solved key frames' volumes, in the input's order. Throws InvalidArgument: fewer than one
-/// frame, frames of different dims or transforms, frame numbers not increasing, velocity grids
-/// of the wrong size, an unknown other than emission or albedo, or invalid per-frame options.
+/// frame, frames of different dims or transforms, sparse frames on different layouts
+/// (putFramesOnOneLayout first), frame numbers not increasing, velocity grids of the wrong size,
+/// an unknown other than emission or albedo, or invalid per-frame options.
 std::vector<Volume> solveKeyFrames(GpuDevice& device, const std::vector<KeyFrame>& frames, const Lighting& lighting,
                                    const KeyFrameOptions& options, KeyFrameReport* report = nullptr,
                                    const std::function<void(int sweep, int frame)>& progress = {});
@@ -57,13 +68,14 @@ std::vector<Volume> solveKeyFrames(GpuDevice& device, const std::vector<KeyFrame
 /// Frame f's property (emission or albedo, as `unknown`) from the solved key frames (`keys`
 /// for their frame numbers and velocities, `solved` in the same order): a key frame's own values;
 /// between two key frames their blend, each carried along its flow (with `followFlow`); before
-/// the first or after the last, carried from it.
+/// the first or after the last, carried from it. On the solved volumes' layout (sparse: the frame
+/// must share it, putFramesOnOneLayout).
 std::vector<float> frameFromKeys(const std::vector<KeyFrame>& keys, const std::vector<Volume>& solved, Unknown unknown, int f,
                                  bool followFlow);
 
 /// The property (`unknown`'s grid) of frame f between key frames a (frame fa) and b (frame fb):
 /// each carried to f along its velocity (when given) and blended linearly by (f − fa)/(fb − fa).
 std::vector<float> inBetween(const std::vector<float>& a, int fa, const std::vector<float>& velocityA, const std::vector<float>& b, int fb,
-                             const std::vector<float>& velocityB, int f, Int3 dims, const Mat4& worldFromIndex);
+                             const std::vector<float>& velocityB, int f, const GridSpace& space, const Mat4& worldFromIndex);
 
 }  // namespace volstyle::core

@@ -49,6 +49,12 @@ struct SolveResult {
     SolveReport report;
 };
 
+/// The inactive bricks a solve of `unknown` on sparse `volume` activates for its unknowns: the
+/// hull's apron (a voxel around the medium) for emission and albedo, every brick next to an
+/// active one for extinction. Empty for a dense volume. Callers that keep several volumes on one
+/// layout (key frames) activate them up front, so the solve's result keeps their layout.
+std::vector<Int3> sparseSolveApron(const Volume& volume, Unknown unknown);
+
 class Solver {
 public:
     /// Validates everything up front (throws InvalidArgument): options, views (a target per view,

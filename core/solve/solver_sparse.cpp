@@ -43,19 +43,29 @@ Int3 halved(Int3 d) { return {std::max(1, (d.x + 1) / 2), std::max(1, (d.y + 1) 
 
 }  // namespace
 
-void Solver::State::growApron() {
-    volume.unshareTiles();  // every unknown a voxel of its own
-    if (opt.unknown == Unknown::Extinction) {  // the medium can grow anywhere next to it
-        volume.activateBricksAround(1);
-        return;
+std::vector<Int3> sparseSolveApron(const Volume& volume, Unknown unknown) {
+    const BrickLayout* bricks = volume.bricks();
+    if (!bricks) return {};
+    std::vector<uint8_t> added(bricks->slotTable().size(), 0);
+    std::vector<Int3> more;
+    auto add = [&](Int3 b) {
+        if (bricks->isActive(b) || added[bricks->brickIndex(b)]) return;
+        added[bricks->brickIndex(b)] = 1;
+        more.push_back(b);
+    };
+    if (unknown == Unknown::Extinction) {  // the medium can grow anywhere next to it
+        const Int3 nb = bricks->brickDims();
+        bricks->forEachActiveBrick([&](Int3 b, uint32_t) {
+            for (int z = std::max(b.z - 1, 0); z <= std::min(b.z + 1, nb.z - 1); ++z)
+                for (int y = std::max(b.y - 1, 0); y <= std::min(b.y + 1, nb.y - 1); ++y)
+                    for (int x = std::max(b.x - 1, 0); x <= std::min(b.x + 1, nb.x - 1); ++x) add({x, y, z});
+        });
+        return more;
     }
     // Emission and albedo: the hull is the medium and a voxel around it (solver_hull.cpp):
     // only voxels on a brick's faces reach into another brick.
-    const BrickLayout active = *volume.bricks();
-    const Int3 n = volume.dims();
-    std::vector<Int3> more;
+    const Int3 n = volume.dims(), o = bricks->offset();
     const std::vector<float>& ext = volume.extinction();
-    const Int3 o = active.offset();
     forEachActiveVoxel(volume, [&](Int3 p, size_t s) {
         if (std::max({ext[3 * s], ext[3 * s + 1], ext[3 * s + 2]}) <= 0) return;
         const Int3 l{(p.x + o.x) % kBrickSide, (p.y + o.y) % kBrickSide, (p.z + o.z) % kBrickSide};
@@ -63,12 +73,15 @@ void Solver::State::growApron() {
         if (inner(l.x) && inner(l.y) && inner(l.z)) return;
         for (int z = std::max(p.z - 1, 0); z <= std::min(p.z + 1, n.z - 1); ++z)
             for (int y = std::max(p.y - 1, 0); y <= std::min(p.y + 1, n.y - 1); ++y)
-                for (int x = std::max(p.x - 1, 0); x <= std::min(p.x + 1, n.x - 1); ++x) {
-                    const Int3 b = active.brickOf({x, y, z});
-                    if (!active.isActive(b)) more.push_back(b);
-                }
+                for (int x = std::max(p.x - 1, 0); x <= std::min(p.x + 1, n.x - 1); ++x) add(bricks->brickOf({x, y, z}));
     });
-    for (const Int3& b : more) volume.activateBrick(b);
+    return more;
+}
+
+void Solver::State::growApron() {
+    const std::vector<Int3> apron = sparseSolveApron(volume, opt.unknown);
+    volume.unshareTiles();  // every unknown a voxel of its own
+    for (const Int3& b : apron) volume.activateBrick(b);
 }
 
 void Solver::State::chooseSparseUnknowns() {

@@ -1,17 +1,19 @@
 #include "core/volume/sequence.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <mutex>
+#include <thread>
 
 #include "core/base/errors.h"
 
 namespace volstyle::core {
 namespace {
 
-size_t at(Int3 n, int i, int j, int k) { return (size_t(k) * size_t(n.y) + size_t(j)) * size_t(n.x) + size_t(i); }
-
 /// Trilinear lookup of RGB `grid` at index point p, clamped to the edge.
-Vec3d sample(const std::vector<float>& grid, Int3 n, const Vec3d& p) {
+Vec3d sample(const std::vector<float>& grid, const GridSpace& space, const Vec3d& p) {
+    const Int3 n = space.dims();
     int i0[3], i1[3];
     double f[3];
     for (int a = 0; a < 3; ++a) {
@@ -22,10 +24,48 @@ Vec3d sample(const std::vector<float>& grid, Int3 n, const Vec3d& p) {
     for (int c = 0; c < 8; ++c) {
         const int x = c & 1 ? i1[0] : i0[0], y = c & 2 ? i1[1] : i0[1], z = c & 4 ? i1[2] : i0[2];
         const double w = (c & 1 ? f[0] : 1 - f[0]) * (c & 2 ? f[1] : 1 - f[1]) * (c & 4 ? f[2] : 1 - f[2]);
-        const size_t e = 3 * at(n, x, y, z);
+        const size_t e = 3 * space.at({x, y, z});
         r += Vec3d(grid[e], grid[e + 1], grid[e + 2]) * w;
     }
     return r;
+}
+
+/// A voxel to extend: where it is stored and where its 6-neighbours are (−x, +x, −y, +y, −z, +z;
+/// kNone where the box or the active region ends: zero flux).
+struct FreeVoxel {
+    static constexpr uint32_t kNone = UINT32_MAX;
+    size_t stored;
+    std::array<uint32_t, 6> neighbours;
+};
+
+std::vector<FreeVoxel> freeVoxels(const GridSpace& space, const std::vector<uint8_t>& known) {
+    if (space.storedVoxels() >= FreeVoxel::kNone) throw LimitExceeded("extendByDiffusion: over 4 G stored voxels");
+    const Int3 n = space.dims();
+    std::vector<FreeVoxel> free;
+    space.forEachVoxel([&](Int3 v, size_t stored) {
+        if (known[stored]) return;
+        FreeVoxel f{stored, {}};
+        const int offsets[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
+        for (int o = 0; o < 6; ++o) {
+            const Int3 q{v.x + offsets[o][0], v.y + offsets[o][1], v.z + offsets[o][2]};
+            const bool inside = q.x >= 0 && q.y >= 0 && q.z >= 0 && q.x < n.x && q.y < n.y && q.z < n.z && space.holds(q);
+            f.neighbours[size_t(o)] = inside ? uint32_t(space.at(q)) : FreeVoxel::kNone;
+        }
+        free.push_back(f);
+    });
+    return free;
+}
+
+/// Calls f(begin, end) over [0, count) split among the cores (a core per 64 K items at most: a
+/// thread costs tens of microseconds), and waits.
+template <typename F>
+void inParallel(size_t count, F&& f) {
+    const size_t workers = std::clamp<size_t>(std::min<size_t>(std::thread::hardware_concurrency(), count >> 16), 1, 16);
+    const size_t chunk = (count + workers - 1) / workers;
+    std::vector<std::thread> threads;
+    for (size_t w = 1; w < workers && w * chunk < count; ++w) threads.emplace_back([&, w] { f(w * chunk, std::min(count, (w + 1) * chunk)); });
+    f(0, std::min(count, chunk));
+    for (auto& t : threads) t.join();
 }
 
 }  // namespace
@@ -39,19 +79,17 @@ std::vector<float> velocityInIndexUnits(const std::vector<float>& v, const Mat4&
     return out;
 }
 
-std::vector<float> advect(const std::vector<float>& grid, Int3 n, const std::vector<float>& velocity, double frames) {
-    if (grid.size() != 3 * size_t(n.volume())) throw InvalidArgument("advect: the grid does not match its dims");
+std::vector<float> advect(const std::vector<float>& grid, const GridSpace& space, const std::vector<float>& velocity, double frames) {
+    if (grid.size() != 3 * space.storedVoxels()) throw InvalidArgument("advect: the grid does not match its dims");
     if (velocity.empty() || frames == 0) return grid;
     if (velocity.size() != grid.size()) throw InvalidArgument("advect: the velocity grid does not match the grid");
-    std::vector<float> out(grid.size());
-    for (int k = 0; k < n.z; ++k)
-        for (int j = 0; j < n.y; ++j)
-            for (int i = 0; i < n.x; ++i) {
-                const size_t e = 3 * at(n, i, j, k);
-                const Vec3d back = Vec3d(i, j, k) - Vec3d(velocity[e], velocity[e + 1], velocity[e + 2]) * frames;
-                const Vec3d v = sample(grid, n, back);
-                out[e] = float(v.x), out[e + 1] = float(v.y), out[e + 2] = float(v.z);
-            }
+    std::vector<float> out = grid;  // the background (sparse) stays as it is
+    space.forEachVoxel([&](Int3 p, size_t stored) {
+        const size_t e = 3 * stored;
+        const Vec3d back = Vec3d(p.x, p.y, p.z) - Vec3d(velocity[e], velocity[e + 1], velocity[e + 2]) * frames;
+        const Vec3d v = sample(grid, space, back);
+        out[e] = float(v.x), out[e + 1] = float(v.y), out[e + 2] = float(v.z);
+    });
     return out;
 }
 
@@ -62,12 +100,11 @@ std::vector<float> blend(const std::vector<float>& a, const std::vector<float>& 
     return out;
 }
 
-void extendByDiffusion(std::vector<float>& grid, Int3 n, const std::vector<uint8_t>& known, int maxSweeps, double tolerance) {
-    if (known.size() != size_t(n.volume()) || grid.size() != 3 * known.size()) throw InvalidArgument("extendByDiffusion: sizes disagree");
+void extendByDiffusion(std::vector<float>& grid, const GridSpace& space, const std::vector<uint8_t>& known, int maxSweeps,
+                       double tolerance) {
+    if (known.size() != space.storedVoxels() || grid.size() != 3 * known.size()) throw InvalidArgument("extendByDiffusion: sizes disagree");
     if (std::none_of(known.begin(), known.end(), [](uint8_t k) { return k != 0; })) return;
-    std::vector<size_t> free;
-    for (size_t v = 0; v < known.size(); ++v)
-        if (!known[v]) free.push_back(v);
+    const std::vector<FreeVoxel> free = freeVoxels(space, known);
     if (free.empty()) return;
     // Start the free voxels at the known ones' mean: fewer sweeps than from zero.
     Vec3d mean(0, 0, 0);
@@ -75,30 +112,31 @@ void extendByDiffusion(std::vector<float>& grid, Int3 n, const std::vector<uint8
     for (size_t v = 0; v < known.size(); ++v)
         if (known[v]) mean += Vec3d(grid[3 * v], grid[3 * v + 1], grid[3 * v + 2]), count += 1;
     mean = mean * (1 / count);
-    for (size_t v : free) grid[3 * v] = float(mean.x), grid[3 * v + 1] = float(mean.y), grid[3 * v + 2] = float(mean.z);
-    std::vector<float> next = grid;
+    for (const FreeVoxel& f : free) grid[3 * f.stored] = float(mean.x), grid[3 * f.stored + 1] = float(mean.y), grid[3 * f.stored + 2] = float(mean.z);
+    // Jacobi sweeps, split among the cores (each voxel's new value reads only the last sweep's).
+    std::vector<float> next(3 * free.size());
+    std::mutex mutex;
     for (int sweep = 0; sweep < maxSweeps; ++sweep) {
         double moved = 0;
-        for (size_t v : free) {
-            const int i = int(v % size_t(n.x)), j = int(v / size_t(n.x) % size_t(n.y)), k = int(v / (size_t(n.x) * size_t(n.y)));
-            Vec3d sum(0, 0, 0);
-            int neighbours = 0;
-            const int offsets[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
-            for (const auto& o : offsets) {
-                const int a = i + o[0], b = j + o[1], c = k + o[2];
-                if (a < 0 || b < 0 || c < 0 || a >= n.x || b >= n.y || c >= n.z) continue;  // zero-flux border
-                const size_t e = 3 * at(n, a, b, c);
-                sum += Vec3d(grid[e], grid[e + 1], grid[e + 2]);
-                ++neighbours;
+        inParallel(free.size(), [&](size_t begin, size_t end) {
+            double movedHere = 0;
+            for (size_t i = begin; i < end; ++i) {
+                Vec3d sum(0, 0, 0);
+                int neighbours = 0;
+                for (uint32_t q : free[i].neighbours)
+                    if (q != FreeVoxel::kNone) sum += Vec3d(grid[3 * size_t(q)], grid[3 * size_t(q) + 1], grid[3 * size_t(q) + 2]), ++neighbours;
+                const Vec3d value = sum * (1.0 / std::max(neighbours, 1));
+                for (int ch = 0; ch < 3; ++ch) {
+                    movedHere = std::max(movedHere, std::abs(value[ch] - grid[3 * free[i].stored + size_t(ch)]));
+                    next[3 * i + size_t(ch)] = float(value[ch]);
+                }
             }
-            const Vec3d value = sum * (1.0 / std::max(neighbours, 1));
-            for (int ch = 0; ch < 3; ++ch) {
-                moved = std::max(moved, std::abs(value[ch] - grid[3 * v + size_t(ch)]));
-                next[3 * v + size_t(ch)] = float(value[ch]);
-            }
-        }
-        for (size_t v : free)
-            for (int ch = 0; ch < 3; ++ch) grid[3 * v + size_t(ch)] = next[3 * v + size_t(ch)];
+            std::lock_guard lock(mutex);
+            moved = std::max(moved, movedHere);
+        });
+        inParallel(free.size(), [&](size_t begin, size_t end) {
+            for (size_t i = begin; i < end; ++i) std::copy_n(&next[3 * i], 3, &grid[3 * free[i].stored]);
+        });
         if (moved <= tolerance) break;
     }
 }

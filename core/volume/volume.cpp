@@ -176,6 +176,34 @@ Volume Volume::toSparse(Int3 offset) const {
     return out;
 }
 
+std::vector<float> gridOnBricks(const Volume& from, const std::vector<float>& grid, int channels, const BrickLayout& bricks,
+                                float background) {
+    const size_t block = size_t(channels) * kBrickVoxels;
+    if (!(from.dims() == bricks.dims())) throw InternalError("gridOnBricks: the layout is not over the volume's box");
+    if (grid.size() != size_t(channels) * from.storedVoxels()) throw InternalError("gridOnBricks: the grid does not match its volume");
+    // Every slot starts as the background (a brick's voxels outside the box keep it), then each
+    // voxel of an active brick reads the source's value.
+    std::vector<float> brickOfBackground(block, background);
+    if (from.isSparse()) std::copy_n(grid.begin(), block, brickOfBackground.begin());
+    std::vector<float> out(size_t(channels) * bricks.storedVoxels());
+    for (size_t slot = 0; slot < bricks.slots(); ++slot) std::copy(brickOfBackground.begin(), brickOfBackground.end(), out.begin() + ptrdiff_t(slot * block));
+    bricks.forEachStoredVoxel([&](Int3 p, size_t stored) {
+        const size_t src = from.index(p.x, p.y, p.z);
+        for (int c = 0; c < channels; ++c) out[size_t(channels) * stored + size_t(c)] = grid[size_t(channels) * src + size_t(c)];
+    });
+    return out;
+}
+
+Volume Volume::onBricks(const BrickLayout& bricks) const {
+    Volume out(bricks, m_worldFromIndex);
+    out.m_extinction = gridOnBricks(*this, m_extinction, 3, bricks, 0.0f);
+    if (hasAlbedo()) out.m_albedo = gridOnBricks(*this, m_albedo, 3, bricks, kDefaultAlbedo);
+    if (hasEmission()) out.m_emission = gridOnBricks(*this, m_emission, 3, bricks, 0.0f);
+    if (m_refractiveIndex) out.m_refractiveIndex = gridOnBricks(*this, *m_refractiveIndex, 1, bricks, 1.0f);
+    out.m_vdbSource = m_vdbSource;
+    return out;
+}
+
 void requireDense(const Volume& volume, const char* what) {
     if (!volume.isSparse()) return;
     std::ostringstream s;

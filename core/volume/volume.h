@@ -81,6 +81,10 @@ public:
     /// The same volume stored as bricks with `offset` (every brick holding a voxel that differs
     /// from the background active).
     Volume toSparse(Int3 offset = {0, 0, 0}) const;
+    /// The same volume stored in `bricks` (of the same box): each voxel of its active bricks holds
+    /// this volume's value there; the background slot keeps this volume's background (a dense
+    /// volume's: the grids' defaults). Voxels outside `bricks` are dropped.
+    Volume onBricks(const BrickLayout& bricks) const;
 
     Int3 dims() const { return m_dims; }
     size_t voxelCount() const { return size_t(m_dims.volume()); }
@@ -174,6 +178,11 @@ void forEachActiveVoxel(const Volume& v, F&& f) {
 /// slots, tiles sharing theirs) and `rgbGrids` grids is over `limits` (checked before its grids
 /// are allocated, and by validate()).
 void checkSparseLimits(Int3 dims, size_t activeBricks, size_t storedSlots, int rgbGrids, const VolumeLimits& limits);
+
+/// `grid` (`channels` floats per stored voxel of `from`) stored in `bricks` (of from's box), as
+/// Volume::onBricks does it; `background` fills the background slot when `from` is dense.
+std::vector<float> gridOnBricks(const Volume& from, const std::vector<float>& grid, int channels, const BrickLayout& bricks,
+                                float background);
 
 /// Throws InvalidArgument naming `what` when `volume` is sparse (code that walks the dense box).
 void requireDense(const Volume& volume, const char* what);

@@ -152,9 +152,14 @@ void VolumeService::runAnimate(Job& job, Session& s, const protocol::AnimateRequ
         std::map<int, std::vector<core::SolveView>> views;
         for (const auto& v : s.views.list)
             if (v.frame && v.target && s.frames.count(*v.frame)) views[*v.frame].push_back({v.id, v.camera, *v.target, v.weights, v.background});
-        for (auto& [n, list] : views) keys.push_back({n, frames[n], std::move(list), {}});
+        for (auto& [n, list] : views) keys.push_back({n, {}, std::move(list), {}});
     }
+    // Sparse frames on one layout, so that values carry from frame to frame brick for brick.
+    std::vector<core::Volume*> all;
+    for (auto& [n, v] : frames) all.push_back(&v);
+    core::putFramesOnOneLayout(all, {}, q.albedo ? core::Unknown::Albedo : core::Unknown::Emission);
     for (auto& k : keys) {
+        k.volume = frames[k.frame];
         k.velocity = core::velocityOf(k.volume);
         for (float& x : k.velocity) x = float(x / q.fps);
     }

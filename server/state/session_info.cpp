@@ -55,7 +55,7 @@ std::vector<protocol::FrameInfo> frameInfos(Session& s) {
     for (const auto& [n, f] : s.frames) {
         int views = 0;
         for (const auto& v : s.views.list) views += v.frame == n ? 1 : 0;
-        out.push_back({n, f.volume.dims(), f.solved, views});
+        out.push_back({n, f.volume.dims(), f.volume.isSparse(), f.volume.activeVoxels(), f.solved, views});
     }
     return out;
 }

@@ -39,7 +39,11 @@ std::string ballFrame(int f, int res = 16) {
     return bytes.str();
 }
 
-class AnimationApi : public PersistentApi {};
+class AnimationApi : public PersistentApi {
+protected:
+    std::vector<core::Volume> animateTheBall();
+    std::vector<std::string> m_storage;  ///< each frame's storage after animateTheBall, as GET …/frames says
+};
 
 }  // namespace
 
@@ -144,4 +148,62 @@ TEST_F(AnimationApi, OneVdbHoldingTheWholeAnimationUploadsEveryFrame) {
     // A file of one frame (no stamped grids) is not an animation; nothing changes.
     expectError(client().Put((base + "/frames").c_str(), read("ball.0.vdb"), "application/octet-stream"), 422, "unsupported_media");
     EXPECT_EQ(json::parse(client().Get((base + "/frames").c_str())->body).size(), 3u);
+}
+
+/// Frames 0–2 of the ball uploaded to a new session, frames 0 and 2 painted grey, animated; every
+/// frame as downloaded afterwards.
+std::vector<core::Volume> AnimationApi::animateTheBall() {
+    const std::string id = createSession(16), base = "/api/v1/sessions/" + id;
+    for (int f = 0; f <= 2; ++f)
+        EXPECT_EQ(client().Put((base + "/frames/" + std::to_string(f)).c_str(), ballFrame(f), "application/octet-stream")->status, 200);
+    for (int f : {0, 2}) {
+        const json view = {{"camera", {{"eye", {0.3, 0.6, 2.8}}, {"target", {0, 0, 0}}, {"width", 16}, {"height", 16}}}, {"frame", f}};
+        auto r = client().Post((base + "/views").c_str(), view.dump(), "application/json");
+        EXPECT_EQ(r->status, 201) << r->body;
+        core::Image target(16, 16);
+        for (float& x : target.rgba) x = 0.5f;
+        const std::string vid = json::parse(r->body)["id"];
+        EXPECT_EQ(client().Put((base + "/views/" + vid + "/target").c_str(), pngOf(target), "image/png")->status, 200);
+    }
+    auto started = client().Post((base + "/animate").c_str(), R"({"sweeps": 2, "max_iterations": 10, "temporal": 0.05})", "application/json");
+    EXPECT_EQ(started->status, 202) << started->body;
+    const std::string jid = json::parse(started->body)["job"];
+    EXPECT_EQ(readEvents(client(), "/api/v1/jobs/" + jid + "/events").back(), "done");
+    for (const auto& f : json::parse(client().Get((base + "/frames").c_str())->body)) m_storage.push_back(f["storage"]);
+    std::vector<core::Volume> frames;
+    for (int f = 0; f <= 2; ++f) {
+        auto vdb = client().Get((base + "/frames/" + std::to_string(f) + ".vdb").c_str());
+        EXPECT_EQ(vdb->status, 200);
+        const auto path = std::filesystem::temp_directory_path() / ("volstyle-frame-" + std::to_string(::getpid()) + ".vdb");
+        std::ofstream(path, std::ios::binary) << vdb->body;
+        frames.push_back(core::loadVdb(path.string()));
+        std::filesystem::remove(path);
+    }
+    return frames;
+}
+
+TEST_F(AnimationApi, SparseFramesAreSolvedAsDenseOnes) {
+    // The same animation with every volume stored as bricks (issue #39): each frame, key frame or
+    // blended, holds the emission the dense animation gives, voxel for voxel.
+    const std::vector<core::Volume> dense = animateTheBall();
+    Api::TearDown();
+    server::ServerOptions opt;
+    opt.volumeLimits.storage = core::VolumeStorage::Sparse;
+    start(opt, m_dir.string());
+    m_storage.clear();
+    const std::vector<core::Volume> sparse = animateTheBall();
+    ASSERT_EQ(sparse.size(), 3u);
+    EXPECT_EQ(m_storage, std::vector<std::string>(3, "sparse"));
+    for (int f = 0; f <= 2; ++f) {
+        ASSERT_TRUE(dense[size_t(f)].hasEmission() && sparse[size_t(f)].hasEmission()) << f;
+        double worst = 0, peak = 0;
+        forEachActiveVoxel(dense[size_t(f)], [&](Int3 p, size_t d) {
+            const size_t s = sparse[size_t(f)].index(p.x, p.y, p.z);
+            peak = std::max(peak, double(dense[size_t(f)].emission()[3 * d]));
+            worst = std::max(worst, double(std::abs(dense[size_t(f)].emission()[3 * d] - sparse[size_t(f)].emission()[3 * s])));
+        });
+        std::cout << "[ measured ] frame " << f << ": sparse against dense emission, at most " << worst << " apart (peak " << peak << ")\n";
+        EXPECT_GT(peak, 1e-3) << f;
+        EXPECT_LE(worst, 1e-4 * std::max(peak, 1.0)) << f;
+    }
 }

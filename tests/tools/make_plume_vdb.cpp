@@ -2,7 +2,9 @@
 // the Houdini-sized sim, about 3% active), a column rising from the ground and bending
 // downwind, widening as it rises, its edge broken up by noise; float `density` (fog volume) and
 // `temperature` (falls with height) and Vec3f `vel` (along the column), leaf voxels on background 0.
-// Usage: make_plume_vdb OUT.vdb [NX NY NZ [WIDTH]]   (WIDTH scales the column's radius: activity ∝ WIDTH²)
+// Usage: make_plume_vdb OUT.vdb [NX NY NZ [WIDTH [FRAME]]]   (WIDTH scales the column's radius:
+// activity ∝ WIDTH²; FRAME, default 0, moves the smoke's noise up along the column as 24 fps of its
+// velocity would, and sways the column: a sequence of frames on one box for `volstyle animate`)
 #include <openvdb/openvdb.h>
 
 #include <cmath>
@@ -15,12 +17,13 @@ using namespace volstyle;
 using namespace volstyle::core;
 
 int main(int argc, char** argv) {
-    if (argc != 2 && argc != 5 && argc != 6) {
-        std::fprintf(stderr, "usage: make_plume_vdb OUT.vdb [NX NY NZ [WIDTH]]\n");
+    if (argc != 2 && (argc < 5 || argc > 7)) {
+        std::fprintf(stderr, "usage: make_plume_vdb OUT.vdb [NX NY NZ [WIDTH [FRAME]]]\n");
         return 2;
     }
     const int nx = argc >= 5 ? std::atoi(argv[2]) : 1024, ny = argc >= 5 ? std::atoi(argv[3]) : 512, nz = argc >= 5 ? std::atoi(argv[4]) : 1024;
-    const double width = argc == 6 ? std::atof(argv[5]) : 1.0;
+    const double width = argc >= 6 ? std::atof(argv[5]) : 1.0;
+    const int frame = argc == 7 ? std::atoi(argv[6]) : 0;
     openvdb::initialize();
     auto density = openvdb::FloatGrid::create(0.0f);
     density->setName("density");
@@ -38,7 +41,9 @@ int main(int argc, char** argv) {
     const PerlinNoise noise(3);
     // In units of the 1024×512×1024 box, scaled to this one: the column's centre at height h and its radius.
     const double sx = nx / 1024.0, sy = ny / 512.0, sz = nz / 1024.0;
-    auto centre = [&](double h) { return Vec3d(sx * (200 + 600 * std::pow(h / 512, 2.0)), sy * h, sz * (512 + 60 * std::sin(h / 90))); };
+    auto centre = [&](double h) { return Vec3d(sx * (200 + 600 * std::pow(h / 512, 2.0)), sy * h, sz * (512 + 60 * std::sin(h / 90 - 0.05 * frame))); };
+    // The noise rises 2 m/s / 24 fps a frame (vel below), in voxels of this box (20 m wide).
+    const Vec3d rise(0, frame * (2.0 / 24) / (20.0 / nx), 0);
     auto radius = [&](double h) { return width * sx * (42 + 105 * h / 512); };
     for (int y = 0; y < ny; ++y) {
         const double h = y / sy;
@@ -50,7 +55,7 @@ int main(int argc, char** argv) {
                 const Vec3d p(x, y, z);
                 const double dist = std::hypot(p.x - c.x, p.z - c.z);
                 if (dist > reach || x < 0 || x >= nx || z < 0 || z >= nz) continue;
-                const double edge = dist / r + 0.35 * noise.fbm(p * (1.0 / (40 * sx)), 3);
+                const double edge = dist / r + 0.35 * noise.fbm((p - rise) * (1.0 / (40 * sx)), 3);
                 if (edge >= 1) continue;
                 const openvdb::Coord ijk(x, y, z);
                 d.setValue(ijk, float(0.6 * (1 - edge) * (1 - 0.5 * h / 512) / sx));  // the same optical depth at any resolution
