@@ -3,9 +3,9 @@
 # Makes frames 0..2 of the plume (tests/tools/make_plume_vdb, one box, density/temperature/vel),
 # paints key frames 0 and 2 (a render under a hotter sun: the solve must find emission that makes
 # the plume look like that under the scene's own light), solves them jointly along the files' `vel`
-# and fills frame 1, all stored sparse; prints the wall clock and peak RSS of the whole command,
-# the RMS of each key frame's render against its paint before and after, and checks that the
-# written frames kept every grid of the sim. Usage:
+# and fills frame 1, all stored sparse; prints the wall clock and peak RSS of the whole command and
+# each key frame's views' RMS against their paint before and after, and checks that every RMS fell
+# and that the written frames kept every grid of the sim. Usage:
 #   bench/sparse_animation_e2e.sh BUILD_DIR [NX NY NZ [VIEW_SIZE [ITERATIONS]]]   (default 512 256 512 128 10)
 set -euo pipefail
 build=$(realpath "$1")
@@ -30,9 +30,14 @@ for f in 0 2; do
 done
 echo "{\"views\": [$views], \"lighting\": {$scene}}" > "$work/views.json"
 /usr/bin/time -v "$build/bin/volstyle" animate --frames "$work/plume.%d.vdb" --range 0-2 --views "$work/views.json" \
-  --iterations "$iterations" --sweeps 2 --storage "${STORAGE:-auto}" -o "$work/out.%d.vdb" 2> "$work/time.txt" > "$work/animate.log"; cat "$work/animate.log"; grep -v "^\s" "$work/time.txt" || true || { cat "$work/time.txt"; exit 1; }
+  --iterations "$iterations" --sweeps 2 --storage "${STORAGE:-auto}" -o "$work/out.%d.vdb" 2> "$work/time.txt" > "$work/animate.log" \
+  || { cat "$work/animate.log" "$work/time.txt"; echo "FAILED: volstyle animate"; exit 1; }
+grep -v "^\s" "$work/time.txt" || true   # the progress lines (time -v's own are indented)
 echo "wall clock: $(awk -F': ' '/Elapsed/ {print $2}' "$work/time.txt"); peak RSS: $(awk '/Maximum resident/ {printf "%.0f MiB", $NF / 1024}' "$work/time.txt")"
 grep -q "stored sparse" "$work/time.txt" || { echo "FAILED: the frames were not stored sparse"; exit 1; }
+awk '/^key frame [0-9]+: RMS per view/ { n++; sub(/.*RMS per view /, ""); k = split($0, v, ", ");
+  for (i = 1; i <= k; i++) { split(v[i], ab, " -> "); if (ab[2] + 0 >= ab[1] + 0) { print "FAILED: a view'"'"'s RMS did not fall: " v[i]; bad = 1 } } }
+  END { if (n != 2) { print "FAILED: expected the RMS of 2 key frames, got " n; bad = 1 } exit bad }' "$work/time.txt"
 for f in 0 1 2; do
   "$build/bin/volstyle" info "$work/out.$f.vdb" > "$work/info.txt"
   for grid in density temperature vel emission; do

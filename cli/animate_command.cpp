@@ -139,9 +139,13 @@ void solveFrames(const Arguments& args, core::GpuDevice& device, Frames& in, std
     o.followFlow = !args.has("no-flow");
     o.solve.validate();
     std::vector<core::Volume*> all;  // sparse frames: one layout, so values carry brick for brick
-    std::vector<std::vector<float>*> velocities;
-    for (size_t i = 0; i < frames.size(); ++i) all.push_back(&frames[i]), velocities.push_back(&in.velocity[i]);
-    core::putFramesOnOneLayout(all, velocities, o.solve.unknown);
+    for (core::Volume& frame : frames) all.push_back(&frame);
+    core::putFramesOnOneLayout(all, {}, o.solve.unknown);
+    if (frames[0].isSparse())  // the files' velocity over the whole layout, where it reaches past a frame's own bricks too
+        for (size_t i = 0; i < frames.size(); ++i) {
+            in.velocity[i] = core::velocityOf(frames[i]);
+            for (float& x : in.velocity[i]) x = float(x / args.number("fps", 24));
+        }
     std::vector<core::KeyFrame> keys;
     for (auto& [f, v] : byFrame) keys.push_back({f, frames[size_t(f - first)], std::move(v), in.velocity[size_t(f - first)]});
     core::KeyFrameReport report;
@@ -160,6 +164,12 @@ void solveFrames(const Arguments& args, core::GpuDevice& device, Frames& in, std
     progressLine(quiet, fmt::format("{} key frames solved in {:.1f} s ({:.1f} s solving, {:.1f} s extending into empty voxels); "
                                     "largest change per sweep: {}",
                                     keys.size(), msSince(t0) / 1000, report.solveSeconds, report.extendSeconds, changes));
+    for (size_t k = 0; k < keys.size(); ++k) {
+        std::string rms;
+        for (size_t v = 0; v < report.frames[k].finalRms.size(); ++v)
+            rms += fmt::format("{}{:.4g} -> {:.4g}", v ? ", " : "", report.startRms[k][v], report.frames[k].finalRms[v]);
+        if (!rms.empty()) progressLine(quiet, fmt::format("key frame {}: RMS per view {}", keys[k].frame, rms));
+    }
     if (args.has("output"))
         for (int f = first; f <= last; ++f) {
             core::saveVdb(frameName(args.get("output"), f), frames[size_t(f - first)]);

@@ -193,6 +193,10 @@ std::unique_ptr<Context> Context::createOn(const std::string& platform, bool deb
     GLint64 storageBlock = 0;
     glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &storageBlock);
     caps.maxStorageBlockBytes = storageBlock;
+    // A smaller limit, to try what a GPU with small storage blocks does (tests: sparse solves that
+    // coarsen their unknowns to fit). It can only lower the driver's.
+    if (const char* limit = std::getenv("VOLSTYLE_MAX_STORAGE_BLOCK_BYTES"))
+        if (const long long bytes = std::atoll(limit); bytes > 0) caps.maxStorageBlockBytes = std::min(caps.maxStorageBlockBytes, bytes);
     caps.memoryInfo = gpuMemorySource();
 
     glEnable(GL_DEBUG_OUTPUT);

@@ -30,8 +30,9 @@ void check(const std::vector<KeyFrame>& frames, const KeyFrameOptions& o) {
             throw InvalidArgument(name + ": every key frame must share the first one's grid (dims and transform)");
         if (k > 0 && f.frame <= frames[k - 1].frame) throw InvalidArgument(name + ": frame numbers must increase");
         const BrickLayout *bricks = f.volume.bricks(), *first = frames[0].volume.bricks();
-        if (bool(bricks) != bool(first) || (bricks && !(*bricks == *first)))
-            throw InvalidArgument(name + ": sparse key frames must share one brick layout (putFramesOnOneLayout)");
+        if (bool(bricks) != bool(first) || (bricks && !(*bricks == *first)) || (bricks && bricks->hasSharedSlots()))
+            throw InvalidArgument(name + " is not stored on the same bricks as key frame " + std::to_string(frames[0].frame) +
+                                  ", or shares tile slots: put the sequence's frames on one brick layout first (putFramesOnOneLayout)");
         if (!f.velocity.empty() && f.velocity.size() != 3 * f.volume.storedVoxels())
             throw InvalidArgument(name + ": its velocity grid has " + std::to_string(f.velocity.size() / 3) + " voxels, not " +
                                   std::to_string(f.volume.storedVoxels()));
@@ -60,11 +61,13 @@ void putFramesOnOneLayout(const std::vector<Volume*>& frames, const std::vector<
     if (sparse == frames.end()) return;
     const BrickLayout& reference = *(*sparse)->bricks();
     BrickLayout shared(reference.dims(), reference.offset());
-    for (const Volume* frame : frames) {
+    for (size_t i = 0; i < frames.size(); ++i) {
+        const Volume* frame = frames[i];
         std::optional<Volume> converted;  // a dense frame's bricks: those that hold data
         const Volume& asBricks = frame->isSparse() ? *frame : converted.emplace(frame->toSparse(reference.offset()));
         if (!(asBricks.dims() == reference.dims()) || !(asBricks.bricks()->offset() == reference.offset()))
-            throw InvalidArgument("the frames of a sequence must share one grid (dims, transform and brick offset) to be solved together");
+            throw InvalidArgument("the sequence's frame #" + std::to_string(i + 1) + " is not on the first sparse frame's grid " +
+                                  "(its dims, or where its bricks start, differ): a sequence's frames must share one grid to be solved together");
         asBricks.bricks()->forEachActiveBrick([&](Int3 b, uint32_t) { shared.activate(b); });
         for (const Int3& b : sparseSolveApron(asBricks, unknown)) shared.activate(b);
     }
@@ -94,6 +97,7 @@ std::vector<Volume> solveKeyFrames(GpuDevice& device, const std::vector<KeyFrame
     };
     KeyFrameReport rep;
     rep.frames.resize(frames.size());
+    rep.startRms.resize(frames.size());
     for (int sweep = 0; sweep < o.sweeps; ++sweep) {
         double change = 0;
         for (size_t k = 0; k < frames.size(); ++k) {
@@ -122,6 +126,7 @@ std::vector<Volume> solveKeyFrames(GpuDevice& device, const std::vector<KeyFrame
                 Solver solver(device, out[k], lighting, frames[k].views, so);
                 SolveResult r = solver.run();
                 rep.solveSeconds += msSince(t0) / 1000;
+                if (rep.startRms[k].empty()) rep.startRms[k] = r.report.initialRms;
                 rep.frames[k] = r.report;
                 propertyOf(out[k], unknown) = onLayoutOf(out[k], r.volume, unknown);
             }

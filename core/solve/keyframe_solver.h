@@ -46,6 +46,7 @@ struct KeyFrameReport {
     /// Per sweep: the largest change of any frame's values (max abs), the last one's convergence.
     std::vector<double> change;
     std::vector<SolveReport> frames;  ///< the last solve of each frame (frames without views: empty)
+    std::vector<std::vector<double>> startRms;  ///< per frame, its views' RMS before its first solve
     double solveSeconds = 0, extendSeconds = 0;  ///< wall clock in the frames' solves, and in extending them
 };
 

@@ -267,8 +267,7 @@ void Solver::State::buildRegularizers() {
         br.target = lambda > 0 ? reg.towardOne / lambda : 0;
         if (lp > 0) {
             // λ0‖a‖² + λ1‖a − 1‖² + λp‖a − p‖² = λ‖a − t‖² + (λ1 + λp p² − λ t²), t = (λ1 + λp p)/λ.
-            const std::vector<float>& p = *opt.prior.values;
-            if (p.size() != 3 * elements) throw InvalidArgument("the prior has " + std::to_string(p.size() / 3) + " values for " + std::to_string(elements) + " unknowns");
+            const std::vector<float> p = priorOnUnknowns();
             br.targets.assign(4 * cells, 0.0f);
             for (size_t e = 0; e < cells; ++e)
                 for (int c = 0; c < 3; ++c) {

@@ -127,7 +127,12 @@ std::vector<float> Solver::State::sparseGridFrom(const std::vector<float>& unkno
         return grid;
     }
     // Coarser unknowns: the basis functions evaluated at every stored voxel (trilinear, or the
-    // box's nearest unknown), as the projector weighs them.
+    // box's nearest unknown), as the projector weighs them. The background brick keeps the
+    // property's background (albedo 1: what inactive bricks read).
+    const bool albedo = opt.unknown == Unknown::Albedo || (opt.unknown == Unknown::EmissionAlbedo && block == 1);
+    const std::vector<float>& was = albedo ? volume.albedo() : opt.unknown == Unknown::Extinction ? volume.extinction() : volume.emission();
+    if (was.size() == grid.size()) std::copy_n(was.begin(), 3 * kBrickVoxels, grid.begin());
+    else if (albedo) std::fill_n(grid.begin(), 3 * kBrickVoxels, kDefaultAlbedo);
     const Vec3d scale(double(udims.x) / n.x, double(udims.y) / n.y, double(udims.z) / n.z);
     const GridView from{unknowns, udims, 4, 4 * block * cells, &unknownBricks};
     forEachActiveVoxel(volume, [&](Int3 p, size_t s) {
@@ -136,6 +141,22 @@ std::vector<float> Solver::State::sparseGridFrom(const std::vector<float>& unkno
         for (int ch = 0; ch < 3; ++ch) grid[3 * s + size_t(ch)] = float(v[ch]);
     });
     return grid;
+}
+
+std::vector<float> Solver::State::priorOnUnknowns() const {
+    const std::vector<float>& p = *opt.prior.values;
+    if (p.size() == 3 * elements) return p;
+    const size_t blocks = elements / cells;
+    if (!volume.isSparse() || p.size() != 3 * blocks * volume.storedVoxels())
+        throw InvalidArgument("the prior has " + std::to_string(p.size() / 3) + " values for " + std::to_string(elements) + " unknowns");
+    // Per stored voxel of a sparse volume whose unknowns were coarsened to fit (key frames).
+    std::vector<float> init(4 * elements), out(3 * elements);
+    for (size_t b = 0; b < blocks; ++b) {
+        const auto first = p.begin() + ptrdiff_t(3 * b * volume.storedVoxels());
+        sparseUnknownsFrom(std::vector<float>(first, first + ptrdiff_t(3 * volume.storedVoxels())), init, b);
+    }
+    for (size_t e = 0; e < elements; ++e) std::copy_n(&init[4 * e], 3, &out[3 * e]);
+    return out;
 }
 
 void Solver::State::checkVectorsFit() const {

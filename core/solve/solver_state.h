@@ -93,6 +93,9 @@ struct Solver::State final : BoundedLeastSquares {
     void sparseUnknownsFrom(const std::vector<float>& grid, std::vector<float>& init, size_t block) const;
     /// A grid of the volume (3 floats per stored voxel) from block `block` of the unknowns.
     std::vector<float> sparseGridFrom(const std::vector<float>& unknowns, size_t block) const;
+    /// The prior's values, 3 per element: as given, or (a sparse volume solved on coarser unknowns,
+    /// given per stored voxel of the volume) at each unknown's centre. Throws InvalidArgument else.
+    std::vector<float> priorOnUnknowns() const;
     /// Throws LimitExceeded when a vector of the unknowns or pixels is over the GPU's storage-block size.
     void checkVectorsFit() const;
     void allocate();

@@ -34,17 +34,21 @@ Vec3d sample(const std::vector<float>& grid, const GridSpace& space, const Vec3d
 /// kNone where the box or the active region ends: zero flux).
 struct FreeVoxel {
     static constexpr uint32_t kNone = UINT32_MAX;
-    size_t stored;
+    uint32_t stored;
     std::array<uint32_t, 6> neighbours;
 };
 
 std::vector<FreeVoxel> freeVoxels(const GridSpace& space, const std::vector<uint8_t>& known) {
-    if (space.storedVoxels() >= FreeVoxel::kNone) throw LimitExceeded("extendByDiffusion: over 4 G stored voxels");
+    if (space.storedVoxels() >= FreeVoxel::kNone)
+        throw LimitExceeded("a grid of over 4 G voxels is too large to extend into its empty voxels");
     const Int3 n = space.dims();
+    size_t count = 0;
+    space.forEachVoxel([&](Int3, size_t stored) { count += known[stored] ? 0 : 1; });
     std::vector<FreeVoxel> free;
+    free.reserve(count);
     space.forEachVoxel([&](Int3 v, size_t stored) {
         if (known[stored]) return;
-        FreeVoxel f{stored, {}};
+        FreeVoxel f{uint32_t(stored), {}};
         const int offsets[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
         for (int o = 0; o < 6; ++o) {
             const Int3 q{v.x + offsets[o][0], v.y + offsets[o][1], v.z + offsets[o][2]};
@@ -56,11 +60,11 @@ std::vector<FreeVoxel> freeVoxels(const GridSpace& space, const std::vector<uint
     return free;
 }
 
-/// Calls f(begin, end) over [0, count) split among the cores (a core per 64 K items at most: a
+/// Calls f(begin, end) over [0, count) split among the cores (a core per 32 K items at most: a
 /// thread costs tens of microseconds), and waits.
 template <typename F>
 void inParallel(size_t count, F&& f) {
-    const size_t workers = std::clamp<size_t>(std::min<size_t>(std::thread::hardware_concurrency(), count >> 16), 1, 16);
+    const size_t workers = std::clamp<size_t>(std::min<size_t>(std::thread::hardware_concurrency(), count >> 15), 1, 16);
     const size_t chunk = (count + workers - 1) / workers;
     std::vector<std::thread> threads;
     for (size_t w = 1; w < workers && w * chunk < count; ++w) threads.emplace_back([&, w] { f(w * chunk, std::min(count, (w + 1) * chunk)); });
@@ -80,7 +84,8 @@ std::vector<float> velocityInIndexUnits(const std::vector<float>& v, const Mat4&
 }
 
 std::vector<float> advect(const std::vector<float>& grid, const GridSpace& space, const std::vector<float>& velocity, double frames) {
-    if (grid.size() != 3 * space.storedVoxels()) throw InvalidArgument("advect: the grid does not match its dims");
+    if (grid.size() != 3 * space.storedVoxels()) throw InvalidArgument("advect: the grid does not match its voxels");
+    if (space.hasSharedSlots()) throw InvalidArgument("advect: a tile's bricks share their voxels (unshare them first)");
     if (velocity.empty() || frames == 0) return grid;
     if (velocity.size() != grid.size()) throw InvalidArgument("advect: the velocity grid does not match the grid");
     std::vector<float> out = grid;  // the background (sparse) stays as it is
@@ -103,6 +108,7 @@ std::vector<float> blend(const std::vector<float>& a, const std::vector<float>& 
 void extendByDiffusion(std::vector<float>& grid, const GridSpace& space, const std::vector<uint8_t>& known, int maxSweeps,
                        double tolerance) {
     if (known.size() != space.storedVoxels() || grid.size() != 3 * known.size()) throw InvalidArgument("extendByDiffusion: sizes disagree");
+    if (space.hasSharedSlots()) throw InvalidArgument("extendByDiffusion: a tile's bricks share their voxels (unshare them first)");
     if (std::none_of(known.begin(), known.end(), [](uint8_t k) { return k != 0; })) return;
     const std::vector<FreeVoxel> free = freeVoxels(space, known);
     if (free.empty()) return;
@@ -112,7 +118,7 @@ void extendByDiffusion(std::vector<float>& grid, const GridSpace& space, const s
     for (size_t v = 0; v < known.size(); ++v)
         if (known[v]) mean += Vec3d(grid[3 * v], grid[3 * v + 1], grid[3 * v + 2]), count += 1;
     mean = mean * (1 / count);
-    for (const FreeVoxel& f : free) grid[3 * f.stored] = float(mean.x), grid[3 * f.stored + 1] = float(mean.y), grid[3 * f.stored + 2] = float(mean.z);
+    for (const FreeVoxel& f : free) grid[3 * size_t(f.stored)] = float(mean.x), grid[3 * size_t(f.stored) + 1] = float(mean.y), grid[3 * size_t(f.stored) + 2] = float(mean.z);
     // Jacobi sweeps, split among the cores (each voxel's new value reads only the last sweep's).
     std::vector<float> next(3 * free.size());
     std::mutex mutex;
@@ -127,7 +133,7 @@ void extendByDiffusion(std::vector<float>& grid, const GridSpace& space, const s
                     if (q != FreeVoxel::kNone) sum += Vec3d(grid[3 * size_t(q)], grid[3 * size_t(q) + 1], grid[3 * size_t(q) + 2]), ++neighbours;
                 const Vec3d value = sum * (1.0 / std::max(neighbours, 1));
                 for (int ch = 0; ch < 3; ++ch) {
-                    movedHere = std::max(movedHere, std::abs(value[ch] - grid[3 * free[i].stored + size_t(ch)]));
+                    movedHere = std::max(movedHere, std::abs(value[ch] - grid[3 * size_t(free[i].stored) + size_t(ch)]));
                     next[3 * i + size_t(ch)] = float(value[ch]);
                 }
             }
@@ -135,7 +141,7 @@ void extendByDiffusion(std::vector<float>& grid, const GridSpace& space, const s
             moved = std::max(moved, movedHere);
         });
         inParallel(free.size(), [&](size_t begin, size_t end) {
-            for (size_t i = begin; i < end; ++i) std::copy_n(&next[3 * i], 3, &grid[3 * free[i].stored]);
+            for (size_t i = begin; i < end; ++i) std::copy_n(&next[3 * i], 3, &grid[3 * size_t(free[i].stored)]);
         });
         if (moved <= tolerance) break;
     }

@@ -29,6 +29,9 @@ public:
     size_t at(Int3 v) const {
         return m_bricks ? m_bricks->storageIndex(v) : (size_t(v.z) * size_t(m_dims.y) + size_t(v.y)) * size_t(m_dims.x) + size_t(v.x);
     }
+    /// Whether bricks share a slot (a tile's): advect and extendByDiffusion write voxel by voxel,
+    /// so they refuse such a layout.
+    bool hasSharedSlots() const { return m_bricks && m_bricks->hasSharedSlots(); }
     /// Whether voxel v (inside the box) has storage of its own (dense: always).
     bool holds(Int3 v) const { return !m_bricks || m_bricks->isActive(m_bricks->brickOf(v)); }
     /// Calls f(Int3 voxel, size_t stored) for every voxel with storage of its own, in storage order.

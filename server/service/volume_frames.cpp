@@ -31,6 +31,28 @@ SessionFrame& frameOf(Session& s, int n) {
     return it->second;
 }
 
+/// Frames put on one brick layout (sparse animations) must still fit: the layout, the union of
+/// every frame's bricks, within the volume limits, and the frames, with the solved grid, within
+/// the session's memory budget. Checked before the solve and again before storing its result.
+void checkFramesFit(const MemoryBudget& memory, const core::VolumeLimits& limits, Session& s, const std::map<int, core::Volume>& frames) {
+    if (frames.empty()) return;
+    if (const core::BrickLayout* b = frames.begin()->second.bricks()) {
+        try {
+            core::checkSparseLimits(b->dims(), b->activeBricks(), b->slots(), 3, limits);
+        } catch (const LimitExceeded& e) {
+            throw LimitExceeded(std::string("the frames on one brick layout (the union of their bricks): ") + e.what());
+        }
+    }
+    std::lock_guard lock(s.mutex);
+    size_t adding = 0, freeing = 0;
+    for (const auto& [n, v] : frames) {
+        if (!s.frames.count(n)) continue;
+        adding += v.memoryBytes() + (v.hasEmission() && v.hasAlbedo() ? 0 : 12 * v.storedVoxels());
+        freeing += s.frames.at(n).volume.memoryBytes();
+    }
+    memory.check(s, adding, freeing, fmt::format("the animation's {} frames, solved", frames.size()));
+}
+
 }  // namespace
 
 void VolumeService::uploadFrame(Session& s, int n, const std::string& bytes) {
@@ -158,6 +180,7 @@ void VolumeService::runAnimate(Job& job, Session& s, const protocol::AnimateRequ
     std::vector<core::Volume*> all;
     for (auto& [n, v] : frames) all.push_back(&v);
     core::putFramesOnOneLayout(all, {}, q.albedo ? core::Unknown::Albedo : core::Unknown::Emission);
+    checkFramesFit(m_ctx.memory, m_ctx.limits.volumeLimits, s, frames);
     for (auto& k : keys) {
         k.volume = frames[k.frame];
         k.velocity = core::velocityOf(k.volume);
@@ -180,6 +203,7 @@ void VolumeService::runAnimate(Job& job, Session& s, const protocol::AnimateRequ
     // Every frame from the key frames, stored (and written) as solved.
     for (auto& [n, v] : frames)
         (q.albedo ? v.ensureAlbedo() : v.ensureEmission()) = core::frameFromKeys(keys, solved, o.solve.unknown, n, o.followFlow);
+    checkFramesFit(m_ctx.memory, m_ctx.limits.volumeLimits, s, frames);
     protocol::AnimateJobResult result{{}, {}, report.change};
     for (const auto& k : keys) result.keyFrames.push_back(k.frame);
     {

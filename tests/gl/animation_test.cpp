@@ -223,6 +223,37 @@ TEST(Animation, SparseKeyFramesFollowTheDenseSolve) {
     EXPECT_NEAR(errSparse, errDense, 0.05 * errDense);
 }
 
+TEST(Animation, SparseKeyFramesSolveOnCoarsenedUnknownsToo) {
+    VOLSTYLE_REQUIRE_GL();
+    // A sparse solve whose vectors would not fit the GPU's storage blocks coarsens its unknowns;
+    // the temporal prior, given per stored voxel, then follows them. CTest's
+    // gl_sparse_key_frames_small_blocks runs this with VOLSTYLE_MAX_STORAGE_BLOCK_BYTES=65536
+    // (4,096 unknowns), where these frames solve at half resolution.
+    constexpr int kBig = 48;
+    constexpr double kRadius = 0.25;
+    std::vector<KeyFrame> keys{keyFrame(0, true, kBig, kRadius), keyFrame(2, true, kBig, kRadius)};
+    Volume between = frameVolume(1, false, kBig, kRadius).toSparse();
+    putFramesOnOneLayout({&keys[0].volume, &keys[1].volume, &between}, {&keys[0].velocity, &keys[1].velocity, nullptr}, Unknown::Emission);
+    KeyFrameOptions o;
+    o.solve.maxIterations = 20;
+    o.temporal = 0.05;
+    o.sweeps = 2;
+    KeyFrameReport report;
+    const auto solved = solveKeyFrames(test::device(), keys, dark(), o, &report);
+    Volume none = frameVolume(1, false, kBig, kRadius);
+    none.ensureEmission();
+    between.emission() = frameFromKeys(keys, solved, Unknown::Emission, 1, true);
+    const double start = frameOneError(none, kBig, kRadius), err = frameOneError(between, kBig, kRadius);
+    const bool coarse = report.frames[0].unknownCount < keys[0].volume.storedVoxels();
+    std::cout << "[ measured ] storage blocks of " << test::device().capabilities().maxStorageBlockBytes << " bytes: "
+              << report.frames[0].unknownCount << " unknowns for " << keys[0].volume.storedVoxels() << " stored voxels; frame 1: RMS "
+              << start << " (no emission) -> " << err << "\n";
+    EXPECT_LE(err, 0.25 * start);
+    if (std::getenv("VOLSTYLE_MAX_STORAGE_BLOCK_BYTES")) {
+        EXPECT_TRUE(coarse) << "the small blocks coarsened the unknowns";
+    }
+}
+
 TEST(Animation, SparseCarryAndDiffusionAreTheDenseOnesOnFullBricks) {
     // Every brick active: the same voxels, the same arithmetic, bit for bit (a box that is not a
     // whole number of bricks, so edge bricks stick out of it).
@@ -267,4 +298,47 @@ TEST(Animation, SparseDiffusionStopsAtInactiveBricks) {
     extendByDiffusion(g, GridSpace::of(v), known, 20000, 1e-7);
     for (int i = 0; i < 16; ++i) EXPECT_NEAR(g[3 * v.index(i, 0, 0)], float(std::min(i, 8)), 1e-3) << i;
     for (int i = 16; i < 24; ++i) EXPECT_EQ(g[3 * v.index(i, 0, 0)], 0.0f) << i << ": the background";
+}
+
+TEST(Animation, TheParallelDiffusionIsTheSerialOne) {
+    // 70 K free voxels, so the Jacobi sweeps split among the cores (a core per 32 K): each sweep reads only the
+    // last one's values, so the result is a serial Jacobi's bit for bit (written out here).
+    const Int3 n{80, 64, 16};
+    const size_t count = size_t(n.volume());
+    std::vector<float> g(3 * count);
+    std::vector<uint8_t> known(count);
+    for (size_t i = 0; i < count; ++i) known[i] = i % 7 == 0, g[3 * i] = g[3 * i + 1] = g[3 * i + 2] = known[i] ? float(i % 101) / 10 : 0.0f;
+    std::vector<float> serial = g;
+    Vec3d mean(0, 0, 0);
+    double m = 0;
+    for (size_t i = 0; i < count; ++i)
+        if (known[i]) mean += Vec3d(g[3 * i], g[3 * i + 1], g[3 * i + 2]), m += 1;
+    mean = mean * (1 / m);
+    for (size_t i = 0; i < count; ++i)
+        if (!known[i]) serial[3 * i] = float(mean.x), serial[3 * i + 1] = float(mean.y), serial[3 * i + 2] = float(mean.z);
+    for (int sweep = 0; sweep < 20; ++sweep) {
+        std::vector<float> next = serial;
+        for (int k = 0; k < n.z; ++k)
+            for (int j = 0; j < n.y; ++j)
+                for (int i = 0; i < n.x; ++i) {
+                    const size_t v = (size_t(k) * size_t(n.y) + size_t(j)) * size_t(n.x) + size_t(i);
+                    if (known[v]) continue;
+                    Vec3d sum(0, 0, 0);
+                    int neighbours = 0;
+                    const int offsets[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
+                    for (const auto& o : offsets) {
+                        const int a = i + o[0], b = j + o[1], c = k + o[2];
+                        if (a < 0 || b < 0 || c < 0 || a >= n.x || b >= n.y || c >= n.z) continue;
+                        const size_t e = 3 * ((size_t(c) * size_t(n.y) + size_t(b)) * size_t(n.x) + size_t(a));
+                        sum += Vec3d(serial[e], serial[e + 1], serial[e + 2]), ++neighbours;
+                    }
+                    const Vec3d value = sum * (1.0 / std::max(neighbours, 1));
+                    for (int ch = 0; ch < 3; ++ch) next[3 * v + size_t(ch)] = float(value[ch]);
+                }
+        serial = next;
+    }
+    extendByDiffusion(g, n, known, 20, 0);
+    size_t differ = 0;
+    for (size_t i = 0; i < g.size(); ++i) differ += g[i] != serial[i];
+    EXPECT_EQ(differ, 0u);
 }
