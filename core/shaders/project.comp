@@ -41,9 +41,9 @@ layout(local_size_x = kWorkgroup2D, local_size_y = kWorkgroup2D) in;
 #ifndef VOLSTYLE_ROW_MASK
 #define VOLSTYLE_ROW_MASK 0
 #endif
-// The fill pass places each entry in its element's column too (atomics); 0: the rows alone, and
-// the caller transposes them (a CPU rasterizer, where these scattered writes cost more than the
-// march: core/solve/projector.cpp).
+// The count pass counts each column's entries and the fill pass places each entry in its
+// element's column too (atomics); 0: the rows alone, and the caller counts and transposes them (a
+// CPU rasterizer, where these scattered atomics cost more than the march: core/solve/projector.cpp).
 #ifndef VOLSTYLE_ROW_COLUMNS
 #define VOLSTYLE_ROW_COLUMNS 1
 #endif
@@ -85,7 +85,9 @@ uint g_entries = 0u;  // entries of its row so far
 // (pass 2, at the slot the count pass reserved).
 void emitEntry(uint element, vec3 w) {
 #if VOLSTYLE_ROWS == VOLSTYLE_ROWS_COUNT
+#if VOLSTYLE_ROW_COLUMNS
     atomicAdd(colStart[element], 1u);
+#endif
 #else
     // The count pass reserved these slots; a ray that (by rounding in another compilation)
     // finds more entries than it counted drops the extra ones instead of writing a neighbour's.

@@ -120,24 +120,26 @@ uint64_t exclusiveScan(std::vector<uint32_t>& counts) {
     return total;
 }
 
-/// The columns of `r` from its rows on the host (a counting sort by element: each column's entries
-/// in row order). Entries past what a column counted are dropped, as the fill pass drops them.
-void transposeOnHost(SparseRows& r, const std::vector<uint32_t>& rowStart, const std::vector<uint32_t>& colStart) {
+/// The columns of `r` from its rows on the host: each column's entries counted (its start written
+/// to r.colStart), then placed by a counting sort by element, each column's entries in row order.
+/// A slot a ray left unfilled (element 0, weight 0) becomes a weight-0 entry of column 0.
+void transposeOnHost(SparseRows& r, const std::vector<uint32_t>& rowStart) {
     const size_t ch = size_t(r.channels), E = r.entries;
     std::vector<uint32_t> rowIndex(E), colIndex(E, 0);
     std::vector<float> rowWeight(E * ch), colWeight(E * ch, 0.0f);
     glGetNamedBufferSubData(r.rowIndex.id(), 0, GLsizeiptr(4 * E), rowIndex.data());
     glGetNamedBufferSubData(r.rowWeight.id(), 0, GLsizeiptr(4 * E * ch), rowWeight.data());
+    std::vector<uint32_t> colStart(r.columns, 0);
+    for (uint32_t e : rowIndex) ++colStart[e];
+    exclusiveScan(colStart);
     std::vector<uint32_t> cursor(colStart.begin(), colStart.end() - 1);
     for (size_t p = 0; p < r.rows; ++p)
         for (size_t k = rowStart[p]; k < rowStart[p + 1]; ++k) {
-            const uint32_t e = rowIndex[k];
-            const uint32_t j = cursor[e];
-            if (j >= colStart[e + 1]) continue;  // an unfilled slot (element 0, weight 0) or a surplus entry
-            cursor[e] = j + 1;
+            const uint32_t e = rowIndex[k], j = cursor[e]++;
             colIndex[j] = uint32_t(p);
             std::copy_n(&rowWeight[k * ch], ch, &colWeight[size_t(j) * ch]);
         }
+    gl::writeBuffer(r.colStart, 0, 4 * colStart.size(), colStart.data());
     gl::writeBuffer(r.colIndex, 0, 4 * E, colIndex.data());
     gl::writeBuffer(r.colWeight, 0, 4 * E * ch, colWeight.data());
 }
@@ -157,25 +159,29 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
         if (pixelMask) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowMask, pixelMask->id());
     };
     const int masked = pixelMask ? 1 : 0;
-    // Pass 1: entries per row (written by each ray) and per column (counted with atomics).
+    const bool hostColumns = m_columnsOnHost;
+    // Pass 1: entries per row (written by each ray) and, on a GPU, per column (counted with
+    // atomics; on a CPU rasterizer the host counts them while it transposes: bench/solver_race (b)'s
+    // rows went from 3.6 to 3.2–3.4 s, docs/BENCHMARKS.md).
     gl::ShaderBuilder count("project.comp");
     count.define("VOLSTYLE_ROWS", VOLSTYLE_ROWS_COUNT).define("VOLSTYLE_ROW_CHANNELS", channels).define("VOLSTYLE_ROW_MASK", masked);
+    count.define("VOLSTYLE_ROW_COLUMNS", hostColumns ? 0 : 1);
     useProgram(v, count);
     bindStarts();
     dispatchView(v);
     gl::barrierAfterComputeWrites();
-    std::vector<uint32_t> rowStart(r->rows), colStart(r->columns);
+    std::vector<uint32_t> rowStart(r->rows), colStart(hostColumns ? 0 : r->columns);
     glGetNamedBufferSubData(r->rowStart.id(), 0, GLsizeiptr(4 * r->rows), rowStart.data());
-    glGetNamedBufferSubData(r->colStart.id(), 0, GLsizeiptr(4 * r->columns), colStart.data());
+    if (!hostColumns) glGetNamedBufferSubData(r->colStart.id(), 0, GLsizeiptr(4 * r->columns), colStart.data());
     const uint64_t entries = exclusiveScan(rowStart);
-    VOLSTYLE_CHECK(exclusiveScan(colStart), ==, entries);
+    if (!hostColumns) VOLSTYLE_CHECK(exclusiveScan(colStart), ==, entries);
     const size_t weightBytes = entries * 4 * size_t(channels);
     if (entries >= 0xffffffffu || sparseRowsBytes(r->rows, r->columns, entries, channels) > budgetBytes ||
         (long long)weightBytes > m_device.capabilities().maxStorageBlockBytes)
         return nullptr;
     r->entries = entries;
     gl::writeBuffer(r->rowStart, 0, 4 * rowStart.size(), rowStart.data());
-    gl::writeBuffer(r->colStart, 0, 4 * colStart.size(), colStart.data());
+    if (!hostColumns) gl::writeBuffer(r->colStart, 0, 4 * colStart.size(), colStart.data());
     // Zeroed: a slot a ray left unfilled (fewer entries than counted) is element 0 with weight 0.
     r->rowIndex = zeroedBuffer(4 * entries, "rows-index");
     r->rowWeight = zeroedBuffer(weightBytes, "rows-weight");
@@ -187,7 +193,6 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
     // column. On a CPU rasterizer the host transposes the rows instead: the columns' scattered
     // writes and atomics made the fill pass 2.3× slower than the rows alone (1,450 against 630 ms
     // for 10 M entries, bench/solver_race (b)), and a counting sort on the host costs less.
-    const bool hostColumns = m_columnsOnHost;
     gl::Buffer cursor;  // where each column's next entry goes (the fill pass's atomics)
     if (!hostColumns) cursor = zeroedBuffer(4 * r->columns, "columns-cursor");
     gl::ShaderBuilder fill("project.comp");
@@ -204,7 +209,7 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
     }
     dispatchView(v);
     gl::barrierAfterComputeWrites();
-    if (hostColumns) transposeOnHost(*r, rowStart, colStart);
+    if (hostColumns) transposeOnHost(*r, rowStart);
     return r;
 }
 

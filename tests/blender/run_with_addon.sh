@@ -4,7 +4,8 @@
 # passes `-- ZIP WORKDIR ARGS…` to the script and passes when it prints "NAME: PASS".
 # Usage: run_with_addon.sh VOLSTYLE_BINARY SCRIPT.py NAME [ARGS…]
 #   addon_test.py "ADDON TEST" — the operators end to end;
-#   cycles_match.py "CYCLES MATCH" [SAMPLES] — Cycles against volstyle (default 128 samples);
+#   cycles_match.py "CYCLES MATCH" [SAMPLES [both]] — Cycles against volstyle (default 128 samples;
+#     `both`: also the material with both parts, printed, not held);
 #   ui_solve.py "UI SOLVE" — a script named ui_* runs in a real Blender window under Xvfb;
 #   ui_panel_screenshot.py SCREENSHOT OUT.png — docs/images/blender_panel.png (scripts/blender_screenshot.sh).
 set -euo pipefail
