@@ -117,6 +117,9 @@ def measure(scene, sun, cam, name):
         print(f"[ measured ] {name} {part}: Cycles/volstyle sum {ratio:.4f}, relative RMS {100 * rms:.2f}%{floor}"
               f"{'' if held else ' — measured, not held'}")
         out[part] = (ratio, rms, held)
+    # The sun back on: the next scene's session takes the scene's visible lights (with none, the
+    # server keeps its default sun and sky, and volstyle's scattering would not be Cycles').
+    sun.hide_render = False
     return out
 
 
