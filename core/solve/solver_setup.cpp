@@ -253,12 +253,13 @@ void Solver::State::buildRegularizers() {
     // Regularizer scales per block, averaged over the block's hull unknowns.
     std::vector<Unknown> kinds = {opt.unknown};
     if (opt.unknown == Unknown::EmissionAlbedo) kinds = {Unknown::Emission, Unknown::Albedo};
+    const double lp = opt.prior.values ? opt.prior.weight : 0.0;
+    const std::vector<float> p = lp > 0 ? priorOnUnknowns() : std::vector<float>{};  // every block's, once
     for (size_t b = 0; b < kinds.size(); ++b) {
         size_t inHull = 0;
         for (size_t e = b * cells; e < (b + 1) * cells; ++e) inHull += hullHost[4 * e] > 0 ? 1 : 0;
         const double Mh = std::max<double>(1.0, double(inHull));
         const Regularization& reg = opt.regularizationFor(kinds[b]);
-        const double lp = opt.prior.values ? opt.prior.weight : 0.0;
         const double lambda = reg.l2 + reg.towardOne + lp;
         BlockRegularizer br;
         br.range = {b * cells, cells};
@@ -267,7 +268,6 @@ void Solver::State::buildRegularizers() {
         br.target = lambda > 0 ? reg.towardOne / lambda : 0;
         if (lp > 0) {
             // λ0‖a‖² + λ1‖a − 1‖² + λp‖a − p‖² = λ‖a − t‖² + (λ1 + λp p² − λ t²), t = (λ1 + λp p)/λ.
-            const std::vector<float> p = priorOnUnknowns();
             br.targets.assign(4 * cells, 0.0f);
             for (size_t e = 0; e < cells; ++e)
                 for (int c = 0; c < 3; ++c) {

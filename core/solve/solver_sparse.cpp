@@ -54,12 +54,7 @@ std::vector<Int3> sparseSolveApron(const Volume& volume, Unknown unknown) {
         more.push_back(b);
     };
     if (unknown == Unknown::Extinction) {  // the medium can grow anywhere next to it
-        const Int3 nb = bricks->brickDims();
-        bricks->forEachActiveBrick([&](Int3 b, uint32_t) {
-            for (int z = std::max(b.z - 1, 0); z <= std::min(b.z + 1, nb.z - 1); ++z)
-                for (int y = std::max(b.y - 1, 0); y <= std::min(b.y + 1, nb.y - 1); ++y)
-                    for (int x = std::max(b.x - 1, 0); x <= std::min(b.x + 1, nb.x - 1); ++x) add({x, y, z});
-        });
+        bricks->forEachActiveBrick([&](Int3 b, uint32_t) { bricks->forEachBrickAround(b, 1, add); });
         return more;
     }
     // Emission and albedo: the hull is the medium and a voxel around it (solver_hull.cpp):

@@ -15,6 +15,7 @@
 /// value, so every such brick with the same values reads one shared slot. A shared slot is
 /// read-only; activate() gives a brick a slot of its own (Volume::activateBrick copies the values).
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -83,6 +84,14 @@ public:
             for (int y = 0; y < m_brickDims.y; ++y)
                 for (int x = 0; x < m_brickDims.x; ++x, ++i)
                     if (m_slotOfBrick[i] != 0) f(Int3{x, y, z}, m_slotOfBrick[i]);
+    }
+    /// Calls f(Int3 brick) for every brick of the box within `radius` bricks of b along each axis
+    /// (b itself included), x fastest.
+    template <typename F>
+    void forEachBrickAround(Int3 b, int radius, F&& f) const {
+        for (int z = std::max(b.z - radius, 0); z <= std::min(b.z + radius, m_brickDims.z - 1); ++z)
+            for (int y = std::max(b.y - radius, 0); y <= std::min(b.y + radius, m_brickDims.y - 1); ++y)
+                for (int x = std::max(b.x - radius, 0); x <= std::min(b.x + radius, m_brickDims.x - 1); ++x) f(Int3{x, y, z});
     }
     /// The table from brick to slot (x fastest), as the GPU's indirection texture holds it.
     const std::vector<uint32_t>& slotTable() const { return m_slotOfBrick; }

@@ -93,12 +93,10 @@ void Volume::unshareTiles() {
 void Volume::activateBricksAround(int radius) {
     if (!m_bricks || radius <= 0) return;
     const BrickLayout active = *m_bricks;
-    const Int3 nb = active.brickDims();
     active.forEachActiveBrick([&](Int3 b, uint32_t) {
-        for (int z = std::max(b.z - radius, 0); z <= std::min(b.z + radius, nb.z - 1); ++z)
-            for (int y = std::max(b.y - radius, 0); y <= std::min(b.y + radius, nb.y - 1); ++y)
-                for (int x = std::max(b.x - radius, 0); x <= std::min(b.x + radius, nb.x - 1); ++x)
-                    if (!m_bricks->isActive({x, y, z})) activateBrick({x, y, z});
+        active.forEachBrickAround(b, radius, [&](Int3 n) {
+            if (!m_bricks->isActive(n)) activateBrick(n);
+        });
     });
 }
 

@@ -34,7 +34,8 @@ SessionFrame& frameOf(Session& s, int n) {
 /// Frames put on one brick layout (sparse animations) must still fit: the layout, the union of
 /// every frame's bricks, within the volume limits, and the frames, with the solved grid, within
 /// the session's memory budget. Checked before the solve and again before storing its result.
-void checkFramesFit(const MemoryBudget& memory, const core::VolumeLimits& limits, Session& s, const std::map<int, core::Volume>& frames) {
+void checkFramesFit(const MemoryBudget& memory, const core::VolumeLimits& limits, Session& s, const std::map<int, core::Volume>& frames,
+                    bool albedo) {
     if (frames.empty()) return;
     if (const core::BrickLayout* b = frames.begin()->second.bricks()) {
         try {
@@ -47,7 +48,7 @@ void checkFramesFit(const MemoryBudget& memory, const core::VolumeLimits& limits
     size_t adding = 0, freeing = 0;
     for (const auto& [n, v] : frames) {
         if (!s.frames.count(n)) continue;
-        adding += v.memoryBytes() + (v.hasEmission() && v.hasAlbedo() ? 0 : 12 * v.storedVoxels());
+        adding += v.memoryBytes() + ((albedo ? v.hasAlbedo() : v.hasEmission()) ? 0 : 12 * v.storedVoxels());  // the solved grid
         freeing += s.frames.at(n).volume.memoryBytes();
     }
     memory.check(s, adding, freeing, fmt::format("the animation's {} frames, solved", frames.size()));
@@ -180,7 +181,7 @@ void VolumeService::runAnimate(Job& job, Session& s, const protocol::AnimateRequ
     std::vector<core::Volume*> all;
     for (auto& [n, v] : frames) all.push_back(&v);
     core::putFramesOnOneLayout(all, {}, q.albedo ? core::Unknown::Albedo : core::Unknown::Emission);
-    checkFramesFit(m_ctx.memory, m_ctx.limits.volumeLimits, s, frames);
+    checkFramesFit(m_ctx.memory, m_ctx.limits.volumeLimits, s, frames, q.albedo);
     for (auto& k : keys) {
         k.volume = frames[k.frame];
         k.velocity = core::velocityOf(k.volume);
@@ -203,7 +204,7 @@ void VolumeService::runAnimate(Job& job, Session& s, const protocol::AnimateRequ
     // Every frame from the key frames, stored (and written) as solved.
     for (auto& [n, v] : frames)
         (q.albedo ? v.ensureAlbedo() : v.ensureEmission()) = core::frameFromKeys(keys, solved, o.solve.unknown, n, o.followFlow);
-    checkFramesFit(m_ctx.memory, m_ctx.limits.volumeLimits, s, frames);
+    checkFramesFit(m_ctx.memory, m_ctx.limits.volumeLimits, s, frames, q.albedo);
     protocol::AnimateJobResult result{{}, {}, report.change};
     for (const auto& k : keys) result.keyFrames.push_back(k.frame);
     {
