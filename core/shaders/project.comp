@@ -80,6 +80,11 @@ layout(std430, binding = kBindingColWeight) writeonly buffer b_ColWeight {
 #endif
 uint g_pixel = 0u;    // this invocation's pixel within its view
 uint g_entries = 0u;  // entries of its row so far
+#if VOLSTYLE_ROWS == VOLSTYLE_ROWS_FILL
+// The slots the count pass reserved for this row, read once per ray: per entry, two loads of
+// rowStart at a per-lane index were most of what writing the rows cost on llvmpipe (issue #40).
+uint g_rowBegin = 0u, g_rowEnd = 0u;
+#endif
 
 // One entry of the row: counted (pass 1), or written to the row and to the element's column
 // (pass 2, at the slot the count pass reserved).
@@ -91,8 +96,8 @@ void emitEntry(uint element, vec3 w) {
 #else
     // The count pass reserved these slots; a ray that (by rounding in another compilation)
     // finds more entries than it counted drops the extra ones instead of writing a neighbour's.
-    uint k = rowStart[g_pixel] + g_entries;
-    if (k >= rowStart[g_pixel + 1u]) return;
+    uint k = g_rowBegin + g_entries;
+    if (k >= g_rowEnd) return;
 #if VOLSTYLE_ROW_COLUMNS
     uint j = colStart[element] + atomicAdd(colCursor[element], 1u);
     if (j >= colStart[element + 1u]) return;
@@ -340,6 +345,11 @@ void main() {
     g_pixel = uint(pix.y * u.imageSize.x + pix.x);
     g_entries = 0u;
     vec3 r = vec3(1.0);  // the weights themselves
+#if VOLSTYLE_ROWS == VOLSTYLE_ROWS_FILL
+    g_rowBegin = rowStart[g_pixel];
+    g_rowEnd = rowStart[g_pixel + 1u];
+    if (g_rowEnd == g_rowBegin) return;  // an empty row (a pixel without weight, or a ray that misses)
+#endif
 #if VOLSTYLE_ROW_MASK
     if (pixelWeight[pixelIndex].rgb == vec3(0.0)) {
 #if VOLSTYLE_ROWS == VOLSTYLE_ROWS_COUNT

@@ -2,6 +2,7 @@
 
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
+#include "core/solve/host_columns.h"
 #include "core/shaders/layout.h"
 
 #include <spdlog/spdlog.h>
@@ -101,8 +102,8 @@ void Projector::dispatch(bool adjoint, const GpuVector& unknowns, const GpuVecto
 
 namespace {
 
-gl::Buffer zeroedBuffer(size_t bytes, const std::string& label) {
-    gl::Buffer b = gl::createBuffer(std::max<size_t>(bytes, 4), nullptr, GL_DYNAMIC_STORAGE_BIT, label);
+gl::Buffer zeroedBuffer(size_t bytes, const std::string& label, GLbitfield flags = GL_DYNAMIC_STORAGE_BIT) {
+    gl::Buffer b = gl::createBuffer(std::max<size_t>(bytes, 4), nullptr, flags, label);
     const GLuint zero = 0;
     glClearNamedBufferData(b.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
     return b;
@@ -120,30 +121,6 @@ uint64_t exclusiveScan(std::vector<uint32_t>& counts) {
     return total;
 }
 
-/// The columns of `r` from its rows on the host: each column's entries counted (its start written
-/// to r.colStart), then placed by a counting sort by element, each column's entries in row order.
-/// A slot a ray left unfilled (element 0, weight 0) becomes a weight-0 entry of column 0.
-void transposeOnHost(SparseRows& r, const std::vector<uint32_t>& rowStart) {
-    const size_t ch = size_t(r.channels), E = r.entries;
-    std::vector<uint32_t> rowIndex(E), colIndex(E, 0);
-    std::vector<float> rowWeight(E * ch), colWeight(E * ch, 0.0f);
-    glGetNamedBufferSubData(r.rowIndex.id(), 0, GLsizeiptr(4 * E), rowIndex.data());
-    glGetNamedBufferSubData(r.rowWeight.id(), 0, GLsizeiptr(4 * E * ch), rowWeight.data());
-    std::vector<uint32_t> colStart(r.columns, 0);
-    for (uint32_t e : rowIndex) ++colStart[e];
-    exclusiveScan(colStart);
-    std::vector<uint32_t> cursor(colStart.begin(), colStart.end() - 1);
-    for (size_t p = 0; p < r.rows; ++p)
-        for (size_t k = rowStart[p]; k < rowStart[p + 1]; ++k) {
-            const uint32_t e = rowIndex[k], j = cursor[e]++;
-            colIndex[j] = uint32_t(p);
-            std::copy_n(&rowWeight[k * ch], ch, &colWeight[size_t(j) * ch]);
-        }
-    gl::writeBuffer(r.colStart, 0, 4 * colStart.size(), colStart.data());
-    gl::writeBuffer(r.colIndex, 0, 4 * E, colIndex.data());
-    gl::writeBuffer(r.colWeight, 0, 4 * E * ch, colWeight.data());
-}
-
 }  // namespace
 
 std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetBytes, int channels, const GpuVector* pixelMask) {
@@ -151,15 +128,17 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
     r->rows = size_t(v.camera.width) * v.camera.height;
     r->columns = elementCount();
     r->channels = channels;
+    const bool hostColumns = m_columnsOnHost;
+    r->hostMapped = hostColumns;
+    const GLbitfield storage = hostColumns ? kHostMappedStorage : GL_DYNAMIC_STORAGE_BIT;
     r->rowStart = zeroedBuffer(4 * (r->rows + 1), "rows-start");
-    r->colStart = zeroedBuffer(4 * (r->columns + 1), "columns-start");
+    r->colStart = zeroedBuffer(4 * (r->columns + 1), "columns-start", storage);
     auto bindStarts = [&] {
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowStart, r->rowStart.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColStart, r->colStart.id());
         if (pixelMask) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowMask, pixelMask->id());
     };
     const int masked = pixelMask ? 1 : 0;
-    const bool hostColumns = m_columnsOnHost;
     // Pass 1: entries per row (written by each ray) and, on a GPU, per column (counted with
     // atomics; on a CPU rasterizer the host counts them while it transposes: bench/solver_race (b)'s
     // rows went from 3.6 to 3.2–3.4 s, docs/BENCHMARKS.md).
@@ -183,12 +162,10 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
     gl::writeBuffer(r->rowStart, 0, 4 * rowStart.size(), rowStart.data());
     if (!hostColumns) gl::writeBuffer(r->colStart, 0, 4 * colStart.size(), colStart.data());
     // Zeroed: a slot a ray left unfilled (fewer entries than counted) is element 0 with weight 0.
-    r->rowIndex = zeroedBuffer(4 * entries, "rows-index");
-    r->rowWeight = zeroedBuffer(weightBytes, "rows-weight");
-    r->colIndex = m_columnsOnHost ? gl::createBuffer(4 * entries, nullptr, GL_DYNAMIC_STORAGE_BIT, "columns-index")
-                                  : zeroedBuffer(4 * entries, "columns-index");
-    r->colWeight = m_columnsOnHost ? gl::createBuffer(weightBytes, nullptr, GL_DYNAMIC_STORAGE_BIT, "columns-weight")
-                                   : zeroedBuffer(weightBytes, "columns-weight");
+    r->rowIndex = zeroedBuffer(4 * entries, "rows-index", storage);
+    r->rowWeight = zeroedBuffer(weightBytes, "rows-weight", storage);
+    r->colIndex = hostColumns ? gl::createBuffer(4 * entries, nullptr, storage, "columns-index") : zeroedBuffer(4 * entries, "columns-index");
+    r->colWeight = hostColumns ? gl::createBuffer(weightBytes, nullptr, storage, "columns-weight") : zeroedBuffer(weightBytes, "columns-weight");
     // Pass 2: the same rays write their entries into their row and, on a GPU, into each element's
     // column. On a CPU rasterizer the host transposes the rows instead: the columns' scattered
     // writes and atomics made the fill pass 2.3× slower than the rows alone (1,450 against 630 ms
@@ -208,7 +185,7 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColWeight, r->colWeight.id());
     }
     dispatchView(v);
-    gl::barrierAfterComputeWrites();
+    gl::barrierAfterComputeWrites();  // (it includes what the host's mapping of the rows needs)
     if (hostColumns) transposeOnHost(*r, rowStart);
     return r;
 }
@@ -227,8 +204,11 @@ void Projector::mergeRows(size_t budgetBytes) {
     std::vector<uint32_t> rowStart;
     rowStart.reserve(m_pixelCount + 1);
     std::vector<uint32_t> colCount(elementCount() + 1, 0), viewStarts;
-    m->rowIndex = gl::createBuffer(4 * entries, nullptr, GL_DYNAMIC_STORAGE_BIT, "merged-rows-index");
-    m->rowWeight = gl::createBuffer(4 * entries * size_t(channels), nullptr, GL_DYNAMIC_STORAGE_BIT, "merged-rows-weight");
+    // On a CPU rasterizer whose views' columns the host made, the host merges them too (in place).
+    m->hostMapped = m_columnsOnHost && std::all_of(m_views.begin(), m_views.end(), [](const View& v) { return v.rows->hostMapped; });
+    const GLbitfield storage = m->hostMapped ? kHostMappedStorage : GL_DYNAMIC_STORAGE_BIT;
+    m->rowIndex = gl::createBuffer(4 * entries, nullptr, storage, "merged-rows-index");
+    m->rowWeight = gl::createBuffer(4 * entries * size_t(channels), nullptr, storage, "merged-rows-weight");
     size_t before = 0;
     for (const View& v : m_views) {
         const SparseRows& r = *v.rows;
@@ -249,18 +229,33 @@ void Projector::mergeRows(size_t budgetBytes) {
     m->rowStart = gl::createBuffer(4 * rowStart.size(), rowStart.data(), 0, "merged-rows-start");
     exclusiveScan(colCount);  // counts -> starts (one extra total appended, unused)
     colCount.pop_back();
-    m->colStart = gl::createBuffer(4 * colCount.size(), colCount.data(), 0, "merged-columns-start");
-    // Columns: each element's entries of every view, in view order (sparse_merge.comp).
-    m->colIndex = gl::createBuffer(4 * entries, nullptr, GL_DYNAMIC_STORAGE_BIT, "merged-columns-index");
-    m->colWeight = gl::createBuffer(4 * entries * size_t(channels), nullptr, GL_DYNAMIC_STORAGE_BIT, "merged-columns-weight");
+    m->colStart = gl::createBuffer(4 * colCount.size(), colCount.data(), m->hostMapped ? storage : 0, "merged-columns-start");
+    m->colIndex = gl::createBuffer(4 * entries, nullptr, storage, "merged-columns-index");
+    m->colWeight = gl::createBuffer(4 * entries * size_t(channels), nullptr, storage, "merged-columns-weight");
+    if (m->hostMapped) {
+        // bench/solver_race (b), two views of 10 M entries: 420 ms on llvmpipe by sparse_merge.comp.
+        std::vector<const SparseRows*> views;
+        std::vector<size_t> offsets;
+        for (const View& v : m_views) views.push_back(v.rows.get()), offsets.push_back(v.offset);
+        mergeColumnsOnHost(*m, colCount, views, offsets);
+    } else {
+        mergeColumnsOnDevice(*m);
+    }
+    m_stats.cacheBytes += bytes;
+    m_merged = std::move(m);
+    if (m_stats.cacheBytes > m_keepViewRowsBytes) dropViewRows();
+}
+
+void Projector::mergeColumnsOnDevice(SparseRows& m) {
+    // Each element's entries of every view, in view order (sparse_merge.comp).
     const gl::Buffer cursor = zeroedBuffer(4 * elementCount(), "merged-columns-cursor");
     gl::ShaderBuilder builder("sparse_merge.comp");
-    builder.define("VOLSTYLE_ROW_CHANNELS", channels);
+    builder.define("VOLSTYLE_ROW_CHANNELS", m.channels);
     glUseProgram(m_device.program(builder).id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColStart, m->colStart.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColStart, m.colStart.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColCursor, cursor.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColIndex, m->colIndex.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColWeight, m->colWeight.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColIndex, m.colIndex.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingColWeight, m.colWeight.id());
     for (const View& v : m_views) {
         if (v.rows->entries == 0) continue;
         layout::SparseParams p;
@@ -272,9 +267,6 @@ void Projector::mergeRows(size_t budgetBytes) {
         glDispatchCompute(GLuint((elementCount() + layout::kWorkgroup1D - 1) / layout::kWorkgroup1D), 1, 1);
         gl::barrierAfterComputeWrites();  // the next view appends after these
     }
-    m_stats.cacheBytes += bytes;
-    m_merged = std::move(m);
-    if (m_stats.cacheBytes > m_keepViewRowsBytes) dropViewRows();
 }
 
 void Projector::dropViewRows() {

@@ -124,6 +124,8 @@ private:
     /// dispatch each instead of one per view. Skipped (per-view gathers stay) past `budgetBytes`
     /// or one storage block.
     void mergeRows(size_t budgetBytes);
+    /// The merged columns by sparse_merge.comp (host_columns.h merges them on a CPU rasterizer).
+    void mergeColumnsOnDevice(SparseRows& merged);
     /// Frees each view's own rows once merged rows hold them.
     void dropViewRows();
 

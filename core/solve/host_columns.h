@@ -1,0 +1,34 @@
+#pragma once
+/// \file host_columns.h
+/// The columns of W made on the host, on a CPU rasterizer (issue #40). There, the fill pass's
+/// per-entry column atomics and scattered stores cost more than the march itself, and a
+/// GPU-side merge of the views' columns is a scattered copy too. The host reads and writes the
+/// buffers in place (mapped: on a CPU rasterizer they are the process's memory), so neither
+/// step copies the entries through a staging buffer. GPUs build columns on the device instead
+/// (project.comp's fill, sparse_merge.comp). GL thread only.
+
+#include <epoxy/gl.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "core/solve/sparse_rows.h"
+
+namespace volstyle::core {
+
+/// Storage flags of a SparseRows' buffers the host reads or writes in place (SparseRows::hostMapped).
+constexpr GLbitfield kHostMappedStorage = GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT | GL_MAP_WRITE_BIT;
+
+/// `r`'s columns from its rows (`rowStart`: its rows' starts, with the total appended): each
+/// column's entries counted (its start written to r.colStart), then placed by a counting sort by
+/// element, each column's entries in row order. `r` must be hostMapped. A slot a ray left
+/// unfilled (element 0, weight 0) becomes a weight-0 entry of column 0.
+void transposeOnHost(SparseRows& r, const std::vector<uint32_t>& rowStart);
+
+/// `merged`'s columns from the views' (each hostMapped): for each element, every view's entries of
+/// its column in view order, their pixels shifted by the view's first pixel (`offsets`).
+/// `colStart` is the merged columns' starts; merged.colIndex and colWeight must be hostMapped.
+void mergeColumnsOnHost(SparseRows& merged, const std::vector<uint32_t>& colStart, const std::vector<const SparseRows*>& views,
+                        const std::vector<size_t>& offsets);
+
+}  // namespace volstyle::core
