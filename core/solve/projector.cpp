@@ -23,9 +23,13 @@ Projector::Projector(GpuDevice& device, GpuVolume& volume, const Lighting& light
     if (unknownDims.x < 1 || unknownDims.y < 1 || unknownDims.z < 1)
         throw InvalidArgument("Projector: the unknown grid must have at least one voxel");
     m_columnsOnHost = device.capabilities().isSoftware;
-    if (unknown == Unknown::Extinction) m_lighting.lights.clear();  // log-space tomography: no light
-    // Only albedo's weights hold L_scat: the others need no light volumes for the environment.
-    if (unknown == Unknown::Extinction || unknown == Unknown::Emission) m_lighting.environment = EnvironmentLight{};
+    // Only albedo's weights hold L_scat: the others need no light-depth volumes, for the lights or
+    // the environment (extinction: log-space tomography; emission: T · opacity alone). Issue #40:
+    // an emission solve of 128³ under three suns computed three such volumes here for nothing.
+    if (unknown == Unknown::Extinction || unknown == Unknown::Emission) {
+        m_lighting.lights.clear();
+        m_lighting.environment = EnvironmentLight{};
+    }
     m_useFloatAtomics = device.capabilities().hasFloatAtomics;
 }
 
@@ -49,6 +53,7 @@ void Projector::addView(const Camera& camera) {
     settings.exactTraversal = m_exactTraversal;
     RenderStats stats;
     View view{camera, prepareMarch(m_device, m_volume, camera, m_lighting, settings, stats), m_pixelCount, nullptr};
+    m_stats.lightVolumes += stats.lightVolumesRecomputed;
     const Int3 n = m_volume.dims();
     layout::MarchParams& p = view.setup.params;
     p.unknownDims = {m_unknownDims.x, m_unknownDims.y, m_unknownDims.z, 0};

@@ -27,6 +27,7 @@ struct ProjectorStats {
     size_t cacheBytes = 0;    ///< GPU memory they take
     size_t cachedViews = 0;   ///< views whose W and Wᵀ run from them
     size_t cachedEntries = 0;
+    int lightVolumes = 0;     ///< light-depth volumes its views' set-up computed (only albedo's W is lit)
 };
 
 class Projector {

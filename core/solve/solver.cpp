@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <optional>
+#include <utility>
 
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
@@ -92,9 +93,11 @@ CglsSettings Solver::State::cglsSettings() const {
 }
 
 void Solver::State::computeResiduals() {
-    W->forward(a, qImg);
     ops.copy(obs, rImg);
-    ops.axpy(Vec3d(-1.0), qImg, rImg);
+    if (!std::exchange(startsAtZero, false)) {  // only the first call can find a still at its start
+        W->forward(a, qImg);
+        ops.axpy(Vec3d(-1.0), qImg, rImg);
+    }
     ops.multiply(sqrtW, rImg);
     if (rLap.size() > 0) rLap.fill(0.0f);
     if (rId.size() > 0) rId.fill(0.0f);

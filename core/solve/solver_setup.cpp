@@ -247,6 +247,7 @@ void Solver::State::initialUnknowns() {
         for (int c = 0; c < 3; ++c) init[4 * e + size_t(c)] = std::clamp(init[4 * e + size_t(c)], bounds.lower[b], bounds.upper[b]);
     }
     a.upload(init);
+    startsAtZero = std::all_of(init.begin(), init.end(), [](float x) { return x == 0.0f; });
 }
 
 void Solver::State::buildRegularizers() {

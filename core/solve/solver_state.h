@@ -133,8 +133,10 @@ struct Solver::State final : BoundedLeastSquares {
     void move(const Vec3d& step, const GpuVector& x, const GpuVector& img, const GpuVector& lap);
     void applyAt();  // s from rImg, rLap, rId
     Vec3d precondition();  // z = D² s; returns s·z (γ of preconditioned CGLS)
-    /// [rImg; rLap; rId] = b − A a, from scratch, over the vectors' supports.
+    /// [rImg; rLap; rId] = b − A a, from scratch, over the vectors' supports. W a is skipped while
+    /// startsAtZero (it is 0 exactly: issue #40, one W fewer in a first solve from nothing).
     void computeResiduals();
+    bool startsAtZero = false;  ///< a is the all-zero start (initialUnknowns) and has not moved yet
     double totalObjective();
     std::vector<double> rmsPerView();
 

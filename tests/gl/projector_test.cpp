@@ -213,6 +213,22 @@ TEST(Projector, ColumnsFromTheHostAndFromTheFillPassBothMatchTheOracle) {
     }
 }
 
+TEST(Projector, OnlyAlbedosOperatorComputesLightVolumes) {
+    VOLSTYLE_REQUIRE_GL();
+    // Issue #40 item 5: emission's and extinction's W hold no in-scattering, so their views' set-up
+    // makes no light-depth volumes (it made one per light before). What W computes is unchanged:
+    // CachedRowsMatchTheOracle and IdentityAndOracle hold the lit problem's emission and extinction
+    // operators to the float64 oracle.
+    const Problem prob = makeProblem(11);
+    for (Unknown u : {Unknown::Emission, Unknown::Extinction, Unknown::Albedo, Unknown::EmissionAlbedo}) {
+        GpuVolume gpu(prob.volume);  // fresh: nothing cached from another operator
+        Projector W(test::device(), gpu, prob.lighting, u, BasisType::Trilinear, prob.volume.dims(), 0.5);
+        for (const auto& c : prob.cameras) W.addView(c);
+        const bool lit = u == Unknown::Albedo || u == Unknown::EmissionAlbedo;
+        EXPECT_EQ(W.stats().lightVolumes, lit ? int(prob.lighting.lights.size()) : 0) << "unknown " << int(u);
+    }
+}
+
 TEST(Projector, CompareAndSwapFallbackIsExactToo) {
     VOLSTYLE_REQUIRE_GL();
     checkCase({Unknown::EmissionAlbedo, BasisType::Trilinear, false}, {false});

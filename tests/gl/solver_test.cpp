@@ -134,6 +134,40 @@ TEST(Solver, RecoversStampedEmission) {
     EXPECT_FALSE(plain.hasEmission());
 }
 
+TEST(Solver, TheFirstResidualIsTheTargetLessTheRenderOfTheStart) {
+    VOLSTYLE_REQUIRE_GL();
+    // Issue #40: from an all-zero start the first residual skips W a (it is 0). Either way it must
+    // be what the renderer says: per view, mean over channels of √(Σ w (t − render(start))² / Σ w),
+    // w the target's alpha. Checked from nothing (the skip) and from a start with emission (W a).
+    const Volume plain = thinCloud(24);
+    Volume truth = plain, lit = plain;
+    test::stampLetters(truth, truth.ensureEmission(), Vec3(2.0f, 1.0f, 0.2f));
+    lit.ensureEmission().assign(lit.voxelCount() * 3, 0.3f);
+    const Lighting l = defaultLighting();
+    const auto views = targetsFrom(truth, l, ringCameras(2, 24));
+    SolveOptions opt;
+    opt.maxIterations = 1;
+    for (const Volume* start : {&plain, static_cast<const Volume*>(&lit)}) {
+        const SolveReport rep = Solver(test::device(), *start, l, views, opt).run().report;
+        GpuVolume gpu(*start);
+        for (size_t v = 0; v < views.size(); ++v) {
+            const Image now = test::sharedRenderer().render(gpu, views[v].camera, l);
+            double rms = 0;
+            for (int c = 0; c < 3; ++c) {
+                double sum = 0, weights = 0;
+                for (size_t i = 0; i < now.pixelCount(); ++i) {
+                    const double w = std::max(0.0f, views[v].target.rgba[4 * i + 3]), d = views[v].target.rgba[4 * i + size_t(c)] - now.rgba[4 * i + size_t(c)];
+                    sum += w * d * d, weights += w;
+                }
+                rms += std::sqrt(sum / weights) / 3.0;
+            }
+            std::cout << "[ measured ] start " << (start == &plain ? "zero" : "0.3") << ", view " << v << ": first RMS " << rep.initialRms[v]
+                      << ", from the render " << rms << "\n";
+            EXPECT_NEAR(rep.initialRms[v], rms, 1e-4 * rms);
+        }
+    }
+}
+
 TEST(Solver, RecoversDarkenedAlbedoWithinBounds) {
     VOLSTYLE_REQUIRE_GL();
     const int res = 32;
