@@ -121,7 +121,7 @@ private:
     /// Counts, then writes, one view's rows and columns; null when past the budget.
     std::unique_ptr<SparseRows> buildRows(const View& v, size_t budgetBytes, int channels, const GpuVector* pixelMask);
     /// With every view cached: one row/column structure over all of them (rows concatenated,
-    /// each element's columns appended view after view by sparse_merge.comp), so W and Wᵀ are one
+    /// each element's columns appended view after view: by sparse_merge.comp, or on a CPU rasterizer by the host), so W and Wᵀ are one
     /// dispatch each instead of one per view. Skipped (per-view gathers stay) past `budgetBytes`
     /// or one storage block.
     void mergeRows(size_t budgetBytes);

@@ -216,7 +216,7 @@ TEST(Projector, ColumnsFromTheHostAndFromTheFillPassBothMatchTheOracle) {
 TEST(Projector, OnlyAlbedosOperatorComputesLightVolumes) {
     VOLSTYLE_REQUIRE_GL();
     // Issue #40 item 5: emission's and extinction's W hold no in-scattering, so their views' set-up
-    // makes no light-depth volumes (it made one per light before). What W computes is unchanged:
+    // makes no light-depth volumes (emission's made one per light before). What W computes is unchanged:
     // CachedRowsMatchTheOracle and IdentityAndOracle hold the lit problem's emission and extinction
     // operators to the float64 oracle.
     const Problem prob = makeProblem(11);

@@ -47,7 +47,10 @@ protected:
         m_dir = std::filesystem::temp_directory_path() / ("volstyle-queue-" + std::to_string(::getpid()));
         std::filesystem::remove_all(m_dir);
         server::ServerOptions opt;
-        opt.jobLeaseSeconds = 1;
+        // Short, but renewed three times a lease: 1 s lapsed twice in a row under a loaded CI
+        // (a sequence claimed a fourth time and failed 'interrupted'); nothing here waits out a
+        // live replica's lease (dead replicas' rows carry 1 ms leases of their own).
+        opt.jobLeaseSeconds = 3;
         start(opt, (m_dir / "a").string());
         opt.host = "127.0.0.1";
         opt.port = 0;
