@@ -2,12 +2,22 @@
 
 #include <algorithm>
 #include <memory>
-#include <utility>
 
 #include "core/base/errors.h"
 #include "core/gl/mapped_buffer.h"
 
 namespace volstyle::core {
+
+uint64_t exclusiveScan(std::vector<uint32_t>& counts) {
+    uint64_t total = 0;
+    for (auto& c : counts) {
+        const uint64_t n = c;
+        c = uint32_t(std::min<uint64_t>(total, 0xffffffffu));
+        total += n;
+    }
+    counts.push_back(uint32_t(std::min<uint64_t>(total, 0xffffffffu)));
+    return total;
+}
 
 void transposeOnHost(SparseRows& r, const std::vector<uint32_t>& rowStart) {
     VOLSTYLE_CHECK(r.hostMapped, ==, true);
@@ -19,9 +29,7 @@ void transposeOnHost(SparseRows& r, const std::vector<uint32_t>& rowStart) {
     const float* rowWeight = rowWeightMap.as<const float>();
     std::vector<uint32_t> colStart(r.columns, 0);
     for (size_t k = 0; k < E; ++k) ++colStart[rowIndex[k]];
-    uint32_t total = 0;
-    for (auto& c : colStart) total += std::exchange(c, total);
-    colStart.push_back(total);
+    exclusiveScan(colStart);
     std::vector<uint32_t> cursor(colStart.begin(), colStart.end() - 1);
     {
         // Every slot is written once (all E entries are placed): no clearing first.

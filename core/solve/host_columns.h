@@ -19,6 +19,10 @@ namespace volstyle::core {
 /// Storage flags of a SparseRows' buffers the host reads or writes in place (SparseRows::hostMapped).
 constexpr GLbitfield kHostMappedStorage = GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT | GL_MAP_WRITE_BIT;
 
+/// Counts in place → exclusive prefix sums with the total appended; the total (a start past
+/// 2³² − 1 saturates there: callers refuse such sizes).
+uint64_t exclusiveScan(std::vector<uint32_t>& counts);
+
 /// `r`'s columns from its rows (`rowStart`: its rows' starts, with the total appended): each
 /// column's entries counted (its start written to r.colStart), then placed by a counting sort by
 /// element, each column's entries in row order. `r` must be hostMapped. A slot a ray left

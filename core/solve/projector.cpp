@@ -114,18 +114,6 @@ gl::Buffer zeroedBuffer(size_t bytes, const std::string& label, GLbitfield flags
     return b;
 }
 
-/// Counts in place → exclusive prefix sums with the total appended; the total.
-uint64_t exclusiveScan(std::vector<uint32_t>& counts) {
-    uint64_t total = 0;
-    for (auto& c : counts) {
-        const uint64_t n = c;
-        c = uint32_t(std::min<uint64_t>(total, 0xffffffffu));
-        total += n;
-    }
-    counts.push_back(uint32_t(std::min<uint64_t>(total, 0xffffffffu)));
-    return total;
-}
-
 }  // namespace
 
 std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetBytes, int channels, const GpuVector* pixelMask) {
