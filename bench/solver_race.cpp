@@ -328,13 +328,14 @@ void paperRace(GpuDevice& device, Renderer& renderer, const Problem& p, int iter
     rows.push_back(bestBaseline(device, setup.plain, setup.views, raceOptions(p.step, iterations), defaultLighting(),
                                 BaselineMethod::Adam, {0.03, 0.1}));
     const double f0 = rows[0].second.objective.front();
-    std::printf("\n| %s | iterations | set-up s (rows) | s to 10%% | s to 1%% | s to 0.1%% | s to 1%% of the start RMS | s/iteration | end |\n"
-                "|---|---|---|---|---|---|---|---|---|\n", p.name.c_str());
+    std::printf("\n| %s | iterations | set-up s (rows) | s to 10%% | s to 1%% | s to 0.1%% | s to 1%% of the start RMS | s/iteration | ms/iter forward, back-proj, vectors | end |\n"
+                "|---|---|---|---|---|---|---|---|---|---|\n", p.name.c_str());
     for (const auto& [name, r] : rows) {
-        std::printf("| %s | %d | %.2f (%.2f) | %s | %s | %s | %s | %.2f | %.2g of the start |\n", name.c_str(), r.iterations, r.setupSeconds,
-                    r.rowsSeconds, seconds(r.timeTo(0.1, f0)).c_str(), seconds(r.timeTo(0.01, f0)).c_str(),
-                    seconds(r.timeTo(0.001, f0)).c_str(), seconds(r.timeTo(1e-4, f0)).c_str(),
-                    (r.seconds.back() - r.setupSeconds) / std::max(1, r.iterations), r.objective.back() / f0);
+        const double n = std::max(1, r.iterations);
+        std::printf("| %s | %d | %.2f (%.2f) | %s | %s | %s | %s | %.2f | %.0f, %.0f, %.0f | %.2g of the start |\n", name.c_str(), r.iterations,
+                    r.setupSeconds, r.rowsSeconds, seconds(r.timeTo(0.1, f0)).c_str(), seconds(r.timeTo(0.01, f0)).c_str(),
+                    seconds(r.timeTo(0.001, f0)).c_str(), seconds(r.timeTo(1e-4, f0)).c_str(), (r.seconds.back() - r.setupSeconds) / n,
+                    r.forwardMs / n, r.adjointMs / n, r.vectorMs / n, r.objective.back() / f0);
         std::fprintf(stderr, "%s: set-up (ms) %s\n", name.c_str(), r.phases.c_str());
         std::fflush(stdout);
     }

@@ -3,13 +3,16 @@
 #include <algorithm>
 
 #include "core/base/errors.h"
+#include "core/solve/host_vector_ops.h"
 #include "core/shaders/layout.h"
 
 namespace volstyle::core {
 
-GpuVector::GpuVector(size_t elements, const std::string& label)
-    : m_buffer(gl::createBuffer(std::max<size_t>(elements, 1) * 16, nullptr, GL_DYNAMIC_STORAGE_BIT, label)),
-      m_elements(elements) {
+GpuVector::GpuVector(size_t elements, const std::string& label, bool hostMapped)
+    : m_buffer(gl::createBuffer(std::max<size_t>(elements, 1) * 16, nullptr,
+                                GL_DYNAMIC_STORAGE_BIT | (hostMapped ? GL_MAP_READ_BIT | GL_MAP_WRITE_BIT : 0), label)),
+      m_elements(elements),
+      m_hostMapped(hostMapped) {
     fill(0.0f);
 }
 
@@ -65,7 +68,7 @@ struct VectorOps::Dispatch {
     const std::vector<Range>* segments = nullptr;  ///< kDotSegments: one workgroup per range
 };
 
-VectorOps::VectorOps(GpuDevice& device) : m_device(device) {}
+VectorOps::VectorOps(GpuDevice& device) : m_device(device), m_onHost(device.capabilities().isSoftware) {}
 
 std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
     const size_t size = d.y ? d.y->size() : d.x->size();
@@ -80,6 +83,16 @@ std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
         return std::pair{first, count};
     };
     auto [first, count] = positions(d.range);
+    if (m_onHost) {
+        HostVectorOp h;
+        h.op = op, h.x = d.x, h.y = d.y, h.z = d.z, h.bounds = d.bounds, h.first = first, h.count = count;
+        for (int c = 0; c < 3; ++c) h.alpha[c] = float(d.alpha[c]);
+        h.list = support ? support->host.data() : nullptr;
+        h.dims = d.dims, h.laplacianCells = size_t(d.dims.volume());
+        if (d.segments)
+            for (const Range& r : *d.segments) h.segments.push_back(positions(r));
+        if (hostCanRun(h, d.sparse != nullptr)) return runOnHost(h);
+    }
     if (d.segments) {
         std::vector<uint32_t> segments;
         for (const Range& r : *d.segments) {

@@ -32,9 +32,12 @@ struct Support {
 class GpuVector {
 public:
     GpuVector() = default;
-    GpuVector(size_t elements, const std::string& label);
+    /// `hostMapped`: storage the host can map in place (host_products.h; on a CPU rasterizer).
+    GpuVector(size_t elements, const std::string& label, bool hostMapped = false);
     size_t size() const { return m_elements; }
     GLuint id() const { return m_buffer.id(); }
+    const gl::Buffer& buffer() const { return m_buffer; }
+    bool hostMapped() const { return m_hostMapped; }
     void upload(const std::vector<float>& rgba);  ///< 4 floats per element
     std::vector<float> download() const;
     void fill(float value);
@@ -46,6 +49,7 @@ public:
 private:
     gl::Buffer m_buffer;
     size_t m_elements = 0;
+    bool m_hostMapped = false;
     std::shared_ptr<const Support> m_support;
 };
 
@@ -74,6 +78,9 @@ struct SparseCells {
 class VectorOps {
 public:
     explicit VectorOps(GpuDevice& device);
+    /// Whether operations whose vectors are all hostMapped run on the host (host_vector_ops.h;
+    /// the default on a CPU rasterizer) or in vector_ops.comp.
+    void setOnHost(bool onHost) { m_onHost = onHost; }
     void axpy(const Vec3d& alpha, const GpuVector& x, GpuVector& y, Range range = {});  ///< y += αx
     void xpby(const GpuVector& x, const Vec3d& beta, GpuVector& y);                     ///< y = x + βy
     void multiply(const GpuVector& x, GpuVector& y, Range range = {});                 ///< y ⊙= x
@@ -112,6 +119,7 @@ private:
     std::vector<double> run(Op op, const Dispatch& d);
 
     GpuDevice& m_device;
+    bool m_onHost = false;
     gl::Buffer m_partials;
     size_t m_partialCapacity = 0;
     gl::Buffer m_segments;  // kDotSegments: (first position, count) per range

@@ -3,6 +3,7 @@
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
 #include "core/solve/host_columns.h"
+#include "core/solve/host_products.h"
 #include "core/shaders/layout.h"
 
 #include <spdlog/spdlog.h>
@@ -22,7 +23,7 @@ Projector::Projector(GpuDevice& device, GpuVolume& volume, const Lighting& light
       m_unknownDims(unknownDims), m_step(stepVoxels), m_exactTraversal(exactTraversal) {
     if (unknownDims.x < 1 || unknownDims.y < 1 || unknownDims.z < 1)
         throw InvalidArgument("Projector: the unknown grid must have at least one voxel");
-    m_columnsOnHost = device.capabilities().isSoftware;
+    m_columnsOnHost = m_productsOnHost = device.capabilities().isSoftware;
     // Only albedo's weights hold L_scat: the others need no light-depth volumes, for the lights or
     // the environment (extinction: log-space tomography; emission: T · opacity alone). Issue #40:
     // an emission solve of 128³ under three suns computed three such volumes here for nothing.
@@ -124,7 +125,7 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
     const bool hostColumns = m_columnsOnHost;
     r->hostMapped = hostColumns;
     const GLbitfield storage = hostColumns ? kHostMappedStorage : GL_DYNAMIC_STORAGE_BIT;
-    r->rowStart = zeroedBuffer(4 * (r->rows + 1), "rows-start");
+    r->rowStart = zeroedBuffer(4 * (r->rows + 1), "rows-start", storage);
     r->colStart = zeroedBuffer(4 * (r->columns + 1), "columns-start", storage);
     auto bindStarts = [&] {
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, layout::kBindingRowStart, r->rowStart.id());
@@ -219,7 +220,7 @@ void Projector::mergeRows(size_t budgetBytes) {
         before += r.entries;
     }
     rowStart.push_back(uint32_t(entries));
-    m->rowStart = gl::createBuffer(4 * rowStart.size(), rowStart.data(), 0, "merged-rows-start");
+    m->rowStart = gl::createBuffer(4 * rowStart.size(), rowStart.data(), m->hostMapped ? storage : 0, "merged-rows-start");
     exclusiveScan(colCount);  // counts -> starts (one extra total appended, unused)
     colCount.pop_back();
     m->colStart = gl::createBuffer(4 * colCount.size(), colCount.data(), m->hostMapped ? storage : 0, "merged-columns-start");
@@ -331,15 +332,23 @@ void Projector::timed(bool adjoint, const std::function<void()>& work) {
     (adjoint ? m_stats.adjointCalls : m_stats.forwardCalls)++;
 }
 
+bool Projector::onHost(const SparseRows& rows, const GpuVector& a, const GpuVector& pixels) const {
+    return m_productsOnHost && hostCanApply(rows, a, pixels);
+}
+
 void Projector::forward(const GpuVector& a, GpuVector& pixels) {
     timed(false, [&] {
         const Support* only = allCached() ? m_pixelSupport.get() : nullptr;
         if (m_merged) {
-            sparseForward(m_device, *m_merged, a, pixels, 0, only);
+            if (onHost(*m_merged, a, pixels)) hostForward(*m_merged, {}, a, pixels, 0, only);
+            else sparseForward(m_device, *m_merged, a, pixels, 0, only);
         } else {
             dispatch(false, a, pixels);
-            for (const View& v : m_views)
-                if (v.rows) sparseForward(m_device, *v.rows, a, pixels, v.offset, only);
+            for (const View& v : m_views) {
+                if (!v.rows) continue;
+                if (onHost(*v.rows, a, pixels)) hostForward(*v.rows, {}, a, pixels, v.offset, only);
+                else sparseForward(m_device, *v.rows, a, pixels, v.offset, only);
+            }
         }
         gl::barrierAfterComputeWrites();
     });
@@ -349,14 +358,17 @@ void Projector::adjoint(const GpuVector& pixels, GpuVector& a) {
     timed(true, [&] {
         a.fill(0.0f);
         if (m_merged) {
-            sparseAdjointAdd(m_device, *m_merged, pixels, 0, a, m_elementSupport.get());
+            if (onHost(*m_merged, a, pixels)) hostAdjointAdd(*m_merged, pixels, 0, a, m_elementSupport.get());
+            else sparseAdjointAdd(m_device, *m_merged, pixels, 0, a, m_elementSupport.get());
             gl::barrierAfterComputeWrites();
             return;
         }
         dispatch(true, a, pixels);
         for (const View& v : m_views) {
             if (!v.rows) continue;
-            sparseAdjointAdd(m_device, *v.rows, pixels, v.offset, a, allCached() ? m_elementSupport.get() : nullptr);
+            const Support* only = allCached() ? m_elementSupport.get() : nullptr;
+            if (onHost(*v.rows, a, pixels)) hostAdjointAdd(*v.rows, pixels, v.offset, a, only);
+            else sparseAdjointAdd(m_device, *v.rows, pixels, v.offset, a, only);
             gl::barrierAfterComputeWrites();  // the next view adds to the same elements
         }
     });
@@ -375,7 +387,10 @@ void Projector::forwardByColumns(const GpuVector& c, GpuVector& pixels) {
 void Projector::forwardView(size_t view, const GpuVector& a, GpuVector& pixels) {
     const View& v = m_views.at(view);
     timed(false, [&] {
-        if (v.rows) sparseForward(m_device, *v.rows, a, pixels, v.offset, allCached() ? m_pixelSupport.get() : nullptr);
+        const Support* only = allCached() ? m_pixelSupport.get() : nullptr;
+        if (v.rows && onHost(*v.rows, a, pixels)) hostForward(*v.rows, {}, a, pixels, v.offset, only);
+        else if (v.rows) sparseForward(m_device, *v.rows, a, pixels, v.offset, only);
+        else if (m_merged && onHost(*m_merged, a, pixels)) hostForward(*m_merged, viewRange(view), a, pixels, viewRange(view).first, only);
         else if (m_merged) sparseForwardRange(m_device, *m_merged, viewRange(view), a, pixels, m_pixelSupport.get());
         else dispatch(false, a, pixels, &v);
         gl::barrierAfterComputeWrites();
@@ -386,7 +401,10 @@ void Projector::adjointView(size_t view, const GpuVector& pixels, GpuVector& a) 
     const View& v = m_views.at(view);
     timed(true, [&] {
         a.fill(0.0f);
-        if (v.rows) sparseAdjointAdd(m_device, *v.rows, pixels, v.offset, a, allCached() ? m_elementSupport.get() : nullptr);
+        const Support* only = allCached() ? m_elementSupport.get() : nullptr;
+        if (v.rows && onHost(*v.rows, a, pixels)) hostAdjointAdd(*v.rows, pixels, v.offset, a, only);
+        else if (v.rows) sparseAdjointAdd(m_device, *v.rows, pixels, v.offset, a, only);
+        else if (m_merged && onHost(*m_merged, a, pixels)) hostAdjointAdd(*m_merged, pixels, 0, a, m_elementSupport.get(), viewRange(view));
         else if (m_merged) sparseAdjointAddRange(m_device, *m_merged, viewRange(view), pixels, a, m_elementSupport.get());
         else dispatch(true, a, pixels, &v);
         gl::barrierAfterComputeWrites();

@@ -80,6 +80,9 @@ public:
     /// atomics' scattered writes cost more than a counting sort). Either gives the same columns,
     /// each in another order.
     void setColumnsOnHost(bool onHost) { m_columnsOnHost = onHost; }
+    /// Whether W and Wᵀ from rows the host can map run on the host (host_products.h; the default
+    /// on a CPU rasterizer) or in sparse_project.comp. Either gives the same sums in the same order.
+    void setProductsOnHost(bool onHost) { m_productsOnHost = onHost; }
     /// Once rows are merged, each view's own rows stay beside them only while both together take
     /// at most `bytes` (default 0: never). Kept, a later solve whose one view changed (a stroke)
     /// rebuilds that view's rows alone; dropped, memory is halved and the solver's cache holds a
@@ -118,6 +121,8 @@ private:
     /// Matrix-free W or Wᵀ over the views without cached rows (with `only`: that view alone).
     void dispatch(bool adjoint, const GpuVector& unknowns, const GpuVector& pixels, const View* only = nullptr);
     void timed(bool adjoint, const std::function<void()>& work);
+    /// Whether a product of `rows` with these vectors runs on the host (setProductsOnHost).
+    bool onHost(const SparseRows& rows, const GpuVector& a, const GpuVector& pixels) const;
     /// Counts, then writes, one view's rows and columns; null when past the budget.
     std::unique_ptr<SparseRows> buildRows(const View& v, size_t budgetBytes, int channels, const GpuVector* pixelMask);
     /// With every view cached: one row/column structure over all of them (rows concatenated,
@@ -146,6 +151,7 @@ private:
     std::shared_ptr<const Support> m_pixelSupport, m_elementSupport;
     std::shared_ptr<const SparseRows> m_merged;  ///< every view's rows at once (mergeRows); null: per view
     bool m_columnsOnHost = false;                ///< setColumnsOnHost (constructor: a CPU rasterizer)
+    bool m_productsOnHost = false;               ///< setProductsOnHost (constructor: a CPU rasterizer)
     size_t m_keepViewRowsBytes = 0;              ///< keepViewRowsWithin
 };
 

@@ -132,12 +132,14 @@ bool Solver::State::usesIdentity() const {
 
 void Solver::State::allocate() {
     const size_t P = W->pixelCount(), E = elements;
+    // On a CPU rasterizer W and Wᵀ read and write the vectors in place (host_products.h).
+    const bool mapped = device.capabilities().isSoftware;
     for (auto [vector, name] : {std::pair{&obs, "obs"}, {&sqrtW, "sqrt-weights"}, {&rImg, "r-img"}, {&qImg, "q-img"},
                                 {&tmpImg, "tmp-img"}, {&dImg, "d-img"}, {&rPrev, "r-prev"}})
-        *vector = GpuVector(P, name);
+        *vector = GpuVector(P, name, mapped);
     for (auto [vector, name] : {std::pair{&a, "a"}, {&aPrev, "a-prev"}, {&s, "s"}, {&p, "p"}, {&hull, "hull"}, {&tmpU, "tmp-u"},
                                 {&precond, "precond"}, {&z, "z"}, {&movable, "movable"}})
-        *vector = GpuVector(E, name);
+        *vector = GpuVector(E, name, mapped);
     if (usesLaplacian())
         for (auto [vector, name] : {std::pair{&rLap, "r-lap"}, {&qLap, "q-lap"}, {&dLap, "d-lap"}}) *vector = GpuVector(E, name);
     if (usesIdentity()) rId = GpuVector(E, "r-id");

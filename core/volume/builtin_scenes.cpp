@@ -1,12 +1,11 @@
 #include "core/volume/builtin_scenes.h"
 
 #include <algorithm>
-#include <atomic>
-#include <thread>
 #include <cmath>
 #include <functional>
 
 #include "core/base/errors.h"
+#include "core/base/parallel.h"
 #include "core/volume/noise.h"
 
 namespace volstyle::core {
@@ -30,20 +29,10 @@ struct VoxelProperties {
 };
 using SceneFunction = std::function<VoxelProperties(const Vec3d& world)>;
 
-/// Runs body(k) for every k in [0, n) on the machine's cores. Plain threads, not TBB: their joins
-/// are the happens-before edges ThreadSanitizer sees (it cannot see inside the uninstrumented TBB
-/// scheduler, and reported every scene read after a parallel_for as a race).
+/// Runs body(k) for every slice k in [0, n) on the machine's cores (core/base/parallel.h).
 template <typename Body>
 void forEachSlice(int n, const Body& body) {
-    const int workers = int(std::clamp(std::thread::hardware_concurrency(), 1u, unsigned(std::max(n, 1))));
-    std::atomic<int> next{0};
-    auto work = [&] {
-        for (int k; (k = next.fetch_add(1)) < n;) body(k);
-    };
-    std::vector<std::thread> helpers;
-    for (int w = 1; w < workers; ++w) helpers.emplace_back(work);
-    work();
-    for (auto& t : helpers) t.join();
+    forEachChunk(size_t(std::max(n, 0)), 1, [&](size_t, size_t k, size_t) { body(int(k)); });
 }
 
 /// Evaluates `f` at every voxel centre, slices in parallel.

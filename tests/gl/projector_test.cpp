@@ -3,6 +3,7 @@
 // accumulation; ≤ 1e-12 in the float64 oracle), and the GL operator against the oracle.
 #include <gtest/gtest.h>
 
+#include <map>
 #include <random>
 
 #include "core/cpu_ref/reference_projector.h"
@@ -87,6 +88,7 @@ struct Path {
     size_t budget = size_t(1) << 30;
     int expectCachedViews = -1;  ///< -1: all views
     int columnsOnHost = -1;      ///< the rows' columns: 1 transposed on the host, 0 by the fill pass's atomics, -1 the device's default
+    int productsOnHost = -1;     ///< W and Wᵀ from the rows: 1 on the host (host_products.h), 0 by sparse_project.comp, -1 the device's default
 };
 
 void checkCase(const Case& k, const Path& path) {
@@ -97,6 +99,9 @@ void checkCase(const Case& k, const Path& path) {
     Projector W(test::device(), gpu, prob.lighting, k.unknown, k.basis, udims, 0.5);
     if (!floatAtomics) W.setUseFloatAtomics(false);
     if (path.columnsOnHost >= 0) W.setColumnsOnHost(path.columnsOnHost == 1);
+    // The host computes W and Wᵀ only with vectors it can map (as the solver's, on a CPU rasterizer).
+    const bool mapped = path.productsOnHost < 0 ? test::device().capabilities().isSoftware : path.productsOnHost == 1;
+    W.setProductsOnHost(mapped);
     for (const auto& c : prob.cameras) W.addView(c);
     if (path.cached) {
         W.cacheRows(path.budget, weightChannels(prob.volume, prob.lighting, k.unknown));
@@ -108,7 +113,8 @@ void checkCase(const Case& k, const Path& path) {
     ASSERT_EQ(ref.elementCount(), W.elementCount());
 
     auto a = randomVector(W.elementCount(), 1), r = randomVector(W.pixelCount(), 2);
-    GpuVector ga(W.elementCount(), "a"), gr(W.pixelCount(), "r"), gWa(W.pixelCount(), "Wa"), gWtr(W.elementCount(), "Wtr");
+    GpuVector ga(W.elementCount(), "a", mapped), gr(W.pixelCount(), "r", mapped), gWa(W.pixelCount(), "Wa", mapped),
+        gWtr(W.elementCount(), "Wtr", mapped);
     ga.upload(toFloat(a));
     gr.upload(toFloat(r));
     W.forward(ga, gWa);
@@ -153,7 +159,7 @@ void checkCase(const Case& k, const Path& path) {
             const Range px = W.viewRange(v);
             std::vector<double> rv(r.size(), 0.0);
             std::copy_n(r.begin() + std::ptrdiff_t(4 * px.first), 4 * px.count, rv.begin() + std::ptrdiff_t(4 * px.first));
-            GpuVector viewWa(W.pixelCount(), "Wv a"), viewWtr(W.elementCount(), "Wvt r");
+            GpuVector viewWa(W.pixelCount(), "Wv a", mapped), viewWtr(W.elementCount(), "Wvt r", mapped);
             viewWa.fill(0.0f);
             W.forwardView(v, ga, viewWa);
             W.adjointView(v, gr, viewWtr);
@@ -164,7 +170,7 @@ void checkCase(const Case& k, const Path& path) {
         }
     }
     std::cout << "[ measured ] unknown " << int(k.unknown) << " basis " << int(k.basis) << (k.coarse ? " coarse" : "") << (k.dense ? " dense" : "")
-              << (path.cached ? " cached rows (" + std::to_string(W.stats().cachedViews) + " views)"
+              << (path.cached ? " cached rows (" + std::to_string(W.stats().cachedViews) + " views" + (mapped ? ", products on the host)" : ")")
                               : floatAtomics ? " atomics" : " CAS")
               << ": identity " << std::abs(lhs.x - rhs.x) / std::abs(lhs.x)
               << ", forward vs float64 " << errF << ", adjoint vs float64 " << errA << "\n";
@@ -211,6 +217,71 @@ TEST(Projector, ColumnsFromTheHostAndFromTheFillPassBothMatchTheOracle) {
         checkCase({Unknown::EmissionAlbedo, BasisType::Trilinear, false}, path);
         checkCase({Unknown::Extinction, BasisType::Box, true}, path);
     }
+}
+
+TEST(Projector, ProductsOnTheHostAndInTheShaderBothMatchTheOracle) {
+    VOLSTYLE_REQUIRE_GL();
+    // Issue #40: a CPU rasterizer computes W and Wᵀ from the rows on the host; a GPU runs
+    // sparse_project.comp. Both, merged rows (with each view as a range) and per-view rows (a
+    // budget for one view's: the other stays matrix-free).
+    for (int onHost : {0, 1}) {
+        Path path;
+        path.cached = true;
+        path.productsOnHost = onHost;
+        checkCase({Unknown::EmissionAlbedo, BasisType::Trilinear, false}, path);
+        checkCase({Unknown::Extinction, BasisType::Box, true}, path);
+        checkCase({Unknown::Albedo, BasisType::Trilinear, false, true}, path);
+    }
+}
+
+TEST(Projector, ProductsOnTheHostKeepTheSupportsAsTheShaderDoes) {
+    VOLSTYLE_REQUIRE_GL();
+    // With supports (the solver's constrained pixels and hull), W writes the listed pixels only
+    // (the others keep what they hold) and Wᵀ the listed elements only (the others 0): the host's
+    // products against sparse_project.comp's, value for value, merged and one view's range.
+    Problem prob = makeProblem(7);
+    GpuVolume gpu(prob.volume);
+    std::vector<uint32_t> pixels, elements;
+    std::map<bool, std::vector<std::vector<float>>> results;
+    for (bool onHost : {false, true}) {
+        Projector W(test::device(), gpu, prob.lighting, Unknown::EmissionAlbedo, BasisType::Trilinear, prob.volume.dims(), 0.5);
+        W.setColumnsOnHost(true);  // the rows mapped, so either can compute from them
+        W.setProductsOnHost(onHost);
+        for (const auto& c : prob.cameras) W.addView(c);
+        W.cacheRows(size_t(1) << 30, weightChannels(prob.volume, prob.lighting, Unknown::EmissionAlbedo));
+        ASSERT_TRUE(W.merged());
+        if (pixels.empty()) {
+            for (uint32_t p = 0; p < W.pixelCount(); p += 3) pixels.push_back(p);
+            for (uint32_t e = 0; e < W.elementCount(); e += 5) elements.push_back(e);
+        }
+        W.setSupports(std::make_shared<Support>(pixels), std::make_shared<Support>(elements));
+        GpuVector ga(W.elementCount(), "a", true), gr(W.pixelCount(), "r", true), gWa(W.pixelCount(), "Wa", true),
+            gWtr(W.elementCount(), "Wtr", true), viewWa(W.pixelCount(), "Wv a", true), viewWtr(W.elementCount(), "Wvt r", true);
+        ga.upload(toFloat(randomVector(W.elementCount(), 1)));
+        gr.upload(toFloat(randomVector(W.pixelCount(), 2)));
+        gWa.fill(7.0f), viewWa.fill(7.0f);
+        W.forward(ga, gWa);
+        W.adjoint(gr, gWtr);
+        W.forwardView(1, ga, viewWa);
+        W.adjointView(1, gr, viewWtr);
+        for (const GpuVector* v : {&gWa, &gWtr, &viewWa, &viewWtr}) results[onHost].push_back(v->download());
+    }
+    const char* names[] = {"W a", "Wᵀ r", "W_1 a", "W_1ᵀ r"};
+    for (size_t k = 0; k < 4; ++k) {
+        const auto &shader = results[false][k], &host = results[true][k];
+        ASSERT_EQ(shader.size(), host.size());
+        double peak = 0, worst = 0;
+        for (size_t i = 0; i < shader.size(); ++i) peak = std::max(peak, double(std::abs(shader[i])));
+        for (size_t i = 0; i < shader.size(); ++i) worst = std::max(worst, double(std::abs(shader[i] - host[i])));
+        EXPECT_GT(peak, 0.0) << names[k];
+        EXPECT_LE(worst, 1e-6 * peak) << names[k];  // the same sums in the same order: rounding alone
+    }
+    // Unlisted pixels keep the 7 they held; unlisted elements are 0.
+    const auto& Wa = results[true][0];
+    const auto& Wtr = results[true][1];
+    EXPECT_EQ(Wa[4 * 1], 7.0f);
+    EXPECT_NE(Wa[4 * 0 + 3], 7.0f);  // a listed pixel is written whole (w = 0)
+    EXPECT_EQ(Wtr[4 * 1], 0.0f);
 }
 
 TEST(Projector, OnlyAlbedosOperatorComputesLightVolumes) {
