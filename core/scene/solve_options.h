@@ -60,6 +60,9 @@ struct SolveOptions {
     /// GPU memory for the views' cached rows of W and their transpose (sparse_rows.h); views
     /// past it run matrix-free, and 0 runs every view matrix-free.
     size_t rowCacheBytes = size_t(1) << 30;
+    /// Whether the views' cached rows are merged into one (Projector::setMergeViews); default: on
+    /// a GPU, not on a CPU rasterizer (its host gathers view by view at the same cost).
+    std::optional<bool> mergeViewRows;
     bool analyzeReach = true;   ///< report what the paint asks that the unknowns cannot give (reach.h)
     /// Re-solve after a stroke (solver_local.cpp): when the solve starts from the volume the last
     /// solve with the same settings left (SolveCache) and only some pixels' targets or weights

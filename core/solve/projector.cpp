@@ -24,6 +24,7 @@ Projector::Projector(GpuDevice& device, GpuVolume& volume, const Lighting& light
     if (unknownDims.x < 1 || unknownDims.y < 1 || unknownDims.z < 1)
         throw InvalidArgument("Projector: the unknown grid must have at least one voxel");
     m_columnsOnHost = m_productsOnHost = device.capabilities().isSoftware;
+    m_mergeViews = !m_productsOnHost;
     // Only albedo's weights hold L_scat: the others need no light-depth volumes, for the lights or
     // the environment (extinction: log-space tomography; emission: T · opacity alone). Issue #40:
     // an emission solve of 128³ under three suns computed three such volumes here for nothing.
@@ -314,7 +315,7 @@ void Projector::cacheRows(size_t budgetBytes, int channels, const GpuVector* pix
         m_stats.cachedEntries += v.rows->entries;
         m_stats.cachedViews++;
     }
-    if (allCached() && m_views.size() > 1 && !m_merged) mergeRows(budgetBytes);
+    if (allCached() && m_views.size() > 1 && !m_merged && m_mergeViews) mergeRows(budgetBytes);
     m_device.finish();
     m_stats.cacheMs += msSince(t0);
 }

@@ -83,6 +83,12 @@ public:
     /// Whether W and Wᵀ from rows the host can map run on the host (host_products.h; the default
     /// on a CPU rasterizer) or in sparse_project.comp. Either gives the same sums in the same order.
     void setProductsOnHost(bool onHost) { m_productsOnHost = onHost; }
+    /// Whether cacheRows() merges the views' rows into one (mergeRows): the default on a GPU, where
+    /// W and Wᵀ then take one dispatch instead of one per view. The host's products gather view by
+    /// view at the same cost, so a CPU rasterizer keeps each view's rows and skips the merge's copy
+    /// of every entry ((b): 2.38 -> 2.12 s of rows, docs/BENCHMARKS.md).
+    void setMergeViews(bool merge) { m_mergeViews = merge; }
+    bool mergesViews() const { return m_mergeViews; }
     /// Once rows are merged, each view's own rows stay beside them only while both together take
     /// at most `bytes` (default 0: never). Kept, a later solve whose one view changed (a stroke)
     /// rebuilds that view's rows alone; dropped, memory is halved and the solver's cache holds a
@@ -152,6 +158,7 @@ private:
     std::shared_ptr<const SparseRows> m_merged;  ///< every view's rows at once (mergeRows); null: per view
     bool m_columnsOnHost = false;                ///< setColumnsOnHost (constructor: a CPU rasterizer)
     bool m_productsOnHost = false;               ///< setProductsOnHost (constructor: a CPU rasterizer)
+    bool m_mergeViews = true;                    ///< setMergeViews (constructor: not on a CPU rasterizer)
     size_t m_keepViewRowsBytes = 0;              ///< keepViewRowsWithin
 };
 

@@ -15,11 +15,13 @@ void Solver::State::cacheOperator() {
     if (cache && volumeKey.grid.empty()) volumeKey = volumeKeyOf(volume, opt.unknown);  // buildObservations made it
     for (size_t v = 0; v < views.size() && cache; ++v)
         keys[v] = rowsKey(volumeKey, lighting, opt, udims, views[v].camera, channels, sqrtWHost, W->viewRange(v).first);
-    // All views' rows as one (Projector::mergeRows), kept under the key of the rows it was made
-    // of and looked up first: found, it stands for every view's rows (each view a range of it).
+    // All views' rows as one (Projector::mergeRows, where the projector merges), kept under the
+    // key of the rows it was made of and looked up first: found, it stands for every view's rows
+    // (each view a range of it).
     std::string mergedKey = "merged";
     for (const auto& k : keys) mergedKey += "|" + k;
-    if (auto merged = cache && views.size() > 1 ? cache->findRows(mergedKey) : nullptr) W->adoptMergedRows(std::move(merged));
+    if (auto merged = cache && views.size() > 1 && W->mergesViews() ? cache->findRows(mergedKey) : nullptr)
+        W->adoptMergedRows(std::move(merged));
     std::vector<bool> adopted(views.size(), false);
     size_t adoptedEntries = 0;
     for (size_t v = 0; v < views.size() && cache && !W->merged(); ++v)

@@ -70,6 +70,7 @@ Solver::Solver(GpuDevice& device, const Volume& volume, const Lighting& lighting
     st.gpu = std::make_unique<GpuVolume>(st.volume);
     st.W = std::make_unique<Projector>(device, *st.gpu, st.lighting, st.opt.unknown, st.opt.basis, st.udims,
                                        st.opt.stepVoxels, st.opt.exactTraversal);
+    if (st.opt.mergeViewRows) st.W->setMergeViews(*st.opt.mergeViewRows);
     if (st.volume.isSparse()) {
         st.sparseCells = std::make_unique<SparseCells>(st.unknownBricks);
         st.W->useSparseUnknowns(st.unknownBricks);

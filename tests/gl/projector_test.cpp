@@ -89,6 +89,7 @@ struct Path {
     int expectCachedViews = -1;  ///< -1: all views
     int columnsOnHost = -1;      ///< the rows' columns: 1 transposed on the host, 0 by the fill pass's atomics, -1 the device's default
     int productsOnHost = -1;     ///< W and Wᵀ from the rows: 1 on the host (host_products.h), 0 by sparse_project.comp, -1 the device's default
+    int mergeViews = -1;         ///< the views' rows merged into one: 1, 0, or -1 the device's default (not on a CPU rasterizer)
 };
 
 void checkCase(const Case& k, const Path& path) {
@@ -102,6 +103,7 @@ void checkCase(const Case& k, const Path& path) {
     // The host computes W and Wᵀ only with vectors it can map (as the solver's, on a CPU rasterizer).
     const bool mapped = path.productsOnHost < 0 ? test::device().capabilities().isSoftware : path.productsOnHost == 1;
     W.setProductsOnHost(mapped);
+    if (path.mergeViews >= 0) W.setMergeViews(path.mergeViews == 1);
     for (const auto& c : prob.cameras) W.addView(c);
     if (path.cached) {
         W.cacheRows(path.budget, weightChannels(prob.volume, prob.lighting, k.unknown));
@@ -214,6 +216,7 @@ TEST(Projector, ColumnsFromTheHostAndFromTheFillPassBothMatchTheOracle) {
         Path path;
         path.cached = true;
         path.columnsOnHost = onHost;
+        path.mergeViews = 1;
         checkCase({Unknown::EmissionAlbedo, BasisType::Trilinear, false}, path);
         checkCase({Unknown::Extinction, BasisType::Box, true}, path);
     }
@@ -222,16 +225,18 @@ TEST(Projector, ColumnsFromTheHostAndFromTheFillPassBothMatchTheOracle) {
 TEST(Projector, ProductsOnTheHostAndInTheShaderBothMatchTheOracle) {
     VOLSTYLE_REQUIRE_GL();
     // Issue #40: a CPU rasterizer computes W and Wᵀ from the rows on the host; a GPU runs
-    // sparse_project.comp. Both, merged rows (with each view as a range) and per-view rows (a
-    // budget for one view's: the other stays matrix-free).
-    for (int onHost : {0, 1}) {
-        Path path;
-        path.cached = true;
-        path.productsOnHost = onHost;
-        checkCase({Unknown::EmissionAlbedo, BasisType::Trilinear, false}, path);
-        checkCase({Unknown::Extinction, BasisType::Box, true}, path);
-        checkCase({Unknown::Albedo, BasisType::Trilinear, false, true}, path);
-    }
+    // sparse_project.comp. Both, with every view's rows merged (each view then a range of them)
+    // and with each view's own rows.
+    for (int onHost : {0, 1})
+        for (int merge : {0, 1}) {
+            Path path;
+            path.cached = true;
+            path.productsOnHost = onHost;
+            path.mergeViews = merge;
+            checkCase({Unknown::EmissionAlbedo, BasisType::Trilinear, false}, path);
+            checkCase({Unknown::Extinction, BasisType::Box, true}, path);
+            checkCase({Unknown::Albedo, BasisType::Trilinear, false, true}, path);
+        }
 }
 
 TEST(Projector, ProductsOnTheHostKeepTheSupportsAsTheShaderDoes) {
@@ -247,6 +252,7 @@ TEST(Projector, ProductsOnTheHostKeepTheSupportsAsTheShaderDoes) {
         Projector W(test::device(), gpu, prob.lighting, Unknown::EmissionAlbedo, BasisType::Trilinear, prob.volume.dims(), 0.5);
         W.setColumnsOnHost(true);  // the rows mapped, so either can compute from them
         W.setProductsOnHost(onHost);
+        W.setMergeViews(true);
         for (const auto& c : prob.cameras) W.addView(c);
         W.cacheRows(size_t(1) << 30, weightChannels(prob.volume, prob.lighting, Unknown::EmissionAlbedo));
         ASSERT_TRUE(W.merged());
@@ -312,6 +318,7 @@ TEST(Projector, ViewsPastTheCacheBudgetStayMatrixFree) {
     GpuVolume gpu(prob.volume);
     Projector all(test::device(), gpu, prob.lighting, Unknown::Albedo, BasisType::Trilinear, prob.volume.dims(), 0.5);
     for (const auto& c : prob.cameras) all.addView(c);
+    all.setMergeViews(true);
     all.keepViewRowsWithin(SIZE_MAX);  // each view's own rows kept beside the merged ones, to measure them
     all.cacheRows(size_t(1) << 30, 3);
     ASSERT_EQ(all.stats().cachedViews, 2u);
@@ -383,6 +390,7 @@ TEST(Projector, ForwardByColumnsIsTheRowGatherOnASparseVector) {
         if (floatAtomics && !test::device().capabilities().hasFloatAtomics) continue;
         Projector W(test::device(), gpu, prob.lighting, Unknown::EmissionAlbedo, BasisType::Trilinear, prob.volume.dims(), 0.5);
         W.setUseFloatAtomics(floatAtomics);
+        W.setMergeViews(true);  // two views: by columns needs their rows merged
         for (const auto& c : prob.cameras) W.addView(c);
         W.cacheRows(size_t(1) << 30, weightChannels(prob.volume, prob.lighting, Unknown::EmissionAlbedo));
         ASSERT_TRUE(W.canForwardByColumns());

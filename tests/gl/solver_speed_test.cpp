@@ -122,29 +122,34 @@ TEST(SolverSpeed, CachedRowsGiveTheMatrixFreeSolve) {
 TEST(SolverSpeed, ASecondSolveTakesEveryUnchangedPartFromTheCache) {
     VOLSTYLE_REQUIRE_GL();
     // A stroke changes one target, not the weights: the re-solve finds every view's rows and
-    // renders, and lands where a solve without the cache lands. A new extinction misses all.
-    Problem p = stampedProblem();
-    SolveOptions opt = plainOptions(6);
-    opt.localResolve = false;  // the whole problem again: the iterates must match a solve without the cache
-    SolveCache cache;
-    const SolveResult first = Solver(test::device(), p.plain, defaultLighting(), p.views, opt, &cache).run();
-    EXPECT_EQ(cache.hits(), 0u);
-    EXPECT_EQ(cache.entries(), 2 * p.views.size() + 2);  // rows and renders per view, all rows merged, the last solve
-    for (size_t i = 0; i < 40; ++i) p.views[0].target.rgba[4 * (400 + i)] *= 1.3f;
-    const SolveReport warm = Solver(test::device(), first.volume, defaultLighting(), p.views, opt, &cache).run().report;
-    // The merged rows are looked up first (issue #40); found, they stand for every view's rows.
-    EXPECT_EQ(cache.hits(), p.views.size() + 1);
-    const SolveReport cold = Solver(test::device(), first.volume, defaultLighting(), p.views, opt).run().report;
-    ASSERT_EQ(warm.objectiveHistory.size(), cold.objectiveHistory.size());
-    for (size_t i = 0; i < warm.objectiveHistory.size(); ++i)
-        EXPECT_NEAR(warm.objectiveHistory[i] / cold.objectiveHistory[i], 1.0, 1e-4) << "iteration " << i;
-    EXPECT_NEAR(warm.finalRms[0], cold.finalRms[0], 1e-5);
+    // renders, and lands where a solve without the cache lands. A new extinction misses all. With
+    // the views' rows merged (a GPU's default) and each view's own (a CPU rasterizer's).
+    for (bool merge : {true, false}) {
+        Problem p = stampedProblem();
+        SolveOptions opt = plainOptions(6);
+        opt.localResolve = false;  // the whole problem again: the iterates must match a solve without the cache
+        opt.mergeViewRows = merge;
+        const size_t V = p.views.size();
+        SolveCache cache;
+        const SolveResult first = Solver(test::device(), p.plain, defaultLighting(), p.views, opt, &cache).run();
+        EXPECT_EQ(cache.hits(), 0u);
+        EXPECT_EQ(cache.entries(), 2 * V + (merge ? 2 : 1));  // rows and renders per view, (all rows merged,) the last solve
+        for (size_t i = 0; i < 40; ++i) p.views[0].target.rgba[4 * (400 + i)] *= 1.3f;
+        const SolveReport warm = Solver(test::device(), first.volume, defaultLighting(), p.views, opt, &cache).run().report;
+        // Merged rows are looked up first (issue #40); found, they stand for every view's rows.
+        EXPECT_EQ(cache.hits(), merge ? V + 1 : 2 * V);
+        const SolveReport cold = Solver(test::device(), first.volume, defaultLighting(), p.views, opt).run().report;
+        ASSERT_EQ(warm.objectiveHistory.size(), cold.objectiveHistory.size());
+        for (size_t i = 0; i < warm.objectiveHistory.size(); ++i)
+            EXPECT_NEAR(warm.objectiveHistory[i] / cold.objectiveHistory[i], 1.0, 1e-4) << "iteration " << i;
+        EXPECT_NEAR(warm.finalRms[0], cold.finalRms[0], 1e-5);
 
-    Volume denser = first.volume;
-    for (float& s : denser.extinction()) s *= 1.5f;
-    const size_t misses = cache.misses();
-    Solver(test::device(), denser, defaultLighting(), p.views, opt, &cache);
-    EXPECT_EQ(cache.misses() - misses, 2 * p.views.size() + 1);  // the merged rows, each view's rows and renders
+        Volume denser = first.volume;
+        for (float& s : denser.extinction()) s *= 1.5f;
+        const size_t misses = cache.misses();
+        Solver(test::device(), denser, defaultLighting(), p.views, opt, &cache);
+        EXPECT_EQ(cache.misses() - misses, 2 * V + (merge ? 1 : 0));  // (the merged rows,) each view's rows and renders
+    }
 }
 
 TEST(SolverSpeed, RowsPastHalfTheCacheAreKeptMergedOnlyAndFoundAgain) {
@@ -155,6 +160,7 @@ TEST(SolverSpeed, RowsPastHalfTheCacheAreKeptMergedOnlyAndFoundAgain) {
     Problem p = stampedProblem();
     SolveOptions opt = plainOptions(6);
     opt.localResolve = false;
+    opt.mergeViewRows = true;  // a GPU's default
     SolveCache roomy;
     const SolveResult both = Solver(test::device(), p.plain, defaultLighting(), p.views, opt, &roomy).run();
     const size_t bothBytes = both.report.rowCacheBytes;
