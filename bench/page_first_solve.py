@@ -59,7 +59,8 @@ def main():
                 n = max(report["iterations"], 1)
                 per = (report["forward_ms"] + report["adjoint_ms"] + report["vector_ms"]) / n
                 print(f"{a.resolution}³ cloud, one {a.size}² view, emission + albedo, {label}: {wall:.2f} s from POST to done; "
-                      f"set-up {report['setup_ms'] / 1000:.2f} s ({phases} ms); {report['iterations']} iterations of {per:.0f} ms; "
+                      f"set-up {report['setup_ms'] / 1000:.2f} s ({phases} ms); {report['iterations']} iterations of {per:.0f} ms "
+                      f"(forward {report['forward_ms'] / n:.0f}, back-projection {report['adjoint_ms'] / n:.0f}, vectors {report['vector_ms'] / n:.0f}); "
                       f"reach analysis {report['reach']['ms']:.0f} ms")
                 sys.stdout.flush()
         finally:

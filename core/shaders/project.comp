@@ -391,7 +391,14 @@ void main() {
 #if VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION || VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO
             apply(b, emission, opacity, r, sum);
 #endif
-#if VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_ALBEDO || VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO
+#if (VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_ALBEDO || VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO) && \
+    VOLSTYLE_ROWS == VOLSTYLE_ROWS_COUNT
+            // Counting needs only which corners get an entry, and every corner whose weight
+            // T·opacity·L_scat is not 0 has T·opacity ≠ 0: the light marches are skipped (issue #40:
+            // they were most of the count pass of an albedo solve). Where L_scat is 0 the fill
+            // leaves the counted slot a weight-0 entry.
+            apply(b, albedo, opacity, r, sum);
+#elif VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_ALBEDO || VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO
             apply(b, albedo, opacity * inScattering(p, marchDirection(m, dir)), r, sum);
 #endif
             transmittance *= exp(-tau);

@@ -142,8 +142,8 @@ void Solver::State::allocate() {
                                 {&precond, "precond"}, {&z, "z"}, {&movable, "movable"}})
         *vector = GpuVector(E, name, mapped);
     if (usesLaplacian())
-        for (auto [vector, name] : {std::pair{&rLap, "r-lap"}, {&qLap, "q-lap"}, {&dLap, "d-lap"}}) *vector = GpuVector(E, name);
-    if (usesIdentity()) rId = GpuVector(E, "r-id");
+        for (auto [vector, name] : {std::pair{&rLap, "r-lap"}, {&qLap, "q-lap"}, {&dLap, "d-lap"}}) *vector = GpuVector(E, name, mapped);
+    if (usesIdentity()) rId = GpuVector(E, "r-id", mapped);
 }
 
 void Solver::State::buildObservations() {
