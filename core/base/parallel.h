@@ -15,7 +15,7 @@ namespace volstyle::core {
 /// Runs work(chunk, lo, hi) for the chunks [lo, hi) of [0, count), `chunk` items each (the last
 /// fewer), taken in turn by one thread per core: items of unequal cost (rows of a matrix, slices
 /// of a scene) keep every core busy. `chunk`'s index is lo / chunk, so per-chunk results can be
-/// combined in a fixed order whichever thread ran them.
+/// combined in a fixed order whichever thread ran them. `work` must not throw.
 template <typename Work>
 void forEachChunk(size_t count, size_t chunk, const Work& work) {
     chunk = std::max<size_t>(chunk, 1);
@@ -26,7 +26,10 @@ void forEachChunk(size_t count, size_t chunk, const Work& work) {
         for (size_t c; (c = next.fetch_add(1)) < chunks;) work(c, c * chunk, std::min(count, (c + 1) * chunk));
     };
     std::vector<std::thread> helpers;
-    for (size_t w = 1; w < workers; ++w) helpers.emplace_back(run);
+    try {
+        for (size_t w = 1; w < workers; ++w) helpers.emplace_back(run);
+    } catch (...) {  // a thread that could not start: the ones that did finish the work
+    }
     run();
     for (auto& t : helpers) t.join();
 }

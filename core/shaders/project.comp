@@ -392,12 +392,14 @@ void main() {
             apply(b, emission, opacity, r, sum);
 #endif
 #if (VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_ALBEDO || VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO) && \
-    VOLSTYLE_ROWS == VOLSTYLE_ROWS_COUNT
-            // Counting needs only which corners get an entry, and every corner whose weight
-            // T·opacity·L_scat is not 0 has T·opacity ≠ 0: the light marches are skipped (issue #40:
-            // they were most of the count pass of an albedo solve). Where L_scat is 0 the fill
-            // leaves the counted slot a weight-0 entry.
-            apply(b, albedo, opacity, r, sum);
+    VOLSTYLE_ROWS == VOLSTYLE_ROWS_COUNT && VOLSTYLE_LIT
+            // Counting needs only an upper bound on the entries the fill finds, and the fill emits
+            // a corner only where some sample's basis weight is not 0: every corner a sample with
+            // extinction reaches is counted, weight 1, and the light marches are skipped (issue
+            // #40: they were most of the count pass of an albedo solve). No rounding of T, opacity
+            // or L_scat can make the fill find more; where they make it find fewer, the row's last
+            // slots stay element 0 with weight 0.
+            apply(b, albedo, vec3(1.0), r, sum);
 #elif VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_ALBEDO || VOLSTYLE_UNKNOWN == VOLSTYLE_UNKNOWN_EMISSION_ALBEDO
             apply(b, albedo, opacity * inScattering(p, marchDirection(m, dir)), r, sum);
 #endif

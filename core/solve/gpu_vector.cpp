@@ -144,9 +144,9 @@ std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
     glUseProgram(m_device.program(builder).id());
     if (count > 0) glDispatchCompute(GLuint(groups), 1, 1);
     gl::barrierAfterComputeWrites();
-    if (!reduces) return {};
+    if (!reduces || count == 0) return {};  // an empty reduction: its identity (as the host's kernels give)
     std::vector<double> partials(groups * 4);
-    if (count > 0) glGetNamedBufferSubData(m_partials.id(), 0, GLsizeiptr(groups * 32), partials.data());
+    glGetNamedBufferSubData(m_partials.id(), 0, GLsizeiptr(groups * 32), partials.data());
     return partials;
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "core/base/errors.h"
 #include "core/base/parallel.h"
 #include "core/gl/mapped_buffer.h"
 
@@ -51,9 +52,11 @@ bool hostCanApply(const SparseRows& rows, const GpuVector& a, const GpuVector& p
 }
 
 void hostForward(const SparseRows& rows, Range view, const GpuVector& a, GpuVector& pixels, size_t pixelOffset, const Support* only) {
+    VOLSTYLE_CHECK(view.first, <=, rows.rows);
     const size_t count = std::min(rows.rows - view.first, view.count);
     const Outputs out = outputsOf(only, pixelOffset, count);
     if (out.count == 0) return;
+    gl::barrierAfterComputeWrites();  // a shader's writes to the vectors, before the host maps them
     const size_t ch = size_t(rows.channels);
     const gl::MappedBuffer startMap(rows.rowStart, 4 * (rows.rows + 1), GL_MAP_READ_BIT);
     const gl::MappedBuffer indexMap(rows.rowIndex, 4 * rows.entries, GL_MAP_READ_BIT);
@@ -80,6 +83,7 @@ void hostAdjointAdd(const SparseRows& rows, const GpuVector& pixels, size_t pixe
                     Range pixelsRead) {
     const Outputs out = outputsOf(only, 0, rows.columns);
     if (out.count == 0 || rows.entries == 0) return;
+    gl::barrierAfterComputeWrites();  // a shader's writes to the vectors, before the host maps them
     const size_t ch = size_t(rows.channels);
     const uint32_t from = uint32_t(std::min<size_t>(pixelsRead.first, 0xffffffffu));
     const uint32_t to = uint32_t(std::min<size_t>(pixelsRead.count == size_t(-1) ? 0xffffffffu : pixelsRead.first + pixelsRead.count, 0xffffffffu));

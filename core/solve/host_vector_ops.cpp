@@ -87,7 +87,7 @@ void elementAt(const HostVectorOp& o, const float* x, float* y, const float* z, 
         }
         case VOLSTYLE_OP_CLAMP: {
             const auto [lo, hi] = boundsOf(o.bounds, i);
-            for (int c = 0; c < 3; ++c) yi[c] = std::clamp(yi[c], lo, hi);
+            for (int c = 0; c < 3; ++c) yi[c] = std::min(std::max(yi[c], lo), hi);  // GLSL's clamp
             break;
         }
         default: break;
@@ -141,6 +141,7 @@ bool hostCanRun(const HostVectorOp& op, bool sparseLaplacian) {
 std::vector<double> runOnHost(const HostVectorOp& o) {
     const bool reduces = o.op == VOLSTYLE_OP_DOT || o.op == VOLSTYLE_OP_STEP || o.op == VOLSTYLE_OP_MAXCHANGE ||
                          o.op == VOLSTYLE_OP_DOT_SEGMENTS;
+    gl::barrierAfterComputeWrites();  // a shader's writes to the vectors, before the host maps them
     Mapped maps;
     float* y = maps.map(o.y, !reduces);
     const float* x = maps.map(o.x, false);

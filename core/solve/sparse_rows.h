@@ -25,7 +25,7 @@ struct SparseRows {
     gl::Buffer colStart, colIndex, colWeight;  ///< per element: first entry; per entry: pixel, weight(s)
     size_t rows = 0, columns = 0, entries = 0;
     int channels = 3;  ///< weights per entry: 1 (grey) or 3 (rgb)
-    bool hostMapped = false;  ///< colStart and the index and weight buffers can be mapped (host_columns.h)
+    bool hostMapped = false;  ///< the start, index and weight buffers can be mapped (host_columns.h, host_products.h)
 };
 
 /// GPU bytes a view's rows and columns take.

@@ -104,6 +104,7 @@ void checkCase(const Case& k, const Path& path) {
     const bool mapped = path.productsOnHost < 0 ? test::device().capabilities().isSoftware : path.productsOnHost == 1;
     W.setProductsOnHost(mapped);
     if (path.mergeViews >= 0) W.setMergeViews(path.mergeViews == 1);
+    if (path.productsOnHost == 1 && path.columnsOnHost < 0) W.setColumnsOnHost(true);  // host products need mapped rows (a GPU maps none)
     for (const auto& c : prob.cameras) W.addView(c);
     if (path.cached) {
         W.cacheRows(path.budget, weightChannels(prob.volume, prob.lighting, k.unknown));
@@ -152,11 +153,14 @@ void checkCase(const Case& k, const Path& path) {
     };
     double errF = compare(refWa, Wa, "forward"), errA = compare(refWtr, Wtr, "adjoint");
     if (path.cached && W.merged()) {
-        // Only the merged rows are kept (issue #40); each view is a range of them: W_v and W_vᵀ
-        // from that range against the oracle over the view's pixels alone.
+        // Only the merged rows are kept (issue #40); each view is a range of them.
         const auto m = W.mergedRows();
         EXPECT_EQ(W.rowsOf(0), nullptr);
         EXPECT_EQ(W.stats().cacheBytes, sparseRowsBytes(m->rows, m->columns, m->entries, m->channels));
+    }
+    if (path.cached && W.allCached()) {
+        // W_v and W_vᵀ (a range of the merged rows, or the view's own) against the oracle over the
+        // view's pixels alone.
         for (size_t v = 0; v < W.viewCount(); ++v) {
             const Range px = W.viewRange(v);
             std::vector<double> rv(r.size(), 0.0);
@@ -167,8 +171,8 @@ void checkCase(const Case& k, const Path& path) {
             W.adjointView(v, gr, viewWtr);
             std::vector<double> refView(refWa.size(), 0.0);
             std::copy_n(refWa.begin() + std::ptrdiff_t(4 * px.first), 4 * px.count, refView.begin() + std::ptrdiff_t(4 * px.first));
-            compare(refView, viewWa.download(), "one view's forward from merged rows");
-            compare(ref.adjoint(rv), viewWtr.download(), "one view's adjoint from merged rows");
+            compare(refView, viewWa.download(), "one view's forward from its rows");
+            compare(ref.adjoint(rv), viewWtr.download(), "one view's adjoint from its rows");
         }
     }
     std::cout << "[ measured ] unknown " << int(k.unknown) << " basis " << int(k.basis) << (k.coarse ? " coarse" : "") << (k.dense ? " dense" : "")
@@ -243,51 +247,66 @@ TEST(Projector, ProductsOnTheHostKeepTheSupportsAsTheShaderDoes) {
     VOLSTYLE_REQUIRE_GL();
     // With supports (the solver's constrained pixels and hull), W writes the listed pixels only
     // (the others keep what they hold) and Wᵀ the listed elements only (the others 0): the host's
-    // products against sparse_project.comp's, value for value, merged and one view's range.
+    // products against sparse_project.comp's, value for value, with the views' rows merged (each
+    // view a range of them) and with each view's own (a CPU rasterizer's default).
     Problem prob = makeProblem(7);
     GpuVolume gpu(prob.volume);
-    std::vector<uint32_t> pixels, elements;
-    std::map<bool, std::vector<std::vector<float>>> results;
-    for (bool onHost : {false, true}) {
-        Projector W(test::device(), gpu, prob.lighting, Unknown::EmissionAlbedo, BasisType::Trilinear, prob.volume.dims(), 0.5);
-        W.setColumnsOnHost(true);  // the rows mapped, so either can compute from them
-        W.setProductsOnHost(onHost);
-        W.setMergeViews(true);
-        for (const auto& c : prob.cameras) W.addView(c);
-        W.cacheRows(size_t(1) << 30, weightChannels(prob.volume, prob.lighting, Unknown::EmissionAlbedo));
-        ASSERT_TRUE(W.merged());
-        if (pixels.empty()) {
-            for (uint32_t p = 0; p < W.pixelCount(); p += 3) pixels.push_back(p);
-            for (uint32_t e = 0; e < W.elementCount(); e += 5) elements.push_back(e);
+    for (bool merge : {true, false}) {
+        std::vector<uint32_t> pixels, elements;
+        std::map<bool, std::vector<std::vector<float>>> results;
+        std::vector<float> fullWa, fullWtr;  // without supports: which pixels and elements have entries
+        for (bool onHost : {false, true}) {
+            Projector W(test::device(), gpu, prob.lighting, Unknown::EmissionAlbedo, BasisType::Trilinear, prob.volume.dims(), 0.5);
+            W.setColumnsOnHost(true);  // the rows mapped, so either can compute from them
+            W.setProductsOnHost(onHost);
+            W.setMergeViews(merge);
+            for (const auto& c : prob.cameras) W.addView(c);
+            W.cacheRows(size_t(1) << 30, weightChannels(prob.volume, prob.lighting, Unknown::EmissionAlbedo));
+            ASSERT_EQ(W.merged(), merge);
+            GpuVector ga(W.elementCount(), "a", true), gr(W.pixelCount(), "r", true), gWa(W.pixelCount(), "Wa", true),
+                gWtr(W.elementCount(), "Wtr", true), viewWa(W.pixelCount(), "Wv a", true), viewWtr(W.elementCount(), "Wvt r", true);
+            ga.upload(toFloat(randomVector(W.elementCount(), 1)));
+            gr.upload(toFloat(randomVector(W.pixelCount(), 2)));
+            if (pixels.empty()) {
+                for (uint32_t p = 0; p < W.pixelCount(); p += 3) pixels.push_back(p);
+                for (uint32_t e = 0; e < W.elementCount(); e += 5) elements.push_back(e);
+                W.forward(ga, gWa);
+                W.adjoint(gr, gWtr);
+                fullWa = gWa.download(), fullWtr = gWtr.download();
+            }
+            W.setSupports(std::make_shared<Support>(pixels), std::make_shared<Support>(elements));
+            gWa.fill(7.0f), viewWa.fill(7.0f);
+            W.forward(ga, gWa);
+            W.adjoint(gr, gWtr);
+            W.forwardView(1, ga, viewWa);
+            W.adjointView(1, gr, viewWtr);
+            for (const GpuVector* v : {&gWa, &gWtr, &viewWa, &viewWtr}) results[onHost].push_back(v->download());
         }
-        W.setSupports(std::make_shared<Support>(pixels), std::make_shared<Support>(elements));
-        GpuVector ga(W.elementCount(), "a", true), gr(W.pixelCount(), "r", true), gWa(W.pixelCount(), "Wa", true),
-            gWtr(W.elementCount(), "Wtr", true), viewWa(W.pixelCount(), "Wv a", true), viewWtr(W.elementCount(), "Wvt r", true);
-        ga.upload(toFloat(randomVector(W.elementCount(), 1)));
-        gr.upload(toFloat(randomVector(W.pixelCount(), 2)));
-        gWa.fill(7.0f), viewWa.fill(7.0f);
-        W.forward(ga, gWa);
-        W.adjoint(gr, gWtr);
-        W.forwardView(1, ga, viewWa);
-        W.adjointView(1, gr, viewWtr);
-        for (const GpuVector* v : {&gWa, &gWtr, &viewWa, &viewWtr}) results[onHost].push_back(v->download());
+        const char* names[] = {"W a", "Wᵀ r", "W_1 a", "W_1ᵀ r"};
+        for (size_t k = 0; k < 4; ++k) {
+            const auto &shader = results[false][k], &host = results[true][k];
+            ASSERT_EQ(shader.size(), host.size());
+            double peak = 0, worst = 0;
+            for (size_t i = 0; i < shader.size(); ++i) peak = std::max(peak, double(std::abs(shader[i])));
+            for (size_t i = 0; i < shader.size(); ++i) worst = std::max(worst, double(std::abs(shader[i] - host[i])));
+            EXPECT_GT(peak, 0.0) << names[k];
+            EXPECT_LE(worst, 1e-6 * peak) << names[k] << (merge ? " (merged)" : " (per view)");  // the same sums in the same order
+        }
+        // Unlisted pixels that W reaches keep the 7 they held; unlisted elements with entries are 0.
+        size_t keptPixels = 0, zeroElements = 0;
+        for (size_t p = 0; p < fullWa.size() / 4; ++p)
+            if (p % 3 != 0 && fullWa[4 * p] != 0.0f) {
+                EXPECT_EQ(results[true][0][4 * p], 7.0f) << p;
+                ++keptPixels;
+            }
+        for (size_t e = 0; e < fullWtr.size() / 4; ++e)
+            if (e % 5 != 0 && fullWtr[4 * e] != 0.0f) {
+                EXPECT_EQ(results[true][1][4 * e], 0.0f) << e;
+                ++zeroElements;
+            }
+        EXPECT_GT(keptPixels, 100u);
+        EXPECT_GT(zeroElements, 100u);
     }
-    const char* names[] = {"W a", "Wᵀ r", "W_1 a", "W_1ᵀ r"};
-    for (size_t k = 0; k < 4; ++k) {
-        const auto &shader = results[false][k], &host = results[true][k];
-        ASSERT_EQ(shader.size(), host.size());
-        double peak = 0, worst = 0;
-        for (size_t i = 0; i < shader.size(); ++i) peak = std::max(peak, double(std::abs(shader[i])));
-        for (size_t i = 0; i < shader.size(); ++i) worst = std::max(worst, double(std::abs(shader[i] - host[i])));
-        EXPECT_GT(peak, 0.0) << names[k];
-        EXPECT_LE(worst, 1e-6 * peak) << names[k];  // the same sums in the same order: rounding alone
-    }
-    // Unlisted pixels keep the 7 they held; unlisted elements are 0.
-    const auto& Wa = results[true][0];
-    const auto& Wtr = results[true][1];
-    EXPECT_EQ(Wa[4 * 1], 7.0f);
-    EXPECT_NE(Wa[4 * 0 + 3], 7.0f);  // a listed pixel is written whole (w = 0)
-    EXPECT_EQ(Wtr[4 * 1], 0.0f);
 }
 
 TEST(Projector, OnlyAlbedosOperatorComputesLightVolumes) {

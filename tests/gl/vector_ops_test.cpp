@@ -27,6 +27,7 @@ TEST(VectorOps, TheDotsOfManyRangesInOneDispatchAreEachRangesDot) {
         std::vector<uint32_t> everyThird;
         for (uint32_t i = 0; i < n; i += 3) everyThird.push_back(i);
         VectorOps ops(test::device());
+        ops.setOnHost(onHost);
         for (bool indexed : {false, true}) {
             std::shared_ptr<const Support> support = indexed ? std::make_shared<const Support>(everyThird) : nullptr;
             y.setSupport(support);
@@ -87,6 +88,10 @@ KernelResults runEveryKernel(VectorOps& ops, bool indexed) {
     for (const Vec3d& d : ops.dots(x, y, {{0, 100}, {100, 140}, {5, 0}})) keep3(d);
     ops.laplacian(0.7, x, h, dims, out), keep(out);
     ops.laplacian(-1.3, z, h, dims, out, {block, block}), keep(out);
+    out.setSupport(y.support() ? std::make_shared<const Support>(list) : nullptr);  // the listed cells only
+    out.fill(5.0f);
+    ops.laplacian(0.3, z, h, dims, out), keep(out);
+    keep3(ops.dot(y, y));  // one vector as both operands: mapped once
     ops.freeSet(x, y, bounds), keep(y);
     keep3(ops.maxStep(x, y, bounds));
     keep3(ops.maxChange(x, y, z));
