@@ -68,7 +68,7 @@ struct VectorOps::Dispatch {
     const std::vector<Range>* segments = nullptr;  ///< kDotSegments: one workgroup per range
 };
 
-VectorOps::VectorOps(GpuDevice& device) : m_device(device), m_onHost(device.capabilities().isSoftware) {}
+VectorOps::VectorOps(GpuDevice& device) : m_device(device), m_onHost(solverKernelsOnHost(device)) {}
 
 std::vector<double> VectorOps::run(Op op, const Dispatch& d) {
     const size_t size = d.y ? d.y->size() : d.x->size();

@@ -29,6 +29,11 @@ struct Support {
     std::pair<size_t, size_t> positions(size_t first, size_t count) const;
 };
 
+/// Whether the solver's vectors are host-mapped and its products and vector kernels run on the
+/// host by default (host_products.h, host_vector_ops.h): on a CPU rasterizer, whose buffers are
+/// the process's own memory.
+inline bool solverKernelsOnHost(const GpuDevice& device) { return device.capabilities().isSoftware; }
+
 class GpuVector {
 public:
     GpuVector() = default;

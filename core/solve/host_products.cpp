@@ -45,6 +45,32 @@ Outputs outputsOf(const Support* only, size_t first, size_t count) {
     return {only->host.data(), lo, hi - lo};
 }
 
+/// One product's buffers mapped in place: the rows (or columns) read, `in` read, `out` written.
+struct MappedProduct {
+    MappedProduct(const SparseRows& rows, bool columns, const GpuVector& in, const GpuVector& out)
+        : channels(size_t(rows.channels)),
+          startMap(columns ? rows.colStart : rows.rowStart, 4 * ((columns ? rows.columns : rows.rows) + 1), GL_MAP_READ_BIT),
+          indexMap(columns ? rows.colIndex : rows.rowIndex, 4 * rows.entries, GL_MAP_READ_BIT),
+          weightMap(columns ? rows.colWeight : rows.rowWeight, 4 * rows.entries * channels, GL_MAP_READ_BIT),
+          inMap(in.buffer(), 16 * in.size(), GL_MAP_READ_BIT),
+          outMap(out.buffer(), 16 * out.size(), GL_MAP_READ_BIT | GL_MAP_WRITE_BIT) {}
+
+    /// Σ over entry list `i` (a row or column) of its inputs, from input x0 on (gather()).
+    void sum(size_t i, const float* x0, uint32_t from, uint32_t to, float out[3]) const {
+        const auto* start = startMap.as<const uint32_t>();
+        const auto* index = indexMap.as<const uint32_t>();
+        const auto* weight = weightMap.as<const float>();
+        if (channels == 1) gather<1>(index, weight, x0, start[i], start[i + 1], from, to, out);
+        else gather<3>(index, weight, x0, start[i], start[i + 1], from, to, out);
+    }
+    bool empty(size_t i) const { return startMap.as<const uint32_t>()[i] == startMap.as<const uint32_t>()[i + 1]; }
+    const float* in() const { return inMap.as<const float>(); }
+    float* out() const { return outMap.as<float>(); }
+
+    const size_t channels;
+    const gl::MappedBuffer startMap, indexMap, weightMap, inMap, outMap;
+};
+
 }  // namespace
 
 bool hostCanApply(const SparseRows& rows, const GpuVector& a, const GpuVector& pixels) {
@@ -57,23 +83,12 @@ void hostForward(const SparseRows& rows, Range view, const GpuVector& a, GpuVect
     const Outputs out = outputsOf(only, pixelOffset, count);
     if (out.count == 0) return;
     gl::barrierAfterComputeWrites();  // a shader's writes to the vectors, before the host maps them
-    const size_t ch = size_t(rows.channels);
-    const gl::MappedBuffer startMap(rows.rowStart, 4 * (rows.rows + 1), GL_MAP_READ_BIT);
-    const gl::MappedBuffer indexMap(rows.rowIndex, 4 * rows.entries, GL_MAP_READ_BIT);
-    const gl::MappedBuffer weightMap(rows.rowWeight, 4 * rows.entries * ch, GL_MAP_READ_BIT);
-    const gl::MappedBuffer inMap(a.buffer(), 16 * a.size(), GL_MAP_READ_BIT);
-    const gl::MappedBuffer outMap(pixels.buffer(), 16 * pixels.size(), GL_MAP_READ_BIT | GL_MAP_WRITE_BIT);
-    const auto* start = startMap.as<const uint32_t>();
-    const auto* index = indexMap.as<const uint32_t>();
-    const auto* weight = weightMap.as<const float>();
-    const auto* x = inMap.as<const float>();
-    auto* y = outMap.as<float>();
+    const MappedProduct m(rows, false, a, pixels);
     inParallel(out.count, [&](size_t lo, size_t hi) {
         for (size_t k = lo; k < hi; ++k) {
-            const size_t o = out[k], row = o - pixelOffset + view.first;
-            float* sum = y + 4 * o;
-            if (ch == 1) gather<1>(index, weight, x, start[row], start[row + 1], 0, 0xffffffffu, sum);
-            else gather<3>(index, weight, x, start[row], start[row + 1], 0, 0xffffffffu, sum);
+            const size_t o = out[k];
+            float* sum = m.out() + 4 * o;
+            m.sum(o - pixelOffset + view.first, m.in(), 0, 0xffffffffu, sum);
             sum[3] = 0;
         }
     });
@@ -84,27 +99,16 @@ void hostAdjointAdd(const SparseRows& rows, const GpuVector& pixels, size_t pixe
     const Outputs out = outputsOf(only, 0, rows.columns);
     if (out.count == 0 || rows.entries == 0) return;
     gl::barrierAfterComputeWrites();  // a shader's writes to the vectors, before the host maps them
-    const size_t ch = size_t(rows.channels);
     const uint32_t from = uint32_t(std::min<size_t>(pixelsRead.first, 0xffffffffu));
     const uint32_t to = uint32_t(std::min<size_t>(pixelsRead.count == size_t(-1) ? 0xffffffffu : pixelsRead.first + pixelsRead.count, 0xffffffffu));
-    const gl::MappedBuffer startMap(rows.colStart, 4 * (rows.columns + 1), GL_MAP_READ_BIT);
-    const gl::MappedBuffer indexMap(rows.colIndex, 4 * rows.entries, GL_MAP_READ_BIT);
-    const gl::MappedBuffer weightMap(rows.colWeight, 4 * rows.entries * ch, GL_MAP_READ_BIT);
-    const gl::MappedBuffer inMap(pixels.buffer(), 16 * pixels.size(), GL_MAP_READ_BIT);
-    const gl::MappedBuffer outMap(a.buffer(), 16 * a.size(), GL_MAP_READ_BIT | GL_MAP_WRITE_BIT);
-    const auto* start = startMap.as<const uint32_t>();
-    const auto* index = indexMap.as<const uint32_t>();
-    const auto* weight = weightMap.as<const float>();
-    const float* x = inMap.as<const float>() + 4 * pixelOffset;
-    auto* y = outMap.as<float>();
+    const MappedProduct m(rows, true, pixels, a);
     inParallel(out.count, [&](size_t lo, size_t hi) {
         for (size_t k = lo; k < hi; ++k) {
             const size_t e = out[k];
-            if (start[e] == start[e + 1]) continue;
+            if (m.empty(e)) continue;
             float sum[3];
-            if (ch == 1) gather<1>(index, weight, x, start[e], start[e + 1], from, to, sum);
-            else gather<3>(index, weight, x, start[e], start[e + 1], from, to, sum);
-            for (int c = 0; c < 3; ++c) y[4 * e + size_t(c)] += sum[c];
+            m.sum(e, m.in() + 4 * pixelOffset, from, to, sum);
+            for (int c = 0; c < 3; ++c) m.out()[4 * e + size_t(c)] += sum[c];
         }
     });
 }

@@ -23,7 +23,8 @@ Projector::Projector(GpuDevice& device, GpuVolume& volume, const Lighting& light
       m_unknownDims(unknownDims), m_step(stepVoxels), m_exactTraversal(exactTraversal) {
     if (unknownDims.x < 1 || unknownDims.y < 1 || unknownDims.z < 1)
         throw InvalidArgument("Projector: the unknown grid must have at least one voxel");
-    m_columnsOnHost = m_productsOnHost = device.capabilities().isSoftware;
+    m_columnsOnHost = device.capabilities().isSoftware;
+    m_productsOnHost = solverKernelsOnHost(device);
     m_mergeViews = !m_productsOnHost;
     // Only albedo's weights hold L_scat: the others need no light-depth volumes, for the lights or
     // the environment (extinction: log-space tomography; emission: T · opacity alone). Issue #40:
@@ -333,23 +334,31 @@ void Projector::timed(bool adjoint, const std::function<void()>& work) {
     (adjoint ? m_stats.adjointCalls : m_stats.forwardCalls)++;
 }
 
-bool Projector::onHost(const SparseRows& rows, const GpuVector& a, const GpuVector& pixels) const {
-    return m_productsOnHost && hostCanApply(rows, a, pixels);
+void Projector::gatherRows(const SparseRows& rows, Range view, size_t pixelOffset, const GpuVector& a, GpuVector& pixels,
+                           const Support* only) {
+    const bool whole = view.first == 0 && view.count == size_t(-1);
+    if (m_productsOnHost && hostCanApply(rows, a, pixels)) hostForward(rows, view, a, pixels, pixelOffset, only);
+    else if (whole) sparseForward(m_device, rows, a, pixels, pixelOffset, only);
+    else sparseForwardRange(m_device, rows, view, a, pixels, only);  // pixelOffset is view.first
+}
+
+void Projector::gatherColumns(const SparseRows& rows, size_t pixelOffset, Range pixelsRead, const GpuVector& pixels, GpuVector& a,
+                              const Support* only) {
+    const bool whole = pixelsRead.first == 0 && pixelsRead.count == size_t(-1);
+    if (m_productsOnHost && hostCanApply(rows, a, pixels)) hostAdjointAdd(rows, pixels, pixelOffset, a, only, pixelsRead);
+    else if (whole) sparseAdjointAdd(m_device, rows, pixels, pixelOffset, a, only);
+    else sparseAdjointAddRange(m_device, rows, pixelsRead, pixels, a, only);
 }
 
 void Projector::forward(const GpuVector& a, GpuVector& pixels) {
     timed(false, [&] {
         const Support* only = allCached() ? m_pixelSupport.get() : nullptr;
         if (m_merged) {
-            if (onHost(*m_merged, a, pixels)) hostForward(*m_merged, {}, a, pixels, 0, only);
-            else sparseForward(m_device, *m_merged, a, pixels, 0, only);
+            gatherRows(*m_merged, {}, 0, a, pixels, only);
         } else {
             dispatch(false, a, pixels);
-            for (const View& v : m_views) {
-                if (!v.rows) continue;
-                if (onHost(*v.rows, a, pixels)) hostForward(*v.rows, {}, a, pixels, v.offset, only);
-                else sparseForward(m_device, *v.rows, a, pixels, v.offset, only);
-            }
+            for (const View& v : m_views)
+                if (v.rows) gatherRows(*v.rows, {}, v.offset, a, pixels, only);
         }
         gl::barrierAfterComputeWrites();
     });
@@ -359,17 +368,14 @@ void Projector::adjoint(const GpuVector& pixels, GpuVector& a) {
     timed(true, [&] {
         a.fill(0.0f);
         if (m_merged) {
-            if (onHost(*m_merged, a, pixels)) hostAdjointAdd(*m_merged, pixels, 0, a, m_elementSupport.get());
-            else sparseAdjointAdd(m_device, *m_merged, pixels, 0, a, m_elementSupport.get());
+            gatherColumns(*m_merged, 0, {}, pixels, a, m_elementSupport.get());
             gl::barrierAfterComputeWrites();
             return;
         }
         dispatch(true, a, pixels);
         for (const View& v : m_views) {
             if (!v.rows) continue;
-            const Support* only = allCached() ? m_elementSupport.get() : nullptr;
-            if (onHost(*v.rows, a, pixels)) hostAdjointAdd(*v.rows, pixels, v.offset, a, only);
-            else sparseAdjointAdd(m_device, *v.rows, pixels, v.offset, a, only);
+            gatherColumns(*v.rows, v.offset, {}, pixels, a, allCached() ? m_elementSupport.get() : nullptr);
             gl::barrierAfterComputeWrites();  // the next view adds to the same elements
         }
     });
@@ -388,11 +394,8 @@ void Projector::forwardByColumns(const GpuVector& c, GpuVector& pixels) {
 void Projector::forwardView(size_t view, const GpuVector& a, GpuVector& pixels) {
     const View& v = m_views.at(view);
     timed(false, [&] {
-        const Support* only = allCached() ? m_pixelSupport.get() : nullptr;
-        if (v.rows && onHost(*v.rows, a, pixels)) hostForward(*v.rows, {}, a, pixels, v.offset, only);
-        else if (v.rows) sparseForward(m_device, *v.rows, a, pixels, v.offset, only);
-        else if (m_merged && onHost(*m_merged, a, pixels)) hostForward(*m_merged, viewRange(view), a, pixels, viewRange(view).first, only);
-        else if (m_merged) sparseForwardRange(m_device, *m_merged, viewRange(view), a, pixels, m_pixelSupport.get());
+        if (v.rows) gatherRows(*v.rows, {}, v.offset, a, pixels, allCached() ? m_pixelSupport.get() : nullptr);
+        else if (m_merged) gatherRows(*m_merged, viewRange(view), viewRange(view).first, a, pixels, m_pixelSupport.get());
         else dispatch(false, a, pixels, &v);
         gl::barrierAfterComputeWrites();
     });
@@ -402,11 +405,8 @@ void Projector::adjointView(size_t view, const GpuVector& pixels, GpuVector& a) 
     const View& v = m_views.at(view);
     timed(true, [&] {
         a.fill(0.0f);
-        const Support* only = allCached() ? m_elementSupport.get() : nullptr;
-        if (v.rows && onHost(*v.rows, a, pixels)) hostAdjointAdd(*v.rows, pixels, v.offset, a, only);
-        else if (v.rows) sparseAdjointAdd(m_device, *v.rows, pixels, v.offset, a, only);
-        else if (m_merged && onHost(*m_merged, a, pixels)) hostAdjointAdd(*m_merged, pixels, 0, a, m_elementSupport.get(), viewRange(view));
-        else if (m_merged) sparseAdjointAddRange(m_device, *m_merged, viewRange(view), pixels, a, m_elementSupport.get());
+        if (v.rows) gatherColumns(*v.rows, v.offset, {}, pixels, a, allCached() ? m_elementSupport.get() : nullptr);
+        else if (m_merged) gatherColumns(*m_merged, 0, viewRange(view), pixels, a, m_elementSupport.get());
         else dispatch(true, a, pixels, &v);
         gl::barrierAfterComputeWrites();
     });

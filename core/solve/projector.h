@@ -127,8 +127,12 @@ private:
     /// Matrix-free W or Wᵀ over the views without cached rows (with `only`: that view alone).
     void dispatch(bool adjoint, const GpuVector& unknowns, const GpuVector& pixels, const View* only = nullptr);
     void timed(bool adjoint, const std::function<void()>& work);
-    /// Whether a product of `rows` with these vectors runs on the host (setProductsOnHost).
-    bool onHost(const SparseRows& rows, const GpuVector& a, const GpuVector& pixels) const;
+    /// W a from `rows` (a view's own, or `view`'s range of merged rows) into `pixels` from
+    /// `pixelOffset`, and a += Wᵀ r from their columns (reading `pixelsRead` of merged rows' pixels
+    /// only): on the host where it can map them (setProductsOnHost), else by sparse_project.comp.
+    void gatherRows(const SparseRows& rows, Range view, size_t pixelOffset, const GpuVector& a, GpuVector& pixels, const Support* only);
+    void gatherColumns(const SparseRows& rows, size_t pixelOffset, Range pixelsRead, const GpuVector& pixels, GpuVector& a,
+                       const Support* only);
     /// Counts, then writes, one view's rows and columns; null when past the budget.
     std::unique_ptr<SparseRows> buildRows(const View& v, size_t budgetBytes, int channels, const GpuVector* pixelMask);
     /// With every view cached: one row/column structure over all of them (rows concatenated,

@@ -134,7 +134,7 @@ bool Solver::State::usesIdentity() const {
 void Solver::State::allocate() {
     const size_t P = W->pixelCount(), E = elements;
     // On a CPU rasterizer W and Wᵀ read and write the vectors in place (host_products.h).
-    const bool mapped = device.capabilities().isSoftware;
+    const bool mapped = solverKernelsOnHost(device);
     for (auto [vector, name] : {std::pair{&obs, "obs"}, {&sqrtW, "sqrt-weights"}, {&rImg, "r-img"}, {&qImg, "q-img"},
                                 {&tmpImg, "tmp-img"}, {&dImg, "d-img"}, {&rPrev, "r-prev"}})
         *vector = GpuVector(P, name, mapped);
