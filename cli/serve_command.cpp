@@ -40,6 +40,7 @@ const CommandSpec kServe{
         {"job-lease", "SECONDS", "with --store: a running job's lease; another replica runs it again once it lapses unrenewed; default 10"},
         {"web-dir", "DIR", "the page's folder; default the installed share/volstyle/web, else the source tree's web/"},
         {"render-budget", "S", "seconds one render may hold the GL thread (422 over_budget past it; 0: no limit); default 60"},
+        {"prefetch", "on|off", "render what a session's next solve needs first (each view) while the GL thread is idle, so a solve after painting starts from it; default on"},
         {"max-sessions", "N", "sessions at once; default 64"},
         {"max-upload-mib", "N", "largest VDB or image upload, MiB; default 512"},
         {"max-image-side", "N", "largest target or render side, pixels; default 4096"},
@@ -120,6 +121,9 @@ int runServe(const std::vector<std::string>& argv) {
     // the child, whose /proc/self/exe is still this binary.
     opt.vdbReader = "/proc/self/exe";
     opt.renderBudgetSeconds = args.number("render-budget", opt.renderBudgetSeconds);
+    const std::string prefetch = args.get("prefetch", "on");
+    if (prefetch != "on" && prefetch != "off") throw InvalidArgument("--prefetch must be on or off");
+    opt.prefetchSolves = prefetch == "on";
     if (!(opt.renderBudgetSeconds >= 0) || !std::isfinite(opt.renderBudgetSeconds))
         throw InvalidArgument("--render-budget must be a number of seconds >= 0 (0: no limit)");
 

@@ -5,6 +5,7 @@
 /// check() between them: past the deadline it throws OverBudget naming the pass and how far it
 /// got; a set cancel flag throws Cancelled. The default budget is unlimited and costs nothing.
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 
@@ -25,6 +26,14 @@ public:
     /// Whether check() can ever throw (else work need not be chunked).
     bool bounded() const { return m_seconds > 0 || m_cancel; }
     double seconds() const { return m_seconds; }
+    /// At most `invocations` a chunk (> 0), fewer than a pass would take otherwise: work done ahead
+    /// of a request (solve_prefetch.h) must give the GL thread back within a fraction of a second
+    /// when a request arrives, and a 480² render is one chunk of seconds on llvmpipe.
+    WorkBudget& withChunksOf(long long invocations) {
+        m_chunkInvocations = invocations;
+        return *this;
+    }
+    long long chunkInvocations(long long pass) const { return m_chunkInvocations > 0 ? std::min(pass, m_chunkInvocations) : pass; }
 
     /// Between chunks of `pass`, `fractionDone` of it finished.
     void check(const char* pass, double fractionDone) const {
@@ -46,6 +55,7 @@ private:
     Clock::time_point m_start = Clock::now();
     double m_seconds = 0;
     const std::atomic<bool>* m_cancel = nullptr;
+    long long m_chunkInvocations = 0;
 };
 
 }  // namespace volstyle

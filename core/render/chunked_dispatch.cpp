@@ -15,7 +15,7 @@ void dispatchChunked(GpuDevice& device, layout::MarchParams params, Int3 cells, 
     // Slabs per chunk: a multiple of the group size, at least one group.
     int slabs = extent;
     if (budget.bounded())
-        slabs = int(std::clamp<long long>(chunkInvocations / std::max(sliceCells, 1LL) / group * group, group,
+        slabs = int(std::clamp<long long>(budget.chunkInvocations(chunkInvocations) / std::max(sliceCells, 1LL) / group * group, group,
                                           ((extent + group - 1) / group) * group));
     const auto groups = [group](int n) { return GLuint((n + group - 1) / group); };
     for (int first = 0; first < extent; first += slabs) {

@@ -98,7 +98,8 @@ Image combine(const Image& a, const Image& b, float sign = -1.0f) {
 }  // namespace
 
 std::vector<std::shared_ptr<const ViewRenders>> renderBounds(GpuDevice& device, GpuVolume& gpu, const Lighting& lighting,
-                                      const std::vector<SolveView>& views, const SolveOptions& options, bool withAlbedoOne) {
+                                      const std::vector<SolveView>& views, const SolveOptions& options, bool withAlbedoOne,
+                                      const WorkBudget& budget) {
     RenderSettings settings;
     settings.stepVoxels = options.stepVoxels;
     settings.exactTraversal = options.exactTraversal;
@@ -107,9 +108,11 @@ std::vector<std::shared_ptr<const ViewRenders>> renderBounds(GpuDevice& device, 
     for (size_t v = 0; v < views.size(); ++v) {
         // One march per view: the scattering at albedo 1 comes from the same rays (issue #40:
         // a second render of a white volume was half of a first solve's renders).
-        const RenderLayers l = renderer.renderLayers(gpu, views[v].camera, views[v].lightingFor(lighting), settings, nullptr, WorkBudget(),
+        const auto t0 = Clock::now();
+        const RenderLayers l = renderer.renderLayers(gpu, views[v].camera, views[v].lightingFor(lighting), settings, nullptr, budget,
                                                      withAlbedoOne);
         ViewRenders& r = out[v];
+        r.renderMs = msSince(t0);
         r.now = l.beauty;
         r.background = l.background;
         r.noEmission = combine(l.beauty, l.emission);

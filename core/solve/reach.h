@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "core/base/work_budget.h"
 #include "core/gpu/gpu_device.h"
 #include "core/render/gpu_volume.h"
 #include "core/scene/camera.h"
@@ -39,12 +40,15 @@ struct ViewRenders {
     Image albedo1;     ///< albedo0 + the scattering with albedo 1 (only with `withAlbedoOne`)
     Image neither;     ///< T·background: no emission, albedo 0
     Image background;  ///< the background alone (no medium)
+    double renderMs = 0;  ///< what the render took (what a miss in SolveCache costs again)
 };
 
 /// One render per view (with `withAlbedoOne`, the albedo-1 scattering from the same march), under
 /// `options`' step and traversal, of the volume already on the GPU (the solver's own upload).
+/// Throws as `budget` says between chunks.
 std::vector<std::shared_ptr<const ViewRenders>> renderBounds(GpuDevice& device, GpuVolume& volume, const Lighting& lighting,
-                                      const std::vector<SolveView>& views, const SolveOptions& options, bool withAlbedoOne);
+                                      const std::vector<SolveView>& views, const SolveOptions& options, bool withAlbedoOne,
+                                      const WorkBudget& budget = WorkBudget());
 
 /// Fills `report.reach` for solving `options.unknown` toward `views` from renderBounds() (with
 /// albedo 1). Renders kept from an earlier solve (SolveCache) are exact for the chosen unknowns'

@@ -28,10 +28,6 @@ std::string gridKey(const Volume& v) {
     return key;
 }
 
-std::string cameraKey(const Camera& c) {
-    return fmt::format("cam:{},{},{}:{},{},{}:{},{},{}:{}:{}x{}:{},{}", c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y,
-                       c.target.z, c.up.x, c.up.y, c.up.z, c.fovYDeg, c.width, c.height, c.nearDist, c.farDist);
-}
 
 std::string lightingKey(const Lighting& l) {
     std::string key = "light:";
@@ -65,6 +61,11 @@ std::string otherPropertiesKey(const Volume& v, Unknown u) {
 std::string marchKey(const SolveOptions& o) { return fmt::format("step{}:{}", o.stepVoxels, o.exactTraversal ? "exact" : "march"); }
 
 }  // namespace
+
+std::string cameraKey(const Camera& c) {
+    return fmt::format("cam:{},{},{}:{},{},{}:{},{},{}:{}:{}x{}:{},{}", c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y,
+                       c.target.z, c.up.x, c.up.y, c.up.z, c.fovYDeg, c.width, c.height, c.nearDist, c.farDist);
+}
 
 void SolveCache::putRows(const std::string& key, std::shared_ptr<const SparseRows> rows, double costMs) {
     const size_t bytes = sparseRowsBytes(rows->rows, rows->columns, rows->entries, rows->channels);
@@ -106,7 +107,10 @@ void SolveCache::clear() {
     m_bytes = 0;
 }
 
-VolumeKey volumeKeyOf(const Volume& volume, Unknown unknown) { return {boxKey(volume), gridKey(volume), otherPropertiesKey(volume, unknown)}; }
+VolumeKey volumeKeyOf(const Volume& volume, Unknown unknown) {
+    // (An extinction solve owns neither emission nor albedo: its "others" are both.)
+    return {boxKey(volume), gridKey(volume), otherPropertiesKey(volume, unknown), otherPropertiesKey(volume, Unknown::Extinction)};
+}
 
 std::string rowsKey(const VolumeKey& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,
                     const Camera& camera, int channels, const std::vector<float>& sqrtWeights, size_t firstPixel) {
@@ -129,6 +133,12 @@ std::string rendersKey(const VolumeKey& volume, const Lighting& lighting, const 
     return fmt::format("renders:{}:{}:{}:{}:{}", int(u), withAlbedoOne ? 1 : 0, marchKey(options), volume.grid,
                        lightingKey(lighting)) +
            volume.others + ":" + cameraKey(camera);
+}
+
+std::string exactRendersKey(const VolumeKey& volume, const Lighting& lighting, const SolveOptions& options, const Camera& camera,
+                            bool withAlbedoOne) {
+    return fmt::format("renders:exact:{}:{}:{}:{}", withAlbedoOne ? 1 : 0, marchKey(options), volume.grid, lightingKey(lighting)) + volume.all +
+           ":" + cameraKey(camera);
 }
 
 std::string lastSolveKey(const Volume& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,

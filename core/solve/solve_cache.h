@@ -91,8 +91,12 @@ private:
 /// hashed a 128³ volume's 25 MB grids twenty times, most of its next solve's 1.8 s of "rows".
 struct VolumeKey {
     std::string box, grid, others;
+    std::string all;  ///< every grid's hash, the unknowns' too: a render of exactly this volume (exactRendersKey)
 };
 VolumeKey volumeKeyOf(const Volume& volume, Unknown unknown);
+
+/// A camera's every field, exactly (shortest round-trip decimals).
+std::string cameraKey(const Camera& camera);
 
 /// The key of one view's rows: the extinction (and, for albedo, the lighting), the camera, the
 /// unknowns' grid and basis, the march, and which of the view's pixels have weight.
@@ -102,6 +106,12 @@ std::string rowsKey(const VolumeKey& volume, const Lighting& lighting, const Sol
 /// those, and the fixed part it needs excludes them), the lighting, the camera, the march.
 std::string rendersKey(const VolumeKey& volume, const Lighting& lighting, const SolveOptions& options, const Camera& camera,
                        bool withAlbedoOne);
+
+/// The key of a view's bound renders of exactly this volume, whatever the unknowns: what the
+/// server renders ahead of a solve (solve_prefetch.h) before it knows them. A solve that misses
+/// its own key looks here next.
+std::string exactRendersKey(const VolumeKey& volume, const Lighting& lighting, const SolveOptions& options, const Camera& camera,
+                            bool withAlbedoOne);
 
 /// The key of the last solve over these views: everything a solve's optimum depends on but the
 /// targets, the weights and the unknowns' values (the settings, every other grid, the lighting,

@@ -10,6 +10,7 @@
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
 #include "core/solve/solve_cache.h"
+#include "core/solve/solve_prefetch.h"
 #include "core/solve/solver_state.h"
 #include "core/volume/resample.h"
 
@@ -150,30 +151,8 @@ void Solver::State::buildObservations() {
     // The fixed part of each pixel (everything but the unknown's term, TVCG Eq. 5 and after),
     // from the renders the reach analysis takes too (reach.h: two per view, not six).
     const Unknown u = opt.unknown;
-    viewRenders.assign(views.size(), nullptr);
-    std::vector<std::string> keys(views.size());
-    std::vector<SolveView> missing;
     if (cache) volumeKey = volumeKeyOf(volume, u);
-    for (size_t v = 0; v < views.size(); ++v) {
-        if (!cache) break;
-        keys[v] = rendersKey(volumeKey, views[v].lightingFor(lighting), opt, views[v].camera, opt.analyzeReach);
-        viewRenders[v] = cache->findRenders(keys[v]);
-    }
-    for (size_t v = 0; v < views.size(); ++v)
-        if (!viewRenders[v]) missing.push_back({views[v].name, views[v].camera, Image(), std::nullopt, views[v].background});
-    if (!missing.empty()) {
-        // A GpuVolume of their own: rendering through the solver's made the rows that follow 1.3 s
-        // slower at 128³ (bench/solver_race (b); measured, cause not found), and this costs ~50 ms.
-        const auto t0 = Clock::now();
-        GpuVolume own(volume);
-        auto fresh = renderBounds(device, own, lighting, missing, opt, opt.analyzeReach);
-        const double perViewMs = msSince(t0) / double(missing.size());
-        for (size_t v = 0, k = 0; v < views.size(); ++v) {
-            if (viewRenders[v]) continue;
-            viewRenders[v] = fresh[k++];
-            if (cache) cache->putRenders(keys[v], viewRenders[v], perViewMs);
-        }
-    }
+    viewRenders = cachedRenderBounds(device, volume, volumeKey, lighting, views, opt, cache);
     auto fixedPart = [&](const ViewRenders& r) -> const Image& {
         switch (u) {
             case Unknown::Emission: return r.noEmission;

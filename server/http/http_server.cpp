@@ -45,6 +45,7 @@ ServiceLimits serviceLimits(const ServerOptions& o) {
     l.meshLimits.maxVertices = o.maxMeshVertices;
     l.meshLimits.maxTriangles = 2 * o.maxMeshVertices;
     l.renderBudgetSeconds = o.renderBudgetSeconds;
+    l.prefetchSolves = o.prefetchSolves;
     l.vdbReader.executable = o.vdbReader;
     l.finishedJobsKept = o.finishedJobsKept;
     l.memory = o.memory;

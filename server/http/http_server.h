@@ -39,6 +39,7 @@ struct ServerOptions {
     double eventKeepAliveSeconds = 15;  ///< a job's quiet event stream sends a comment this often
     ConnectionLimits connections;    ///< read deadlines and connections per client (guarded_http_server.h)
     double renderBudgetSeconds = 60;  ///< a render's limit on the GL thread (422 over_budget); <= 0: none
+    bool prefetchSolves = true;       ///< render a session's next solve's views while the GL thread is idle
     /// The volstyle binary that reads uploaded VDBs in a child process (`serve` sets itself);
     /// empty: read them in this process (a crash inside OpenVDB then ends the server).
     std::string vdbReader;

@@ -9,6 +9,7 @@
 #include <functional>
 #include <future>
 #include <memory>
+#include <string>
 
 #include "core/gl/context.h"
 #include "core/gl/gpu_memory.h"
@@ -18,7 +19,7 @@ namespace volstyle::server {
 
 /// The GL thread's queue (GET /metrics, /ready).
 struct GlQueueDepth {
-    size_t shortTasks = 0, longTasks = 0;
+    size_t shortTasks = 0, longTasks = 0, idleTasks = 0;
     bool stopping = false;
 };
 
@@ -52,6 +53,14 @@ public:
         post(std::move(task), /*isLong=*/true);
     }
 
+    /// Work done ahead of a request (a solve's renders while the artist paints, solve_prefetch.h):
+    /// `task(device, yield)` runs only once the GL thread has had nothing else to do for a moment,
+    /// and `yield` is raised as soon as any other task is queued; it should then stop (between
+    /// chunks: WorkBudget's cancel flag) and return false, and runs again at the next idle moment.
+    /// It returns true once done. Queued under a `key` already waiting, it replaces that task.
+    using IdleTask = std::function<bool(core::GpuDevice&, const std::atomic<bool>& yield)>;
+    void whenIdle(const std::string& key, IdleTask task) { postIdle(key, std::move(task)); }
+
     /// Whether any task was ever given to it (a service that never used GL has nothing to free).
     bool used() const { return m_used; }
 
@@ -68,6 +77,8 @@ public:
 protected:
     /// Queues `task`; throws (GpuError) when it cannot run at all.
     virtual void post(std::function<void(core::GpuDevice&)> task, bool isLong) = 0;
+    /// Queues an idle task (whenIdle); an executor without a GL thread of its own does nothing ahead.
+    virtual void postIdle(const std::string& /*key*/, IdleTask /*task*/) {}
 
 private:
     std::atomic<bool> m_used{false};

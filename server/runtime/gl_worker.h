@@ -10,7 +10,9 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <thread>
+#include <utility>
 
 #include "server/runtime/gl_executor.h"
 
@@ -30,7 +32,11 @@ public:
 
 private:
     void post(std::function<void(core::GpuDevice&)> task, bool isLong) override;
+    void postIdle(const std::string& key, IdleTask task) override;
     void loop(std::promise<void>& started);
+    /// With the lock held and both queues empty: waits for a quiet moment, then runs the first idle
+    /// task (unlocked), queuing it again if it yielded. False when there was none to run.
+    bool runIdleTask(std::unique_lock<std::mutex>& lock, core::GpuDevice& device);
     /// Reads the driver's memory figures if a second has passed since the last read (GL thread).
     void sampleGpuMemory(std::chrono::steady_clock::time_point& last);
 
@@ -38,6 +44,8 @@ private:
     mutable std::mutex m_mutex;
     std::condition_variable m_wake;
     std::deque<std::function<void(core::GpuDevice&)>> m_short, m_long;
+    std::deque<std::pair<std::string, IdleTask>> m_idle;
+    std::atomic<bool> m_yield{false};  ///< raised when a task is queued while an idle one runs
     bool m_stopping = false;
     core::gl::Capabilities m_caps;
     std::atomic<long long> m_gpuTotal{-1}, m_gpuAvailable{-1};

@@ -77,8 +77,7 @@ void JobService::solveAndCommit(Job& job, const std::shared_ptr<Session>& s, con
     reportPhase(job, core::SolvePhase::PreparingViews);
     SolveInputs in = snapshot(*s);
     // Every view a stroke left alone keeps its rows of W and renders from the last solve.
-    if (!m_ctx.solveCache && m_ctx.limits.solveCacheBytes > 0) m_ctx.solveCache = std::make_unique<core::SolveCache>(m_ctx.limits.solveCacheBytes);
-    core::Solver solver(device, in.volume, in.lighting, std::move(in.views), options, m_ctx.solveCache.get());
+    core::Solver solver(device, in.volume, in.lighting, std::move(in.views), options, m_ctx.solveCacheOnGl());
     auto lastPreview = Clock::now() - std::chrono::hours(1);
     core::SolveResult result = solver.run(
         [&](const core::SolveProgress& p) {
@@ -201,6 +200,7 @@ std::shared_ptr<Job> JobService::startSolve(const std::shared_ptr<Session>& sess
                                                                        " of the animation: POST …/animate solves it"});
         }
         if (!problems.empty()) throw protocol::ValidationError(problems);
+        if (!options.lights.solve) s.lastSolveOptions = options;  // what work ahead prepares the next solve for
     }
     auto job = m_ctx.queueJob(s, origin);
     m_ctx.gl->submit([this, job, session, options](core::GpuDevice& device) { runSolve(job, session, options, device); });

@@ -112,6 +112,7 @@ void ServiceContext::freeGpuObjects() {
         stylizer.reset();
         translucent.reset();
         solveCache.reset();
+        prefetched.clear();  // it named what the cache held
     });
 }
 
@@ -119,6 +120,7 @@ void ServiceContext::saved(Session& s) {
     if (s.removed) throw ApiError(ErrorCode::NotFound, "session '" + s.id + "' was deleted");
     if (persist) persist->saveSession(s);
     memory.recount(s);  // what it holds now, whatever changed
+    prefetchSolve(s);
 }
 
 std::shared_ptr<Session> ServiceContext::find(const std::string& id) {

@@ -10,6 +10,9 @@
 /// GlExecutor; a session's lock is never held while waiting for the GL thread (a finishing solve
 /// needs it).
 
+#include <atomic>
+#include <map>
+
 #include "server/service/service_types.h"
 
 namespace volstyle::server {
@@ -95,6 +98,16 @@ struct ServiceContext {
     /// On the GL thread: frees the preview copies of the session's finished jobs.
     void dropPreviews(const Session& s);
 
+    // Work ahead (solve_prefetch.cpp).
+    /// Queues, for when the GL thread is idle, the renders the session's next solve needs first
+    /// (each view's, core/solve/solve_prefetch.h) under its last solve's options (the defaults
+    /// before one). Called by saved(): whatever changed, the views, volume or lighting may have.
+    void prefetchSolve(const Session& s);
+    /// The idle task: false when it yielded to a request (it runs again at the next idle moment).
+    bool runPrefetch(const std::string& sessionId, core::GpuDevice& device, const std::atomic<bool>& yield);
+    /// On the GL thread: the solve cache, created on first use (limits.solveCacheBytes > 0).
+    core::SolveCache* solveCacheOnGl();
+
     // The GL thread's engines (created on first use, GL thread only).
     core::Renderer& renderer(core::GpuDevice& device);
     core::Stylizer& stylizerEngine(core::GpuDevice& device);
@@ -139,6 +152,9 @@ struct ServiceContext {
     std::unique_ptr<core::Stylizer> stylizer;                   ///< GL thread only
     std::unique_ptr<core::TranslucentRenderer> translucent;     ///< GL thread only; created on first use
     std::unique_ptr<core::SolveCache> solveCache;               ///< GL thread only; created by the first solve
+    /// GL thread only: per session, what work ahead last prepared (its signature): nothing to do again.
+    std::map<std::string, std::string> prefetched;
+    std::atomic<uint64_t> prefetchedViews{0};  ///< views rendered ahead of solves (GET /metrics)
     std::unique_ptr<GlExecutor> gl;  ///< last: destroyed first, so its thread stops before the engines go
 };
 

@@ -73,6 +73,8 @@ struct ServiceLimits {
     /// GPU memory for the parts one solve leaves for the next (core/solve/solve_cache.h), shared by
     /// every session: the keys name content, not sessions. 0: every solve starts cold.
     size_t solveCacheBytes = size_t(1) << 30;
+    /// Render what a session's next solve needs while the GL thread is idle (solve_prefetch.cpp).
+    bool prefetchSolves = true;
     /// Decoded bytes a session, and all sessions, may hold (memory_budget.h; over: 507).
     MemoryLimits memory;
     /// Where sessions and jobs are kept beside the data folder (issue #41): "" (the folder alone)

@@ -15,6 +15,7 @@
 #include "core/scene/camera.h"
 #include "core/scene/lighting.h"
 #include "core/scene/render_settings.h"
+#include "core/scene/solve_options.h"
 #include "core/volume/volume.h"
 #include "protocol/error_code.h"
 #include "protocol/requests.h"
@@ -100,6 +101,9 @@ struct Session {
     std::vector<std::string> jobs;
     std::vector<DamagedFile> damaged;      ///< files of the session found unreadable (quarantined)
     ViewportState viewport;
+    /// The options of its last solve (in memory only): what the server prepares the next one for
+    /// while the artist paints (server/service/solve_prefetch.cpp).
+    std::optional<core::SolveOptions> lastSolveOptions;
     /// Moves (with `mutex`) when what a render of the session shows changes: a new version, the
     /// lighting, the environment map. The viewport's stream renders again when it moves.
     uint64_t shownRevision = 0;

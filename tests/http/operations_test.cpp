@@ -122,3 +122,33 @@ TEST_F(OperationsOnAFolder, NotReadyWhenTheDataFolderIsGone) {
     EXPECT_EQ(client().Get("/api/v1/ready")->get_header_value("Retry-After"), "5");
     EXPECT_EQ(client().Get("/api/v1/health")->status, 200) << "liveness stays: the process is up";
 }
+
+TEST_F(Operations, ViewsAreRenderedAheadOfASolveWhileIdleAndOnlyWhatChanged) {
+    // Issue #40: while the artist paints, the GL thread renders each view as the next solve will
+    // need it (server/service/solve_prefetch.cpp), once per view, volume and lighting, and never
+    // for a change that does not touch them (a target).
+    auto prefetched = [&] { return samples(client().Get("/api/v1/metrics")->body).at("volstyle_prefetched_views_total"); };
+    auto waitFor = [&](double n) {
+        for (int i = 0; i < 600 && prefetched() < n; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        return prefetched();
+    };
+    const std::string base = "/api/v1/sessions/" + createSession();
+    EXPECT_EQ(prefetched(), 0) << "a session without views has nothing to render ahead";
+    const std::string camera = R"({"camera": {"eye": [0, 0.2, 3], "target": [0, 0, 0], "width": 16, "height": 16}})";
+    ASSERT_EQ(client().Post((base + "/views").c_str(), camera, "application/json")->status, 201);
+    EXPECT_EQ(waitFor(1), 1);
+    ASSERT_EQ(client().Post((base + "/views").c_str(), R"({"camera": {"eye": [3, 0, 0], "target": [0, 0, 0], "width": 16, "height": 16}})",
+                            "application/json")->status,
+              201);
+    EXPECT_EQ(waitFor(2), 2) << "the new view only";
+    auto render = client().Get((base + "/views/v1/render.png").c_str());
+    ASSERT_EQ(client().Put((base + "/views/v1/target").c_str(), render->body, "image/png")->status, 200);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // past the GL thread's quiet moment
+    EXPECT_EQ(prefetched(), 2) << "a target changes no render";
+    ASSERT_EQ(client().Put((base + "/lighting").c_str(), R"({"sun": {"direction": [0.3, 1, 0.2], "irradiance": [2, 2, 2]}})", "application/json")
+                  ->status,
+              200);
+    EXPECT_EQ(waitFor(4), 4) << "new lighting: both views again";
+    EXPECT_EQ(samples(client().Get("/api/v1/metrics")->body).at(R"(volstyle_gl_queue{kind="idle"})"), 0);
+    solveToEnd(client(), base, R"({"unknowns": ["emission"], "max_iterations": 2})");
+}
