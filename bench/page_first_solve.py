@@ -3,8 +3,11 @@
 page's defaults (builtin:cloud at 64³, one 256² view, emission + albedo, Laplacian 0.002, 30
 iterations), a target painted over the whole view, and the time from POST …/solve to the job's
 end, with the solve report's set-up phases. Then the same solve again (the session's cache).
+--paint-seconds S waits S seconds between adding the view and uploading its target, as an artist
+paints: the server renders the view ahead of the solve meanwhile (--prefetch, on by default).
 
-Usage: python3 bench/page_first_solve.py [--binary build/bin/volstyle] [--resolution 64] [--size 256]
+Usage: python3 bench/page_first_solve.py [--binary build/bin/volstyle] [--resolution 64] [--size 256] [--paint-seconds 0]
+       [--prefetch on|off]
 """
 import argparse
 import json
@@ -38,9 +41,11 @@ def main():
     ap.add_argument("--binary", default=BINARY)
     ap.add_argument("--resolution", type=int, default=64)
     ap.add_argument("--size", type=int, default=256)
+    ap.add_argument("--paint-seconds", type=float, default=0)
+    ap.add_argument("--prefetch", choices=("on", "off"), default="on")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as data:
-        server = Server(data, binary=a.binary)
+        server = Server(data, binary=a.binary, extra=["--prefetch", a.prefetch])
         try:
             status, body = request(server.port, "POST", "/sessions", {"scene": "builtin:cloud", "resolution": a.resolution})
             assert status == 201, body
@@ -49,6 +54,10 @@ def main():
             status, body = request(server.port, "POST", f"/sessions/{sid}/views", {"camera": camera})
             assert status in (200, 201), body
             vid = json.loads(body)["id"]
+            time.sleep(a.paint_seconds)
+            _, metrics = request(server.port, "GET", "/metrics")
+            ahead = [line.split()[-1] for line in metrics.decode().splitlines() if line.startswith("volstyle_prefetched_views_total")]
+            print(f"painting for {a.paint_seconds:g} s: {ahead[0] if ahead else '?'} view(s) rendered ahead (--prefetch {a.prefetch})")
             status, body = request(server.port, "PUT", f"/sessions/{sid}/views/{vid}/target", png(a.size, a.size, (200, 150, 110)),
                                    content_type="image/png")
             assert status == 200, body

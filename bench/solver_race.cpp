@@ -326,12 +326,13 @@ void paperRace(GpuDevice& device, Renderer& renderer, const Problem& p, int iter
     rows.push_back({"CGLS (the default)", solveRace(device, setup.plain, setup.views, raceOptions(p.step, iterations), defaultLighting(), {}, &cache)});
     rows.push_back({"CGLS, the next solve of the same views (the first one's cache kept, as the server does)",
                     solveRace(device, setup.plain, setup.views, raceOptions(p.step, iterations), defaultLighting(), {}, &cache)});
-    // The server renders each view ahead of a session's first solve while the artist paints
-    // (server/service/solve_prefetch.cpp): that solve then starts from the renders.
+    // The server makes each view's renders and rows ahead of a session's first solve while the
+    // artist paints (server/service/solve_prefetch.cpp): that solve then starts from them.
     SolveCache ahead;
     const PrefetchReport made = prefetchSolve(device, setup.plain, defaultLighting(), setup.views, raceOptions(p.step, iterations), ahead);
-    std::fprintf(stderr, "%s: %d views rendered ahead of the first solve in %.0f ms\n", p.name.c_str(), made.viewsRendered, made.ms);
-    rows.push_back({"CGLS, a first solve after the views were rendered ahead (the server, while the artist paints)",
+    std::fprintf(stderr, "%s: ahead of the first solve, %d views rendered and %d views' rows written, in %.0f ms\n", p.name.c_str(),
+                 made.viewsRendered, made.rowsWritten, made.ms);
+    rows.push_back({"CGLS, a first solve after the views were made ahead (the server, while the artist paints)",
                     solveRace(device, setup.plain, setup.views, raceOptions(p.step, iterations), defaultLighting(), {}, &ahead)});
     rows.push_back(bestBaseline(device, setup.plain, setup.views, raceOptions(p.step, iterations), defaultLighting(),
                                 BaselineMethod::Adam, {0.03, 0.1}));

@@ -338,7 +338,7 @@ void apply(Basis b, inout CornerCache cache, vec3 weight, vec3 unusedResidual, i
 #endif
 
 void main() {
-    ivec2 pix = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 pix = ivec2(gl_GlobalInvocationID.xy) + u.dispatchOffset.xy;  // chunked_dispatch.h (work ahead's rows)
     if (pix.x >= u.imageSize.x || pix.y >= u.imageSize.y) return;
     uint pixelIndex = uint(u.viewPixels.x + pix.y * u.imageSize.x + pix.x);
 #if VOLSTYLE_ROWS

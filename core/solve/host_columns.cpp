@@ -85,4 +85,45 @@ void mergeColumnsOnHost(SparseRows& merged, const std::vector<uint32_t>& colStar
     }
 }
 
+std::shared_ptr<const SparseRows> restrictRowsOnHost(std::shared_ptr<const SparseRows> all, const std::vector<uint8_t>& keep) {
+    VOLSTYLE_CHECK(all->hostMapped, ==, true);
+    VOLSTYLE_CHECK(keep.size(), ==, all->rows);
+    const size_t ch = size_t(all->channels), P = all->rows;
+    std::vector<uint32_t> start(P + 1);
+    {
+        const gl::MappedBuffer startMap(all->rowStart, 4 * (P + 1), GL_MAP_READ_BIT);
+        std::copy_n(startMap.as<const uint32_t>(), P + 1, start.data());
+    }
+    std::vector<uint32_t> counts(P);
+    bool dropsEntries = false;
+    for (size_t p = 0; p < P; ++p) {
+        counts[p] = keep[p] ? start[p + 1] - start[p] : 0;
+        dropsEntries |= !keep[p] && start[p + 1] > start[p];
+    }
+    if (!dropsEntries) return all;
+    const uint64_t entries = exclusiveScan(counts);
+    auto r = std::make_shared<SparseRows>();
+    r->rows = P, r->columns = all->columns, r->entries = entries, r->channels = all->channels, r->hostMapped = true;
+    r->rowStart = gl::createBuffer(4 * counts.size(), counts.data(), kHostMappedStorage, "rows-start");
+    r->colStart = gl::createBuffer(4 * (r->columns + 1), nullptr, kHostMappedStorage, "columns-start");
+    r->rowIndex = gl::createBuffer(std::max<size_t>(4 * entries, 4), nullptr, kHostMappedStorage, "rows-index");
+    r->rowWeight = gl::createBuffer(std::max<size_t>(4 * entries * ch, 4), nullptr, kHostMappedStorage, "rows-weight");
+    r->colIndex = gl::createBuffer(std::max<size_t>(4 * entries, 4), nullptr, kHostMappedStorage, "columns-index");
+    r->colWeight = gl::createBuffer(std::max<size_t>(4 * entries * ch, 4), nullptr, kHostMappedStorage, "columns-weight");
+    if (entries > 0) {
+        const gl::MappedBuffer fromIndex(all->rowIndex, 4 * all->entries, GL_MAP_READ_BIT);
+        const gl::MappedBuffer fromWeight(all->rowWeight, 4 * all->entries * ch, GL_MAP_READ_BIT);
+        const gl::MappedBuffer toIndex(r->rowIndex, 4 * entries, GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT);
+        const gl::MappedBuffer toWeight(r->rowWeight, 4 * entries * ch, GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT);
+        for (size_t p = 0; p < P; ++p) {
+            if (!keep[p]) continue;
+            const size_t n = start[p + 1] - start[p];
+            std::copy_n(fromIndex.as<const uint32_t>() + start[p], n, toIndex.as<uint32_t>() + counts[p]);
+            std::copy_n(fromWeight.as<const float>() + size_t(start[p]) * ch, n * ch, toWeight.as<float>() + size_t(counts[p]) * ch);
+        }
+    }
+    transposeOnHost(*r, counts);
+    return r;
+}
+
 }  // namespace volstyle::core

@@ -10,6 +10,7 @@
 #include <epoxy/gl.h>
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "core/solve/sparse_rows.h"
@@ -34,5 +35,12 @@ void transposeOnHost(SparseRows& r, const std::vector<uint32_t>& rowStart);
 /// `colStart` is the merged columns' starts; merged.colIndex and colWeight must be hostMapped.
 void mergeColumnsOnHost(SparseRows& merged, const std::vector<uint32_t>& colStart, const std::vector<const SparseRows*>& views,
                         const std::vector<size_t>& offsets);
+
+/// The rows of `all` (one view's, written for every pixel; hostMapped) of the pixels `keep` marks,
+/// and their columns: what the fill pass writes when masked to those pixels, entry for entry (a
+/// ray's entries do not depend on which other rays are written). `all` itself where every pixel
+/// left out has no entry (its rays meet no medium): nothing to copy. Work ahead writes rows for
+/// every pixel before the paint says which have weight (solve_prefetch.h).
+std::shared_ptr<const SparseRows> restrictRowsOnHost(std::shared_ptr<const SparseRows> all, const std::vector<uint8_t>& keep);
 
 }  // namespace volstyle::core

@@ -1,7 +1,10 @@
 #include "core/solve/projector.h"
 
+#include "core/render/chunked_dispatch.h"
+
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
+#include "core/render/chunked_dispatch.h"
 #include "core/solve/host_columns.h"
 #include "core/solve/host_products.h"
 #include "core/shaders/layout.h"
@@ -85,6 +88,8 @@ void Projector::useProgram(const View& v, gl::ShaderBuilder& builder) {
 }
 
 void Projector::dispatchView(const View& v) {
+    if (m_budget && m_budget->bounded())  // in chunks that can stop (work ahead, solve_prefetch.h)
+        return dispatchChunked(m_device, v.setup.params, {v.camera.width, v.camera.height, 1}, DispatchShape::Image, *m_budget, "rows of W");
     const int g = layout::kWorkgroup2D;
     glDispatchCompute(GLuint((v.camera.width + g - 1) / g), GLuint((v.camera.height + g - 1) / g), 1);
 }
@@ -120,6 +125,7 @@ gl::Buffer zeroedBuffer(size_t bytes, const std::string& label, GLbitfield flags
 }  // namespace
 
 std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetBytes, int channels, const GpuVector* pixelMask) {
+    const auto t0 = Clock::now();
     auto r = std::make_unique<SparseRows>();
     r->rows = size_t(v.camera.width) * v.camera.height;
     r->columns = elementCount();
@@ -183,6 +189,8 @@ std::unique_ptr<SparseRows> Projector::buildRows(const View& v, size_t budgetByt
     dispatchView(v);
     gl::barrierAfterComputeWrites();  // (it includes what the host's mapping of the rows needs)
     if (hostColumns) transposeOnHost(*r, rowStart);
+    m_device.finish();
+    r->buildMs = msSince(t0);
     return r;
 }
 

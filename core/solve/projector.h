@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/base/work_budget.h"
 #include "core/gpu/gpu_device.h"
 #include "core/render/gpu_volume.h"
 #include "core/render/march_setup.h"
@@ -68,6 +69,9 @@ public:
     /// Scatter with GL_NV_shader_atomic_float (default where the context has it) or with the
     /// compare-and-swap fallback; tests cover both.
     void setUseFloatAtomics(bool use);
+    /// The rows' passes (cacheRows) in chunks that stop as `budget` says (kept by pointer; null,
+    /// the default: a view at a time). Work ahead (solve_prefetch.h) yields to requests so.
+    void setBudget(const WorkBudget* budget) { m_budget = budget; }
     /// Writes each view's rows of W and their transpose (sparse_rows.h) while they fit in
     /// `budgetBytes` and in one storage block; W and Wᵀ of those views then gather from them and
     /// the others stay matrix-free. Valid while the extinction and the lighting stay as they
@@ -158,6 +162,7 @@ private:
     size_t m_pixelCount = 0;
     ProjectorStats m_stats;
     bool m_useFloatAtomics = false;
+    const WorkBudget* m_budget = nullptr;
     std::shared_ptr<const Support> m_pixelSupport, m_elementSupport;
     std::shared_ptr<const SparseRows> m_merged;  ///< every view's rows at once (mergeRows); null: per view
     bool m_columnsOnHost = false;                ///< setColumnsOnHost (constructor: a CPU rasterizer)

@@ -112,14 +112,18 @@ VolumeKey volumeKeyOf(const Volume& volume, Unknown unknown) {
     return {boxKey(volume), gridKey(volume), otherPropertiesKey(volume, unknown), otherPropertiesKey(volume, Unknown::Extinction)};
 }
 
-std::string rowsKey(const VolumeKey& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,
-                    const Camera& camera, int channels, const std::vector<float>& sqrtWeights, size_t firstPixel) {
-    const bool lit = options.unknown == Unknown::Albedo || options.unknown == Unknown::EmissionAlbedo;
-    std::vector<uint8_t> mask(size_t(camera.width) * camera.height);
-    for (size_t i = 0; i < mask.size(); ++i) {
+std::vector<uint8_t> weightedPixels(const std::vector<float>& sqrtWeights, size_t firstPixel, size_t count) {
+    std::vector<uint8_t> mask(count);
+    for (size_t i = 0; i < count; ++i) {
         const float* w = &sqrtWeights[4 * (firstPixel + i)];
         mask[i] = w[0] > 0 || w[1] > 0 || w[2] > 0;
     }
+    return mask;
+}
+
+std::string rowsKey(const VolumeKey& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,
+                    const Camera& camera, int channels, const std::vector<uint8_t>& mask) {
+    const bool lit = options.unknown == Unknown::Albedo || options.unknown == Unknown::EmissionAlbedo;
     return fmt::format("rows:{}:{}:{}x{}x{}:{}:{}:{}:{}:{}:mask{:x}", int(options.unknown), int(options.basis), unknownDims.x,
                        unknownDims.y, unknownDims.z, channels, marchKey(options),
                        // extinction solves' rows are segment lengths: the grid's box, not its values

@@ -98,10 +98,13 @@ VolumeKey volumeKeyOf(const Volume& volume, Unknown unknown);
 /// A camera's every field, exactly (shortest round-trip decimals).
 std::string cameraKey(const Camera& camera);
 
+/// Which of a view's `count` pixels, from `firstPixel` of the solver's square-root weights (4 per
+/// pixel), have weight: 1, or 0 where no channel has.
+std::vector<uint8_t> weightedPixels(const std::vector<float>& sqrtWeights, size_t firstPixel, size_t count);
 /// The key of one view's rows: the extinction (and, for albedo, the lighting), the camera, the
-/// unknowns' grid and basis, the march, and which of the view's pixels have weight.
+/// unknowns' grid and basis, the march, and which of the view's pixels have weight (`mask`).
 std::string rowsKey(const VolumeKey& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,
-                    const Camera& camera, int channels, const std::vector<float>& sqrtWeights, size_t firstPixel);
+                    const Camera& camera, int channels, const std::vector<uint8_t>& mask);
 /// The key of one view's bound renders: every grid but the unknowns' own (a solve changes only
 /// those, and the fixed part it needs excludes them), the lighting, the camera, the march.
 std::string rendersKey(const VolumeKey& volume, const Lighting& lighting, const SolveOptions& options, const Camera& camera,

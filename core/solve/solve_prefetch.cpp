@@ -1,14 +1,49 @@
 // A solve's renders, from the cache or made and kept there (solve_prefetch.h).
 #include "core/solve/solve_prefetch.h"
 
+#include <functional>
+
 #include "core/base/stopwatch.h"
 #include "core/render/gpu_volume.h"
+#include "core/solve/gpu_vector.h"
+#include "core/solve/projector.h"
 
 namespace volstyle::core {
 namespace {
 
 /// What renderBounds reads of a view (its target is not needed).
 SolveView bare(const SolveView& v) { return {v.name, v.camera, Image(), std::nullopt, v.background}; }
+
+/// Each view's rows of W for every pixel, for `options`' unknowns, kept in `cache` under the key a
+/// solve whose every pixel has weight looks up (Solver::State::rowsMadeAhead finds them for any
+/// other weights). A dense volume's only: a sparse one's unknowns are the bricks its solve picks.
+int writeRowsAhead(GpuDevice& device, const std::function<GpuVolume&()>& gpu, const Volume& volume, const VolumeKey& key, const Lighting& lighting,
+                   const std::vector<SolveView>& views, const SolveOptions& options, SolveCache& cache, const WorkBudget& budget) {
+    if (volume.isSparse() || options.rowCacheBytes == 0) return 0;
+    const Int3 udims = options.resolution.value_or(volume.dims());
+    const int channels = weightChannels(volume, lighting, options.unknown);
+    int written = 0;
+    for (const SolveView& v : views) {
+        const size_t pixels = size_t(v.camera.width) * v.camera.height;
+        const std::string k = rowsKey(key, lighting, options, udims, v.camera, channels, std::vector<uint8_t>(pixels, 1));
+        if (cache.findRows(k)) continue;
+        // Rows are the cache's largest entries: past half of it, work ahead would only push out
+        // what solves left (renders, other sessions' rows) for rows it may push out itself.
+        if (cache.bytes() > cache.budget() / 2) break;
+        Projector W(device, gpu(), lighting, options.unknown, options.basis, udims, options.stepVoxels, options.exactTraversal);
+        W.setMergeViews(false);
+        W.setBudget(&budget);
+        W.addView(v.camera);
+        GpuVector every(pixels, "rows-ahead-mask");  // the solve's masked program, every pixel weighted
+        every.upload(std::vector<float>(4 * pixels, 1.0f));
+        W.cacheRows(options.rowCacheBytes, channels, &every);
+        if (auto rows = W.rowsOf(0)) {
+            cache.putRows(k, rows, rows->buildMs);
+            ++written;
+        }
+    }
+    return written;
+}
 
 }  // namespace
 
@@ -44,13 +79,14 @@ std::vector<std::shared_ptr<const ViewRenders>> cachedRenderBounds(GpuDevice& de
 }
 
 PrefetchReport prefetchSolve(GpuDevice& device, const Volume& volume, const Lighting& lighting, const std::vector<SolveView>& views,
-                             const SolveOptions& options, SolveCache& cache, const WorkBudget& budget) {
+                             const SolveOptions& options, SolveCache& cache, const WorkBudget& budget, GpuVolume* given,
+                             const VolumeKey* givenKey) {
     PrefetchReport report;
     if (options.lights.solve || views.empty()) return report;
     const auto t0 = Clock::now();
     // Made under the exact volume's key, which serves a solve of any unknowns (the artist may pick
     // others than last time); found under the solve's own key too (the last solve left them).
-    const VolumeKey key = volumeKeyOf(volume, options.unknown);
+    const VolumeKey key = givenKey ? *givenKey : volumeKeyOf(volume, options.unknown);
     std::vector<std::pair<std::string, SolveView>> todo;
     for (const SolveView& v : views) {
         const Lighting seen = v.lightingFor(lighting);
@@ -59,13 +95,18 @@ PrefetchReport prefetchSolve(GpuDevice& device, const Volume& volume, const Ligh
             todo.emplace_back(std::move(exact), bare(v));
     }
     report.viewsFound = int(views.size() - todo.size());
-    if (todo.empty()) return report;
-    GpuVolume own(volume);
+    std::unique_ptr<GpuVolume> own;  // uploaded once something is to be made; its light-depth volumes serve the rows too
+    auto gpu = [&]() -> GpuVolume& {
+        if (given) return *given;
+        if (!own) own = std::make_unique<GpuVolume>(volume);
+        return *own;
+    };
     for (const auto& [k, v] : todo) {
-        auto r = renderBounds(device, own, lighting, {v}, options, options.analyzeReach, budget).front();
+        auto r = renderBounds(device, gpu(), lighting, {v}, options, options.analyzeReach, budget).front();
         cache.putRenders(k, r, r->renderMs);  // kept at once: an interrupted prefetch keeps what it finished
         ++report.viewsRendered;
     }
+    report.rowsWritten = writeRowsAhead(device, gpu, volume, key, lighting, views, options, cache, budget);
     report.ms = msSince(t0);
     return report;
 }

@@ -11,6 +11,7 @@
 
 #include "core/base/work_budget.h"
 #include "core/gpu/gpu_device.h"
+#include "core/render/gpu_volume.h"
 #include "core/solve/reach.h"
 #include "core/solve/solve_cache.h"
 
@@ -29,12 +30,19 @@ std::vector<std::shared_ptr<const ViewRenders>> cachedRenderBounds(GpuDevice& de
 struct PrefetchReport {
     int viewsRendered = 0;  ///< made now
     int viewsFound = 0;     ///< in the cache already
+    int rowsWritten = 0;    ///< views whose rows were written now
     double ms = 0;
 };
 
-/// Makes what a solve of `views` (targets not needed) under `options` would render first, into
-/// `cache`. Nothing for a light solve (its set-up is the light volumes). Throws as `budget` says.
+/// Makes what a solve of `views` (targets not needed) under `options` would make first, into
+/// `cache`: each view's renders, then (a dense volume's, options.rowCacheBytes > 0) its rows for
+/// every pixel. Nothing for a light solve (its set-up is the light volumes). Throws as `budget` says
+/// between chunks; what is finished stays in the cache. `gpu`: `volume` on the GPU already (the
+/// server's copy of a session's, whose light-depth volumes its renders made); null: uploaded here.
+/// `key`: volumeKeyOf(volume, options.unknown), if the caller keeps it (a prefetch that yields is
+/// run again: hashing a 128³ volume's grids takes ~0.1 s); null: made here.
 PrefetchReport prefetchSolve(GpuDevice& device, const Volume& volume, const Lighting& lighting, const std::vector<SolveView>& views,
-                             const SolveOptions& options, SolveCache& cache, const WorkBudget& budget = WorkBudget());
+                             const SolveOptions& options, SolveCache& cache, const WorkBudget& budget = WorkBudget(),
+                             GpuVolume* gpu = nullptr, const VolumeKey* key = nullptr);
 
 }  // namespace volstyle::core

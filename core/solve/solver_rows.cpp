@@ -3,6 +3,7 @@
 // solve at what they cost to write, and the vector work restricted to what the rows touch.
 #include <algorithm>
 
+#include "core/solve/host_columns.h"
 #include "core/solve/solve_cache.h"
 #include "core/solve/solver_state.h"
 
@@ -12,9 +13,12 @@ void Solver::State::cacheOperator() {
     if (opt.rowCacheBytes == 0) return;
     const int channels = weightChannels(volume, lighting, opt.unknown);
     std::vector<std::string> keys(views.size());
+    std::vector<std::vector<uint8_t>> masks(views.size());
     if (cache && volumeKey.grid.empty()) volumeKey = volumeKeyOf(volume, opt.unknown);  // buildObservations made it
-    for (size_t v = 0; v < views.size() && cache; ++v)
-        keys[v] = rowsKey(volumeKey, lighting, opt, udims, views[v].camera, channels, sqrtWHost, W->viewRange(v).first);
+    for (size_t v = 0; v < views.size() && cache; ++v) {
+        masks[v] = weightedPixels(sqrtWHost, W->viewRange(v).first, W->viewRange(v).count);
+        keys[v] = rowsKey(volumeKey, lighting, opt, udims, views[v].camera, channels, masks[v]);
+    }
     // All views' rows as one (Projector::mergeRows, where the projector merges), kept under the
     // key of the rows it was made of and looked up first: found, it stands for every view's rows
     // (each view a range of it).
@@ -24,12 +28,14 @@ void Solver::State::cacheOperator() {
         W->adoptMergedRows(std::move(merged));
     std::vector<bool> adopted(views.size(), false);
     size_t adoptedEntries = 0;
-    for (size_t v = 0; v < views.size() && cache && !W->merged(); ++v)
-        if (auto rows = cache->findRows(keys[v])) {
-            adoptedEntries += rows->entries;
-            adopted[v] = true;
-            W->adoptRows(v, std::move(rows));
-        }
+    for (size_t v = 0; v < views.size() && cache && !W->merged(); ++v) {
+        auto rows = cache->findRows(keys[v]);
+        if (!rows) rows = rowsMadeAhead(v, channels, masks[v], keys[v]);
+        if (!rows) continue;
+        adoptedEntries += rows->entries;
+        adopted[v] = true;
+        W->adoptRows(v, std::move(rows));
+    }
     // Each view's own rows stay beside the merged ones (a stroke's re-solve then rebuilds one
     // view's) while both fit in half the cache; past that, the merged rows alone.
     W->keepViewRowsWithin(cache ? cache->budget() / 2 : 0);
@@ -56,6 +62,21 @@ void Solver::State::cacheOperator() {
     for (size_t e = 0; e < elements; ++e)
         if (hullHost[4 * e] > 0) voxels.push_back(uint32_t(e));
     useSupports(std::make_shared<const Support>(std::move(pixels)), std::make_shared<const Support>(std::move(voxels)));
+}
+
+std::shared_ptr<const SparseRows> Solver::State::rowsMadeAhead(size_t v, int channels, const std::vector<uint8_t>& mask,
+                                                               const std::string& key) {
+    // Work ahead (solve_prefetch.h) writes each view's rows for every pixel before the paint says
+    // which have weight; where the host can read them, this view's are those rows' of its
+    // weighted pixels (the same entries a masked fill writes).
+    if (std::all_of(mask.begin(), mask.end(), [](uint8_t m) { return m != 0; })) return nullptr;  // that key missed already
+    auto all = cache->findRows(rowsKey(volumeKey, lighting, opt, udims, views[v].camera, channels, std::vector<uint8_t>(mask.size(), 1)));
+    if (!all || !all->hostMapped) return nullptr;
+    auto rows = restrictRowsOnHost(all, mask);
+    // Kept under this view's key only when cut down (a copy): the same rows twice would count
+    // their bytes twice, and finding them again costs a look at their row starts.
+    if (rows != all) cache->putRows(key, rows, rows->buildMs);
+    return rows;
 }
 
 void Solver::State::useSupports(std::shared_ptr<const Support> pixels, std::shared_ptr<const Support> voxels) {

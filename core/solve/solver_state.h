@@ -110,6 +110,9 @@ struct Solver::State final : BoundedLeastSquares {
     /// The views' rows of W (SolveOptions::rowCacheBytes) and, when all fit, vector work over
     /// the hull and the constrained pixels only.
     void cacheOperator();
+    /// View v's rows from those work ahead wrote for its every pixel (nullptr: none kept, or not
+    /// readable by the host), kept under `key` (its own rows' key, with its weighted pixels `mask`).
+    std::shared_ptr<const SparseRows> rowsMadeAhead(size_t v, int channels, const std::vector<uint8_t>& mask, const std::string& key);
     /// Every vector operation (and W, Wᵀ) over these pixels and unknowns only (gpu_vector.h).
     void useSupports(std::shared_ptr<const Support> pixels, std::shared_ptr<const Support> voxels);
     void initialUnknowns();

@@ -26,6 +26,7 @@ struct SparseRows {
     size_t rows = 0, columns = 0, entries = 0;
     int channels = 3;  ///< weights per entry: 1 (grey) or 3 (rgb)
     bool hostMapped = false;  ///< the start, index and weight buffers can be mapped (host_columns.h, host_products.h)
+    double buildMs = 0;       ///< what writing them took (what a miss in SolveCache costs again)
 };
 
 /// GPU bytes a view's rows and columns take.

@@ -13,6 +13,7 @@
 #include <atomic>
 #include <map>
 
+#include "core/solve/solve_cache.h"
 #include "server/service/service_types.h"
 
 namespace volstyle::server {
@@ -152,9 +153,17 @@ struct ServiceContext {
     std::unique_ptr<core::Stylizer> stylizer;                   ///< GL thread only
     std::unique_ptr<core::TranslucentRenderer> translucent;     ///< GL thread only; created on first use
     std::unique_ptr<core::SolveCache> solveCache;               ///< GL thread only; created by the first solve
-    /// GL thread only: per session, what work ahead last prepared (its signature): nothing to do again.
-    std::map<std::string, std::string> prefetched;
+    /// Work ahead of one session (GL thread only): the signature of what it last finished (the
+    /// same again: nothing to do), and while one is unfinished, its signature, the volume it copied
+    /// and that volume's key (kept while it yields to requests, not copied and hashed again).
+    struct PrefetchState {
+        std::string done, pending;
+        std::shared_ptr<const core::Volume> volume;
+        core::VolumeKey key;
+    };
+    std::map<std::string, PrefetchState> prefetched;
     std::atomic<uint64_t> prefetchedViews{0};  ///< views rendered ahead of solves (GET /metrics)
+    std::atomic<uint64_t> prefetchedRows{0};   ///< views whose rows were written ahead of solves
     std::unique_ptr<GlExecutor> gl;  ///< last: destroyed first, so its thread stops before the engines go
 };
 

@@ -12,18 +12,28 @@
 namespace volstyle::server {
 namespace {
 
-/// Cells a chunk of work ahead marches before it looks whether a request waits: ~0.1–0.2 s of
-/// a lit 128³ render on llvmpipe (a whole 480² view is one chunk of ~2.5 s otherwise).
-constexpr long long kPrefetchChunk = 1 << 14;
+/// Pixels a chunk of work ahead marches before it looks whether a request waits: ~50 ms of a lit
+/// 128³ render on llvmpipe (a whole 480² view is one chunk of ~2.5 s otherwise), and what a request
+/// that arrives mid-chunk waits at most for it.
+constexpr long long kPrefetchChunk = 1 << 12;
 
 /// What a solve of `s` would render first: the session, its volume version and what it shows,
 /// the solve's march and each view's camera and plate. Equal signatures: nothing new to prepare.
 std::string signatureOf(const Session& s, const core::SolveOptions& o) {
-    std::string sig = fmt::format("{}:{}:{}:{}:{}:{}", s.id, s.volume.version, s.shownRevision, o.stepVoxels, o.exactTraversal,
-                                  o.analyzeReach);
+    std::string sig = fmt::format("{}:{}:{}:{}:{}:{}:{}:{}:{}", s.id, s.volume.version, s.shownRevision, int(o.unknown), int(o.basis),
+                                  o.stepVoxels, o.exactTraversal, o.analyzeReach, o.rowCacheBytes);
+    if (o.resolution) sig += fmt::format(":{}x{}x{}", o.resolution->x, o.resolution->y, o.resolution->z);
     for (const SessionView& v : s.views.list)
         if (!v.frame) sig += "|" + v.id + ":" + core::cameraKey(v.camera) + fmt::format(":{}", static_cast<const void*>(v.background.get()));
     return sig;
+}
+
+/// What work ahead prepares a session's first solve for: the page's defaults (emission and
+/// albedo). The renders serve any unknowns; the rows only these.
+core::SolveOptions guessBeforeASolve() {
+    core::SolveOptions o;
+    o.unknown = core::Unknown::EmissionAlbedo;
+    return o;
 }
 
 }  // namespace
@@ -46,35 +56,39 @@ bool ServiceContext::runPrefetch(const std::string& sessionId, core::GpuDevice& 
         prefetched.erase(sessionId);
         return true;
     }
-    core::Volume volume;
+    PrefetchState& state = prefetched[sessionId];  // GL thread only
     core::Lighting lighting;
     std::vector<core::SolveView> views;
     core::SolveOptions options;
     std::string signature;
+    std::shared_ptr<core::GpuVolume> gpu;  // the session's GPU copy: the light-depth volumes its renders made serve here too
     {
         std::lock_guard lock(s->mutex);
         if (s->removed) return true;
-        options = s->lastSolveOptions.value_or(core::SolveOptions{});
+        options = s->lastSolveOptions.value_or(guessBeforeASolve());
         signature = signatureOf(*s, options);
-        if (prefetched[sessionId] == signature) return true;
-        volume = s->volume.current;
+        if (state.done == signature) return true;
+        gpu = sessionGpu(*s);
+        if (state.pending != signature) state = {state.done, signature, std::make_shared<const core::Volume>(s->volume.current), {}};
         lighting = s->light.lighting;
         for (const SessionView& v : s->views.list)
             if (!v.frame) views.push_back({v.id, v.camera, core::Image(), std::nullopt, v.background});
     }
     core::SolveCache* cache = solveCacheOnGl();
     if (!cache || views.empty()) return true;
+    if (state.key.grid.empty()) state.key = core::volumeKeyOf(*state.volume, options.unknown);
     try {
-        const core::PrefetchReport r = core::prefetchSolve(device, volume, lighting, views, options, *cache,
-                                                           WorkBudget(0, &yield).withChunksOf(kPrefetchChunk));
+        const core::PrefetchReport r = core::prefetchSolve(device, *state.volume, lighting, views, options, *cache,
+                                                           WorkBudget(0, &yield).withChunksOf(kPrefetchChunk), gpu.get(), &state.key);
         prefetchedViews += uint64_t(r.viewsRendered);
-        if (r.viewsRendered > 0)
-            spdlog::info("session {}: rendered {} view(s) ahead of its next solve in {:.0f} ms ({} already kept)", sessionId,
-                         r.viewsRendered, r.ms, r.viewsFound);
+        prefetchedRows += uint64_t(r.rowsWritten);
+        if (r.viewsRendered + r.rowsWritten > 0)
+            spdlog::info("session {}: ahead of its next solve, rendered {} view(s) ({} already kept) and wrote the rows of {}, in {:.0f} ms",
+                         sessionId, r.viewsRendered, r.viewsFound, r.rowsWritten, r.ms);
     } catch (const Cancelled&) {
-        return false;  // a request came: the views done so far stay in the cache
+        return false;  // a request came: what is finished stays in the cache; the copy and key stay for the next try
     }
-    prefetched[sessionId] = signature;
+    state = {signature, "", nullptr, {}};
     return true;
 }
 

@@ -123,32 +123,35 @@ TEST_F(OperationsOnAFolder, NotReadyWhenTheDataFolderIsGone) {
     EXPECT_EQ(client().Get("/api/v1/health")->status, 200) << "liveness stays: the process is up";
 }
 
-TEST_F(Operations, ViewsAreRenderedAheadOfASolveWhileIdleAndOnlyWhatChanged) {
-    // Issue #40: while the artist paints, the GL thread renders each view as the next solve will
-    // need it (server/service/solve_prefetch.cpp), once per view, volume and lighting, and never
-    // for a change that does not touch them (a target).
-    auto prefetched = [&] { return samples(client().Get("/api/v1/metrics")->body).at("volstyle_prefetched_views_total"); };
-    auto waitFor = [&](double n) {
-        for (int i = 0; i < 600 && prefetched() < n; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
-        return prefetched();
+TEST_F(Operations, ViewsAreMadeAheadOfASolveWhileIdleAndOnlyWhatChanged) {
+    // Issue #40: while the artist paints, the GL thread makes each view's render and rows as the
+    // next solve will need them (server/service/solve_prefetch.cpp), once per view, volume and
+    // lighting, and never for a change that does not touch them (a target).
+    auto made = [&](const char* what) {
+        return samples(client().Get("/api/v1/metrics")->body).at(std::string("volstyle_prefetched_views_total{what=\"") + what + "\"}");
+    };
+    auto waitFor = [&](double renders, double rows) {
+        for (int i = 0; i < 600 && (made("renders") < renders || made("rows") < rows); ++i)
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        return std::pair{made("renders"), made("rows")};
     };
     const std::string base = "/api/v1/sessions/" + createSession();
-    EXPECT_EQ(prefetched(), 0) << "a session without views has nothing to render ahead";
+    EXPECT_EQ(made("renders"), 0) << "a session without views has nothing to make ahead";
     const std::string camera = R"({"camera": {"eye": [0, 0.2, 3], "target": [0, 0, 0], "width": 16, "height": 16}})";
     ASSERT_EQ(client().Post((base + "/views").c_str(), camera, "application/json")->status, 201);
-    EXPECT_EQ(waitFor(1), 1);
+    EXPECT_EQ(waitFor(1, 1), std::pair(1.0, 1.0));
     ASSERT_EQ(client().Post((base + "/views").c_str(), R"({"camera": {"eye": [3, 0, 0], "target": [0, 0, 0], "width": 16, "height": 16}})",
                             "application/json")->status,
               201);
-    EXPECT_EQ(waitFor(2), 2) << "the new view only";
+    EXPECT_EQ(waitFor(2, 2), std::pair(2.0, 2.0)) << "the new view only";
     auto render = client().Get((base + "/views/v1/render.png").c_str());
     ASSERT_EQ(client().Put((base + "/views/v1/target").c_str(), render->body, "image/png")->status, 200);
     std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // past the GL thread's quiet moment
-    EXPECT_EQ(prefetched(), 2) << "a target changes no render";
+    EXPECT_EQ(std::pair(made("renders"), made("rows")), std::pair(2.0, 2.0)) << "a target changes no render and no row";
     ASSERT_EQ(client().Put((base + "/lighting").c_str(), R"({"sun": {"direction": [0.3, 1, 0.2], "irradiance": [2, 2, 2]}})", "application/json")
                   ->status,
               200);
-    EXPECT_EQ(waitFor(4), 4) << "new lighting: both views again";
+    EXPECT_EQ(waitFor(4, 4), std::pair(4.0, 4.0)) << "new lighting: both views again (emission + albedo rows are lit)";
     EXPECT_EQ(samples(client().Get("/api/v1/metrics")->body).at(R"(volstyle_gl_queue{kind="idle"})"), 0);
-    solveToEnd(client(), base, R"({"unknowns": ["emission"], "max_iterations": 2})");
+    solveToEnd(client(), base, R"({"unknowns": ["emission", "albedo"], "max_iterations": 2})");
 }

@@ -54,8 +54,10 @@ void writeGauges(RouteContext& c, MetricsText& out) {
     out.sample("volstyle_gl_queue", "kind=\"short\"", double(gl.shortTasks));
     out.sample("volstyle_gl_queue", "kind=\"long\"", double(gl.longTasks));
     out.sample("volstyle_gl_queue", "kind=\"idle\"", double(gl.idleTasks));
-    out.family("volstyle_prefetched_views_total", "counter", "views rendered ahead of a solve while the GL thread was idle (--prefetch)");
-    out.sample("volstyle_prefetched_views_total", "", double(c.services.context.prefetchedViews.load()));
+    out.family("volstyle_prefetched_views_total", "counter",
+               "views made ahead of a solve while the GL thread was idle (--prefetch): their renders, and their rows of W");
+    out.sample("volstyle_prefetched_views_total", "what=\"renders\"", double(c.services.context.prefetchedViews.load()));
+    out.sample("volstyle_prefetched_views_total", "what=\"rows\"", double(c.services.context.prefetchedRows.load()));
     out.family("volstyle_streams_open", "gauge", "event and live streams open");
     out.sample("volstyle_streams_open", "", c.streams.open());
     out.family("volstyle_memory_charged_bytes", "gauge",
