@@ -62,6 +62,13 @@ double wholeNumber(const Arguments& args, const std::string& flag, double fallba
     return v;
 }
 
+/// `--flag on|off`, or InvalidArgument.
+bool onOrOff(const Arguments& args, const std::string& flag, bool fallback) {
+    const std::string v = args.get(flag, fallback ? "on" : "off");
+    if (v != "on" && v != "off") throw InvalidArgument("--" + flag + " must be on or off");
+    return v == "on";
+}
+
 }  // namespace
 
 const CommandSpec& serveCommand() { return kServe; }
@@ -121,9 +128,7 @@ int runServe(const std::vector<std::string>& argv) {
     // the child, whose /proc/self/exe is still this binary.
     opt.vdbReader = "/proc/self/exe";
     opt.renderBudgetSeconds = args.number("render-budget", opt.renderBudgetSeconds);
-    const std::string prefetch = args.get("prefetch", "on");
-    if (prefetch != "on" && prefetch != "off") throw InvalidArgument("--prefetch must be on or off");
-    opt.prefetchSolves = prefetch == "on";
+    opt.prefetchSolves = onOrOff(args, "prefetch", true);
     if (!(opt.renderBudgetSeconds >= 0) || !std::isfinite(opt.renderBudgetSeconds))
         throw InvalidArgument("--render-budget must be a number of seconds >= 0 (0: no limit)");
 

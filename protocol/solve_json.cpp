@@ -195,7 +195,7 @@ nlohmann::json solveReportToJson(const core::SolveReport& r) {
             {"ignored_pixels", r.ignoredPixels}, {"clamped_pixels", r.clampedPixels}, {"total_ms", r.totalMs},
             {"forward_ms", r.forwardMs}, {"adjoint_ms", r.adjointMs}, {"vector_ms", r.vectorMs}, {"reach", reachToJson(r.reach)},
             {"coarse_iterations", r.coarseIterations}, {"coarse_ms", r.coarseMs},
-            {"row_cache", {{"ms", r.rowCacheMs}, {"bytes", r.rowCacheBytes}, {"cached_views", r.cachedViews}}},
+            {"row_cache", {{"ms", r.rowCacheMs}, {"bytes", r.rowCacheBytes}, {"cached_views", r.cachedViews}, {"written_views", r.writtenViews}}},
             {"local", r.local.active ? nlohmann::json{{"changed_pixels", r.local.changedPixels}, {"unknowns", r.local.unknowns},
                                                       {"pixels", r.local.pixels}}
                                      : nlohmann::json(nullptr)}};

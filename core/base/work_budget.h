@@ -26,14 +26,15 @@ public:
     /// Whether check() can ever throw (else work need not be chunked).
     bool bounded() const { return m_seconds > 0 || m_cancel; }
     double seconds() const { return m_seconds; }
-    /// At most `invocations` a chunk (> 0), fewer than a pass would take otherwise: work done ahead
-    /// of a request (solve_prefetch.h) must give the GL thread back within a fraction of a second
-    /// when a request arrives, and a 480² render is one chunk of seconds on llvmpipe.
-    WorkBudget& withChunksOf(long long invocations) {
-        m_chunkInvocations = invocations;
+    /// Chunks `divisor` times smaller than a pass would cut otherwise (at least one invocation):
+    /// work done ahead of a request (solve_prefetch.h) must give the GL thread back within a
+    /// fraction of a second when one arrives, and a 480² render is one chunk of seconds on llvmpipe.
+    /// Relative, so a pass whose invocations each march a whole row (light depth) is cut as finely.
+    WorkBudget& withFinerChunks(long long divisor) {
+        m_chunkDivisor = std::max(1LL, divisor);
         return *this;
     }
-    long long chunkInvocations(long long pass) const { return m_chunkInvocations > 0 ? std::min(pass, m_chunkInvocations) : pass; }
+    long long chunkInvocations(long long pass) const { return std::max(1LL, pass / m_chunkDivisor); }
 
     /// Between chunks of `pass`, `fractionDone` of it finished.
     void check(const char* pass, double fractionDone) const {
@@ -55,7 +56,7 @@ private:
     Clock::time_point m_start = Clock::now();
     double m_seconds = 0;
     const std::atomic<bool>* m_cancel = nullptr;
-    long long m_chunkInvocations = 0;
+    long long m_chunkDivisor = 1;
 };
 
 }  // namespace volstyle

@@ -201,6 +201,7 @@ struct SolveReport {
     }
     size_t rowCacheBytes = 0;  ///< the GPU memory they take
     size_t cachedViews = 0;    ///< views whose W and Wᵀ gather from them (the rest: matrix-free)
+    size_t writtenViews = 0;   ///< of those, the views whose rows this solve wrote (the others came from the SolveCache)
     /// A re-solve after a stroke (SolveOptions::localResolve): what changed and what moved.
     struct Local {
         bool active = false;       ///< this solve moved only the unknowns the changed pixels see

@@ -104,6 +104,7 @@ std::shared_ptr<const SparseRows> restrictRowsOnHost(std::shared_ptr<const Spars
     const uint64_t entries = exclusiveScan(counts);
     auto r = std::make_shared<SparseRows>();
     r->rows = P, r->columns = all->columns, r->entries = entries, r->channels = all->channels, r->hostMapped = true;
+    r->buildMs = all->buildMs;  // what a miss costs: writing them again
     r->rowStart = gl::createBuffer(4 * counts.size(), counts.data(), kHostMappedStorage, "rows-start");
     r->colStart = gl::createBuffer(4 * (r->columns + 1), nullptr, kHostMappedStorage, "columns-start");
     r->rowIndex = gl::createBuffer(std::max<size_t>(4 * entries, 4), nullptr, kHostMappedStorage, "rows-index");

@@ -1,6 +1,5 @@
 #include "core/solve/projector.h"
 
-#include "core/render/chunked_dispatch.h"
 
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
@@ -58,7 +57,8 @@ void Projector::addView(const Camera& camera) {
     settings.stepVoxels = m_step;
     settings.exactTraversal = m_exactTraversal;
     RenderStats stats;
-    View view{camera, prepareMarch(m_device, m_volume, camera, m_lighting, settings, stats), m_pixelCount, nullptr};
+    View view{camera, prepareMarch(m_device, m_volume, camera, m_lighting, settings, stats, m_budget ? *m_budget : WorkBudget()), m_pixelCount,
+               nullptr};
     m_stats.lightVolumes += stats.lightVolumesRecomputed;
     const Int3 n = m_volume.dims();
     layout::MarchParams& p = view.setup.params;

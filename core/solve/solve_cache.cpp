@@ -25,6 +25,7 @@ std::string boxKey(const Volume& v) {
 std::string gridKey(const Volume& v) {
     std::string key = boxKey(v) + fmt::format(":σ{:x}", hashOf(v.extinction()));
     if (const BrickLayout* b = v.bricks()) key += fmt::format(":bricks{:x}", hashOf(b->slotTable().data(), b->slotTable().size() * 4));
+    if (const auto& n = v.refractiveIndex()) key += fmt::format(":n{:x}", hashOf(*n));  // bends every ray: renders and rows alike
     return key;
 }
 

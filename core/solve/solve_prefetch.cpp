@@ -19,7 +19,9 @@ SolveView bare(const SolveView& v) { return {v.name, v.camera, Image(), std::nul
 /// other weights). A dense volume's only: a sparse one's unknowns are the bricks its solve picks.
 int writeRowsAhead(GpuDevice& device, const std::function<GpuVolume&()>& gpu, const Volume& volume, const VolumeKey& key, const Lighting& lighting,
                    const std::vector<SolveView>& views, const SolveOptions& options, SolveCache& cache, const WorkBudget& budget) {
-    if (volume.isSparse() || options.rowCacheBytes == 0) return 0;
+    // Only where the host reads the rows (a CPU rasterizer): a solve cuts them to its weighted
+    // pixels there; a GPU writes a view's rows in milliseconds anyway.
+    if (volume.isSparse() || options.rowCacheBytes == 0 || !solverKernelsOnHost(device)) return 0;
     const Int3 udims = options.resolution.value_or(volume.dims());
     const int channels = weightChannels(volume, lighting, options.unknown);
     int written = 0;
@@ -82,7 +84,9 @@ PrefetchReport prefetchSolve(GpuDevice& device, const Volume& volume, const Ligh
                              const SolveOptions& options, SolveCache& cache, const WorkBudget& budget, GpuVolume* given,
                              const VolumeKey* givenKey) {
     PrefetchReport report;
-    if (options.lights.solve || views.empty()) return report;
+    // A sparse volume's solve grows an apron of bricks first, so its keys are not the uploaded
+    // volume's; a light solve's set-up is its light volumes.
+    if (options.lights.solve || views.empty() || volume.isSparse()) return report;
     const auto t0 = Clock::now();
     // Made under the exact volume's key, which serves a solve of any unknowns (the artist may pick
     // others than last time); found under the solve's own key too (the last solve left them).

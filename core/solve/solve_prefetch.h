@@ -1,10 +1,12 @@
 #pragma once
 /// \file solve_prefetch.h
-/// A solve's renders made ahead of it (issue #40: what a person waits for on a first solve is
-/// mostly its set-up, and most of that is each view's bound renders, reach.h). Those depend on
-/// the cameras, the volume, the lighting and the settings, never on the paint: the server makes
-/// them while the artist paints (server/service/solve_prefetch_service.cpp), and the solve finds
-/// them in its SolveCache under the keys it would have made them under. GL thread only.
+/// A solve's set-up made ahead of it (issue #40: what a person waits for on a first solve is
+/// mostly its set-up: each view's bound renders, reach.h, and its rows of W). Those depend on the
+/// cameras, the volume, the lighting and the settings, hardly on the paint: the server makes them
+/// while the artist paints (server/service/solve_prefetch.cpp), and the solve finds them in its
+/// SolveCache. The renders serve a solve of any unknowns; the rows, written for every pixel on a
+/// CPU rasterizer, serve the unknowns they were written for and any pixels' weights (the solver
+/// cuts them down with restrictRowsOnHost). Dense volumes only. GL thread only.
 
 #include <memory>
 #include <vector>
@@ -35,8 +37,9 @@ struct PrefetchReport {
 };
 
 /// Makes what a solve of `views` (targets not needed) under `options` would make first, into
-/// `cache`: each view's renders, then (a dense volume's, options.rowCacheBytes > 0) its rows for
-/// every pixel. Nothing for a light solve (its set-up is the light volumes). Throws as `budget` says
+/// `cache`: each view's renders, then (on a CPU rasterizer, options.rowCacheBytes > 0) its rows for
+/// every pixel while the cache is under half full. Nothing for a light solve (its set-up is the
+/// light volumes) or a sparse volume (its solve's keys follow the apron it grows). Throws as `budget` says
 /// between chunks; what is finished stays in the cache. `gpu`: `volume` on the GPU already (the
 /// server's copy of a session's, whose light-depth volumes its renders made); null: uploaded here.
 /// `key`: volumeKeyOf(volume, options.unknown), if the caller keeps it (a prefetch that yields is

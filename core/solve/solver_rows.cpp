@@ -24,16 +24,19 @@ void Solver::State::cacheOperator() {
     // (each view a range of it).
     std::string mergedKey = "merged";
     for (const auto& k : keys) mergedKey += "|" + k;
-    if (auto merged = cache && views.size() > 1 && W->mergesViews() ? cache->findRows(mergedKey) : nullptr)
-        W->adoptMergedRows(std::move(merged));
-    std::vector<bool> adopted(views.size(), false);
+    auto merged = cache && views.size() > 1 && W->mergesViews() ? cache->findRows(mergedKey) : nullptr;
+    const bool mergedFound = merged != nullptr;
+    if (merged) W->adoptMergedRows(std::move(merged));
+    std::vector<bool> adopted(views.size(), false), aheadAsTheyAre(views.size(), false);
     size_t adoptedEntries = 0;
     for (size_t v = 0; v < views.size() && cache && !W->merged(); ++v) {
         auto rows = cache->findRows(keys[v]);
-        if (!rows) rows = rowsMadeAhead(v, channels, masks[v], keys[v]);
+        bool asTheyAre = false;
+        if (!rows) rows = rowsMadeAhead(v, channels, masks[v], keys[v], asTheyAre);
         if (!rows) continue;
         adoptedEntries += rows->entries;
         adopted[v] = true;
+        aheadAsTheyAre[v] = asTheyAre;
         W->adoptRows(v, std::move(rows));
     }
     // Each view's own rows stay beside the merged ones (a stroke's re-solve then rebuilds one
@@ -47,10 +50,12 @@ void Solver::State::cacheOperator() {
     const ProjectorStats& w = W->stats();
     const size_t builtEntries = w.cachedEntries > adoptedEntries ? w.cachedEntries - adoptedEntries : 0;
     for (size_t v = 0; v < views.size() && cache; ++v)
-        if (auto rows = W->rowsOf(v))
+        if (auto rows = W->rowsOf(v); rows && !aheadAsTheyAre[v])  // (those are kept under the key work ahead wrote them under)
             cache->putRows(keys[v], rows, adopted[v] ? 0.0 : w.cacheMs * double(rows->entries) / double(std::max<size_t>(builtEntries, 1)));
     if (cache && W->merged()) cache->putRows(mergedKey, W->mergedRows(), w.cacheMs);
     report.rowCacheMs = w.cacheMs, report.rowCacheBytes = w.cacheBytes, report.cachedViews = w.cachedViews;
+    const size_t taken = mergedFound ? views.size() : size_t(std::count(adopted.begin(), adopted.end(), true));
+    report.writtenViews = w.cachedViews > taken ? w.cachedViews - taken : 0;
     if (!W->allCached()) return;
     // Every view gathers from its rows, which touch only constrained pixels and (for Wᵀ) the hull:
     // the vector work runs over those alone (hull voxels outside keep their start values, and
@@ -65,7 +70,7 @@ void Solver::State::cacheOperator() {
 }
 
 std::shared_ptr<const SparseRows> Solver::State::rowsMadeAhead(size_t v, int channels, const std::vector<uint8_t>& mask,
-                                                               const std::string& key) {
+                                                               const std::string& key, bool& asTheyAre) {
     // Work ahead (solve_prefetch.h) writes each view's rows for every pixel before the paint says
     // which have weight; where the host can read them, this view's are those rows' of its
     // weighted pixels (the same entries a masked fill writes).
@@ -75,7 +80,8 @@ std::shared_ptr<const SparseRows> Solver::State::rowsMadeAhead(size_t v, int cha
     auto rows = restrictRowsOnHost(all, mask);
     // Kept under this view's key only when cut down (a copy): the same rows twice would count
     // their bytes twice, and finding them again costs a look at their row starts.
-    if (rows != all) cache->putRows(key, rows, rows->buildMs);
+    asTheyAre = rows == all;
+    if (!asTheyAre) cache->putRows(key, rows, rows->buildMs);
     return rows;
 }
 

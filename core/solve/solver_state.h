@@ -111,8 +111,10 @@ struct Solver::State final : BoundedLeastSquares {
     /// the hull and the constrained pixels only.
     void cacheOperator();
     /// View v's rows from those work ahead wrote for its every pixel (nullptr: none kept, or not
-    /// readable by the host), kept under `key` (its own rows' key, with its weighted pixels `mask`).
-    std::shared_ptr<const SparseRows> rowsMadeAhead(size_t v, int channels, const std::vector<uint8_t>& mask, const std::string& key);
+    /// readable by the host): cut down to its weighted pixels `mask` and kept under `key` (its own
+    /// rows' key), or those rows as they are (`asTheyAre`: the pixels left out have no entries).
+    std::shared_ptr<const SparseRows> rowsMadeAhead(size_t v, int channels, const std::vector<uint8_t>& mask, const std::string& key,
+                                                    bool& asTheyAre);
     /// Every vector operation (and W, Wᵀ) over these pixels and unknowns only (gpu_vector.h).
     void useSupports(std::shared_ptr<const Support> pixels, std::shared_ptr<const Support> voxels);
     void initialUnknowns();

@@ -79,6 +79,8 @@ protected:
     virtual void post(std::function<void(core::GpuDevice&)> task, bool isLong) = 0;
     /// Queues an idle task (whenIdle); an executor without a GL thread of its own does nothing ahead.
     virtual void postIdle(const std::string& /*key*/, IdleTask /*task*/) {}
+    /// An idle task is about to run: GL objects may exist from now on (shutdown frees them).
+    void markUsed() { m_used = true; }
 
 private:
     std::atomic<bool> m_used{false};

@@ -42,6 +42,8 @@ GlWorker::~GlWorker() {
     {
         std::lock_guard lock(m_mutex);
         m_stopping = true;
+        m_yield = true;  // an idle task running stops at its next chunk
+        m_idle.clear();  // work ahead is never owed
     }
     m_wake.notify_all();
     if (m_thread.joinable()) m_thread.join();
@@ -76,6 +78,7 @@ bool GlWorker::runIdleTask(std::unique_lock<std::mutex>& lock, core::GpuDevice& 
     auto [key, task] = std::move(m_idle.front());
     m_idle.pop_front();
     m_yield = false;
+    markUsed();
     lock.unlock();
     bool done = true;
     try {

@@ -153,8 +153,12 @@ void JobService::solveLightsAndCommit(Job& job, const std::shared_ptr<Session>& 
         if (lighting.background.fromLobes)  // "lights": {"background": true}: the sky behind is solved too
             s->light.lighting.background.fromLobes = true, s->light.lighting.background.environment = nullptr;
         lighting = s->light.lighting;
-        if (volume) stale = m_ctx.commitVersion(*s, std::move(*volume));  // saves the session, lighting included
-        else m_ctx.saved(*s);
+        if (volume) {
+            stale = m_ctx.commitVersion(*s, std::move(*volume));  // saves the session, lighting included
+        } else {
+            m_ctx.shownChanged(*s);  // the environment lights the renders now (streams, work ahead)
+            m_ctx.saved(*s);
+        }
         result.version = s->volume.version;
         result.lighting = lighting;
         result.sessionMap = s->light.environmentMap;  // named "session" in the answer

@@ -49,6 +49,7 @@ void ServiceContext::shutdown() {
     // the running job to end: as a short task between a cancelled solve's iterations, it freed
     // the solve cache that the solve still wrote its last state to (a heap corruption). Queued
     // jobs then end at once, cancelled, without touching the GPU.
+    workAheadStopped = true;  // no idle task makes GPU objects after freeGpuObjects() below
     std::vector<std::shared_ptr<Job>> local;  // those this replica runs (not copies of other replicas')
     for (auto& j : jobs.all()) {
         std::lock_guard lock(j->mutex);

@@ -12,10 +12,10 @@
 namespace volstyle::server {
 namespace {
 
-/// Pixels a chunk of work ahead marches before it looks whether a request waits: ~50 ms of a lit
-/// 128³ render on llvmpipe (a whole 480² view is one chunk of ~2.5 s otherwise), and what a request
-/// that arrives mid-chunk waits at most for it.
-constexpr long long kPrefetchChunk = 1 << 12;
+/// How much finer than a bounded request's work ahead's chunks are (chunked_dispatch.h: 2^18
+/// invocations of a march): 2^12 pixels, ~50 ms of a lit 128³ render on llvmpipe (a whole 480²
+/// view is one chunk of ~2.5 s otherwise), what a request that arrives mid-chunk waits at most.
+constexpr long long kPrefetchChunkDivisor = 64;
 
 /// What a solve of `s` would render first: the session, its volume version and what it shows,
 /// the solve's march and each view's camera and plate. Equal signatures: nothing new to prepare.
@@ -52,11 +52,11 @@ void ServiceContext::prefetchSolve(const Session& s) {
 
 bool ServiceContext::runPrefetch(const std::string& sessionId, core::GpuDevice& device, const std::atomic<bool>& yield) {
     const std::shared_ptr<Session> s = sessions.find(sessionId);
-    if (!s) {
+    if (!s || workAheadStopped) {
         prefetched.erase(sessionId);
         return true;
     }
-    PrefetchState& state = prefetched[sessionId];  // GL thread only
+    core::Volume volume;  // a copy for this try only: a view interrupted by requests may be tried many times
     core::Lighting lighting;
     std::vector<core::SolveView> views;
     core::SolveOptions options;
@@ -67,28 +67,29 @@ bool ServiceContext::runPrefetch(const std::string& sessionId, core::GpuDevice& 
         if (s->removed) return true;
         options = s->lastSolveOptions.value_or(guessBeforeASolve());
         signature = signatureOf(*s, options);
-        if (state.done == signature) return true;
-        gpu = sessionGpu(*s);
-        if (state.pending != signature) state = {state.done, signature, std::make_shared<const core::Volume>(s->volume.current), {}};
-        lighting = s->light.lighting;
         for (const SessionView& v : s->views.list)
             if (!v.frame) views.push_back({v.id, v.camera, core::Image(), std::nullopt, v.background});
+        if (prefetched[sessionId].done == signature || views.empty()) return true;
+        gpu = sessionGpu(*s);
+        volume = s->volume.current;
+        lighting = s->light.lighting;
     }
     core::SolveCache* cache = solveCacheOnGl();
-    if (!cache || views.empty()) return true;
-    if (state.key.grid.empty()) state.key = core::volumeKeyOf(*state.volume, options.unknown);
+    if (!cache) return true;
+    PrefetchState& state = prefetched[sessionId];  // GL thread only
+    if (state.pending != signature) state = {state.done, signature, core::volumeKeyOf(volume, options.unknown)};
     try {
-        const core::PrefetchReport r = core::prefetchSolve(device, *state.volume, lighting, views, options, *cache,
-                                                           WorkBudget(0, &yield).withChunksOf(kPrefetchChunk), gpu.get(), &state.key);
+        const core::PrefetchReport r = core::prefetchSolve(device, volume, lighting, views, options, *cache,
+                                                           WorkBudget(0, &yield).withFinerChunks(kPrefetchChunkDivisor), gpu.get(), &state.key);
         prefetchedViews += uint64_t(r.viewsRendered);
         prefetchedRows += uint64_t(r.rowsWritten);
         if (r.viewsRendered + r.rowsWritten > 0)
             spdlog::info("session {}: ahead of its next solve, rendered {} view(s) ({} already kept) and wrote the rows of {}, in {:.0f} ms",
                          sessionId, r.viewsRendered, r.viewsFound, r.rowsWritten, r.ms);
     } catch (const Cancelled&) {
-        return false;  // a request came: what is finished stays in the cache; the copy and key stay for the next try
+        return false;  // a request came: what is finished stays in the cache, the key for the next try
     }
-    state = {signature, "", nullptr, {}};
+    state = {signature, "", {}};
     return true;
 }
 

@@ -153,5 +153,7 @@ TEST_F(Operations, ViewsAreMadeAheadOfASolveWhileIdleAndOnlyWhatChanged) {
               200);
     EXPECT_EQ(waitFor(4, 4), std::pair(4.0, 4.0)) << "new lighting: both views again (emission + albedo rows are lit)";
     EXPECT_EQ(samples(client().Get("/api/v1/metrics")->body).at(R"(volstyle_gl_queue{kind="idle"})"), 0);
-    solveToEnd(client(), base, R"({"unknowns": ["emission", "albedo"], "max_iterations": 2})");
+    const json job = solveToEnd(client(), base, R"({"unknowns": ["emission", "albedo"], "max_iterations": 2})");
+    EXPECT_EQ(job["result"]["report"]["row_cache"]["cached_views"], 1) << job.dump();
+    EXPECT_EQ(job["result"]["report"]["row_cache"]["written_views"], 0) << "the solve wrote no rows: it took those written ahead";
 }
