@@ -40,7 +40,7 @@ const CommandSpec kServe{
         {"job-lease", "SECONDS", "with --store: a running job's lease; another replica runs it again once it lapses unrenewed; default 10"},
         {"web-dir", "DIR", "the page's folder; default the installed share/volstyle/web, else the source tree's web/"},
         {"render-budget", "S", "seconds one render may hold the GL thread (422 over_budget past it; 0: no limit); default 60"},
-        {"prefetch", "on|off", "render what a session's next solve needs first (each view) while the GL thread is idle, so a solve after painting starts from it; default on"},
+        {"prefetch", "on|off", "make what a session's next solve needs first (each view's render and, on a CPU rasterizer, rows of W) while the GL thread is idle, so a solve after painting starts from it; default on"},
         {"max-sessions", "N", "sessions at once; default 64"},
         {"max-upload-mib", "N", "largest VDB or image upload, MiB; default 512"},
         {"max-image-side", "N", "largest target or render side, pixels; default 4096"},

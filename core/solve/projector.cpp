@@ -1,6 +1,5 @@
 #include "core/solve/projector.h"
 
-
 #include "core/base/errors.h"
 #include "core/base/stopwatch.h"
 #include "core/render/chunked_dispatch.h"

@@ -29,7 +29,6 @@ std::string gridKey(const Volume& v) {
     return key;
 }
 
-
 std::string lightingKey(const Lighting& l) {
     std::string key = "light:";
     for (const auto& d : l.lights)
@@ -132,18 +131,26 @@ std::string rowsKey(const VolumeKey& volume, const Lighting& lighting, const Sol
                        lit ? lightingKey(lighting) : "", cameraKey(camera), hashOf(mask.data(), mask.size()));
 }
 
+namespace {
+
+/// A view's bound renders under `tag` (the unknowns, or "exact"), with `grids` the hashes of the
+/// emission and albedo grids the key names.
+std::string rendersKeyOf(const std::string& tag, const std::string& grids, const VolumeKey& volume, const Lighting& lighting,
+                         const SolveOptions& options, const Camera& camera, bool withAlbedoOne) {
+    return fmt::format("renders:{}:{}:{}:{}:{}", tag, withAlbedoOne ? 1 : 0, marchKey(options), volume.grid, lightingKey(lighting)) + grids +
+           ":" + cameraKey(camera);
+}
+
+}  // namespace
+
 std::string rendersKey(const VolumeKey& volume, const Lighting& lighting, const SolveOptions& options, const Camera& camera,
                        bool withAlbedoOne) {
-    const Unknown u = options.unknown;
-    return fmt::format("renders:{}:{}:{}:{}:{}", int(u), withAlbedoOne ? 1 : 0, marchKey(options), volume.grid,
-                       lightingKey(lighting)) +
-           volume.others + ":" + cameraKey(camera);
+    return rendersKeyOf(std::to_string(int(options.unknown)), volume.others, volume, lighting, options, camera, withAlbedoOne);
 }
 
 std::string exactRendersKey(const VolumeKey& volume, const Lighting& lighting, const SolveOptions& options, const Camera& camera,
                             bool withAlbedoOne) {
-    return fmt::format("renders:exact:{}:{}:{}:{}", withAlbedoOne ? 1 : 0, marchKey(options), volume.grid, lightingKey(lighting)) + volume.all +
-           ":" + cameraKey(camera);
+    return rendersKeyOf("exact", volume.all, volume, lighting, options, camera, withAlbedoOne);
 }
 
 std::string lastSolveKey(const Volume& volume, const Lighting& lighting, const SolveOptions& options, Int3 unknownDims,

@@ -1,6 +1,7 @@
-// A solve's renders, from the cache or made and kept there (solve_prefetch.h).
+// A solve's renders and rows, from the cache or made and kept there (solve_prefetch.h).
 #include "core/solve/solve_prefetch.h"
 
+#include <algorithm>
 #include <functional>
 
 #include "core/base/stopwatch.h"
@@ -13,6 +14,24 @@ namespace {
 
 /// What renderBounds reads of a view (its target is not needed).
 SolveView bare(const SolveView& v) { return {v.name, v.camera, Image(), std::nullopt, v.background}; }
+
+/// A view's renders in `cache`: under the solve's own key (`own`), else under the exact volume's
+/// (`exact`: made ahead of a solve); null where neither holds them.
+struct FoundRenders {
+    std::shared_ptr<const ViewRenders> renders;
+    std::string own, exact;
+    bool underOwnKey = false;
+};
+FoundRenders findViewRenders(SolveCache& cache, const VolumeKey& key, const Lighting& lighting, const SolveView& view,
+                             const SolveOptions& options) {
+    const Lighting seen = view.lightingFor(lighting);
+    FoundRenders f{nullptr, rendersKey(key, seen, options, view.camera, options.analyzeReach),
+                   exactRendersKey(key, seen, options, view.camera, options.analyzeReach)};
+    f.renders = cache.findRenders(f.own);
+    f.underOwnKey = f.renders != nullptr;
+    if (!f.renders) f.renders = cache.findRenders(f.exact);
+    return f;
+}
 
 /// Each view's rows of W for every pixel, for `options`' unknowns, kept in `cache` under the key a
 /// solve whose every pixel has weight looks up (Solver::State::rowsMadeAhead finds them for any
@@ -51,31 +70,25 @@ int writeRowsAhead(GpuDevice& device, const std::function<GpuVolume&()>& gpu, co
 
 std::vector<std::shared_ptr<const ViewRenders>> cachedRenderBounds(GpuDevice& device, const Volume& volume, const VolumeKey& volumeKey,
                                                                    const Lighting& lighting, const std::vector<SolveView>& views,
-                                                                   const SolveOptions& options, SolveCache* cache, const WorkBudget& budget,
-                                                                   int* made) {
+                                                                   const SolveOptions& options, SolveCache* cache, const WorkBudget& budget) {
     std::vector<std::shared_ptr<const ViewRenders>> renders(views.size());
     std::vector<std::string> keys(views.size());
-    bool missing = false;
     for (size_t v = 0; v < views.size() && cache; ++v) {
-        const Lighting seen = views[v].lightingFor(lighting);
-        keys[v] = rendersKey(volumeKey, seen, options, views[v].camera, options.analyzeReach);
-        renders[v] = cache->findRenders(keys[v]);
-        if (renders[v]) continue;
+        FoundRenders f = findViewRenders(*cache, volumeKey, lighting, views[v], options);
+        keys[v] = std::move(f.own);
+        renders[v] = std::move(f.renders);
         // Rendered ahead of the solve (the server's prefetch) of exactly this volume: kept under
         // this solve's key too, which the next solve (the unknowns changed) looks up.
-        renders[v] = cache->findRenders(exactRendersKey(volumeKey, seen, options, views[v].camera, options.analyzeReach));
-        if (renders[v]) cache->putRenders(keys[v], renders[v], renders[v]->renderMs);
+        if (renders[v] && !f.underOwnKey) cache->putRenders(keys[v], renders[v], renders[v]->renderMs);
     }
-    for (const auto& r : renders) missing |= !r;
-    if (!missing) return renders;
+    if (std::all_of(renders.begin(), renders.end(), [](const auto& r) { return r != nullptr; })) return renders;
     // A GpuVolume of their own: rendering through the solver's made the rows that follow 1.3 s
     // slower at 128³ (bench/solver_race (b); measured, cause not found), and this costs ~50 ms.
     GpuVolume own(volume);
     for (size_t v = 0; v < views.size(); ++v) {
         if (renders[v]) continue;
         renders[v] = renderBounds(device, own, lighting, {bare(views[v])}, options, options.analyzeReach, budget).front();
-        if (cache) cache->putRenders(keys[v], renders[v], renders[v]->renderMs);  // kept at once: an interrupted prefetch keeps it
-        if (made) ++*made;
+        if (cache) cache->putRenders(keys[v], renders[v], renders[v]->renderMs);
     }
     return renders;
 }
@@ -92,12 +105,8 @@ PrefetchReport prefetchSolve(GpuDevice& device, const Volume& volume, const Ligh
     // others than last time); found under the solve's own key too (the last solve left them).
     const VolumeKey key = givenKey ? *givenKey : volumeKeyOf(volume, options.unknown);
     std::vector<std::pair<std::string, SolveView>> todo;
-    for (const SolveView& v : views) {
-        const Lighting seen = v.lightingFor(lighting);
-        std::string exact = exactRendersKey(key, seen, options, v.camera, options.analyzeReach);
-        if (!cache.findRenders(rendersKey(key, seen, options, v.camera, options.analyzeReach)) && !cache.findRenders(exact))
-            todo.emplace_back(std::move(exact), bare(v));
-    }
+    for (const SolveView& v : views)
+        if (FoundRenders f = findViewRenders(cache, key, lighting, v, options); !f.renders) todo.emplace_back(std::move(f.exact), bare(v));
     report.viewsFound = int(views.size() - todo.size());
     std::unique_ptr<GpuVolume> own;  // uploaded once something is to be made; its light-depth volumes serve the rows too
     auto gpu = [&]() -> GpuVolume& {

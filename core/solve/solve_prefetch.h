@@ -22,11 +22,11 @@ namespace volstyle::core {
 /// Each view's bound renders (renderBounds), from `cache` where it holds them; made (and kept
 /// there, each as soon as it is done) otherwise. `cache` may be null. `volumeKey`:
 /// volumeKeyOf(volume, options.unknown), needed only with a cache. Throws as `budget` says between
-/// chunks; the views finished by then stay in the cache. `made`: how many were rendered here.
+/// chunks; the views finished by then stay in the cache.
 std::vector<std::shared_ptr<const ViewRenders>> cachedRenderBounds(GpuDevice& device, const Volume& volume, const VolumeKey& volumeKey,
                                                                    const Lighting& lighting, const std::vector<SolveView>& views,
                                                                    const SolveOptions& options, SolveCache* cache,
-                                                                   const WorkBudget& budget = WorkBudget(), int* made = nullptr);
+                                                                   const WorkBudget& budget = WorkBudget());
 
 /// What prefetchSolve() did.
 struct PrefetchReport {

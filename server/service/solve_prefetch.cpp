@@ -1,6 +1,6 @@
-// Work ahead (issue #40): while the artist paints, the GL thread renders what the session's next
-// solve needs first — each view's bound renders (core/solve/solve_prefetch.h), most of a first
-// solve's set-up — so the solve finds them in the solve cache. It runs only while the GL thread
+// Work ahead (issue #40): while the artist paints, the GL thread makes what the session's next
+// solve needs first — each view's bound renders and rows of W (core/solve/solve_prefetch.h), most
+// of a first solve's set-up — so the solve finds them in the solve cache. It runs only while the GL thread
 // has nothing else to do, and yields between chunks of a render to any request that arrives.
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -17,11 +17,11 @@ namespace {
 /// view is one chunk of ~2.5 s otherwise), what a request that arrives mid-chunk waits at most.
 constexpr long long kPrefetchChunkDivisor = 64;
 
-/// What a solve of `s` would render first: the session, its volume version and what it shows,
-/// the solve's march and each view's camera and plate. Equal signatures: nothing new to prepare.
+/// What a solve of `s` would make first depends on: its volume version and what it shows, the
+/// solve's settings and each view's camera and plate. Equal signatures: nothing new to prepare.
 std::string signatureOf(const Session& s, const core::SolveOptions& o) {
-    std::string sig = fmt::format("{}:{}:{}:{}:{}:{}:{}:{}:{}", s.id, s.volume.version, s.shownRevision, int(o.unknown), int(o.basis),
-                                  o.stepVoxels, o.exactTraversal, o.analyzeReach, o.rowCacheBytes);
+    std::string sig = fmt::format("{}:{}:{}:{}:{}:{}:{}:{}", s.volume.version, s.shownRevision, int(o.unknown), int(o.basis), o.stepVoxels,
+                                  o.exactTraversal, o.analyzeReach, o.rowCacheBytes);
     if (o.resolution) sig += fmt::format(":{}x{}x{}", o.resolution->x, o.resolution->y, o.resolution->z);
     for (const SessionView& v : s.views.list)
         if (!v.frame) sig += "|" + v.id + ":" + core::cameraKey(v.camera) + fmt::format(":{}", static_cast<const void*>(v.background.get()));
